@@ -1,0 +1,1 @@
+//! stride-model (work in progress)

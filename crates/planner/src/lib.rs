@@ -1,0 +1,1 @@
+//! stride-planner (work in progress)

@@ -1,0 +1,1 @@
+//! stride-qp (work in progress)

@@ -1,0 +1,2 @@
+//! stride-runner: configuration, scheduler, MCAP logging, replay and the `stride` command line.
+pub mod cli;

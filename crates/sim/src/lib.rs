@@ -1,0 +1,1 @@
+//! stride-sim (work in progress)

@@ -1,0 +1,1 @@
+//! stride-simplified (work in progress)

@@ -1,0 +1,1 @@
+//! stride-wbc (work in progress)
