@@ -1,1 +1,51 @@
-//! stride-model (work in progress)
+//! # stride-model
+//!
+//! Floating-base rigid-body kinematics and dynamics for stride: URDF loading (urdf-rs), forward kinematics,
+//! frame Jacobians and `J̇ν`, centre of mass, centroidal momentum, mass matrix (CRBA), bias/gravity forces and
+//! inverse dynamics (RNEA), forward dynamics (ABA), in the mixed (default), body and inertial velocity
+//! representations with iDynTree semantics.
+//!
+//! ```no_run
+//! use std::sync::Arc;
+//! use stride_model::{KinDyn, Model, RobotState};
+//! let model = Arc::new(Model::from_urdf_file("models/stride_humanoid.urdf")?);
+//! let mut kd = KinDyn::new(Arc::clone(&model));
+//! kd.set_state(&RobotState::zero(&model))?;
+//! let sole = model.frame_id("l_sole").expect("frame");
+//! let pose = kd.frame_pose(sole);
+//! # let _ = pose;
+//! # Ok::<(), stride_model::ModelError>(())
+//! ```
+//!
+//! Conventions: 6D vectors are `[linear; angular]`; generalized velocity `ν = [base linear; base angular;
+//! joints]`; the base part of generalized forces is the wrench dual to the base velocity of the selected
+//! representation. See `docs/model.md`.
+
+#![warn(missing_docs)]
+
+mod error;
+mod kindyn;
+mod model;
+pub mod spatial;
+mod state;
+mod urdf;
+
+pub use error::ModelError;
+pub use kindyn::{ExternalWrench, KinDyn};
+pub use model::{Body, Frame, FrameId, FrameKind, FtSensor, Joint, JointKind, Mimic, Model};
+pub use state::{convert_velocity, se3_exp, RobotState, VelocityRepresentation};
+
+impl Model {
+    /// Loads a model from a URDF file. Fixed joints are merged (inertias lumped, child links kept as frames);
+    /// see [`Model::from_urdf_str`].
+    pub fn from_urdf_file(path: impl AsRef<std::path::Path>) -> Result<Model, ModelError> {
+        urdf::load_file(path.as_ref())
+    }
+
+    /// Loads a model from URDF text. Revolute, continuous and prismatic joints are degrees of freedom; fixed
+    /// joints are merged; floating and planar joints are rejected. Warnings (inconsistent inertias, missing
+    /// limits, massless bodies) are in [`Model::warnings`] and are also emitted with `tracing::warn!`.
+    pub fn from_urdf_str(urdf: &str) -> Result<Model, ModelError> {
+        urdf::load_str(urdf)
+    }
+}

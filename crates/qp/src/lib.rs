@@ -1,1 +1,38 @@
-//! stride-qp (work in progress)
+//! `stride-qp`: the quadratic programs of the whole-body controllers.
+//!
+//! * [`VariableSet`] names the blocks of the decision vector (`base_velocity`, `joint_velocities`, …).
+//! * [`QpProblem`] is assembled once from [`TaskSpec`]s: each task fills `A x = b` (equality) or
+//!   `l ≤ A x ≤ u` (inequality) over the variables it names; equalities are hard constraints or soft costs
+//!   `½‖W^{1/2}(A x − b)‖²` with run-time weights; a Tikhonov term `½ρ‖x‖²` is added. Every tick the caller
+//!   writes numbers into the preallocated task buffers and calls [`QpProblem::solve`] (allocation-free with
+//!   the active-set backend).
+//! * Backends implement [`QpSolver`] on the dense standard form [`DenseQp`]: [`ActiveSetSolver`] (our
+//!   Goldfarb–Idnani dual active-set solver, warm-started, the default) and [`ClarabelSolver`] (interior point,
+//!   the reference). [`check_kkt`] verifies any primal–dual answer independently.
+//! * Failures are explicit ([`QpStatus`], [`QpError::SolveFailed`]); with `fallback` enabled an infeasible
+//!   problem is re-solved with its hard equality tasks relaxed into soft ones ([`SolvePath::Relaxed`]).
+//! * Large sparse problems (the DCM MPC) go through [`SparseQp`] and [`ClarabelSparseSolver`] without
+//!   densification.
+#![warn(missing_docs)]
+
+mod active_set;
+mod clarabel_backend;
+mod dense;
+mod error;
+mod kkt;
+mod problem;
+mod solver;
+mod sparse;
+mod variables;
+
+pub use active_set::{ActiveSetSettings, ActiveSetSolver};
+pub use clarabel_backend::{ClarabelSettings, ClarabelSolver, ClarabelSparseSolver};
+pub use dense::DenseQp;
+pub use error::QpError;
+pub use kkt::{check_kkt, KktReport};
+pub use problem::{
+    Backend, QpProblem, QpSettings, QpSolution, SolvePath, Task, TaskId, TaskKind, TaskSpec,
+};
+pub use solver::{QpSolver, QpStatus, SolverOutput};
+pub use sparse::{SparseQp, SparseSolution};
+pub use variables::{VarId, VariableSet};

@@ -1,8 +1,216 @@
-//! The `stride` command line (work in progress).
+//! The `stride` command line.
+//!
+//! Every subcommand returns a [`CliError`]; [`main`] prints it as one paragraph (the error and its causes
+//! joined by `: `) and exits with status 1 (2 for usage errors, printed by clap). `--verbose` turns on
+//! `tracing` diagnostics on stderr (`RUST_LOG` refines them).
+
+use std::path::PathBuf;
 use std::process::ExitCode;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+/// Any failure of a subcommand.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    /// The scenario file is invalid.
+    #[error(transparent)]
+    Config(#[from] crate::config::ConfigError),
+    /// Anything else, with context.
+    #[error("{0}")]
+    Other(String),
+}
+
+impl CliError {
+    /// An error from a message.
+    pub fn msg(m: impl Into<String>) -> Self {
+        CliError::Other(m.into())
+    }
+}
+
+/// stride: a three-layer walking controller stack for humanoid robots.
+#[derive(Debug, Parser)]
+#[command(name = "stride", version, about, long_about = None)]
+pub struct Cli {
+    /// Print diagnostics (tracing, level debug; RUST_LOG overrides).
+    #[arg(short, long, global = true)]
+    pub verbose: bool,
+    /// The subcommand.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Velocity representation for `stride model eval`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Representation {
+    /// Mixed (default): origin velocity and angular velocity in world orientation.
+    Mixed,
+    /// Body: both in the body frame.
+    Body,
+    /// Inertial: both in the world frame (right-trivialized).
+    Inertial,
+}
+
+/// A layer that `stride replay` can rebuild.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LayerName {
+    /// The footstep and DCM planner.
+    Planner,
+    /// The simplified-model (DCM/ZMP) layer.
+    Simplified,
+    /// The whole-body layer (QP-IK or TSID).
+    Wbc,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Inspect and evaluate a URDF model.
+    Model {
+        /// What to do with the model.
+        #[command(subcommand)]
+        command: ModelCommand,
+    },
+    /// Validate a scenario file without running it.
+    Check {
+        /// Scenario TOML file.
+        config: PathBuf,
+    },
+    /// Run only the planner of a scenario and print its plan.
+    Plan {
+        /// Scenario TOML file.
+        config: PathBuf,
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Sampling period of the printed references [s] (default: the simplified layer's period).
+        #[arg(long)]
+        dt: Option<f64>,
+    },
+    /// Run a scenario in closed loop and write an MCAP log.
+    Run {
+        /// Scenario TOML file.
+        config: PathBuf,
+        /// Log file (default: `log.path` of the scenario, else `<scenario name>.mcap`).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Override the scenario duration [s].
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Pace the loop at 1× wall-clock time and count deadline misses.
+        #[arg(long)]
+        realtime: bool,
+        /// Do not draw the progress bar.
+        #[arg(long)]
+        no_progress: bool,
+    },
+    /// Re-run one layer on the inputs recorded in a log.
+    Replay {
+        /// MCAP log written by `stride run`.
+        log: PathBuf,
+        /// The layer to rebuild.
+        #[arg(long, value_enum)]
+        layer: LayerName,
+        /// Another scenario file for the layer's parameters (default: the config stored in the log).
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Write the replayed outputs to this MCAP file.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+}
+
+/// `stride model ...`
+#[derive(Debug, Subcommand)]
+pub enum ModelCommand {
+    /// Degrees of freedom, joints, links, frames, sensors, mass and CoM of a URDF.
+    Info {
+        /// URDF file.
+        urdf: PathBuf,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Evaluate kinematics and dynamics at a state given as JSON; prints one JSON object.
+    Eval {
+        /// URDF file.
+        urdf: PathBuf,
+        /// State JSON file (see docs/cli.md).
+        #[arg(long)]
+        state: PathBuf,
+        /// Velocity representation.
+        #[arg(long, value_enum, default_value_t = Representation::Mixed)]
+        representation: Representation,
+    },
+}
 
 /// Entry point of the `stride` binary.
 pub fn main() -> ExitCode {
-    eprintln!("stride: not implemented yet");
-    ExitCode::FAILURE
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            // clap prints help/version to stdout and usage errors to stderr.
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    init_tracing(cli.verbose);
+    match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {}", one_paragraph(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The error and its chain of causes as one line.
+pub fn one_paragraph(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut s = e.to_string();
+    let mut cur = e.source();
+    while let Some(c) = cur {
+        let cs = c.to_string();
+        if !s.contains(&cs) {
+            s.push_str(": ");
+            s.push_str(&cs);
+        }
+        cur = c.source();
+    }
+    s
+}
+
+fn init_tracing(verbose: bool) {
+    use tracing_subscriber::EnvFilter;
+    let default = if verbose { "debug" } else { "warn" };
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .try_init();
+}
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> Result<ExitCode, CliError> {
+    match cli.command {
+        Command::Model { command } => crate::commands::model(command),
+        Command::Check { config } => crate::commands::check(&config),
+        Command::Plan { config, json, dt } => crate::commands::plan(&config, json, dt),
+        Command::Run {
+            config,
+            output,
+            duration,
+            realtime,
+            no_progress,
+        } => crate::commands::run(&config, output, duration, realtime, no_progress),
+        Command::Replay {
+            log,
+            layer,
+            config,
+            output,
+        } => crate::commands::replay(&log, layer, config, output),
+    }
 }

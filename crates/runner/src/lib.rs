@@ -1,2 +1,8 @@
 //! stride-runner: configuration, scheduler, MCAP logging, replay and the `stride` command line.
+#![warn(missing_docs)]
+
 pub mod cli;
+pub mod commands;
+pub mod config;
+pub mod log;
+pub mod model_cmd;

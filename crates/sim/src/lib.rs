@@ -1,1 +1,40 @@
-//! stride-sim (work in progress)
+//! `stride-sim`: the simulated robot that closes stride's loop with no external simulator.
+//!
+//! A [`SimRobot`] integrates the floating-base dynamics of a [`stride_model::Model`] standing on a flat,
+//! possibly inclined, compliant ground:
+//!
+//! * **Dynamics.** Semi-implicit Euler (velocity first, then the configuration with the new velocity; the base
+//!   orientation on SO(3) with [`stride_model::RobotState::integrate`]). With the default
+//!   [`IntegratorKind::Implicit`] scheme the joint servos, passive damping and contact spring-dampers are
+//!   evaluated at the end of the step (linearly implicit), which keeps high-gain position servos and a rigid
+//!   floor stable at 2 kHz; [`IntegratorKind::Explicit`] uses the articulated-body algorithm with every force
+//!   explicit.
+//! * **Contact.** Each contact surface (a foot sole) is a rectangle sampled by a grid of points; each point is
+//!   a spring-damper along the ground normal that never pulls and a tangential stick spring anchored where
+//!   the point touched down, limited by Coulomb's cone (it slides when the cone is reached). The stiffness
+//!   and damping are area densities (N/m³, N·s/m³) as in the visco-elastic model of Romualdi's thesis
+//!   (Lemma 1), so a fine grid reproduces Lemma 1's wrench.
+//! * **Actuation** per joint: position PD servo, velocity servo or torque, with effort limits, passive
+//!   damping and armature.
+//! * **Sensors:** encoders, six-axis wrench of each surface in its force/torque sensor frame, IMU, ground
+//!   truth, with optional seeded noise. **Pushes** and **fall detection** from the config.
+//!
+//! See `docs/sim.md` for the choices, the checks and the measured numbers.
+
+mod config;
+mod contact;
+mod error;
+mod linalg;
+mod noise;
+mod robot;
+
+pub use config::{
+    ActuationConfig, ActuationMode, ContactConfig, ContactSurfaceConfig, EffortLimitPolicy, FallConfig,
+    GroundConfig, IntegratorKind, JointActuatorConfig, JointActuatorOverride, NoiseConfig, PushConfig,
+    SafetyConfig, SensorConfig, SimConfig,
+};
+pub use contact::{surface_points, trapezoid_nodes, ContactMode, GroundPlane, PointLaw, PointSpec};
+pub use error::SimError;
+pub use linalg::{cholesky_in_place, cholesky_solve_in_place};
+pub use noise::GaussianNoise;
+pub use robot::{ContactPointState, ImuMeasurement, SimInput, SimOutput, SimRobot, SurfaceMeasurement};

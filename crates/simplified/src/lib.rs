@@ -1,1 +1,80 @@
-//! stride-simplified (work in progress)
+//! `stride-simplified`: the simplified-model control layer (thesis 002 ch. 4 and §10.2.3).
+//!
+//! It keeps the robot's divergent component of motion (DCM) on the plan by choosing a desired ZMP, and
+//! turns that into CoM references for the whole-body layer:
+//!
+//! ```text
+//! plan (DCM, ZMP, CoM) + measured (DCM, ZMP, CoM) ─► DCM controller ─► desired ZMP ─► ZMP-CoM ─► CoM refs
+//!                                                   (instantaneous PI (10.2.17)      (10.2.25), gains
+//!                                                    or predictive MPC (10.2.23))     scheduled walk/stand
+//! ```
+//!
+//! # What the runner uses
+//!
+//! * [`SimplifiedConfig`] (serde, `deny_unknown_fields`, every field optional with iCub-like defaults):
+//!   `dcm_controller = "instantaneous" | "predictive"`, sections `[instantaneous]` (`kp`, `ki`,
+//!   `integral_limit`), `[predictive]` (`horizon` = 2 s, `dcm_weight`, `zmp_rate_weight`,
+//!   `zmp_rate_reference`, `solver`, `tolerance`, `max_iterations`), `[zmp_com]` (`walking`/`standing`
+//!   `{k_zmp, k_com}`, `transition_time` of the minimum-jerk gain blend).
+//! * [`SimplifiedController::new`]`(&config, period)` builds the layer for its tick period (the MPC stage
+//!   length is that period). It implements [`stride_block::Block`] with
+//!   * `Input` = [`SimplifiedInput`]: time, `omega` (= [`natural_frequency`] of the plan's CoM height),
+//!     `walking` flag, planned DCM position/velocity, ZMP, CoM position/velocity at the current time,
+//!     measured CoM position/velocity, DCM ([`dcm_from_com`]) and ZMP ([`measured_zmp`]), the current
+//!     [`SupportPolygon`] ([`feet_support_polygon`]: hull of the feet in contact) and, for the MPC only,
+//!     a [`DcmHorizon`]: `clear()` then `push(HorizonSample { dcm_position, zmp, support })` for
+//!     `k = 0..=N` at times `t + k·period` ([`SimplifiedController::horizon_samples`] = `N + 1`; build the
+//!     input with [`SimplifiedInput::new`]`(controller.horizon_samples(), polygon)`, no allocation after).
+//!   * `Output` = [`SimplifiedOutput`]: desired ZMP (always inside the support polygon), CoM position,
+//!     velocity and acceleration references, and [`SimplifiedDiagnostics`] (DCM error, integral term,
+//!     projection flag, gains, MPC status/iterations/solve time).
+//! * **Bad input**: a non-finite input, an empty horizon or an MPC failure returns an error and changes
+//!   nothing; [`SimplifiedController::output`] keeps the last valid references (hold them). Support
+//!   polygons are validated when built ([`SupportPolygon::convex_hull`] rejects empty/degenerate sets),
+//!   so an invalid polygon cannot reach `step`. A horizon shorter than `N + 1` samples (plan ending) is
+//!   padded by holding its last sample (reported as `held_samples`). No output is ever NaN.
+//!
+//! # Helpers
+//!
+//! [`natural_frequency`], [`dcm_from_com`], [`zmp_from_dcm`] (`p = ξ − ξ̇/ω`, erratum 9),
+//! [`dcm_velocity`], [`LipmDiscretization`] (exact ZOH LIPM/DCM transition for any `dt`),
+//! [`measured_zmp`] (global ZMP from the feet wrenches), [`SupportPolygon`] (hull, point-in-polygon,
+//! projection, half-planes), [`FootRectangle`] and [`feet_support_polygon`].
+//!
+//! The individual controllers are usable alone: [`DcmInstantaneousController`],
+//! [`DcmPredictiveController`], [`ZmpComController`]; the bare laws [`dcm_instantaneous_law`] and
+//! [`zmp_com_law`] are exposed for analysis.
+
+mod banded;
+mod block;
+mod dcm_instantaneous;
+mod dcm_predictive;
+mod error;
+mod lipm;
+mod polygon;
+mod wrench;
+mod zmp_com;
+
+pub use block::{
+    DcmControllerKind, SimplifiedConfig, SimplifiedController, SimplifiedDiagnostics, SimplifiedInput,
+    SimplifiedOutput,
+};
+pub use dcm_instantaneous::{
+    dcm_instantaneous_law, DcmInstantaneousConfig, DcmInstantaneousController, DcmInstantaneousOutput,
+};
+pub use dcm_predictive::{
+    DcmHorizon, DcmPredictiveConfig, DcmPredictiveController, DcmPredictiveOutput, HorizonSample,
+    MpcDiagnostics, MpcProblemView, MpcSolverKind, MpcStatus, ZmpRateReference,
+};
+pub use error::{Result, SimplifiedError};
+pub use lipm::{
+    dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization, STANDARD_GRAVITY,
+};
+pub use polygon::{
+    feet_support_polygon, FootRectangle, SupportPolygon, MAX_HULL_POINTS, MAX_POLYGON_VERTICES,
+    MIN_POLYGON_AREA,
+};
+pub use wrench::{measured_zmp, FootWrench};
+pub use zmp_com::{
+    minimum_jerk_blend, zmp_com_law, ZmpComConfig, ZmpComController, ZmpComGains, ZmpComOutput,
+};

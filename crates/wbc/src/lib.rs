@@ -1,1 +1,29 @@
-//! stride-wbc (work in progress)
+//! `stride-wbc`: the whole-body QP layer of stride — a task library, the kinematic QP-IK
+//! (thesis 002 eq. 7.1.16) and the torque TSID (eq. 7.2.31), both on stride-qp.
+//!
+//! * [`QpIk`]: decision variable ν (mixed base twist + joint velocities); hard feet SE(3) and CoM, soft
+//!   torso orientation and posture, joint position/velocity limits as bounds; integrates its own state
+//!   on SE(3) × Rⁿ and outputs joint position commands (position-controlled robots) and velocities.
+//! * [`Tsid`]: decision variables ν̇ and the contact wrenches of the loaded feet (torques eliminated
+//!   through the joint rows of the floating-base dynamics); outputs joint torques, accelerations and
+//!   planned contact wrenches; contact changes ramp the normal-force bound.
+//!
+//! Both are built from a [`IkConfig`] / [`TsidConfig`] (TOML, a list of typed tasks) and implement
+//! [`stride_block::Block`] with [`WbcInput`] as input. Failed QPs fall back to the relaxed problem
+//! (hard equalities as heavily weighted costs) and, if that also fails, hold the last valid command;
+//! the output says which. See docs/wbc.md for the formulation choices and measured numbers.
+
+mod bridge;
+pub mod config;
+mod error;
+mod ik;
+mod io;
+pub mod math;
+mod tasks;
+mod tsid;
+
+pub use config::*;
+pub use error::WbcError;
+pub use ik::QpIk;
+pub use io::*;
+pub use tsid::Tsid;

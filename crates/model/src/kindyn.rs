@@ -1,0 +1,750 @@
+//! The computation workspace: kinematics, Jacobians, centroidal quantities, CRBA, RNEA, ABA.
+//!
+//! Internally every spatial quantity is expressed in the frame `A'`: world orientation, origin at the current
+//! base origin, treated as a fixed inertial frame at this instant (right-trivialized velocities about the base
+//! origin). At this instant `^{A'} v_{A',B}` equals the mixed base velocity `[ȯ_B; ω_B]`, and keeping the
+//! origin at the base avoids the loss of precision that a world-origin frame suffers far from the origin.
+//! Inputs and outputs are converted to the selected [`VelocityRepresentation`] at the boundary.
+
+use std::sync::Arc;
+
+use nalgebra::{
+    DMatrix, DVector, Isometry3, Matrix3, Matrix6, Rotation3, Translation3, Unit, UnitQuaternion,
+    Vector3, Vector6,
+};
+
+use crate::error::{check_len, check_shape, ModelError};
+use crate::model::{FrameId, Model};
+use crate::spatial::{
+    ang, blockdiag, cross_force, cross_motion, join, lin, shift_motion, translation_x, Inertia,
+};
+use crate::state::{convert_velocity, RobotState, VelocityRepresentation};
+
+/// A wrench applied ON the robot at a frame: `[force; torque]`, torque about the frame origin, both in world
+/// orientation (the frame's mixed frame `F[A]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExternalWrench {
+    /// Frame whose origin is the point of application (and the torque reference point).
+    pub frame: FrameId,
+    /// `[f; τ]` in N and N·m, world orientation.
+    pub wrench: Vector6<f64>,
+}
+
+/// Reusable computation workspace bound to one [`Model`]. `new` allocates everything; after that, no method
+/// allocates (errors aside).
+#[derive(Clone, Debug)]
+pub struct KinDyn {
+    model: Arc<Model>,
+    repr: VelocityRepresentation,
+    gravity: Vector3<f64>,
+    // ---- state ----
+    base_pose: Isometry3<f64>,
+    base_pos: Vector3<f64>,
+    base_rot: Matrix3<f64>,
+    q: DVector<f64>,
+    qd: DVector<f64>,
+    base_velocity: Vector6<f64>,
+    // ---- per-body caches, frame A' ----
+    rot: Vec<Matrix3<f64>>,
+    pos: Vec<Vector3<f64>>,
+    s: Vec<Vector6<f64>>,
+    vel: Vec<Vector6<f64>>,
+    /// Velocity-product acceleration term `v_λ × S q̇` of each body's joint.
+    c: Vec<Vector6<f64>>,
+    /// Body acceleration for ν̇ = 0 in the current representation (J̇ν of the body, frame A').
+    bias: Vec<Vector6<f64>>,
+    inertia: Vec<Inertia>,
+    // ---- scratch ----
+    acc: Vec<Vector6<f64>>,
+    force: Vec<Vector6<f64>>,
+    ext: Vec<Vector6<f64>>,
+    composite: Vec<Inertia>,
+    art: Vec<Matrix6<f64>>,
+    u_vec: Vec<Vector6<f64>>,
+    d_val: Vec<f64>,
+    u_val: Vec<f64>,
+}
+
+impl KinDyn {
+    /// Builds the workspace (allocates) with the zero state, mixed representation and gravity
+    /// `[0, 0, −9.81]` m/s².
+    pub fn new(model: Arc<Model>) -> Self {
+        let nb = model.body_count();
+        let n = model.dof();
+        let mut kd = Self {
+            repr: VelocityRepresentation::Mixed,
+            gravity: Vector3::new(0.0, 0.0, -9.81),
+            base_pose: Isometry3::identity(),
+            base_pos: Vector3::zeros(),
+            base_rot: Matrix3::identity(),
+            q: DVector::zeros(n),
+            qd: DVector::zeros(n),
+            base_velocity: Vector6::zeros(),
+            rot: vec![Matrix3::identity(); nb],
+            pos: vec![Vector3::zeros(); nb],
+            s: vec![Vector6::zeros(); nb],
+            vel: vec![Vector6::zeros(); nb],
+            c: vec![Vector6::zeros(); nb],
+            bias: vec![Vector6::zeros(); nb],
+            inertia: vec![Inertia::zero(); nb],
+            acc: vec![Vector6::zeros(); nb],
+            force: vec![Vector6::zeros(); nb],
+            ext: vec![Vector6::zeros(); nb],
+            composite: vec![Inertia::zero(); nb],
+            art: vec![Matrix6::zeros(); nb],
+            u_vec: vec![Vector6::zeros(); nb],
+            d_val: vec![0.0; nb],
+            u_val: vec![0.0; nb],
+            model,
+        };
+        kd.update();
+        kd
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Arc<Model> {
+        &self.model
+    }
+
+    /// Current velocity representation.
+    pub fn representation(&self) -> VelocityRepresentation {
+        self.repr
+    }
+
+    /// Selects the representation of base velocity, frame velocities, Jacobians, accelerations and of the
+    /// base part of generalized forces. The base velocity of the last state is reinterpreted in the new
+    /// representation (as iDynTree does: set the representation before the state).
+    pub fn set_representation(&mut self, representation: VelocityRepresentation) {
+        self.repr = representation;
+        self.update();
+    }
+
+    /// Gravity acceleration in world coordinates (m/s²).
+    pub fn gravity(&self) -> Vector3<f64> {
+        self.gravity
+    }
+
+    /// Sets the gravity acceleration in world coordinates (m/s²; default `[0, 0, −9.81]`).
+    pub fn set_gravity(&mut self, gravity: Vector3<f64>) {
+        self.gravity = gravity;
+    }
+
+    /// Sets the state (base velocity in the current representation) and computes the kinematics of every
+    /// body (poses, velocities, bias accelerations). Checks sizes and finiteness.
+    pub fn set_state(&mut self, state: &RobotState) -> Result<(), ModelError> {
+        let n = self.model.dof();
+        check_len("joint_positions", n, state.joint_positions.len())?;
+        check_len("joint_velocities", n, state.joint_velocities.len())?;
+        let pose_ok = state.base_pose.translation.vector.iter().all(|v| v.is_finite())
+            && state.base_pose.rotation.coords.iter().all(|v| v.is_finite());
+        if !pose_ok {
+            return Err(ModelError::NonFiniteInput { what: "base_pose" });
+        }
+        if !state.joint_positions.iter().all(|v| v.is_finite()) {
+            return Err(ModelError::NonFiniteInput {
+                what: "joint_positions",
+            });
+        }
+        if !state.base_velocity.iter().all(|v| v.is_finite()) {
+            return Err(ModelError::NonFiniteInput {
+                what: "base_velocity",
+            });
+        }
+        if !state.joint_velocities.iter().all(|v| v.is_finite()) {
+            return Err(ModelError::NonFiniteInput {
+                what: "joint_velocities",
+            });
+        }
+        self.base_pose = state.base_pose;
+        self.q.copy_from(&state.joint_positions);
+        self.qd.copy_from(&state.joint_velocities);
+        self.base_velocity = state.base_velocity;
+        self.update();
+        Ok(())
+    }
+
+    /// Copies the current state (base velocity in the current representation) into `state` (no allocation
+    /// when `state` already has the model's sizes).
+    pub fn state_into(&self, state: &mut RobotState) {
+        state.base_pose = self.base_pose;
+        if state.joint_positions.len() != self.q.len() {
+            state.joint_positions = self.q.clone();
+        } else {
+            state.joint_positions.copy_from(&self.q);
+        }
+        if state.joint_velocities.len() != self.qd.len() {
+            state.joint_velocities = self.qd.clone();
+        } else {
+            state.joint_velocities.copy_from(&self.qd);
+        }
+        state.base_velocity = self.base_velocity;
+    }
+
+    /// Forward kinematics, velocities and velocity-product terms of every body.
+    fn update(&mut self) {
+        let m = &*self.model;
+        self.base_rot = *self.base_pose.rotation.to_rotation_matrix().matrix();
+        self.base_pos = self.base_pose.translation.vector;
+        let base_mixed = convert_velocity(
+            &self.base_pose,
+            &self.base_velocity,
+            self.repr,
+            VelocityRepresentation::Mixed,
+        );
+        self.rot[0] = self.base_rot;
+        self.pos[0] = Vector3::zeros();
+        self.vel[0] = base_mixed;
+        self.s[0] = Vector6::zeros();
+        self.c[0] = Vector6::zeros();
+        // Base acceleration in A' when ν̇ = 0 in the representation (Traversaro Table 2.2).
+        self.bias[0] = match self.repr {
+            VelocityRepresentation::Mixed => {
+                let od = lin(&base_mixed);
+                let w = ang(&base_mixed);
+                join(&od.cross(&w), &Vector3::zeros())
+            }
+            _ => Vector6::zeros(),
+        };
+        self.inertia[0] = m.inertia[0].transformed(&self.rot[0], &self.pos[0]);
+        for i in 1..m.body_count() {
+            let p = m.parent[i];
+            let j = i - 1;
+            let rp = self.rot[p];
+            let rj = rp * m.placement_rot[i];
+            let pj = self.pos[p] + rp * m.placement_pos[i];
+            let axis_w = rj * m.axis[i];
+            let q = self.q[j];
+            if m.prismatic[i] {
+                self.rot[i] = rj;
+                self.pos[i] = pj + axis_w * q;
+                self.s[i] = join(&axis_w, &Vector3::zeros());
+            } else {
+                let r = Rotation3::from_axis_angle(&Unit::new_unchecked(m.axis[i]), q);
+                self.rot[i] = rj * r.matrix();
+                self.pos[i] = pj;
+                self.s[i] = join(&pj.cross(&axis_w), &axis_w);
+            }
+            let qd = self.qd[j];
+            self.vel[i] = self.vel[p] + self.s[i] * qd;
+            self.c[i] = cross_motion(&self.vel[p], &self.s[i]) * qd;
+            self.bias[i] = self.bias[p] + self.c[i];
+            self.inertia[i] = m.inertia[i].transformed(&self.rot[i], &self.pos[i]);
+        }
+    }
+
+    // ------------------------------------------------------------------ helpers
+
+    fn frame_checked(&self, frame: FrameId) -> Result<(), ModelError> {
+        if frame.0 < self.model.frames.len() {
+            Ok(())
+        } else {
+            Err(ModelError::FrameOutOfRange {
+                index: frame.0,
+                count: self.model.frames.len(),
+            })
+        }
+    }
+
+    /// Body index, rotation and position (relative to the base origin, world orientation) of a frame.
+    #[inline]
+    fn frame_rt(&self, frame: FrameId) -> (usize, Matrix3<f64>, Vector3<f64>) {
+        let m = &*self.model;
+        let b = m.frames[frame.0].link;
+        let r = self.rot[b] * m.frame_rot[frame.0];
+        let p = self.pos[b] + self.rot[b] * m.frame_pos[frame.0];
+        (b, r, p)
+    }
+
+    /// Converts a motion vector of frame A' into the output representation of a frame `(r, p)`.
+    #[inline]
+    fn out_motion(&self, r: &Matrix3<f64>, p: &Vector3<f64>, v: &Vector6<f64>) -> Vector6<f64> {
+        match self.repr {
+            VelocityRepresentation::Mixed => shift_motion(v, p),
+            VelocityRepresentation::Body => {
+                let m = shift_motion(v, p);
+                join(&(r.tr_mul(&lin(&m))), &(r.tr_mul(&ang(&m))))
+            }
+            VelocityRepresentation::Inertial => shift_motion(v, &(-self.base_pos)),
+        }
+    }
+
+    /// `T` such that (A' base velocity) = T (base velocity in the representation).
+    fn base_t(&self) -> Matrix6<f64> {
+        match self.repr {
+            VelocityRepresentation::Mixed => Matrix6::identity(),
+            VelocityRepresentation::Body => blockdiag(&self.base_rot),
+            VelocityRepresentation::Inertial => translation_x(&(-self.base_pos)),
+        }
+    }
+
+    /// `T v`.
+    #[inline]
+    fn base_t_mul(&self, v: &Vector6<f64>) -> Vector6<f64> {
+        match self.repr {
+            VelocityRepresentation::Mixed => *v,
+            VelocityRepresentation::Body => {
+                join(&(self.base_rot * lin(v)), &(self.base_rot * ang(v)))
+            }
+            VelocityRepresentation::Inertial => shift_motion(v, &self.base_pos),
+        }
+    }
+
+    /// `T⁻¹ v`.
+    #[inline]
+    fn base_t_inv_mul(&self, v: &Vector6<f64>) -> Vector6<f64> {
+        match self.repr {
+            VelocityRepresentation::Mixed => *v,
+            VelocityRepresentation::Body => {
+                join(&(self.base_rot.tr_mul(&lin(v))), &(self.base_rot.tr_mul(&ang(v))))
+            }
+            VelocityRepresentation::Inertial => shift_motion(v, &(-self.base_pos)),
+        }
+    }
+
+    /// `Tᵀ f` (a wrench dual to the representation's base velocity).
+    #[inline]
+    fn base_t_tr_mul(&self, f: &Vector6<f64>) -> Vector6<f64> {
+        match self.repr {
+            VelocityRepresentation::Mixed => *f,
+            VelocityRepresentation::Body => {
+                join(&(self.base_rot.tr_mul(&lin(f))), &(self.base_rot.tr_mul(&ang(f))))
+            }
+            VelocityRepresentation::Inertial => {
+                // T = [[1, −o^],[0, 1]] ⇒ Tᵀ = [[1, 0],[o^, 1]].
+                let fl = lin(f);
+                join(&fl, &(ang(f) + self.base_pos.cross(&fl)))
+            }
+        }
+    }
+
+    fn world_gravity6(&self) -> Vector6<f64> {
+        join(&self.gravity, &Vector3::zeros())
+    }
+
+    fn gather_wrenches(&mut self, wrenches: &[ExternalWrench]) -> Result<(), ModelError> {
+        for e in self.ext.iter_mut() {
+            *e = Vector6::zeros();
+        }
+        for w in wrenches {
+            self.frame_checked(w.frame)?;
+            if !w.wrench.iter().all(|v| v.is_finite()) {
+                return Err(ModelError::NonFiniteInput {
+                    what: "external wrench",
+                });
+            }
+            let (b, _, p) = self.frame_rt(w.frame);
+            let f = lin(&w.wrench);
+            self.ext[b] += join(&f, &(ang(&w.wrench) + p.cross(&f)));
+        }
+        Ok(())
+    }
+
+    fn composites(&mut self) {
+        let m = &*self.model;
+        self.composite.copy_from_slice(&self.inertia);
+        for i in (1..m.body_count()).rev() {
+            let p = m.parent[i];
+            let ci = self.composite[i];
+            self.composite[p].add(&ci);
+        }
+    }
+
+    /// CoM relative to the base origin (world orientation).
+    fn com_rel(&self) -> Vector3<f64> {
+        let mut m = 0.0;
+        let mut h = Vector3::zeros();
+        for i in &self.inertia {
+            m += i.m;
+            h += i.h;
+        }
+        if m > 0.0 {
+            h / m
+        } else {
+            Vector3::zeros()
+        }
+    }
+
+    /// Total momentum about the A' origin and its time derivative for ν̇ = 0.
+    fn momentum_and_rate(&self) -> (Vector6<f64>, Vector6<f64>) {
+        let mut h = Vector6::zeros();
+        let mut hd = Vector6::zeros();
+        for (k, inertia) in self.inertia.iter().enumerate() {
+            let iv = inertia.mul_motion(&self.vel[k]);
+            h += iv;
+            hd += inertia.mul_motion(&self.bias[k]) + cross_force(&self.vel[k], &iv);
+        }
+        (h, hd)
+    }
+
+    /// Moves a momentum/wrench about the A' origin to the CoM `c` (relative to the base origin).
+    #[inline]
+    fn to_com(f: &Vector6<f64>, c: &Vector3<f64>) -> Vector6<f64> {
+        let fl = lin(f);
+        join(&fl, &(ang(f) - c.cross(&fl)))
+    }
+
+    // ------------------------------------------------------------------ kinematics
+
+    /// `world_H_frame`.
+    pub fn frame_pose(&self, frame: FrameId) -> Isometry3<f64> {
+        let (_, r, p) = self.frame_rt(frame);
+        Isometry3::from_parts(
+            Translation3::from(p + self.base_pos),
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)),
+        )
+    }
+
+    /// World rotation matrix and position of a frame (cheaper than [`Self::frame_pose`]).
+    pub fn frame_rotation_translation(&self, frame: FrameId) -> (Matrix3<f64>, Vector3<f64>) {
+        let (_, r, p) = self.frame_rt(frame);
+        (r, p + self.base_pos)
+    }
+
+    /// `a_H_b`.
+    pub fn relative_transform(&self, a: FrameId, b: FrameId) -> Isometry3<f64> {
+        let (_, ra, pa) = self.frame_rt(a);
+        let (_, rb, pb) = self.frame_rt(b);
+        let r = ra.tr_mul(&rb);
+        let p = ra.tr_mul(&(pb - pa));
+        Isometry3::from_parts(
+            Translation3::from(p),
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)),
+        )
+    }
+
+    /// Velocity of a frame in the current representation.
+    pub fn frame_velocity(&self, frame: FrameId) -> Vector6<f64> {
+        let (b, r, p) = self.frame_rt(frame);
+        self.out_motion(&r, &p, &self.vel[b])
+    }
+
+    /// Frame Jacobian `J` (6 × nv) with `frame_velocity = J ν`, both in the current representation.
+    pub fn frame_jacobian(&self, frame: FrameId, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        self.frame_checked(frame)?;
+        let nv = self.model.nv();
+        check_shape("frame_jacobian output", (6, nv), out.shape())?;
+        out.fill(0.0);
+        let (b, r, p) = self.frame_rt(frame);
+        let t = self.base_t();
+        for k in 0..6 {
+            let col = self.out_motion(&r, &p, &t.column(k).into_owned());
+            out.fixed_view_mut::<6, 1>(0, k).copy_from(&col);
+        }
+        let mut i = b;
+        while i != 0 {
+            let col = self.out_motion(&r, &p, &self.s[i]);
+            out.fixed_view_mut::<6, 1>(0, 5 + i).copy_from(&col);
+            i = self.model.parent[i];
+        }
+        Ok(())
+    }
+
+    /// `J̇ ν` of a frame: its acceleration in the current representation when ν̇ = 0.
+    pub fn frame_bias_acceleration(&self, frame: FrameId) -> Vector6<f64> {
+        let (b, r, p) = self.frame_rt(frame);
+        let mut a = self.out_motion(&r, &p, &self.bias[b]);
+        if self.repr == VelocityRepresentation::Mixed {
+            let v = shift_motion(&self.vel[b], &p);
+            let od = lin(&v);
+            let w = ang(&v);
+            let corr = od.cross(&w);
+            a[0] -= corr.x;
+            a[1] -= corr.y;
+            a[2] -= corr.z;
+        }
+        a
+    }
+
+    /// Centre of mass in world coordinates (m). The base origin if the model has no mass.
+    pub fn com_position(&self) -> Vector3<f64> {
+        self.com_rel() + self.base_pos
+    }
+
+    /// CoM velocity in world coordinates (m/s).
+    pub fn com_velocity(&self) -> Vector3<f64> {
+        let mass = self.model.total_mass;
+        if mass <= 0.0 {
+            return Vector3::zeros();
+        }
+        let mut p = Vector3::zeros();
+        for (k, inertia) in self.inertia.iter().enumerate() {
+            p += lin(&inertia.mul_motion(&self.vel[k]));
+        }
+        p / mass
+    }
+
+    /// CoM Jacobian (3 × nv): `com_velocity = J ν`.
+    pub fn com_jacobian(&mut self, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        let nv = self.model.nv();
+        check_shape("com_jacobian output", (3, nv), out.shape())?;
+        let mass = self.model.total_mass;
+        out.fill(0.0);
+        if mass <= 0.0 {
+            return Ok(());
+        }
+        self.composites();
+        let base = self.composite[0].matrix() * self.base_t();
+        for k in 0..6 {
+            for r in 0..3 {
+                out[(r, k)] = base[(r, k)] / mass;
+            }
+        }
+        for i in 1..self.model.body_count() {
+            let f = self.composite[i].mul_motion(&self.s[i]);
+            for r in 0..3 {
+                out[(r, 5 + i)] = f[r] / mass;
+            }
+        }
+        Ok(())
+    }
+
+    /// `J̇_com ν`: CoM acceleration when ν̇ = 0 (m/s²).
+    pub fn com_bias_acceleration(&self) -> Vector3<f64> {
+        let mass = self.model.total_mass;
+        if mass <= 0.0 {
+            return Vector3::zeros();
+        }
+        let (_, hd) = self.momentum_and_rate();
+        lin(&hd) / mass
+    }
+
+    /// Total mass (kg).
+    pub fn total_mass(&self) -> f64 {
+        self.model.total_mass
+    }
+
+    /// Centroidal momentum `[p; l]`: linear momentum and angular momentum about the CoM, world orientation.
+    pub fn centroidal_momentum(&self) -> Vector6<f64> {
+        let (h, _) = self.momentum_and_rate();
+        Self::to_com(&h, &self.com_rel())
+    }
+
+    /// Centroidal momentum matrix (6 × nv): `centroidal_momentum = CMM ν`.
+    pub fn centroidal_momentum_matrix(&mut self, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        let nv = self.model.nv();
+        check_shape("centroidal_momentum_matrix output", (6, nv), out.shape())?;
+        self.composites();
+        let c = self.com_rel();
+        let base = self.composite[0].matrix() * self.base_t();
+        for k in 0..6 {
+            let col = Self::to_com(&base.column(k).into_owned(), &c);
+            out.fixed_view_mut::<6, 1>(0, k).copy_from(&col);
+        }
+        for i in 1..self.model.body_count() {
+            let f = self.composite[i].mul_motion(&self.s[i]);
+            out.fixed_view_mut::<6, 1>(0, 5 + i)
+                .copy_from(&Self::to_com(&f, &c));
+        }
+        Ok(())
+    }
+
+    /// `d/dt(CMM) ν`: rate of the centroidal momentum when ν̇ = 0 (no gravity, no external forces).
+    pub fn centroidal_momentum_bias(&self) -> Vector6<f64> {
+        let (_, hd) = self.momentum_and_rate();
+        Self::to_com(&hd, &self.com_rel())
+    }
+
+    // ------------------------------------------------------------------ dynamics
+
+    /// Mass matrix M (nv × nv) by the composite-rigid-body algorithm, in the current representation.
+    pub fn mass_matrix(&mut self, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        let nv = self.model.nv();
+        check_shape("mass_matrix output", (nv, nv), out.shape())?;
+        self.composites();
+        let t = self.base_t();
+        let base = t.transpose() * self.composite[0].matrix() * t;
+        out.fixed_view_mut::<6, 6>(0, 0).copy_from(&base);
+        let m = &*self.model;
+        for i in 1..m.body_count() {
+            let f = self.composite[i].mul_motion(&self.s[i]);
+            let col = 5 + i;
+            out[(col, col)] = self.s[i].dot(&f);
+            let mut k = m.parent[i];
+            while k != 0 {
+                let v = self.s[k].dot(&f);
+                out[(5 + k, col)] = v;
+                out[(col, 5 + k)] = v;
+                k = m.parent[k];
+            }
+            // Bodies not on the path: zero.
+            let fb = self.base_t_tr_mul(&f);
+            for r in 0..6 {
+                out[(r, col)] = fb[r];
+                out[(col, r)] = fb[r];
+            }
+        }
+        // Zero the entries between joints on different branches.
+        for i in 1..m.body_count() {
+            for j in (i + 1)..m.body_count() {
+                if !self.is_ancestor(i, j) {
+                    out[(5 + i, 5 + j)] = 0.0;
+                    out[(5 + j, 5 + i)] = 0.0;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn is_ancestor(&self, a: usize, mut b: usize) -> bool {
+        // Bodies are numbered depth-first: an ancestor has a smaller index.
+        while b > a {
+            b = self.model.parent[b];
+        }
+        a == b
+    }
+
+    /// Generalized bias forces `h = C ν + G` (nv), base part dual to the representation's base velocity.
+    pub fn bias_forces(&mut self, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        check_len("bias_forces output", self.model.nv(), out.len())?;
+        for e in self.ext.iter_mut() {
+            *e = Vector6::zeros();
+        }
+        self.rnea(None, true, out);
+        Ok(())
+    }
+
+    /// Generalized gravity forces `G` (nv).
+    pub fn gravity_forces(&mut self, out: &mut DVector<f64>) -> Result<(), ModelError> {
+        check_len("gravity_forces output", self.model.nv(), out.len())?;
+        for e in self.ext.iter_mut() {
+            *e = Vector6::zeros();
+        }
+        self.rnea(None, false, out);
+        Ok(())
+    }
+
+    /// Inverse dynamics (RNEA): `out = M ν̇ + h − Σ J_fᵀ w_f` = `[base wrench; τ]`, with ν̇ in the current
+    /// representation and the external wrenches acting on the robot. The base wrench is zero for a motion
+    /// that the external wrenches can produce.
+    pub fn inverse_dynamics(
+        &mut self,
+        nu_dot: &DVector<f64>,
+        wrenches: &[ExternalWrench],
+        out: &mut DVector<f64>,
+    ) -> Result<(), ModelError> {
+        let nv = self.model.nv();
+        check_len("nu_dot", nv, nu_dot.len())?;
+        check_len("inverse_dynamics output", nv, out.len())?;
+        if !nu_dot.iter().all(|v| v.is_finite()) {
+            return Err(ModelError::NonFiniteInput { what: "nu_dot" });
+        }
+        self.gather_wrenches(wrenches)?;
+        self.rnea(Some(nu_dot), true, out);
+        Ok(())
+    }
+
+    /// RNEA in frame A'. `velocity = false` computes gravity only.
+    fn rnea(&mut self, nu_dot: Option<&DVector<f64>>, velocity: bool, out: &mut DVector<f64>) {
+        let nb = self.model.body_count();
+        let g6 = self.world_gravity6();
+        if velocity {
+            let base_acc = match nu_dot {
+                Some(nd) => {
+                    let vd = Vector6::from_iterator(nd.iter().take(6).copied());
+                    self.base_t_mul(&vd)
+                }
+                None => Vector6::zeros(),
+            };
+            self.acc[0] = base_acc + self.bias[0] - g6;
+            let m = &*self.model;
+            for i in 1..nb {
+                let p = m.parent[i];
+                let mut a = self.acc[p] + self.c[i];
+                if let Some(nd) = nu_dot {
+                    a += self.s[i] * nd[5 + i];
+                }
+                self.acc[i] = a;
+            }
+            for i in 0..nb {
+                let iv = self.inertia[i].mul_motion(&self.vel[i]);
+                self.force[i] = self.inertia[i].mul_motion(&self.acc[i])
+                    + cross_force(&self.vel[i], &iv)
+                    - self.ext[i];
+            }
+        } else {
+            for i in 0..nb {
+                self.force[i] = self.inertia[i].mul_motion(&(-g6)) - self.ext[i];
+            }
+        }
+        let m = &*self.model;
+        for i in (1..nb).rev() {
+            out[5 + i] = self.s[i].dot(&self.force[i]);
+            let p = m.parent[i];
+            let f = self.force[i];
+            self.force[p] += f;
+        }
+        let fb = self.base_t_tr_mul(&self.force[0]);
+        for r in 0..6 {
+            out[r] = fb[r];
+        }
+    }
+
+    /// Forward dynamics (articulated-body algorithm) of the free-floating robot: ν̇ (nv, in the current
+    /// representation) produced by joint torques `tau` (n) and external wrenches.
+    pub fn forward_dynamics(
+        &mut self,
+        tau: &DVector<f64>,
+        wrenches: &[ExternalWrench],
+        out: &mut DVector<f64>,
+    ) -> Result<(), ModelError> {
+        let n = self.model.dof();
+        check_len("tau", n, tau.len())?;
+        check_len("forward_dynamics output", n + 6, out.len())?;
+        if !tau.iter().all(|v| v.is_finite()) {
+            return Err(ModelError::NonFiniteInput { what: "tau" });
+        }
+        self.gather_wrenches(wrenches)?;
+        let nb = self.model.body_count();
+        for i in 0..nb {
+            let iv = self.inertia[i].mul_motion(&self.vel[i]);
+            self.art[i] = self.inertia[i].matrix();
+            self.force[i] = cross_force(&self.vel[i], &iv) - self.ext[i];
+        }
+        for i in (1..nb).rev() {
+            let p = self.model.parent[i];
+            let s = self.s[i];
+            let u_vec = self.art[i] * s;
+            let d = s.dot(&u_vec);
+            if !(d > 1e-14 && d.is_finite()) {
+                return Err(ModelError::SingularInertia {
+                    what: format!("joint `{}`", self.model.joints[i - 1].name),
+                });
+            }
+            let u = tau[i - 1] - s.dot(&self.force[i]);
+            let inv_d = 1.0 / d;
+            let ia = self.art[i] - u_vec * (u_vec.transpose() * inv_d);
+            let pa = self.force[i] + ia * self.c[i] + u_vec * (u * inv_d);
+            self.art[p] += ia;
+            self.force[p] += pa;
+            self.u_vec[i] = u_vec;
+            self.d_val[i] = inv_d;
+            self.u_val[i] = u;
+        }
+        let Some(chol) = self.art[0].cholesky() else {
+            return Err(ModelError::SingularInertia {
+                what: "the floating base".to_string(),
+            });
+        };
+        let a0 = -chol.solve(&self.force[0]);
+        self.acc[0] = a0;
+        for i in 1..nb {
+            let p = self.model.parent[i];
+            let a = self.acc[p] + self.c[i];
+            let qdd = (self.u_val[i] - self.u_vec[i].dot(&a)) * self.d_val[i];
+            self.acc[i] = a + self.s[i] * qdd;
+            out[5 + i] = qdd;
+        }
+        let true_base = a0 + self.world_gravity6() - self.bias[0];
+        let vd = self.base_t_inv_mul(&true_base);
+        for r in 0..6 {
+            out[r] = vd[r];
+        }
+        if !out.iter().all(|v| v.is_finite()) {
+            return Err(ModelError::SingularInertia {
+                what: "the floating base".to_string(),
+            });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,238 @@
+//! The immutable model: bodies (links joined by movable joints, fixed joints merged), joints, frames, sensors.
+
+use std::collections::HashMap;
+
+use nalgebra::{Isometry3, Matrix3, Vector3};
+
+use crate::spatial::Inertia;
+
+/// Type of a movable joint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointKind {
+    /// Rotation about `axis`, with position limits.
+    Revolute,
+    /// Rotation about `axis`, unbounded (`lower = −∞`, `upper = +∞`).
+    Continuous,
+    /// Translation along `axis`.
+    Prismatic,
+}
+
+impl JointKind {
+    /// The URDF name of the type (`revolute`, `continuous`, `prismatic`).
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            JointKind::Revolute => "revolute",
+            JointKind::Continuous => "continuous",
+            JointKind::Prismatic => "prismatic",
+        }
+    }
+}
+
+/// The `<mimic>` element of a joint. Mimic joints are loaded as independent joints (as iDynTree and Pinocchio do
+/// by default); this records the declared relation `q = multiplier · q_joint + offset`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Mimic {
+    /// The joint that is mimicked.
+    pub joint: String,
+    /// Multiplier (default 1).
+    pub multiplier: f64,
+    /// Offset in rad or m (default 0).
+    pub offset: f64,
+}
+
+/// A movable joint (one degree of freedom).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Joint {
+    /// Joint name.
+    pub name: String,
+    /// Revolute, continuous or prismatic.
+    pub kind: JointKind,
+    /// Unit axis in the child link frame (= joint frame).
+    pub axis: Vector3<f64>,
+    /// Lower position limit (rad or m); `−∞` for continuous joints and joints declared without `<limit>`.
+    pub lower: f64,
+    /// Upper position limit (rad or m); `+∞` for continuous joints and joints declared without `<limit>`.
+    pub upper: f64,
+    /// Velocity limit (rad/s or m/s); `+∞` when not declared.
+    pub velocity_limit: f64,
+    /// Effort limit (N·m or N); `+∞` when not declared.
+    pub effort_limit: f64,
+    /// `Some` when the URDF declares the joint as a mimic joint (it is still an independent DoF).
+    pub mimic: Option<Mimic>,
+    /// URDF parent link of the joint.
+    pub parent_link: String,
+    /// URDF child link of the joint.
+    pub child_link: String,
+}
+
+/// Identifier of a frame of a [`Model`] (index into [`Model::frames`]). Obtain it from [`Model::frame_id`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct FrameId(pub(crate) usize);
+
+impl FrameId {
+    /// Index into [`Model::frames`].
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
+
+/// What a frame is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrameKind {
+    /// The frame of a body (a URDF link moved by a movable joint, or the root link).
+    Body,
+    /// A URDF link attached by a fixed joint, merged into the body it is rigidly attached to.
+    MergedLink,
+    /// A sensor frame that is not a URDF link.
+    Sensor,
+}
+
+/// A named frame rigidly attached to a body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Name (the URDF link name, or the sensor name).
+    pub name: String,
+    /// Index of the body it is attached to (into [`Model::bodies`]).
+    pub link: usize,
+    /// `body_H_frame`.
+    pub placement: Isometry3<f64>,
+    /// What the frame is.
+    pub kind: FrameKind,
+}
+
+/// A rigid body of the model: one URDF link moved by a movable joint (or the root), with the inertias of every
+/// link attached to it through fixed joints lumped in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Body {
+    /// Name of the URDF link that defines the body frame.
+    pub name: String,
+    /// Parent body (`None` for the root / floating base).
+    pub parent: Option<usize>,
+    /// Index of the movable joint connecting it to its parent (`None` for the root). Always `Some(body − 1)`.
+    pub joint: Option<usize>,
+    /// `parent_body_H_body` at zero joint position.
+    pub placement_in_parent: Isometry3<f64>,
+    /// Mass (kg), lumped.
+    pub mass: f64,
+    /// Centre of mass in the body frame (m).
+    pub com: Vector3<f64>,
+    /// Rotational inertia about the CoM, body orientation (kg·m²).
+    pub inertia_at_com: Matrix3<f64>,
+}
+
+/// A six-axis force/torque sensor declared in the URDF (on a fixed joint).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FtSensor {
+    /// Sensor name.
+    pub name: String,
+    /// The fixed joint the sensor is mounted on.
+    pub joint: String,
+    /// Measurement frame.
+    pub frame: FrameId,
+    /// Parent link of the joint.
+    pub parent_link: String,
+    /// Child link of the joint.
+    pub child_link: String,
+    /// Declared measurement direction (`child_to_parent` or `parent_to_child`; `child_to_parent` if not declared).
+    pub measure_direction: String,
+}
+
+/// The immutable floating-base model. Build it with [`Model::from_urdf_file`] or [`Model::from_urdf_str`]
+/// and share it with [`std::sync::Arc`].
+#[derive(Clone, Debug)]
+pub struct Model {
+    pub(crate) name: String,
+    pub(crate) root_link: String,
+    pub(crate) joints: Vec<Joint>,
+    pub(crate) bodies: Vec<Body>,
+    pub(crate) frames: Vec<Frame>,
+    pub(crate) frame_index: HashMap<String, usize>,
+    pub(crate) joint_index: HashMap<String, usize>,
+    pub(crate) ft_sensors: Vec<FtSensor>,
+    pub(crate) warnings: Vec<String>,
+    pub(crate) total_mass: f64,
+    // Flat data for the algorithms (index = body).
+    pub(crate) parent: Vec<usize>,
+    pub(crate) placement_rot: Vec<Matrix3<f64>>,
+    pub(crate) placement_pos: Vec<Vector3<f64>>,
+    pub(crate) axis: Vec<Vector3<f64>>,
+    pub(crate) prismatic: Vec<bool>,
+    pub(crate) inertia: Vec<Inertia>,
+    pub(crate) frame_rot: Vec<Matrix3<f64>>,
+    pub(crate) frame_pos: Vec<Vector3<f64>>,
+}
+
+impl Model {
+    /// Robot name (`<robot name>`).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Number of movable joints n.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Size of the generalized velocity, 6 + n.
+    pub fn nv(&self) -> usize {
+        6 + self.joints.len()
+    }
+
+    /// Movable joints in model order (depth-first from the root, children in file order). Joint `i` is DoF `i`
+    /// and moves body `i + 1`.
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+
+    /// Index (DoF) of a movable joint by name.
+    pub fn joint_index(&self, name: &str) -> Option<usize> {
+        self.joint_index.get(name).copied()
+    }
+
+    /// Frame by name: every URDF link (bodies and fixed-joint-merged links) and every sensor frame.
+    pub fn frame_id(&self, name: &str) -> Option<FrameId> {
+        self.frame_index.get(name).map(|&i| FrameId(i))
+    }
+
+    /// Name of a frame. Panics if `frame` comes from another, smaller model.
+    pub fn frame_name(&self, frame: FrameId) -> &str {
+        &self.frames[frame.0].name
+    }
+
+    /// All frames; [`FrameId::index`] indexes this slice. The first `bodies().len()` frames are the body frames.
+    pub fn frames(&self) -> &[Frame] {
+        &self.frames
+    }
+
+    /// Bodies (index 0 is the root / floating base); body `i > 0` is moved by joint `i − 1`.
+    pub fn bodies(&self) -> &[Body] {
+        &self.bodies
+    }
+
+    /// Name of the root link (the floating base).
+    pub fn root_link(&self) -> &str {
+        &self.root_link
+    }
+
+    /// Total mass (kg).
+    pub fn total_mass(&self) -> f64 {
+        self.total_mass
+    }
+
+    /// Six-axis force/torque sensors.
+    pub fn ft_sensors(&self) -> &[FtSensor] {
+        &self.ft_sensors
+    }
+
+    /// Warnings raised while loading (physically inconsistent inertias, missing limits, massless bodies, ...).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Number of bodies (n + 1).
+    pub fn body_count(&self) -> usize {
+        self.bodies.len()
+    }
+}

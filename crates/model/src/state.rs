@@ -1,0 +1,160 @@
+//! Floating-base state, velocity representations and state integration.
+
+use nalgebra::{
+    DVector, Isometry3, Matrix3, Translation3, UnitQuaternion, Vector6,
+};
+
+use crate::error::{check_len, ModelError};
+use crate::model::Model;
+use crate::spatial::{ang, join, lin, skew};
+
+/// How the base velocity (and frame velocities, Jacobians, accelerations) are expressed (Traversaro 2017,
+/// Table 2.1; iDynTree semantics).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VelocityRepresentation {
+    /// `[d/dt ^A o_B; ^A ω_{A,B}]`: linear velocity of the frame origin and angular velocity, both in world
+    /// orientation (iDynTree's default, frame `B[A]`).
+    #[default]
+    Mixed,
+    /// Left-trivialized `^B v_{A,B}`: both in the frame's own coordinates (Pinocchio's LOCAL).
+    Body,
+    /// Right-trivialized `^A v_{A,B}`: world coordinates, linear part = velocity of the body point at the world
+    /// origin.
+    Inertial,
+}
+
+impl VelocityRepresentation {
+    /// `mixed`, `body` or `inertial`.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            VelocityRepresentation::Mixed => "mixed",
+            VelocityRepresentation::Body => "body",
+            VelocityRepresentation::Inertial => "inertial",
+        }
+    }
+}
+
+impl std::str::FromStr for VelocityRepresentation {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "mixed" => Ok(Self::Mixed),
+            "body" => Ok(Self::Body),
+            "inertial" => Ok(Self::Inertial),
+            other => Err(format!(
+                "unknown velocity representation `{other}` (expected mixed, body or inertial)"
+            )),
+        }
+    }
+}
+
+/// Floating-base robot state.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobotState {
+    /// `world_H_base` (pose of the root link).
+    pub base_pose: Isometry3<f64>,
+    /// Joint positions (rad or m), model order, length n.
+    pub joint_positions: DVector<f64>,
+    /// Base velocity `[linear; angular]` in the representation of the [`crate::KinDyn`] it is given to.
+    pub base_velocity: Vector6<f64>,
+    /// Joint velocities (rad/s or m/s), length n.
+    pub joint_velocities: DVector<f64>,
+}
+
+impl RobotState {
+    /// Identity base pose, zero joint positions and velocities.
+    pub fn zero(model: &Model) -> Self {
+        Self {
+            base_pose: Isometry3::identity(),
+            joint_positions: DVector::zeros(model.dof()),
+            base_velocity: Vector6::zeros(),
+            joint_velocities: DVector::zeros(model.dof()),
+        }
+    }
+
+    /// Advances the state by `dt` seconds at constant velocity: joints `q += dt q̇`; base on SE(3) with the
+    /// base velocity read in `representation` and held constant in that representation:
+    /// body `H ← H exp(dt ^B v^)`, inertial `H ← exp(dt ^A v^) H`, mixed `o ← o + dt ȯ`, `R ← exp(dt ω^) R`.
+    /// Velocities are unchanged.
+    pub fn integrate(
+        &mut self,
+        model: &Model,
+        representation: VelocityRepresentation,
+        dt: f64,
+    ) -> Result<(), ModelError> {
+        check_len("joint_positions", model.dof(), self.joint_positions.len())?;
+        check_len("joint_velocities", model.dof(), self.joint_velocities.len())?;
+        if !dt.is_finite() {
+            return Err(ModelError::NonFiniteInput { what: "dt" });
+        }
+        if !self.base_velocity.iter().all(|v| v.is_finite())
+            || !self.joint_velocities.iter().all(|v| v.is_finite())
+        {
+            return Err(ModelError::NonFiniteInput { what: "velocities" });
+        }
+        self.joint_positions.axpy(dt, &self.joint_velocities, 1.0);
+        let v = self.base_velocity;
+        self.base_pose = match representation {
+            VelocityRepresentation::Body => self.base_pose * se3_exp(&(v * dt)),
+            VelocityRepresentation::Inertial => se3_exp(&(v * dt)) * self.base_pose,
+            VelocityRepresentation::Mixed => {
+                let rot = UnitQuaternion::from_scaled_axis(ang(&v) * dt) * self.base_pose.rotation;
+                let pos = self.base_pose.translation.vector + lin(&v) * dt;
+                Isometry3::from_parts(
+                    Translation3::from(pos),
+                    UnitQuaternion::new_normalize(rot.into_inner()),
+                )
+            }
+        };
+        Ok(())
+    }
+}
+
+/// Exponential map of SE(3): the pose reached after a unit time at constant body twist `xi = [v; ω]`.
+pub fn se3_exp(xi: &Vector6<f64>) -> Isometry3<f64> {
+    let v = lin(xi);
+    let w = ang(xi);
+    let theta = w.norm();
+    let s = skew(&w);
+    let (a, b) = if theta < 1e-6 {
+        // Series of (1 − cos θ)/θ² and (θ − sin θ)/θ³.
+        let t2 = theta * theta;
+        (0.5 - t2 / 24.0, 1.0 / 6.0 - t2 / 120.0)
+    } else {
+        (
+            (1.0 - theta.cos()) / (theta * theta),
+            (theta - theta.sin()) / (theta * theta * theta),
+        )
+    };
+    let jac = Matrix3::identity() + s * a + s * s * b;
+    Isometry3::from_parts(
+        Translation3::from(jac * v),
+        UnitQuaternion::from_scaled_axis(w),
+    )
+}
+
+/// Converts a base (or any frame) velocity of a frame with world pose `pose` between representations.
+pub fn convert_velocity(
+    pose: &Isometry3<f64>,
+    velocity: &Vector6<f64>,
+    from: VelocityRepresentation,
+    to: VelocityRepresentation,
+) -> Vector6<f64> {
+    let r: Matrix3<f64> = *pose.rotation.to_rotation_matrix().matrix();
+    let o = pose.translation.vector;
+    // To mixed [ȯ; ω].
+    let (od, w) = match from {
+        VelocityRepresentation::Mixed => (lin(velocity), ang(velocity)),
+        VelocityRepresentation::Body => (r * lin(velocity), r * ang(velocity)),
+        VelocityRepresentation::Inertial => {
+            let w = ang(velocity);
+            (lin(velocity) + w.cross(&o), w)
+        }
+    };
+    match to {
+        VelocityRepresentation::Mixed => join(&od, &w),
+        VelocityRepresentation::Body => join(&(r.transpose() * od), &(r.transpose() * w)),
+        VelocityRepresentation::Inertial => join(&(od - w.cross(&o)), &w),
+    }
+}

@@ -1,0 +1,394 @@
+//! Planner parameters.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::PlannerError;
+
+/// Which foot swings first when a plan starts from standing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FirstSwingFoot {
+    /// The foot on the side the robot moves or turns to (left when going straight).
+    Auto,
+    /// Always the left foot.
+    Left,
+    /// Always the right foot.
+    Right,
+}
+
+/// All parameters of the trajectory layer. Defaults are iCub-v2.7-like (see `anchors-walking-stacks.md` §1.1,
+/// §1.3 and the thesis digest §7).
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `com_height` | m | 0.53 | constant CoM height above the ground (LIPM), gives ω = √(g/h) |
+/// | `gravity` | m/s² | 9.81 | gravity magnitude |
+/// | `step_duration_min` | s | 0.8 | min time between two touch-downs (10.1.11) |
+/// | `step_duration_nominal` | s | 1.0 | duration of the closing steps once the unicycle stopped |
+/// | `step_duration_max` | s | 1.2 | max time between two touch-downs (10.1.11) |
+/// | `double_support_fraction` | – | 0.35 | share of each step spent in double support, in (0, 1) |
+/// | `initial_double_support_duration` | s | 1.0 | first double support of a plan started from standing |
+/// | `final_double_support_duration` | s | 1.0 | last double support, ZMP/DCM move to the feet mid-point |
+/// | `step_length_min` | m | 0.0 | min distance between the feet at touch-down (10.1.12) |
+/// | `step_length_max` | m | 0.22 | max distance between the feet at touch-down (10.1.12), width included |
+/// | `nominal_width` | m | 0.16 | lateral distance of the feet from each other on the unicycle axle |
+/// | `min_width` | m | 0.14 | min lateral distance of the left foot in the right-foot frame |
+/// | `max_yaw_per_step` | rad | 0.26 | max relative yaw between the feet (10.1.13), ≈ 15° |
+/// | `swing_height` | m | 0.03 | apex height of the swing foot above the higher of its two footholds |
+/// | `swing_apex_fraction` | – | 0.5 | apex time as a fraction of the swing, in (0, 1) |
+/// | `landing_velocity` | m/s | 0.0 | vertical swing-foot velocity at touch-down (≤ 0) |
+/// | `foot_length` | m | 0.20 | sole rectangle length (x of the sole frame), centred on the sole frame |
+/// | `foot_width` | m | 0.09 | sole rectangle width (y of the sole frame) |
+/// | `backward_speed_factor` | – | 0.5 | backward speed limit as a fraction of the forward one, in (0, 1] |
+/// | `sideways_speed_factor` | – | 0.3 | lateral speed limit as a fraction of the forward one, in [0, 1] |
+/// | `linear_saturation_factor` | – | 0.9 | forward speed limit = factor · √(l_max² − w²)/t_min |
+/// | `angular_saturation_factor` | – | 0.7 | yaw-rate limit = factor · max_yaw_per_step / t_min |
+/// | `reference_speed_fraction` | – | 0.9 | speed of the reference point along a path, fraction of the limits |
+/// | `unicycle_gain` | 1/s | 10.0 | K of the feedback-linearising unicycle controller (10.1.6) |
+/// | `reference_point` | m | [0.1, 0.0] | controlled point F in the unicycle frame (x must be > 0) |
+/// | `time_weight` | s² | 2.5 | K_t of the step cost K_t/Δt² + K_x Δx² (10.1.10) |
+/// | `position_weight` | 1/m² | 1.0 | K_x of the step cost |
+/// | `unicycle_dt` | s | 0.01 | integration and impact-time sampling period of the unicycle |
+/// | `horizon` | s | 120.0 | longest unicycle motion planned at once; beyond it the plan is a prefix |
+/// | `turn_in_place_threshold` | rad | 0.8 | heading error to a waypoint above which the robot turns in place first |
+/// | `backward_max_distance` | m | 0.5 | a waypoint behind the robot closer than this is reached walking backwards |
+/// | `merge_point_fraction` | – | 0.4 | where inside a double support a new plan is merged, in [0, 1) |
+/// | `first_swing_foot` | – | `auto` | `auto`, `left` or `right` |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlannerConfig {
+    /// Constant CoM height above the ground [m].
+    pub com_height: f64,
+    /// Gravity magnitude [m/s²].
+    pub gravity: f64,
+    /// Minimum step duration (touch-down to touch-down) [s].
+    pub step_duration_min: f64,
+    /// Duration of the closing steps placed after the unicycle stopped [s].
+    pub step_duration_nominal: f64,
+    /// Maximum step duration [s].
+    pub step_duration_max: f64,
+    /// Fraction of each step spent in double support, in (0, 1).
+    pub double_support_fraction: f64,
+    /// Duration of the first double support when starting from standing [s].
+    pub initial_double_support_duration: f64,
+    /// Duration of the final double support [s].
+    pub final_double_support_duration: f64,
+    /// Minimum distance between the feet at touch-down [m].
+    pub step_length_min: f64,
+    /// Maximum distance between the feet at touch-down [m] (the width is included in this distance).
+    pub step_length_max: f64,
+    /// Nominal lateral distance between the feet [m].
+    pub nominal_width: f64,
+    /// Minimum lateral position of the left foot in the right-foot frame [m].
+    pub min_width: f64,
+    /// Maximum relative yaw between the feet [rad].
+    pub max_yaw_per_step: f64,
+    /// Swing apex height above the higher foothold [m].
+    pub swing_height: f64,
+    /// Apex time as a fraction of the swing duration, in (0, 1).
+    pub swing_apex_fraction: f64,
+    /// Vertical velocity of the swing foot at touch-down [m/s], ≤ 0.
+    pub landing_velocity: f64,
+    /// Sole length [m].
+    pub foot_length: f64,
+    /// Sole width [m].
+    pub foot_width: f64,
+    /// Backward speed limit as a fraction of the forward speed limit, in (0, 1].
+    pub backward_speed_factor: f64,
+    /// Lateral speed limit as a fraction of the forward speed limit, in [0, 1].
+    pub sideways_speed_factor: f64,
+    /// Forward speed limit factor (see the table above), in (0, 1].
+    pub linear_saturation_factor: f64,
+    /// Yaw-rate limit factor (see the table above), in (0, 1].
+    pub angular_saturation_factor: f64,
+    /// Reference-point speed along a path as a fraction of the limits, in (0, 1].
+    pub reference_speed_fraction: f64,
+    /// Unicycle feedback gain K [1/s].
+    pub unicycle_gain: f64,
+    /// Controlled point F in the unicycle frame [m] (x > 0).
+    pub reference_point: [f64; 2],
+    /// K_t of the footstep cost [s²].
+    pub time_weight: f64,
+    /// K_x of the footstep cost [1/m²].
+    pub position_weight: f64,
+    /// Unicycle integration period [s].
+    pub unicycle_dt: f64,
+    /// Planning horizon of the unicycle [s].
+    pub horizon: f64,
+    /// Heading error above which the robot turns in place before walking to a waypoint [rad].
+    pub turn_in_place_threshold: f64,
+    /// Waypoints behind the robot closer than this are reached walking backwards [m].
+    pub backward_max_distance: f64,
+    /// Merge point position inside a double support, in [0, 1).
+    pub merge_point_fraction: f64,
+    /// Which foot swings first from standing.
+    pub first_swing_foot: FirstSwingFoot,
+}
+
+impl Default for PlannerConfig {
+    fn default() -> Self {
+        Self {
+            com_height: 0.53,
+            gravity: 9.81,
+            step_duration_min: 0.8,
+            step_duration_nominal: 1.0,
+            step_duration_max: 1.2,
+            double_support_fraction: 0.35,
+            initial_double_support_duration: 1.0,
+            final_double_support_duration: 1.0,
+            step_length_min: 0.0,
+            step_length_max: 0.22,
+            nominal_width: 0.16,
+            min_width: 0.14,
+            max_yaw_per_step: 0.26,
+            swing_height: 0.03,
+            swing_apex_fraction: 0.5,
+            landing_velocity: 0.0,
+            foot_length: 0.20,
+            foot_width: 0.09,
+            backward_speed_factor: 0.5,
+            sideways_speed_factor: 0.3,
+            linear_saturation_factor: 0.9,
+            angular_saturation_factor: 0.7,
+            reference_speed_fraction: 0.9,
+            unicycle_gain: 10.0,
+            reference_point: [0.1, 0.0],
+            time_weight: 2.5,
+            position_weight: 1.0,
+            unicycle_dt: 0.01,
+            horizon: 120.0,
+            turn_in_place_threshold: 0.8,
+            backward_max_distance: 0.5,
+            merge_point_fraction: 0.4,
+            first_swing_foot: FirstSwingFoot::Auto,
+        }
+    }
+}
+
+fn check(
+    name: &'static str,
+    value: f64,
+    ok: bool,
+    reason: impl Into<String>,
+) -> Result<(), PlannerError> {
+    if value.is_finite() && ok {
+        Ok(())
+    } else {
+        Err(PlannerError::InvalidParameter {
+            name,
+            value,
+            reason: reason.into(),
+        })
+    }
+}
+
+impl PlannerConfig {
+    /// Checks every field; the error names the first offending parameter.
+    pub fn validate(&self) -> Result<(), PlannerError> {
+        let c = self;
+        check("com_height", c.com_height, c.com_height > 0.0, "must be > 0")?;
+        check("gravity", c.gravity, c.gravity > 0.0, "must be > 0")?;
+        check(
+            "step_duration_min",
+            c.step_duration_min,
+            c.step_duration_min > 0.0,
+            "must be > 0",
+        )?;
+        check(
+            "step_duration_max",
+            c.step_duration_max,
+            c.step_duration_max >= c.step_duration_min,
+            "must be >= step_duration_min",
+        )?;
+        check(
+            "step_duration_nominal",
+            c.step_duration_nominal,
+            c.step_duration_nominal >= c.step_duration_min
+                && c.step_duration_nominal <= c.step_duration_max,
+            "must lie in [step_duration_min, step_duration_max]",
+        )?;
+        check(
+            "double_support_fraction",
+            c.double_support_fraction,
+            c.double_support_fraction > 0.0 && c.double_support_fraction < 1.0,
+            "must lie in (0, 1)",
+        )?;
+        check(
+            "initial_double_support_duration",
+            c.initial_double_support_duration,
+            c.initial_double_support_duration > 0.0,
+            "must be > 0",
+        )?;
+        check(
+            "final_double_support_duration",
+            c.final_double_support_duration,
+            c.final_double_support_duration > 0.0,
+            "must be > 0",
+        )?;
+        check("foot_length", c.foot_length, c.foot_length > 0.0, "must be > 0")?;
+        check("foot_width", c.foot_width, c.foot_width > 0.0, "must be > 0")?;
+        check(
+            "max_yaw_per_step",
+            c.max_yaw_per_step,
+            c.max_yaw_per_step > 0.0 && c.max_yaw_per_step < std::f64::consts::FRAC_PI_2,
+            "must lie in (0, π/2)",
+        )?;
+        let no_overlap = 0.5 * c.foot_width * (1.0 + c.max_yaw_per_step.cos())
+            + 0.5 * c.foot_length * c.max_yaw_per_step.sin();
+        check(
+            "min_width",
+            c.min_width,
+            c.min_width > no_overlap,
+            format!(
+                "must exceed {no_overlap:.4} m so that the soles cannot overlap at the maximum relative yaw"
+            ),
+        )?;
+        check(
+            "nominal_width",
+            c.nominal_width,
+            c.nominal_width >= c.min_width,
+            "must be >= min_width",
+        )?;
+        check(
+            "step_length_max",
+            c.step_length_max,
+            c.step_length_max > c.nominal_width,
+            "must exceed nominal_width (the feet distance includes the width)",
+        )?;
+        check(
+            "step_length_min",
+            c.step_length_min,
+            c.step_length_min >= 0.0 && c.step_length_min <= c.min_width,
+            "must lie in [0, min_width]",
+        )?;
+        check("swing_height", c.swing_height, c.swing_height > 0.0, "must be > 0")?;
+        check(
+            "swing_apex_fraction",
+            c.swing_apex_fraction,
+            c.swing_apex_fraction > 0.0 && c.swing_apex_fraction < 1.0,
+            "must lie in (0, 1)",
+        )?;
+        check(
+            "landing_velocity",
+            c.landing_velocity,
+            c.landing_velocity <= 0.0,
+            "must be <= 0 (downwards)",
+        )?;
+        check(
+            "backward_speed_factor",
+            c.backward_speed_factor,
+            c.backward_speed_factor > 0.0 && c.backward_speed_factor <= 1.0,
+            "must lie in (0, 1]",
+        )?;
+        check(
+            "sideways_speed_factor",
+            c.sideways_speed_factor,
+            (0.0..=1.0).contains(&c.sideways_speed_factor),
+            "must lie in [0, 1]",
+        )?;
+        for (name, v) in [
+            ("linear_saturation_factor", c.linear_saturation_factor),
+            ("angular_saturation_factor", c.angular_saturation_factor),
+            ("reference_speed_fraction", c.reference_speed_fraction),
+        ] {
+            check(name, v, v > 0.0 && v <= 1.0, "must lie in (0, 1]")?;
+        }
+        check("unicycle_gain", c.unicycle_gain, c.unicycle_gain > 0.0, "must be > 0")?;
+        check(
+            "reference_point",
+            c.reference_point[0],
+            c.reference_point[0] > 0.0,
+            "x must be > 0 (the unicycle controller is singular on the wheel axis)",
+        )?;
+        check(
+            "reference_point",
+            c.reference_point[1],
+            true,
+            "y must be finite",
+        )?;
+        check("time_weight", c.time_weight, c.time_weight >= 0.0, "must be >= 0")?;
+        check(
+            "position_weight",
+            c.position_weight,
+            c.position_weight >= 0.0,
+            "must be >= 0",
+        )?;
+        check(
+            "unicycle_dt",
+            c.unicycle_dt,
+            c.unicycle_dt > 0.0 && c.unicycle_dt <= 0.1 * c.step_duration_min,
+            "must lie in (0, step_duration_min / 10]",
+        )?;
+        let (n_min, n_max) = c.step_sample_window();
+        check(
+            "step_duration_max",
+            c.step_duration_max,
+            n_min <= n_max,
+            "the window [step_duration_min, step_duration_max] contains no multiple of unicycle_dt",
+        )?;
+        check(
+            "horizon",
+            c.horizon,
+            c.horizon > 0.0 && c.horizon / c.unicycle_dt <= 1.0e7,
+            "must be > 0 and at most 1e7 unicycle samples",
+        )?;
+        check(
+            "turn_in_place_threshold",
+            c.turn_in_place_threshold,
+            c.turn_in_place_threshold >= 0.0 && c.turn_in_place_threshold <= std::f64::consts::PI,
+            "must lie in [0, π]",
+        )?;
+        check(
+            "backward_max_distance",
+            c.backward_max_distance,
+            c.backward_max_distance >= 0.0,
+            "must be >= 0",
+        )?;
+        check(
+            "merge_point_fraction",
+            c.merge_point_fraction,
+            (0.0..1.0).contains(&c.merge_point_fraction),
+            "must lie in [0, 1)",
+        )?;
+        Ok(())
+    }
+
+    /// LIPM natural frequency ω = √(g/h) [1/s].
+    pub fn omega(&self) -> f64 {
+        (self.gravity / self.com_height).sqrt()
+    }
+
+    /// Forward speed limit of the unicycle [m/s]: factor · √(l_max² − w²)/t_min.
+    pub fn max_forward_speed(&self) -> f64 {
+        let l = self.step_length_max;
+        let w = self.nominal_width;
+        self.linear_saturation_factor * (l * l - w * w).sqrt() / self.step_duration_min
+    }
+
+    /// Backward speed limit [m/s] (positive number).
+    pub fn max_backward_speed(&self) -> f64 {
+        self.backward_speed_factor * self.max_forward_speed()
+    }
+
+    /// Lateral speed limit [m/s]: the smaller of the configured fraction of the forward limit and the
+    /// geometric limit 0.9·(nominal_width − min_width)/t_min (the trailing foot must keep `min_width`).
+    pub fn max_lateral_speed(&self) -> f64 {
+        let geometric = 0.9 * (self.nominal_width - self.min_width) / self.step_duration_min;
+        (self.sideways_speed_factor * self.max_forward_speed()).min(geometric)
+    }
+
+    /// Yaw-rate limit [rad/s]: factor · max_yaw_per_step / t_min.
+    pub fn max_yaw_rate(&self) -> f64 {
+        self.angular_saturation_factor * self.max_yaw_per_step / self.step_duration_min
+    }
+
+    /// Step durations as numbers of unicycle samples: [ceil(t_min/dt), floor(t_max/dt)].
+    pub(crate) fn step_sample_window(&self) -> (usize, usize) {
+        let n_min = (self.step_duration_min / self.unicycle_dt - 1e-9).ceil().max(1.0);
+        let n_max = (self.step_duration_max / self.unicycle_dt + 1e-9).floor();
+        if !(n_min.is_finite() && n_max.is_finite()) || n_max < 0.0 || n_min > 1e9 || n_max > 1e9 {
+            return (1, 0);
+        }
+        (n_min as usize, n_max as usize)
+    }
+}

@@ -1,0 +1,74 @@
+//! The scenarios the runner uses: a 2 m straight walk, a 90° turn in place, a curve, a velocity command.
+
+mod common;
+
+use common::*;
+use stride_planner::{plan_from_standing, Goal, PlanOutcome, PlannerConfig, Waypoint};
+
+fn run(goal: Goal) -> stride_planner::Plan {
+    let cfg = PlannerConfig::default();
+    let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+    let plan = plan_from_standing(&cfg, 0.0, &l, &r, &goal).expect("plan");
+    check_all(&cfg, &plan, true);
+    plan
+}
+
+fn final_mid(plan: &stride_planner::Plan) -> (f64, f64, f64) {
+    let l = &plan.left_contacts.contacts.last().unwrap().pose;
+    let r = &plan.right_contacts.contacts.last().unwrap().pose;
+    let m = (l.translation.vector + r.translation.vector) * 0.5;
+    (m.x, m.y, yaw_of(l))
+}
+
+#[test]
+fn straight_two_meters() {
+    let plan = run(Goal::Pose { x: 2.0, y: 0.0, yaw: 0.0 });
+    let (x, y, yaw) = final_mid(&plan);
+    assert!((x - 2.0).abs() < 0.01 && y.abs() < 0.01 && yaw.abs() < 0.01, "{x} {y} {yaw}");
+    assert_eq!(plan.outcome, PlanOutcome::Complete);
+    assert!(plan.step_count() >= 10, "steps {}", plan.step_count());
+    eprintln!("2 m: {} steps, {:.2} s", plan.step_count(), plan.end_time);
+}
+
+#[test]
+fn turn_in_place_90_degrees() {
+    let plan = run(Goal::Pose { x: 0.0, y: 0.0, yaw: std::f64::consts::FRAC_PI_2 });
+    let (x, y, yaw) = final_mid(&plan);
+    assert!(x.abs() < 0.01 && y.abs() < 0.01, "{x} {y}");
+    assert!((yaw - std::f64::consts::FRAC_PI_2).abs() < 0.01, "{yaw}");
+}
+
+#[test]
+fn curve_through_waypoints() {
+    let plan = run(Goal::Waypoints {
+        points: vec![
+            Waypoint { x: 0.6, y: 0.0, yaw: None },
+            Waypoint { x: 1.2, y: 0.4, yaw: None },
+            Waypoint { x: 1.5, y: 1.0, yaw: Some(1.2) },
+        ],
+    });
+    let (x, y, yaw) = final_mid(&plan);
+    assert!((x - 1.5).abs() < 0.02 && (y - 1.0).abs() < 0.02, "{x} {y}");
+    assert!((yaw - 1.2).abs() < 0.02, "{yaw}");
+}
+
+#[test]
+fn velocity_command() {
+    let plan = run(Goal::Velocity { forward: 0.1, lateral: 0.0, yaw_rate: 0.05, duration: Some(8.0) });
+    let (x, _, yaw) = final_mid(&plan);
+    assert!(x > 0.5, "{x}");
+    assert!(yaw > 0.2, "{yaw}");
+}
+
+#[test]
+fn lateral_and_backward_velocity() {
+    run(Goal::Velocity { forward: 0.0, lateral: 0.05, yaw_rate: 0.0, duration: Some(6.0) });
+    run(Goal::Velocity { forward: -0.1, lateral: 0.0, yaw_rate: 0.0, duration: Some(6.0) });
+    run(Goal::Pose { x: -0.3, y: 0.0, yaw: 0.0 });
+}
+
+#[test]
+fn stand_goal_is_a_valid_standing_plan() {
+    let plan = run(Goal::Stand);
+    assert_eq!(plan.step_count(), 0);
+}

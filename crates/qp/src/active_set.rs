@@ -1,0 +1,763 @@
+//! Dense dual active-set QP solver after Goldfarb & Idnani (1983), "A numerically stable dual method for
+//! solving strictly convex quadratic programs", Math. Programming 27:1–33.
+//!
+//! Notation of the paper: `G = L Lᵀ` (Cholesky of the Hessian), `N` the normals of the active constraints,
+//! `L⁻¹ N = Q [R; 0]` and `J = L⁻ᵀ Q = [J₁ J₂]`, so that `Jᵀ N = [R; 0]` and `J Jᵀ = G⁻¹`. For a violated
+//! constraint `p` with normal `n⁺` (written as `n⁺ᵀx ≥ b⁺`), `d = Jᵀ n⁺`, the primal step direction is
+//! `z = J₂ d₂`, the change of the active multipliers is `r = R⁻¹ d₁`; the partial (dual) step `t₁` keeps the
+//! inequality multipliers non-negative and the full step `t₂ = −s(x)/zᵀn⁺` makes `p` active. Adding a
+//! constraint rotates `d` into `e_q` with Givens rotations applied to the columns of `J`; dropping one
+//! removes a column of `R` and restores its triangular form with Givens rotations (again applied to `J`).
+//!
+//! Every constraint is one *slot*: equality rows, two-sided inequality rows (the violated side is used with
+//! `sign = +1` for `C_i x ≥ l_i`, `sign = −1` for `−C_i x ≥ −u_i`), and the variable bounds (unit normals,
+//! handled without forming them).
+
+use serde::{Deserialize, Serialize};
+
+use crate::dense::DenseQp;
+use crate::solver::{QpSolver, QpStatus, SolverOutput};
+
+/// Settings of the active-set backend.
+///
+/// | field | default | meaning |
+/// |---|---|---|
+/// | `max_iterations` | `0` (= automatic: `3·(n + n_eq + n_ineq + n) + 50`) | limit on active-set changes (adds + drops) |
+/// | `feasibility_tolerance` | `1e-9` | a side is violated when `violation > tol · (1 + |rhs|)/‖row‖`-scaled (distance in `x` space) |
+/// | `dependence_tolerance` | `1e-10` | a constraint is linearly dependent on the active set when `‖d₂‖ ≤ tol·‖d‖` |
+/// | `warm_start` | `true` | start from the previous solve's active set (falls back to a cold start if that fails) |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ActiveSetSettings {
+    /// Iteration limit (0 = automatic).
+    pub max_iterations: usize,
+    /// Primal feasibility tolerance (scaled distance).
+    pub feasibility_tolerance: f64,
+    /// Linear-dependence tolerance (relative).
+    pub dependence_tolerance: f64,
+    /// Warm start from the previous active set.
+    pub warm_start: bool,
+}
+
+impl Default for ActiveSetSettings {
+    fn default() -> Self {
+        Self { max_iterations: 0, feasibility_tolerance: 1e-9, dependence_tolerance: 1e-10, warm_start: true }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Active {
+    slot: usize,
+    sign: f64,
+}
+
+/// Result of one active-set run.
+enum Run {
+    Done(QpStatus),
+    /// The warm start could not be used (inconsistent skipped equality etc.): retry cold.
+    WarmFailed,
+}
+
+/// The dense Goldfarb–Idnani dual active-set backend (the default for the whole-body QPs).
+///
+/// Needs a positive definite Hessian. Per solve: one Cholesky factorisation and one triangular inverse
+/// (`O(n³)`), then `O(n²)` per active-set change. Warm start: the active set of the previous solve (same
+/// problem dimensions) is re-imposed as equalities, multipliers are computed in closed form, constraints with
+/// negative multipliers are dropped, and the ordinary dual iterations continue from this dual-feasible point;
+/// if anything fails the solve restarts cold. All workspace is allocated on the first solve of a given size:
+/// later solves allocate nothing.
+pub struct ActiveSetSolver {
+    settings: ActiveSetSettings,
+    n: usize,
+    me: usize,
+    mi: usize,
+    chol: Vec<f64>,
+    j0: Vec<f64>,
+    j: Vec<f64>,
+    r: Vec<f64>,
+    nt: Vec<f64>,
+    norms: Vec<f64>,
+    x: Vec<f64>,
+    d: Vec<f64>,
+    z: Vec<f64>,
+    rv: Vec<f64>,
+    tmp: Vec<f64>,
+    u: Vec<f64>,
+    active: Vec<Active>,
+    is_active: Vec<bool>,
+    prev: Vec<Active>,
+    prev_dims: (usize, usize, usize),
+    iterations: usize,
+    warm_used: bool,
+}
+
+impl ActiveSetSolver {
+    /// A solver with the given settings; workspace is sized at the first solve.
+    pub fn new(settings: ActiveSetSettings) -> Self {
+        Self {
+            settings,
+            n: 0,
+            me: 0,
+            mi: 0,
+            chol: Vec::new(),
+            j0: Vec::new(),
+            j: Vec::new(),
+            r: Vec::new(),
+            nt: Vec::new(),
+            norms: Vec::new(),
+            x: Vec::new(),
+            d: Vec::new(),
+            z: Vec::new(),
+            rv: Vec::new(),
+            tmp: Vec::new(),
+            u: Vec::new(),
+            active: Vec::new(),
+            is_active: Vec::new(),
+            prev: Vec::new(),
+            prev_dims: (usize::MAX, 0, 0),
+            iterations: 0,
+            warm_used: false,
+        }
+    }
+
+    /// Settings in use.
+    pub fn settings(&self) -> &ActiveSetSettings {
+        &self.settings
+    }
+
+    /// Mutable settings (take effect at the next solve).
+    pub fn settings_mut(&mut self) -> &mut ActiveSetSettings {
+        &mut self.settings
+    }
+
+    /// Number of constraints in the active set of the last successful solve.
+    pub fn active_set_size(&self) -> usize {
+        self.prev.len()
+    }
+
+    fn ensure_workspace(&mut self, n: usize, me: usize, mi: usize) {
+        let grow = |v: &mut Vec<f64>, len: usize| {
+            if v.len() < len {
+                v.resize(len, 0.0);
+            }
+        };
+        grow(&mut self.chol, n * n);
+        grow(&mut self.j0, n * n);
+        grow(&mut self.j, n * n);
+        grow(&mut self.r, n * n);
+        grow(&mut self.nt, n * (me + mi));
+        grow(&mut self.norms, me + mi);
+        grow(&mut self.x, n);
+        grow(&mut self.d, n);
+        grow(&mut self.z, n);
+        grow(&mut self.rv, n);
+        grow(&mut self.tmp, n.max(me + mi + n));
+        grow(&mut self.u, n);
+        if self.is_active.len() < me + mi + n {
+            self.is_active.resize(me + mi + n, false);
+        }
+        if self.active.capacity() < n {
+            self.active.reserve(n - self.active.len());
+        }
+        if self.prev.capacity() < n {
+            self.prev.reserve(n - self.prev.len());
+        }
+        self.n = n;
+        self.me = me;
+        self.mi = mi;
+    }
+
+    /// Cholesky `H = L Lᵀ` (lower, column-major, right-looking) then `J₀ = L⁻ᵀ`. False if `H` is not PD.
+    fn factorize(&mut self, qp: &DenseQp) -> bool {
+        let n = self.n;
+        let l = &mut self.chol[..n * n];
+        let mut max_diag: f64 = 0.0;
+        for c in 0..n {
+            for r in 0..n {
+                l[r + c * n] = 0.5 * (qp.h[(r, c)] + qp.h[(c, r)]);
+            }
+            max_diag = max_diag.max(qp.h[(c, c)].abs());
+        }
+        let pivot_min = 1e-14 * max_diag.max(f64::MIN_POSITIVE);
+        for c in 0..n {
+            let piv = l[c + c * n];
+            if !(piv > pivot_min) {
+                return false;
+            }
+            let s = piv.sqrt();
+            for v in &mut l[c + c * n..(c + 1) * n] {
+                *v /= s;
+            }
+            for k in c + 1..n {
+                let f = l[k + c * n];
+                if f != 0.0 {
+                    let (left, right) = l.split_at_mut(k * n);
+                    let colc = &left[c * n + k..c * n + n];
+                    let colk = &mut right[k..n];
+                    for (a, b) in colk.iter_mut().zip(colc) {
+                        *a -= f * b;
+                    }
+                }
+            }
+        }
+        // J0 = L^{-T}: column jj solves Lᵀ y = e_jj (upper triangular back substitution).
+        let j0 = &mut self.j0[..n * n];
+        j0.fill(0.0);
+        for jj in 0..n {
+            for i in (0..=jj).rev() {
+                let mut s = if i == jj { 1.0 } else { 0.0 };
+                let lcol = &l[i * n + i + 1..i * n + jj + 1];
+                let ycol = &j0[jj * n + i + 1..jj * n + jj + 1];
+                for (a, b) in lcol.iter().zip(ycol) {
+                    s -= a * b;
+                }
+                j0[jj * n + i] = s / l[i + i * n];
+            }
+        }
+        true
+    }
+
+    /// `d = sign · Jᵀ n(slot)`.
+    fn compute_d(&mut self, slot: usize, sign: f64) {
+        let n = self.n;
+        let nrow = self.me + self.mi;
+        if slot < nrow {
+            let col = &self.nt[slot * n..(slot + 1) * n];
+            for k in 0..n {
+                let jc = &self.j[k * n..(k + 1) * n];
+                let mut s = 0.0;
+                for (a, b) in jc.iter().zip(col) {
+                    s += a * b;
+                }
+                self.d[k] = sign * s;
+            }
+        } else {
+            let row = slot - nrow;
+            for k in 0..n {
+                self.d[k] = sign * self.j[row + k * n];
+            }
+        }
+    }
+
+    /// `n(slot) · x` (without sign).
+    fn normal_dot(&self, slot: usize, x: &[f64]) -> f64 {
+        let n = self.n;
+        let nrow = self.me + self.mi;
+        if slot < nrow {
+            self.nt[slot * n..(slot + 1) * n].iter().zip(&x[..n]).map(|(a, b)| a * b).sum()
+        } else {
+            x[slot - nrow]
+        }
+    }
+
+    /// Right-hand side `b` of slot in the `sign · n·x ≥ sign · b` form, i.e. returns `sign · rhs`.
+    fn signed_rhs(&self, qp: &DenseQp, slot: usize, sign: f64) -> f64 {
+        let nrow = self.me + self.mi;
+        if slot < self.me {
+            sign * qp.f[slot]
+        } else if slot < nrow {
+            let i = slot - self.me;
+            if sign > 0.0 {
+                qp.l[i]
+            } else {
+                -qp.u[i]
+            }
+        } else {
+            let jdx = slot - nrow;
+            if sign > 0.0 {
+                qp.lb[jdx]
+            } else {
+                -qp.ub[jdx]
+            }
+        }
+    }
+
+    /// `z = J₂ d₂` (columns q..n); returns `‖d₂‖²` (= zᵀn⁺) and `‖d‖²`.
+    fn compute_z(&mut self, q: usize) -> (f64, f64) {
+        let n = self.n;
+        let z = &mut self.z[..n];
+        z.fill(0.0);
+        let mut zn = 0.0;
+        let mut dn = 0.0;
+        for k in 0..n {
+            let dk = self.d[k];
+            dn += dk * dk;
+            if k >= q {
+                zn += dk * dk;
+                if dk != 0.0 {
+                    for (a, b) in z.iter_mut().zip(&self.j[k * n..(k + 1) * n]) {
+                        *a += dk * b;
+                    }
+                }
+            }
+        }
+        (zn, dn)
+    }
+
+    /// `rv = R⁻¹ d₁` (q × q upper triangular).
+    fn compute_r(&mut self, q: usize) {
+        let n = self.n;
+        for i in (0..q).rev() {
+            let mut s = self.d[i];
+            for k in i + 1..q {
+                s -= self.r[i + k * n] * self.rv[k];
+            }
+            self.rv[i] = s / self.r[i + i * n];
+        }
+    }
+
+    /// Appends the constraint whose `d` is current as column `q` of R. False if it is dependent.
+    fn add_constraint(&mut self, q: usize) -> bool {
+        let n = self.n;
+        let dnorm: f64 = self.d[..n].iter().map(|v| v * v).sum::<f64>().sqrt();
+        for i in (q + 1..n).rev() {
+            let a = self.d[i - 1];
+            let b = self.d[i];
+            if b == 0.0 {
+                continue;
+            }
+            let h = a.hypot(b);
+            let (c, s) = (a / h, b / h);
+            self.d[i - 1] = h;
+            self.d[i] = 0.0;
+            let (left, right) = self.j.split_at_mut(i * n);
+            let col_a = &mut left[(i - 1) * n..i * n];
+            let col_b = &mut right[..n];
+            for (ja, jb) in col_a.iter_mut().zip(col_b.iter_mut()) {
+                let (va, vb) = (*ja, *jb);
+                *ja = c * va + s * vb;
+                *jb = -s * va + c * vb;
+            }
+        }
+        if !(self.d[q].abs() > self.settings.dependence_tolerance * dnorm) {
+            return false;
+        }
+        for i in 0..=q {
+            self.r[i + q * n] = self.d[i];
+        }
+        true
+    }
+
+    /// Removes active constraint `k` (of `q`), restoring R triangular with Givens rotations on J.
+    fn drop_constraint(&mut self, k: usize, q: usize) {
+        let n = self.n;
+        // shift columns k+1..q of R one to the left
+        for col in k + 1..q {
+            for i in 0..=col {
+                self.r[i + (col - 1) * n] = self.r[i + col * n];
+            }
+        }
+        for jcol in k..q - 1 {
+            let a = self.r[jcol + jcol * n];
+            let b = self.r[jcol + 1 + jcol * n];
+            if b != 0.0 {
+                let h = a.hypot(b);
+                let (c, s) = (a / h, b / h);
+                self.r[jcol + jcol * n] = h;
+                self.r[jcol + 1 + jcol * n] = 0.0;
+                for col in jcol + 1..q - 1 {
+                    let va = self.r[jcol + col * n];
+                    let vb = self.r[jcol + 1 + col * n];
+                    self.r[jcol + col * n] = c * va + s * vb;
+                    self.r[jcol + 1 + col * n] = -s * va + c * vb;
+                }
+                let (left, right) = self.j.split_at_mut((jcol + 1) * n);
+                let col_a = &mut left[jcol * n..(jcol + 1) * n];
+                let col_b = &mut right[..n];
+                for (ja, jb) in col_a.iter_mut().zip(col_b.iter_mut()) {
+                    let (va, vb) = (*ja, *jb);
+                    *ja = c * va + s * vb;
+                    *jb = -s * va + c * vb;
+                }
+            }
+        }
+        let removed = self.active.remove(k);
+        self.is_active[removed.slot] = false;
+        for i in k..q - 1 {
+            self.u[i] = self.u[i + 1];
+        }
+        self.u[q - 1] = 0.0;
+    }
+
+    /// Unconstrained minimiser into `x`: `x = −J Jᵀ g` (any J with J Jᵀ = H⁻¹).
+    fn unconstrained(&mut self, qp: &DenseQp) {
+        let n = self.n;
+        for k in 0..n {
+            let jc = &self.j[k * n..(k + 1) * n];
+            self.tmp[k] = jc.iter().zip(qp.g.iter()).map(|(a, b)| a * b).sum();
+        }
+        let x = &mut self.x[..n];
+        x.fill(0.0);
+        for k in 0..n {
+            let t = self.tmp[k];
+            for (a, b) in x.iter_mut().zip(&self.j[k * n..(k + 1) * n]) {
+                *a -= t * b;
+            }
+        }
+    }
+
+    /// The most violated inactive inequality side or bound: `(slot, sign, signed slack < 0)`.
+    fn most_violated(&self, qp: &DenseQp) -> Option<(usize, f64, f64)> {
+        let tol = self.settings.feasibility_tolerance;
+        let mut best: Option<(usize, f64, f64)> = None;
+        let mut best_measure = 0.0;
+        let mut consider = |slot: usize, sign: f64, slack: f64, rhs: f64, norm: f64| {
+            let measure = -slack / norm;
+            if measure > tol * (1.0 + rhs.abs() / norm) && measure > best_measure {
+                best_measure = measure;
+                best = Some((slot, sign, slack));
+            }
+        };
+        let n = self.n;
+        for i in 0..self.mi {
+            let slot = self.me + i;
+            if self.is_active[slot] {
+                continue;
+            }
+            let norm = self.norms[slot];
+            if norm == 0.0 {
+                continue;
+            }
+            let v = self.normal_dot(slot, &self.x);
+            if qp.l[i].is_finite() {
+                consider(slot, 1.0, v - qp.l[i], qp.l[i], norm);
+            }
+            if qp.u[i].is_finite() {
+                consider(slot, -1.0, qp.u[i] - v, qp.u[i], norm);
+            }
+        }
+        let nrow = self.me + self.mi;
+        for jdx in 0..n {
+            let slot = nrow + jdx;
+            if self.is_active[slot] {
+                continue;
+            }
+            let v = self.x[jdx];
+            if qp.lb[jdx].is_finite() {
+                consider(slot, 1.0, v - qp.lb[jdx], qp.lb[jdx], 1.0);
+            }
+            if qp.ub[jdx].is_finite() {
+                consider(slot, -1.0, qp.ub[jdx] - v, qp.ub[jdx], 1.0);
+            }
+        }
+        best
+    }
+
+    fn max_iterations(&self) -> usize {
+        if self.settings.max_iterations > 0 {
+            self.settings.max_iterations
+        } else {
+            3 * (2 * self.n + self.me + self.mi) + 50
+        }
+    }
+
+    fn reset_state(&mut self) {
+        let n = self.n;
+        self.j[..n * n].copy_from_slice(&self.j0[..n * n]);
+        self.active.clear();
+        for v in &mut self.is_active {
+            *v = false;
+        }
+        self.u[..n].fill(0.0);
+    }
+
+    /// Checks an equality row that was skipped as dependent: true if it holds at `x`.
+    fn equality_holds(&self, qp: &DenseQp, i: usize) -> bool {
+        let v = self.normal_dot(i, &self.x);
+        let norm = self.norms[i].max(f64::MIN_POSITIVE);
+        (v - qp.f[i]).abs() / norm <= 10.0 * self.settings.feasibility_tolerance * (1.0 + qp.f[i].abs() / norm)
+    }
+
+    /// Cold start: unconstrained minimum, then equalities with full steps, then the dual iterations.
+    fn run_cold(&mut self, qp: &DenseQp) -> Run {
+        self.reset_state();
+        self.unconstrained(qp);
+        let tol = self.settings.feasibility_tolerance;
+        let dep = self.settings.dependence_tolerance;
+        for i in 0..self.me {
+            let q = self.active.len();
+            let s_raw = self.normal_dot(i, &self.x) - qp.f[i];
+            let sign = if s_raw > 0.0 { -1.0 } else { 1.0 };
+            let s = sign * s_raw;
+            self.compute_d(i, sign);
+            let (zn, dn) = self.compute_z(q);
+            if zn <= dep * dep * dn {
+                let norm = self.norms[i].max(f64::MIN_POSITIVE);
+                if -s / norm <= 10.0 * tol * (1.0 + qp.f[i].abs() / norm) {
+                    continue; // redundant and consistent
+                }
+                return Run::Done(QpStatus::Infeasible);
+            }
+            let t = -s / zn;
+            for (xv, zv) in self.x[..self.n].iter_mut().zip(&self.z[..self.n]) {
+                *xv += t * zv;
+            }
+            if q > 0 {
+                self.compute_r(q);
+                for k in 0..q {
+                    self.u[k] -= t * self.rv[k];
+                }
+            }
+            if !self.add_constraint(q) {
+                return Run::Done(QpStatus::NumericalError);
+            }
+            self.u[q] = t;
+            self.active.push(Active { slot: i, sign });
+            self.is_active[i] = true;
+            self.iterations += 1;
+        }
+        Run::Done(self.dual_iterations(qp))
+    }
+
+    /// Warm start: re-impose equalities and the previous active set, closed-form x/u, drop negative
+    /// multipliers, then the dual iterations.
+    fn run_warm(&mut self, qp: &DenseQp) -> Run {
+        self.reset_state();
+        let dep = self.settings.dependence_tolerance;
+        for i in 0..self.me {
+            let q = self.active.len();
+            self.compute_d(i, 1.0);
+            let (zn, dn) = self.compute_z(q);
+            if zn <= dep * dep * dn {
+                continue;
+            }
+            if !self.add_constraint(q) {
+                return Run::WarmFailed;
+            }
+            self.active.push(Active { slot: i, sign: 1.0 });
+            self.is_active[i] = true;
+        }
+        let nslots = self.me + self.mi + self.n;
+        for idx in 0..self.prev.len() {
+            let Active { slot, sign } = self.prev[idx];
+            if slot < self.me || slot >= nslots || self.is_active[slot] {
+                continue;
+            }
+            if !self.signed_rhs(qp, slot, sign).is_finite() {
+                continue;
+            }
+            let q = self.active.len();
+            if q >= self.n {
+                break;
+            }
+            self.compute_d(slot, sign);
+            let (zn, dn) = self.compute_z(q);
+            if zn <= dep * dep * dn {
+                continue;
+            }
+            if !self.add_constraint(q) {
+                return Run::WarmFailed;
+            }
+            self.active.push(Active { slot, sign });
+            self.is_active[slot] = true;
+        }
+        loop {
+            self.closed_form(qp);
+            let mut worst: Option<usize> = None;
+            let mut worst_u = 0.0;
+            for k in 0..self.active.len() {
+                if self.active[k].slot >= self.me && self.u[k] < worst_u {
+                    worst_u = self.u[k];
+                    worst = Some(k);
+                }
+            }
+            match worst {
+                Some(k) => {
+                    let q = self.active.len();
+                    self.drop_constraint(k, q);
+                }
+                None => break,
+            }
+        }
+        for i in 0..self.me {
+            if !self.is_active[i] && !self.equality_holds(qp, i) {
+                return Run::WarmFailed;
+            }
+        }
+        match self.dual_iterations(qp) {
+            QpStatus::Solved => Run::Done(QpStatus::Solved),
+            _ => Run::WarmFailed,
+        }
+    }
+
+    /// Given J, R of the active set: `x = x₀ + J₁ v`, `u = R⁻¹ v` with `Rᵀ v = b_A − N_Aᵀ x₀`.
+    fn closed_form(&mut self, qp: &DenseQp) {
+        let n = self.n;
+        let q = self.active.len();
+        self.unconstrained(qp);
+        // w_k = b_k - n_k·x0 (signed), then forward substitution Rᵀ v = w (v stored in rv)
+        for k in 0..q {
+            let Active { slot, sign } = self.active[k];
+            let w = self.signed_rhs(qp, slot, sign) - sign * self.normal_dot(slot, &self.x);
+            let mut s = w;
+            for i in 0..k {
+                s -= self.r[i + k * n] * self.rv[i];
+            }
+            self.rv[k] = s / self.r[k + k * n];
+        }
+        for k in 0..q {
+            let vk = self.rv[k];
+            for (a, b) in self.x[..n].iter_mut().zip(&self.j[k * n..(k + 1) * n]) {
+                *a += vk * b;
+            }
+        }
+        // u = R^{-1} v
+        for i in (0..q).rev() {
+            let mut s = self.rv[i];
+            for k in i + 1..q {
+                s -= self.r[i + k * n] * self.u[k];
+            }
+            self.u[i] = s / self.r[i + i * n];
+        }
+    }
+
+    /// The Goldfarb–Idnani iterations from a dual-feasible (x, active set, u).
+    fn dual_iterations(&mut self, qp: &DenseQp) -> QpStatus {
+        let max_iter = self.max_iterations();
+        let dep = self.settings.dependence_tolerance;
+        let n = self.n;
+        loop {
+            if self.iterations >= max_iter {
+                return QpStatus::MaxIterations;
+            }
+            let Some((slot, sign, mut slack)) = self.most_violated(qp) else {
+                return QpStatus::Solved;
+            };
+            let mut u_new = 0.0;
+            self.compute_d(slot, sign);
+            loop {
+                let q = self.active.len();
+                let (zn, dn) = self.compute_z(q);
+                self.compute_r(q);
+                let mut t1 = f64::INFINITY;
+                let mut kdrop = usize::MAX;
+                for k in 0..q {
+                    if self.active[k].slot >= self.me && self.rv[k] > 0.0 {
+                        let ratio = self.u[k] / self.rv[k];
+                        if ratio < t1 {
+                            t1 = ratio;
+                            kdrop = k;
+                        }
+                    }
+                }
+                let t2 = if zn > dep * dep * dn { -slack / zn } else { f64::INFINITY };
+                if t1.is_infinite() && t2.is_infinite() {
+                    return QpStatus::Infeasible;
+                }
+                self.iterations += 1;
+                if self.iterations > max_iter {
+                    return QpStatus::MaxIterations;
+                }
+                let t = t1.min(t2);
+                for k in 0..q {
+                    self.u[k] -= t * self.rv[k];
+                }
+                u_new += t;
+                if t2.is_finite() {
+                    for (xv, zv) in self.x[..n].iter_mut().zip(&self.z[..n]) {
+                        *xv += t * zv;
+                    }
+                }
+                if t2 <= t1 {
+                    if q >= n || !self.add_constraint(q) {
+                        return QpStatus::NumericalError;
+                    }
+                    self.u[q] = u_new;
+                    self.active.push(Active { slot, sign });
+                    self.is_active[slot] = true;
+                    break;
+                }
+                self.u[kdrop] = 0.0;
+                self.drop_constraint(kdrop, q);
+                slack = sign * self.normal_dot(slot, &self.x) - self.signed_rhs(qp, slot, sign);
+                if slack >= 0.0 {
+                    // The partial step already satisfied p (possible only through round-off): move on.
+                    break;
+                }
+                self.compute_d(slot, sign);
+            }
+            if !self.x[..n].iter().all(|v| v.is_finite()) {
+                return QpStatus::NumericalError;
+            }
+        }
+    }
+}
+
+impl QpSolver for ActiveSetSolver {
+    fn name(&self) -> &'static str {
+        "active_set"
+    }
+
+    fn solve(&mut self, qp: &DenseQp, out: &mut SolverOutput) {
+        out.prepare(qp);
+        if !qp.is_valid() {
+            out.status = QpStatus::InvalidData;
+            self.prev.clear();
+            return;
+        }
+        let (n, me, mi) = (qp.n(), qp.n_eq(), qp.n_ineq());
+        self.ensure_workspace(n, me, mi);
+        for i in 0..me + mi {
+            let col = &mut self.nt[i * n..(i + 1) * n];
+            let mut s = 0.0;
+            for (jdx, v) in col.iter_mut().enumerate() {
+                *v = if i < me { qp.e[(i, jdx)] } else { qp.c[(i - me, jdx)] };
+                s += *v * *v;
+            }
+            self.norms[i] = s.sqrt();
+        }
+        if !self.factorize(qp) {
+            out.status = QpStatus::HessianNotPositiveDefinite;
+            self.prev.clear();
+            return;
+        }
+        self.iterations = 0;
+        self.warm_used = false;
+        let can_warm = self.settings.warm_start && self.prev_dims == (n, me, mi) && !self.prev.is_empty();
+        let mut status = None;
+        if can_warm {
+            if let Run::Done(s) = self.run_warm(qp) {
+                self.warm_used = true;
+                status = Some(s);
+            }
+        }
+        let status = match status {
+            Some(s) => s,
+            None => match self.run_cold(qp) {
+                Run::Done(s) => s,
+                Run::WarmFailed => QpStatus::NumericalError,
+            },
+        };
+        out.status = status;
+        out.iterations = self.iterations;
+        out.warm_started = self.warm_used;
+        self.prev.clear();
+        if status == QpStatus::Solved {
+            for jdx in 0..n {
+                out.x[jdx] = self.x[jdx];
+            }
+            let nrow = me + mi;
+            for (k, a) in self.active.iter().enumerate() {
+                let m = -a.sign * self.u[k];
+                if a.slot < me {
+                    out.y[a.slot] = m;
+                } else if a.slot < nrow {
+                    out.z[a.slot - me] = m;
+                } else {
+                    out.bound_multipliers[a.slot - nrow] = m;
+                }
+            }
+            out.objective = qp.objective_noalloc(&out.x);
+            self.prev.extend_from_slice(&self.active);
+            self.prev_dims = (n, me, mi);
+        }
+        out.sanitize();
+        if !out.status.is_success() {
+            self.prev.clear();
+        }
+    }
+
+    fn reset(&mut self) {
+        self.prev.clear();
+    }
+}

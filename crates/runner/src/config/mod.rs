@@ -1,0 +1,582 @@
+//! Scenario configuration: the TOML schema, validation and loading.
+//!
+//! A scenario is one TOML file in `configs/` that may `include` shared robot and layer sections (see
+//! [`load`] for the include/overlay rules). Every table rejects unknown keys; every error names the file,
+//! line, column and key and says what is expected. The full key reference is `docs/configuration.md`,
+//! generated from [`reference`] and checked by a test so it cannot drift from the code.
+
+pub mod load;
+pub mod reference;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+pub use load::{Loaded, Location, SourceFile, SourceMap};
+
+/// Why a configuration was rejected.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// A file could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// A file is not valid TOML.
+    #[error("{location}: TOML syntax error: {message}")]
+    Syntax {
+        /// Where.
+        location: Location,
+        /// What the parser expected.
+        message: String,
+    },
+    /// A key is unknown, has the wrong type, or a value is out of range.
+    #[error("{}key `{key}`: {message}", location.as_ref().map(|l| format!("{l}: ")).unwrap_or_default())]
+    Invalid {
+        /// Where the key (or its closest written parent) is written, if anywhere.
+        location: Option<Location>,
+        /// Dotted key path, e.g. `rates.wbc_hz`.
+        key: String,
+        /// What is wrong and what is expected.
+        message: String,
+    },
+    /// A file includes itself (directly or not), or includes nest deeper than 16 levels.
+    #[error("{}: include cycle (or includes nested deeper than 16 levels)", path.display())]
+    IncludeCycle {
+        /// The file included again.
+        path: PathBuf,
+    },
+}
+
+/// How the whole-body layer commands the robot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ControlMode {
+    /// Kinematic QP-IK → integrated joint positions → joint position servos.
+    #[default]
+    Position,
+    /// TSID → joint torques.
+    Torque,
+}
+
+/// Which plant the loop closes on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum PlantKind {
+    /// stride-sim: floating-base dynamics with compliant ground contact.
+    #[default]
+    Simulator,
+    /// Ideal kinematic plant: joint commands applied exactly, base pose from the fixed stance foot.
+    Ideal,
+}
+
+/// `[scenario]`: what this run is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScenarioSection {
+    /// Short name, used for the default log file name.
+    pub name: String,
+    /// One line saying what the scenario shows.
+    pub description: String,
+    /// Simulated duration [s]; the run ends here at the latest.
+    pub duration: f64,
+    /// Position or torque control.
+    pub control_mode: ControlMode,
+    /// Simulator or ideal kinematic plant.
+    pub plant: PlantKind,
+}
+
+impl Default for ScenarioSection {
+    fn default() -> Self {
+        Self {
+            name: "scenario".into(),
+            description: String::new(),
+            duration: 20.0,
+            control_mode: ControlMode::Position,
+            plant: PlantKind::Simulator,
+        }
+    }
+}
+
+/// `[robot]`: the model and how the runner names its parts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RobotSection {
+    /// URDF path, relative to the file that sets this key.
+    pub urdf: PathBuf,
+    /// Frame at the centre of the left sole.
+    pub left_sole: String,
+    /// Frame at the centre of the right sole.
+    pub right_sole: String,
+    /// Frame whose tilt is checked for falls (torso or base link).
+    pub torso_frame: String,
+    /// Initial joint positions [rad or m] by joint name; joints not listed start at 0.
+    pub initial_joint_positions: BTreeMap<String, f64>,
+}
+
+impl Default for RobotSection {
+    fn default() -> Self {
+        Self {
+            urdf: PathBuf::from("../models/stride_humanoid.urdf"),
+            left_sole: "l_sole".into(),
+            right_sole: "r_sole".into(),
+            torso_frame: "root_link".into(),
+            initial_joint_positions: BTreeMap::new(),
+        }
+    }
+}
+
+/// When the planner runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum PlannerMode {
+    /// On a new goal and at merge points of the current plan.
+    #[default]
+    Event,
+    /// At `rates.planner_hz`, plus on a new goal.
+    Periodic,
+}
+
+/// `[rates]`: the multi-rate schedule. Every rate must divide `base_hz` exactly, and `base_hz` must divide
+/// 1 000 000 000 so the base period is an integer number of nanoseconds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RatesSection {
+    /// Base clock rate [Hz]; every other rate divides it.
+    pub base_hz: u32,
+    /// Planner scheduling.
+    pub planner_mode: PlannerMode,
+    /// Planner rate [Hz] when `planner_mode = "periodic"`.
+    pub planner_hz: u32,
+    /// Simplified-model layer rate [Hz].
+    pub simplified_hz: u32,
+    /// Whole-body layer rate [Hz].
+    pub wbc_hz: u32,
+    /// Simulator (plant) rate [Hz].
+    pub sim_hz: u32,
+}
+
+impl Default for RatesSection {
+    fn default() -> Self {
+        Self {
+            base_hz: 4000,
+            planner_mode: PlannerMode::Event,
+            planner_hz: 10,
+            simplified_hz: 100,
+            wbc_hz: 500,
+            sim_hz: 4000,
+        }
+    }
+}
+
+/// A planar pose goal.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlanarPose {
+    /// x [m] in the world frame.
+    pub x: f64,
+    /// y [m] in the world frame.
+    pub y: f64,
+    /// Heading [deg] about world z.
+    pub heading_deg: f64,
+}
+
+/// One segment of a velocity command schedule.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct VelocitySegment {
+    /// Start time of this segment [s]; segments are sorted by start.
+    pub start: f64,
+    /// Forward speed [m/s] (in the robot's heading frame).
+    pub forward: f64,
+    /// Lateral speed [m/s].
+    pub lateral: f64,
+    /// Yaw rate [deg/s].
+    pub yaw_rate_deg: f64,
+}
+
+/// `[goal]`: where the robot should go. Exactly one of the sub-tables.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum Goal {
+    /// `[goal.pose]`: walk to a planar pose and stop.
+    Pose(PlanarPose),
+    /// `[goal.waypoints]`: walk through planar poses in order, stop at the last.
+    Waypoints {
+        /// The poses.
+        points: Vec<PlanarPose>,
+    },
+    /// `[goal.velocity]`: follow a velocity command over time.
+    Velocity {
+        /// The schedule.
+        segments: Vec<VelocitySegment>,
+    },
+    /// `[goal.stand]`: stand still (push tests).
+    Stand {},
+}
+
+impl Default for Goal {
+    fn default() -> Self {
+        Goal::Pose(PlanarPose {
+            x: 2.0,
+            y: 0.0,
+            heading_deg: 0.0,
+        })
+    }
+}
+
+/// `[[pushes]]`: an external force applied to a link for a while.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Push {
+    /// Start [s].
+    pub start: f64,
+    /// Duration [s].
+    pub duration: f64,
+    /// Force [N] in world orientation, applied at the frame origin.
+    pub force: [f64; 3],
+    /// Frame (link or fixed frame) the force is applied to.
+    pub frame: String,
+}
+
+/// MCAP chunk compression.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Compression {
+    /// zstd (smallest files).
+    #[default]
+    Zstd,
+    /// lz4 (fastest).
+    Lz4,
+    /// No compression.
+    None,
+}
+
+/// `[log]`: the MCAP log.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LogSection {
+    /// Write a log at all.
+    pub enabled: bool,
+    /// Output path (relative to the working directory); empty = `<scenario.name>.mcap`. `--output` wins.
+    pub path: PathBuf,
+    /// Rate of `/tf`, `/sim/state` and `/sensors/*` [Hz]; must divide `rates.sim_hz`.
+    pub state_hz: u32,
+    /// Chunk compression.
+    pub compression: Compression,
+    /// Target chunk size [bytes] before compression.
+    pub chunk_size: u64,
+    /// Messages the loop may queue ahead of the writer thread before it waits.
+    pub queue_capacity: usize,
+}
+
+impl Default for LogSection {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            path: PathBuf::new(),
+            state_hz: 100,
+            compression: Compression::Zstd,
+            chunk_size: 1 << 20,
+            queue_capacity: 8192,
+        }
+    }
+}
+
+/// `[end]`: when a run stops before its duration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EndSection {
+    /// Fall when the base height drops below this fraction of its initial height [-], in (0, 1).
+    pub fall_height_fraction: f64,
+    /// Fall when the torso tilts more than this from vertical [deg].
+    pub fall_tilt_deg: f64,
+    /// Stop when the goal is reached and the robot stands still.
+    pub stop_at_goal: bool,
+    /// Goal reached: planar distance from the goal [m].
+    pub goal_position_tolerance: f64,
+    /// Goal reached: heading error [deg].
+    pub goal_heading_tolerance_deg: f64,
+    /// Standing still: CoM speed below this [m/s] ...
+    pub standstill_speed: f64,
+    /// ... for this long [s].
+    pub standstill_time: f64,
+}
+
+impl Default for EndSection {
+    fn default() -> Self {
+        Self {
+            fall_height_fraction: 0.8,
+            fall_tilt_deg: 20.0,
+            stop_at_goal: true,
+            goal_position_tolerance: 0.1,
+            goal_heading_tolerance_deg: 10.0,
+            standstill_speed: 0.01,
+            standstill_time: 0.5,
+        }
+    }
+}
+
+/// A whole scenario. The file may also hold `include = [...]` (see [`load`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScenarioConfig {
+    /// What this run is.
+    pub scenario: ScenarioSection,
+    /// The robot model.
+    pub robot: RobotSection,
+    /// The schedule.
+    pub rates: RatesSection,
+    /// The goal.
+    pub goal: Goal,
+    /// External pushes.
+    pub pushes: Vec<Push>,
+    /// The log.
+    pub log: LogSection,
+    /// Run endings.
+    pub end: EndSection,
+}
+
+/// A loaded, validated scenario with its sources (for error locations and relative paths).
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    /// The configuration.
+    pub config: ScenarioConfig,
+    /// Where each key came from.
+    pub sources: SourceMap,
+    /// The merged document (stored in logs).
+    pub merged: toml::Table,
+    /// Resolved URDF path.
+    pub urdf_path: PathBuf,
+}
+
+impl Scenario {
+    /// Reads, merges, deserializes and validates a scenario file.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let loaded: Loaded<ScenarioConfig> = load::load(path)?;
+        Self::from_loaded(loaded)
+    }
+
+    /// Parses a scenario from in-memory texts (merge order), e.g. the config stored in a log.
+    pub fn from_texts(files: Vec<(PathBuf, String)>) -> Result<Self, ConfigError> {
+        let files = files
+            .into_iter()
+            .map(|(path, text)| SourceFile {
+                path,
+                text,
+                offset: 0,
+            })
+            .collect();
+        Self::from_loaded(load::load_files(files)?)
+    }
+
+    fn from_loaded(loaded: Loaded<ScenarioConfig>) -> Result<Self, ConfigError> {
+        let Loaded {
+            value,
+            sources,
+            merged,
+        } = loaded;
+        let dir = sources.value_dir("robot.urdf").unwrap_or_else(|| {
+            // Not written anywhere: relative to the top-level scenario file.
+            sources
+                .files
+                .last()
+                .and_then(|f| f.path.parent().map(Path::to_path_buf))
+                .unwrap_or_default()
+        });
+        let urdf_path = if value.robot.urdf.is_absolute() {
+            value.robot.urdf.clone()
+        } else {
+            dir.join(&value.robot.urdf)
+        };
+        let scenario = Self {
+            config: value,
+            sources,
+            merged,
+            urdf_path,
+        };
+        scenario.validate()?;
+        Ok(scenario)
+    }
+
+    /// An error about `key`, located where it was written.
+    pub fn invalid(&self, key: &str, message: impl Into<String>) -> ConfigError {
+        ConfigError::Invalid {
+            location: self
+                .sources
+                .value_location(key)
+                .or_else(|| self.sources.files.last().map(|f| Location {
+                    path: f.path.clone(),
+                    line: 1,
+                    column: 1,
+                })),
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+
+    /// Range, rate and consistency checks that serde cannot express.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let c = &self.config;
+        let finite_pos = |key: &str, v: f64, unit: &str| -> Result<(), ConfigError> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(self.invalid(key, format!("{v} is not allowed; expected a finite number > 0 {unit}")))
+            }
+        };
+        let in_range = |key: &str, v: f64, lo: f64, hi: f64, unit: &str| -> Result<(), ConfigError> {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(self.invalid(key, format!("{v} is out of range; expected {lo} ≤ value ≤ {hi} {unit}")))
+            }
+        };
+        finite_pos("scenario.duration", c.scenario.duration, "[s]")?;
+        in_range("scenario.duration", c.scenario.duration, 0.0, 3600.0, "[s]")?;
+
+        // Rates.
+        let r = &c.rates;
+        if r.base_hz == 0 || 1_000_000_000 % r.base_hz != 0 {
+            return Err(self.invalid(
+                "rates.base_hz",
+                format!(
+                    "{} Hz gives a base period that is not a whole number of nanoseconds; expected a rate \
+                     that divides 1 000 000 000 (e.g. 1000, 2000, 4000, 5000, 8000, 10000) [Hz]",
+                    r.base_hz
+                ),
+            ));
+        }
+        let divides = |key: &str, hz: u32, base: u32, base_key: &str| -> Result<(), ConfigError> {
+            if hz == 0 || base % hz != 0 {
+                let divisors: Vec<String> = (1..=base)
+                    .filter(|d| base % d == 0 && *d >= base / 100)
+                    .map(|d| d.to_string())
+                    .collect();
+                Err(self.invalid(
+                    key,
+                    format!(
+                        "{hz} Hz does not divide {base_key} = {base} Hz exactly; expected one of its divisors \
+                         (e.g. {}) [Hz]",
+                        divisors.join(", ")
+                    ),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        divides("rates.sim_hz", r.sim_hz, r.base_hz, "rates.base_hz")?;
+        divides("rates.wbc_hz", r.wbc_hz, r.base_hz, "rates.base_hz")?;
+        divides("rates.simplified_hz", r.simplified_hz, r.base_hz, "rates.base_hz")?;
+        if r.planner_mode == PlannerMode::Periodic {
+            divides("rates.planner_hz", r.planner_hz, r.base_hz, "rates.base_hz")?;
+        }
+        if r.wbc_hz > r.sim_hz {
+            return Err(self.invalid(
+                "rates.wbc_hz",
+                format!("{} Hz is faster than the simulator ({} Hz); expected wbc_hz ≤ sim_hz", r.wbc_hz, r.sim_hz),
+            ));
+        }
+        if r.simplified_hz > r.wbc_hz {
+            return Err(self.invalid(
+                "rates.simplified_hz",
+                format!(
+                    "{} Hz is faster than the whole-body layer ({} Hz); expected simplified_hz ≤ wbc_hz",
+                    r.simplified_hz, r.wbc_hz
+                ),
+            ));
+        }
+        if c.log.enabled {
+            divides("log.state_hz", c.log.state_hz, r.sim_hz, "rates.sim_hz")?;
+        }
+        if c.log.queue_capacity == 0 {
+            return Err(self.invalid("log.queue_capacity", "0 is not allowed; expected ≥ 1 [messages]"));
+        }
+
+        // Goal.
+        match &c.goal {
+            Goal::Pose(p) => self.check_pose("goal.pose", p)?,
+            Goal::Waypoints { points } => {
+                if points.is_empty() {
+                    return Err(self.invalid("goal.waypoints.points", "empty; expected at least one pose"));
+                }
+                for (i, p) in points.iter().enumerate() {
+                    self.check_pose(&format!("goal.waypoints.points[{i}]"), p)?;
+                }
+            }
+            Goal::Velocity { segments } => {
+                let mut last = f64::NEG_INFINITY;
+                for (i, s) in segments.iter().enumerate() {
+                    let k = format!("goal.velocity.segments[{i}]");
+                    for (name, v) in [
+                        ("start", s.start),
+                        ("forward", s.forward),
+                        ("lateral", s.lateral),
+                        ("yaw_rate_deg", s.yaw_rate_deg),
+                    ] {
+                        if !v.is_finite() {
+                            return Err(self.invalid(&format!("{k}.{name}"), format!("{v}: expected a finite number")));
+                        }
+                    }
+                    if s.start < last {
+                        return Err(self.invalid(&format!("{k}.start"), "segments must be sorted by start time [s]"));
+                    }
+                    last = s.start;
+                }
+            }
+            Goal::Stand {} => {}
+        }
+
+        for (i, p) in c.pushes.iter().enumerate() {
+            let k = format!("pushes[{i}]");
+            in_range(&format!("{k}.start"), p.start, 0.0, c.scenario.duration, "[s] (within the scenario duration)")?;
+            finite_pos(&format!("{k}.duration"), p.duration, "[s]")?;
+            if p.force.iter().any(|f| !f.is_finite()) {
+                return Err(self.invalid(&format!("{k}.force"), "expected three finite numbers [N]"));
+            }
+            if p.frame.is_empty() {
+                return Err(self.invalid(&format!("{k}.frame"), "empty; expected a link or frame name of the model"));
+            }
+        }
+
+        let e = &c.end;
+        if !(e.fall_height_fraction > 0.0 && e.fall_height_fraction < 1.0) {
+            return Err(self.invalid(
+                "end.fall_height_fraction",
+                format!("{} is out of range; expected 0 < value < 1 [-]", e.fall_height_fraction),
+            ));
+        }
+        in_range("end.fall_tilt_deg", e.fall_tilt_deg, 1.0, 90.0, "[deg]")?;
+        finite_pos("end.goal_position_tolerance", e.goal_position_tolerance, "[m]")?;
+        finite_pos("end.goal_heading_tolerance_deg", e.goal_heading_tolerance_deg, "[deg]")?;
+        finite_pos("end.standstill_speed", e.standstill_speed, "[m/s]")?;
+        finite_pos("end.standstill_time", e.standstill_time, "[s]")?;
+        for (name, q) in &c.robot.initial_joint_positions {
+            if !q.is_finite() {
+                return Err(self.invalid(
+                    &format!("robot.initial_joint_positions.{name}"),
+                    format!("{q}: expected a finite joint position [rad or m]"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn check_pose(&self, key: &str, p: &PlanarPose) -> Result<(), ConfigError> {
+        for (name, v) in [("x", p.x), ("y", p.y), ("heading_deg", p.heading_deg)] {
+            if !v.is_finite() {
+                return Err(self.invalid(&format!("{key}.{name}"), format!("{v}: expected a finite number")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The merged configuration as TOML text (what logs store).
+    pub fn merged_toml(&self) -> String {
+        toml::to_string(&self.merged).unwrap_or_default()
+    }
+}

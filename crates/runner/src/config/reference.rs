@@ -1,0 +1,1 @@
+//! Key reference (docs/configuration.md).

@@ -1,0 +1,634 @@
+//! MCAP logging on a writer thread.
+//!
+//! The control loop serializes each message to JSON into a buffer taken from a pool of preallocated
+//! buffers and hands it to a bounded channel; a dedicated thread writes it into a chunked, compressed
+//! MCAP file and returns the buffer to the pool. In steady state nothing allocates on the loop side: the
+//! buffers keep their capacity. If the writer ever falls behind by `queue_capacity` messages the loop
+//! waits for it (logs stay complete and deterministic) and the wait is counted in [`LogStats::stalls`].
+//!
+//! Schemas are JSON Schema (`jsonschema`), messages JSON (`json`); see docs/logging.md for why. `/tf` uses
+//! the exact `foxglove.FrameTransforms` schema. Each topic's schema is either given when the topic is
+//! registered or derived from the first message written to it.
+//!
+//! [`LogWriter`] finishes the file when dropped, so a run that ends by an error or a panic (the loop runs
+//! inside `catch_unwind`, the writer outside it) still leaves a valid file.
+
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
+use std::thread::JoinHandle;
+
+use serde::Serialize;
+
+use crate::config::Compression;
+
+/// Why the log could not be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    /// File system error.
+    #[error("log file {}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// OS error.
+        source: std::io::Error,
+    },
+    /// The MCAP library failed.
+    #[error("MCAP: {0}")]
+    Mcap(#[from] mcap::McapError),
+    /// A message could not be serialized.
+    #[error("serializing a message for topic {topic}: {source}")]
+    Serialize {
+        /// The topic.
+        topic: String,
+        /// serde_json's error.
+        source: serde_json::Error,
+    },
+    /// The writer thread stopped early (its error is reported when the log is finished).
+    #[error("the log writer thread stopped")]
+    WriterGone,
+    /// The log does not hold what was asked for.
+    #[error("{0}")]
+    Content(String),
+}
+
+/// Options of a log file.
+#[derive(Debug, Clone)]
+pub struct LogOptions {
+    /// Chunk compression.
+    pub compression: Compression,
+    /// Target uncompressed chunk size [bytes].
+    pub chunk_size: u64,
+    /// Bounded queue length between loop and writer [messages].
+    pub queue_capacity: usize,
+}
+
+impl Default for LogOptions {
+    fn default() -> Self {
+        Self {
+            compression: Compression::Zstd,
+            chunk_size: 1 << 20,
+            queue_capacity: 8192,
+        }
+    }
+}
+
+/// Handle of a registered topic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TopicId(u16);
+
+enum Msg {
+    Topic {
+        id: u16,
+        topic: String,
+        schema_name: String,
+        schema: Option<String>,
+    },
+    Message {
+        id: u16,
+        sequence: u32,
+        time_ns: u64,
+        buf: Vec<u8>,
+    },
+    Attachment {
+        name: String,
+        media_type: String,
+        data: Vec<u8>,
+    },
+    Metadata {
+        name: String,
+        entries: BTreeMap<String, String>,
+    },
+}
+
+/// Counters of a finished log.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct LogStats {
+    /// Messages written.
+    pub messages: u64,
+    /// Times the loop had to wait for the writer.
+    pub stalls: u64,
+    /// File size [bytes].
+    pub bytes: u64,
+}
+
+/// The loop-side handle of a log being written.
+pub struct LogWriter {
+    path: PathBuf,
+    tx: Option<SyncSender<Msg>>,
+    pool: Receiver<Vec<u8>>,
+    thread: Option<JoinHandle<Result<u64, LogError>>>,
+    sequences: Vec<u32>,
+    topics: Vec<String>,
+    messages: u64,
+    stalls: u64,
+    finished: Option<Result<LogStats, String>>,
+}
+
+impl LogWriter {
+    /// Creates the file and starts the writer thread.
+    pub fn create(path: &Path, options: &LogOptions) -> Result<Self, LogError> {
+        if let Some(dir) = path.parent() {
+            if !dir.as_os_str().is_empty() {
+                std::fs::create_dir_all(dir).map_err(|e| LogError::Io {
+                    path: path.to_path_buf(),
+                    source: e,
+                })?;
+            }
+        }
+        let file = File::create(path).map_err(|e| LogError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
+        let compression = match options.compression {
+            Compression::Zstd => Some(mcap::Compression::Zstd),
+            Compression::Lz4 => Some(mcap::Compression::Lz4),
+            Compression::None => None,
+        };
+        let writer = mcap::WriteOptions::new()
+            .compression(compression)
+            .chunk_size(Some(options.chunk_size))
+            .profile("")
+            .library(concat!("stride-", env!("CARGO_PKG_VERSION")))
+            .create(BufWriter::with_capacity(1 << 16, file))?;
+        let capacity = options.queue_capacity.max(1);
+        let (tx, rx) = mpsc::sync_channel::<Msg>(capacity);
+        let (pool_tx, pool_rx) = mpsc::sync_channel::<Vec<u8>>(capacity + 1);
+        for _ in 0..capacity {
+            let _ = pool_tx.try_send(Vec::with_capacity(1024));
+        }
+        let thread_path = path.to_path_buf();
+        let thread = std::thread::Builder::new()
+            .name("stride-log".into())
+            .spawn(move || writer_thread(writer, rx, pool_tx, thread_path))
+            .map_err(|e| LogError::Io {
+                path: path.to_path_buf(),
+                source: e,
+            })?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            tx: Some(tx),
+            pool: pool_rx,
+            thread: Some(thread),
+            sequences: Vec::new(),
+            topics: Vec::new(),
+            messages: 0,
+            stalls: 0,
+            finished: None,
+        })
+    }
+
+    /// Path of the file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn send(&mut self, msg: Msg) -> Result<(), LogError> {
+        let tx = self.tx.as_ref().ok_or(LogError::WriterGone)?;
+        match tx.try_send(msg) {
+            Ok(()) => Ok(()),
+            Err(TrySendError::Full(msg)) => {
+                self.stalls += 1;
+                tx.send(msg).map_err(|_| LogError::WriterGone)
+            }
+            Err(TrySendError::Disconnected(_)) => Err(LogError::WriterGone),
+        }
+    }
+
+    /// Registers a topic. `schema` is a JSON Schema text; `None` derives one from the first message.
+    pub fn topic(
+        &mut self,
+        topic: &str,
+        schema_name: &str,
+        schema: Option<String>,
+    ) -> Result<TopicId, LogError> {
+        let id = u16::try_from(self.topics.len())
+            .map_err(|_| LogError::Content("more than 65535 topics".into()))?;
+        self.topics.push(topic.to_string());
+        self.sequences.push(0);
+        self.send(Msg::Topic {
+            id,
+            topic: topic.into(),
+            schema_name: schema_name.into(),
+            schema,
+        })?;
+        Ok(TopicId(id))
+    }
+
+    /// Serializes `value` as JSON and queues it on `topic` at simulated time `time_ns`.
+    pub fn write<T: Serialize + ?Sized>(
+        &mut self,
+        topic: TopicId,
+        time_ns: u64,
+        value: &T,
+    ) -> Result<(), LogError> {
+        let mut buf = self.pool.try_recv().unwrap_or_default();
+        buf.clear();
+        if let Err(source) = serde_json::to_writer(&mut buf, value) {
+            return Err(LogError::Serialize {
+                topic: self.topics[usize::from(topic.0)].clone(),
+                source,
+            });
+        }
+        let seq = &mut self.sequences[usize::from(topic.0)];
+        *seq = seq.wrapping_add(1);
+        let sequence = *seq;
+        self.messages += 1;
+        self.send(Msg::Message {
+            id: topic.0,
+            sequence,
+            time_ns,
+            buf,
+        })
+    }
+
+    /// Stores a file (URDF, config, ...) in the log.
+    pub fn attach(&mut self, name: &str, media_type: &str, data: Vec<u8>) -> Result<(), LogError> {
+        self.send(Msg::Attachment {
+            name: name.into(),
+            media_type: media_type.into(),
+            data,
+        })
+    }
+
+    /// Stores a metadata record (string map).
+    pub fn metadata(&mut self, name: &str, entries: BTreeMap<String, String>) -> Result<(), LogError> {
+        self.send(Msg::Metadata {
+            name: name.into(),
+            entries,
+        })
+    }
+
+    /// Flushes everything, writes the summary and closes the file. Idempotent.
+    pub fn finish(&mut self) -> Result<LogStats, LogError> {
+        if let Some(done) = &self.finished {
+            return done.clone().map_err(LogError::Content);
+        }
+        self.tx = None; // closes the channel: the thread drains it and finishes the file
+        let result = match self.thread.take() {
+            Some(t) => match t.join() {
+                Ok(Ok(bytes)) => Ok(LogStats {
+                    messages: self.messages,
+                    stalls: self.stalls,
+                    bytes,
+                }),
+                Ok(Err(e)) => Err(e.to_string()),
+                Err(_) => Err("the log writer thread panicked".to_string()),
+            },
+            None => Err("the log writer was already stopped".to_string()),
+        };
+        self.finished = Some(result.clone());
+        result.map_err(LogError::Content)
+    }
+}
+
+impl Drop for LogWriter {
+    fn drop(&mut self) {
+        if self.finished.is_none() {
+            if let Err(e) = self.finish() {
+                tracing::error!("closing log {}: {e}", self.path.display());
+            }
+        }
+    }
+}
+
+fn writer_thread(
+    mut w: mcap::Writer<BufWriter<File>>,
+    rx: Receiver<Msg>,
+    pool: SyncSender<Vec<u8>>,
+    path: PathBuf,
+) -> Result<u64, LogError> {
+    // Topic id → (mcap channel id, pending registration when the schema is derived from data).
+    let mut channels: Vec<Option<u16>> = Vec::new();
+    let mut pending: BTreeMap<u16, (String, String)> = BTreeMap::new();
+    let mut first_error: Option<LogError> = None;
+    for msg in rx.iter() {
+        let r: Result<(), LogError> = (|| {
+            match msg {
+                Msg::Topic {
+                    id,
+                    topic,
+                    schema_name,
+                    schema,
+                } => {
+                    let idx = usize::from(id);
+                    if channels.len() <= idx {
+                        channels.resize(idx + 1, None);
+                    }
+                    match schema {
+                        Some(s) => {
+                            let sid = w.add_schema(&schema_name, "jsonschema", s.as_bytes())?;
+                            channels[idx] = Some(w.add_channel(sid, &topic, "json", &BTreeMap::new())?);
+                        }
+                        None => {
+                            pending.insert(id, (topic, schema_name));
+                        }
+                    }
+                }
+                Msg::Message {
+                    id,
+                    sequence,
+                    time_ns,
+                    buf,
+                } => {
+                    let idx = usize::from(id);
+                    if channels.get(idx).copied().flatten().is_none() {
+                        if let Some((topic, schema_name)) = pending.remove(&id) {
+                            let value: serde_json::Value = serde_json::from_slice(&buf).map_err(|e| {
+                                LogError::Serialize {
+                                    topic: topic.clone(),
+                                    source: e,
+                                }
+                            })?;
+                            let schema = schema_from_example(&value, &schema_name);
+                            let sid = w.add_schema(&schema_name, "jsonschema", schema.to_string().as_bytes())?;
+                            if channels.len() <= idx {
+                                channels.resize(idx + 1, None);
+                            }
+                            channels[idx] = Some(w.add_channel(sid, &topic, "json", &BTreeMap::new())?);
+                        }
+                    }
+                    let channel_id = channels
+                        .get(idx)
+                        .copied()
+                        .flatten()
+                        .ok_or_else(|| LogError::Content(format!("message for unregistered topic {id}")))?;
+                    w.write_to_known_channel(
+                        &mcap::records::MessageHeader {
+                            channel_id,
+                            sequence,
+                            log_time: time_ns,
+                            publish_time: time_ns,
+                        },
+                        &buf,
+                    )?;
+                    let _ = pool.try_send(buf);
+                }
+                Msg::Attachment {
+                    name,
+                    media_type,
+                    data,
+                } => {
+                    w.attach(&mcap::Attachment {
+                        log_time: 0,
+                        create_time: 0,
+                        name,
+                        media_type,
+                        data: Cow::Owned(data),
+                    })?;
+                }
+                Msg::Metadata { name, entries } => {
+                    w.write_metadata(&mcap::records::Metadata {
+                        name,
+                        metadata: entries,
+                    })?;
+                }
+            }
+            Ok(())
+        })();
+        if let Err(e) = r {
+            tracing::error!("log writer: {e}");
+            if first_error.is_none() {
+                first_error = Some(e);
+            }
+        }
+    }
+    w.finish()?;
+    let mut inner = w.into_inner();
+    inner.flush().map_err(|e| LogError::Io {
+        path: path.clone(),
+        source: e,
+    })?;
+    drop(inner);
+    if let Some(e) = first_error {
+        return Err(e);
+    }
+    let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+    Ok(bytes)
+}
+
+/// A JSON Schema (draft 2020-12) describing `example`'s shape: objects with their properties, arrays
+/// with the item schema of their first element, numbers, strings, booleans; `null` accepts anything.
+pub fn schema_from_example(example: &serde_json::Value, title: &str) -> serde_json::Value {
+    let mut s = schema_of(example);
+    if let serde_json::Value::Object(m) = &mut s {
+        m.insert("$schema".into(), "https://json-schema.org/draft/2020-12/schema".into());
+        m.insert("title".into(), title.into());
+    }
+    s
+}
+
+fn schema_of(v: &serde_json::Value) -> serde_json::Value {
+    use serde_json::{json, Value};
+    match v {
+        Value::Null => json!({}),
+        Value::Bool(_) => json!({"type": "boolean"}),
+        Value::Number(n) if n.is_u64() || n.is_i64() => json!({"type": "number"}),
+        Value::Number(_) => json!({"type": "number"}),
+        Value::String(_) => json!({"type": "string"}),
+        Value::Array(a) => match a.first() {
+            Some(first) => json!({"type": "array", "items": schema_of(first)}),
+            None => json!({"type": "array"}),
+        },
+        Value::Object(m) => {
+            let props: serde_json::Map<String, Value> =
+                m.iter().map(|(k, v)| (k.clone(), schema_of(v))).collect();
+            json!({"type": "object", "properties": props})
+        }
+    }
+}
+
+/// The JSON Schema of `foxglove.FrameTransforms` (Foxglove's published schema, JSON encoding).
+pub const FRAME_TRANSFORMS_SCHEMA: &str = r#"{
+  "title": "foxglove.FrameTransforms",
+  "description": "An array of FrameTransform messages",
+  "$comment": "Generated by https://github.com/foxglove/foxglove-sdk",
+  "type": "object",
+  "properties": {
+    "transforms": {
+      "type": "array",
+      "items": {
+        "title": "foxglove.FrameTransform",
+        "description": "A transform between two reference frames in 3D space",
+        "type": "object",
+        "properties": {
+          "timestamp": {
+            "type": "object",
+            "title": "time",
+            "properties": {
+              "sec": {"type": "integer", "minimum": 0},
+              "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999}
+            },
+            "description": "Timestamp of transform"
+          },
+          "parent_frame_id": {"type": "string", "description": "Name of the parent frame"},
+          "child_frame_id": {"type": "string", "description": "Name of the child frame"},
+          "translation": {
+            "title": "foxglove.Vector3",
+            "description": "Translation component of the transform",
+            "type": "object",
+            "properties": {
+              "x": {"type": "number", "description": "x coordinate length"},
+              "y": {"type": "number", "description": "y coordinate length"},
+              "z": {"type": "number", "description": "z coordinate length"}
+            }
+          },
+          "rotation": {
+            "title": "foxglove.Quaternion",
+            "description": "Rotation component of the transform",
+            "type": "object",
+            "properties": {
+              "x": {"type": "number", "description": "x value"},
+              "y": {"type": "number", "description": "y value"},
+              "z": {"type": "number", "description": "z value"},
+              "w": {"type": "number", "description": "w value"}
+            }
+          }
+        }
+      },
+      "description": "Array of transforms"
+    }
+  }
+}"#;
+
+/// A Foxglove `time` value.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq, Default)]
+pub struct FoxgloveTime {
+    /// Seconds.
+    pub sec: u32,
+    /// Nanoseconds.
+    pub nsec: u32,
+}
+
+impl FoxgloveTime {
+    /// From an integer nanosecond count.
+    pub fn from_ns(ns: u64) -> Self {
+        Self {
+            sec: u32::try_from(ns / 1_000_000_000).unwrap_or(u32::MAX),
+            nsec: (ns % 1_000_000_000) as u32,
+        }
+    }
+}
+
+/// `foxglove.Vector3`.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq, Default)]
+pub struct FoxgloveVector3 {
+    /// x.
+    pub x: f64,
+    /// y.
+    pub y: f64,
+    /// z.
+    pub z: f64,
+}
+
+/// `foxglove.Quaternion`.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq, Default)]
+pub struct FoxgloveQuaternion {
+    /// x.
+    pub x: f64,
+    /// y.
+    pub y: f64,
+    /// z.
+    pub z: f64,
+    /// w.
+    pub w: f64,
+}
+
+/// `foxglove.FrameTransform`.
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct FrameTransform {
+    /// Time of the transform.
+    pub timestamp: FoxgloveTime,
+    /// Parent frame (`world`).
+    pub parent_frame_id: String,
+    /// Child frame (a link name).
+    pub child_frame_id: String,
+    /// Translation [m].
+    pub translation: FoxgloveVector3,
+    /// Rotation.
+    pub rotation: FoxgloveQuaternion,
+}
+
+/// `foxglove.FrameTransforms`.
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct FrameTransforms {
+    /// The transforms.
+    pub transforms: Vec<FrameTransform>,
+}
+
+/// One message read back from a log.
+#[derive(Debug, Clone)]
+pub struct LoggedMessage {
+    /// Topic.
+    pub topic: String,
+    /// Log time [ns].
+    pub time_ns: u64,
+    /// JSON payload.
+    pub data: Vec<u8>,
+}
+
+/// Everything in a log file, read with the mcap crate's reader.
+#[derive(Debug, Clone, Default)]
+pub struct LogContents {
+    /// Messages in file order.
+    pub messages: Vec<LoggedMessage>,
+    /// Attachments by name.
+    pub attachments: BTreeMap<String, Vec<u8>>,
+    /// Metadata records by name.
+    pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+    /// Schemas by topic: (schema name, encoding, schema text).
+    pub schemas: BTreeMap<String, (String, String, String)>,
+}
+
+impl LogContents {
+    /// Messages on one topic, in order.
+    pub fn topic<'a>(&'a self, topic: &'a str) -> impl Iterator<Item = &'a LoggedMessage> + 'a {
+        self.messages.iter().filter(move |m| m.topic == topic)
+    }
+}
+
+/// Reads a whole MCAP file: messages (through the summary-less linear reader, so files of interrupted
+/// runs that still have their footer read the same way), attachments and metadata.
+pub fn read_log(path: &Path) -> Result<LogContents, LogError> {
+    let bytes = std::fs::read(path).map_err(|e| LogError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let mut out = LogContents::default();
+    for m in mcap::MessageStream::new(&bytes)? {
+        let m = m?;
+        let topic = m.channel.topic.clone();
+        if !out.schemas.contains_key(&topic) {
+            if let Some(s) = &m.channel.schema {
+                out.schemas.insert(
+                    topic.clone(),
+                    (
+                        s.name.clone(),
+                        s.encoding.clone(),
+                        String::from_utf8_lossy(&s.data).into_owned(),
+                    ),
+                );
+            }
+        }
+        out.messages.push(LoggedMessage {
+            topic,
+            time_ns: m.log_time,
+            data: m.data.into_owned(),
+        });
+    }
+    for rec in mcap::read::LinearReader::new(&bytes)? {
+        match rec? {
+            mcap::records::Record::Attachment { header, data, .. } => {
+                out.attachments.insert(header.name.clone(), data.into_owned());
+            }
+            mcap::records::Record::Metadata(m) => {
+                out.metadata.insert(m.name.clone(), m.metadata.clone());
+            }
+            _ => {}
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,579 @@
+//! Plain-data configuration of the simulated robot ([`SimConfig`]) and its validation.
+//!
+//! Every struct deserialises with `#[serde(deny_unknown_fields)]` and every field has a default, so a TOML
+//! section may name only what it changes. The defaults describe the bundled humanoid
+//! (`models/stride_humanoid.urdf`, 32.8 kg, 0.20 m × 0.09 m soles) standing on a rigid floor.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::SimError;
+
+/// Configuration of [`crate::SimRobot`].
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `rate_hz` | Hz | 2000 | simulation rate; one [`crate::SimRobot`] step advances `1/rate_hz`. `1e9 / rate_hz` must be an integer number of nanoseconds |
+/// | `gravity` | m/s² | `[0, 0, -9.81]` | gravity acceleration in the world frame |
+/// | `integrator` | – | `implicit` | [`IntegratorKind`] |
+/// | `ground` | – | flat floor at z = 0 | [`GroundConfig`] |
+/// | `contact` | – | rigid floor, the humanoid's two soles | [`ContactConfig`] |
+/// | `actuation` | – | position servos on every joint | [`ActuationConfig`] |
+/// | `sensors` | – | IMU on `imu_frame`, no noise | [`SensorConfig`] |
+/// | `pushes` | – | none | [`PushConfig`] list |
+/// | `fall` | – | base below 0.25 m or tilted beyond 1 rad | [`FallConfig`] |
+/// | `safety` | – | see [`SafetyConfig`] | divergence thresholds |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimConfig {
+    /// Simulation rate in Hz (steps per simulated second). Default 2000.
+    pub rate_hz: u32,
+    /// Gravity in the world frame, m/s². Default `[0, 0, -9.81]`.
+    pub gravity: [f64; 3],
+    /// Time-stepping scheme. Default [`IntegratorKind::Implicit`].
+    pub integrator: IntegratorKind,
+    /// The ground plane.
+    pub ground: GroundConfig,
+    /// Contact surfaces and the contact law.
+    pub contact: ContactConfig,
+    /// Joint actuation (servo modes, gains, limits, passive damping).
+    pub actuation: ActuationConfig,
+    /// Sensors and their noise.
+    pub sensors: SensorConfig,
+    /// Scheduled external wrenches ("pushes").
+    pub pushes: Vec<PushConfig>,
+    /// Fall detection thresholds.
+    pub fall: FallConfig,
+    /// Divergence detection thresholds.
+    pub safety: SafetyConfig,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self {
+            rate_hz: 2000,
+            gravity: [0.0, 0.0, -9.81],
+            integrator: IntegratorKind::Implicit,
+            ground: GroundConfig::default(),
+            contact: ContactConfig::default(),
+            actuation: ActuationConfig::default(),
+            sensors: SensorConfig::default(),
+            pushes: Vec::new(),
+            fall: FallConfig::default(),
+            safety: SafetyConfig::default(),
+        }
+    }
+}
+
+/// How one step advances the state.
+///
+/// Both are semi-implicit Euler schemes (velocity first, then the configuration with the new velocity; the base
+/// orientation on SO(3)). They differ in how stiff forces are evaluated:
+///
+/// * `implicit` (default): the position servos, the passive joint damping and the contact spring-dampers are
+///   evaluated at the end of the step, linearised (`f(q + dt ν⁺, ν⁺)`), which adds `dt·D + dt²·K` terms to the
+///   mass matrix: `(M + dt Kd + dt² Kp + Σ Jᵀ(dt D + dt² K)J) ν̇ = …`. Solved with the composite-rigid-body mass
+///   matrix and a Cholesky factorisation. Stable for stiff servos and a rigid floor at 1–5 kHz.
+/// * `explicit`: every force is evaluated at the start of the step and the articulated-body algorithm gives ν̇.
+///   Cheaper per step, but needs soft gains or a high rate; kept as an independent cross-check.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegratorKind {
+    /// Linearly implicit servos and contacts (CRBA + Cholesky).
+    Implicit,
+    /// Explicit forces, articulated-body algorithm.
+    Explicit,
+}
+
+/// The flat ground: a plane through `[0, 0, height]` whose normal is `R_x(roll) R_y(pitch) e_z`.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `height` | m | 0 | height of the plane at the world origin |
+/// | `inclination` | rad | `[0, 0]` | `[roll, pitch]` of the plane; a positive pitch makes the ground descend along +x |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GroundConfig {
+    /// Height of the plane at the world origin, m.
+    pub height: f64,
+    /// `[roll, pitch]` of the plane, rad.
+    pub inclination: [f64; 2],
+}
+
+impl Default for GroundConfig {
+    fn default() -> Self {
+        Self { height: 0.0, inclination: [0.0, 0.0] }
+    }
+}
+
+/// The compliant contact law and the surfaces of the robot that touch the ground.
+///
+/// Each surface is a rectangle sampled by a grid of points. The parameters are **area densities** as in the
+/// visco-elastic model of Romualdi's thesis (Lemma 1, `ρ = k(x̄ − x) − b ẋ`): a grid point carries the stiffness
+/// `k · l · w · weight` and the damping `b · l · w · weight`, where the weights are the trapezoidal-rule weights
+/// of the grid (they sum to one). So the total normal stiffness of a flat surface is `k l w` whatever the grid,
+/// and a fine grid converges to Lemma 1's wrench. Normal forces never pull; tangential forces follow Coulomb's
+/// law with a stick-slip spring anchored where the point touched down.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `normal_stiffness` | N/m³ | 1e7 | `k` (rigid floor: 0.9 mm static sink for the 32.8 kg humanoid on both feet) |
+/// | `normal_damping` | N·s/m³ | 2e5 | `b` (about critical for the humanoid bouncing on both feet) |
+/// | `tangential_stiffness` | N/m³ | 1e7 | stiffness density of the stick spring |
+/// | `tangential_damping` | N·s/m³ | 2e5 | damping density of the stick spring |
+/// | `friction_coefficient` | – | 0.8 | Coulomb μ (static = kinetic) |
+/// | `surfaces` | – | `l_sole`, `r_sole` | [`ContactSurfaceConfig`] list |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ContactConfig {
+    /// Normal stiffness density `k`, N/m³.
+    pub normal_stiffness: f64,
+    /// Normal damping density `b`, N·s/m³.
+    pub normal_damping: f64,
+    /// Tangential (stick) stiffness density, N/m³.
+    pub tangential_stiffness: f64,
+    /// Tangential (stick) damping density, N·s/m³.
+    pub tangential_damping: f64,
+    /// Coulomb friction coefficient μ (≥ 0).
+    pub friction_coefficient: f64,
+    /// The contact surfaces.
+    pub surfaces: Vec<ContactSurfaceConfig>,
+}
+
+impl Default for ContactConfig {
+    fn default() -> Self {
+        Self {
+            normal_stiffness: 1.0e7,
+            normal_damping: 2.0e5,
+            tangential_stiffness: 1.0e7,
+            tangential_damping: 2.0e5,
+            friction_coefficient: 0.8,
+            surfaces: vec![
+                ContactSurfaceConfig::foot("left", "l_sole", "l_foot_ft_sensor"),
+                ContactSurfaceConfig::foot("right", "r_sole", "r_foot_ft_sensor"),
+            ],
+        }
+    }
+}
+
+/// A rectangular contact surface rigidly attached to a frame of the model.
+///
+/// The rectangle lies in the frame's x-y plane, centred at `offset` (frame coordinates), `length` along the
+/// frame's x axis and `width` along y; it is sampled by `grid[0] × grid[1]` points that include the corners.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `name` | – | – | name used in outputs and errors |
+/// | `frame` | – | – | model frame the surface is attached to (e.g. `l_sole`) |
+/// | `length`, `width` | m | 0.20, 0.09 | rectangle size along the frame's x and y |
+/// | `grid` | – | `[3, 3]` | points along x and y (each ≥ 2) |
+/// | `offset` | m | `[0, 0, 0]` | rectangle centre in the frame |
+/// | `ft_sensor` | – | none | frame in which the surface's measured wrench is expressed (e.g. `l_foot_ft_sensor`) |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSurfaceConfig {
+    /// Name used in outputs and errors.
+    pub name: String,
+    /// Model frame the surface is attached to.
+    pub frame: String,
+    /// Size along the frame's x axis, m.
+    #[serde(default = "default_length")]
+    pub length: f64,
+    /// Size along the frame's y axis, m.
+    #[serde(default = "default_width")]
+    pub width: f64,
+    /// Number of grid points along x and y (each ≥ 2, corners included).
+    #[serde(default = "default_grid")]
+    pub grid: [usize; 2],
+    /// Centre of the rectangle in the frame, m.
+    #[serde(default)]
+    pub offset: [f64; 3],
+    /// Frame of the six-axis force/torque sensor that measures this surface's wrench (optional).
+    #[serde(default)]
+    pub ft_sensor: Option<String>,
+}
+
+fn default_length() -> f64 {
+    0.20
+}
+fn default_width() -> f64 {
+    0.09
+}
+fn default_grid() -> [usize; 2] {
+    [3, 3]
+}
+
+impl ContactSurfaceConfig {
+    /// A sole of the bundled humanoid (0.20 m × 0.09 m, 3 × 3 points) with its force/torque sensor.
+    pub fn foot(name: &str, frame: &str, ft_sensor: &str) -> Self {
+        Self {
+            name: name.to_string(),
+            frame: frame.to_string(),
+            length: default_length(),
+            width: default_width(),
+            grid: default_grid(),
+            offset: [0.0; 3],
+            ft_sensor: Some(ft_sensor.to_string()),
+        }
+    }
+}
+
+/// How a joint is driven.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActuationMode {
+    /// PD servo on the commanded position and velocity plus the feed-forward torque:
+    /// `τ = kp (q_ref − q) + kd (q̇_ref − q̇) + τ_ff` (a robot's motor board in position mode).
+    Position,
+    /// Velocity servo: `τ = kd (q̇_ref − q̇) + τ_ff` (the position command is ignored).
+    Velocity,
+    /// Torque: `τ = τ_ff` (position and velocity commands are ignored).
+    Torque,
+}
+
+/// What to do when a joint's motor torque exceeds its effort limit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffortLimitPolicy {
+    /// Saturate the torque at the limit and report the joint in the output (like a motor driver).
+    Saturate,
+    /// Fail the step with [`SimError::EffortLimit`] (only for a commanded feed-forward torque beyond the limit;
+    /// servo torques are always saturated).
+    Error,
+}
+
+/// Joint actuation: a default actuator for every joint and per-joint overrides.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `default` | – | position servo, kp 1000 N·m/rad, kd 30 N·m·s/rad | [`JointActuatorConfig`] of every joint |
+/// | `joints` | – | none | [`JointActuatorOverride`] list by joint name |
+/// | `effort_limit_policy` | – | `saturate` | [`EffortLimitPolicy`] |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ActuationConfig {
+    /// Actuator of every joint not overridden.
+    pub default: JointActuatorConfig,
+    /// Per-joint overrides (applied in order).
+    pub joints: Vec<JointActuatorOverride>,
+    /// Behaviour at the effort limit.
+    pub effort_limit_policy: EffortLimitPolicy,
+}
+
+impl Default for ActuationConfig {
+    fn default() -> Self {
+        Self {
+            default: JointActuatorConfig::default(),
+            joints: Vec::new(),
+            effort_limit_policy: EffortLimitPolicy::Saturate,
+        }
+    }
+}
+
+/// One joint's actuator and passive dynamics.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `mode` | – | `position` | [`ActuationMode`] |
+/// | `kp` | N·m/rad (N/m) | 1000 | position gain |
+/// | `kd` | N·m·s/rad (N·s/m) | 30 | velocity gain (position and velocity modes) |
+/// | `effort_limit` | N·m (N) | model's limit | motor torque bound; `None` uses the URDF `effort` (unbounded if absent) |
+/// | `damping` | N·m·s/rad | 0 | passive viscous joint damping (not limited by the effort limit) |
+/// | `armature` | kg·m² | 0 | reflected rotor inertia added to the joint's diagonal of the mass matrix |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct JointActuatorConfig {
+    /// Servo mode.
+    pub mode: ActuationMode,
+    /// Position gain.
+    pub kp: f64,
+    /// Velocity gain.
+    pub kd: f64,
+    /// Motor torque bound (`None`: the model's effort limit).
+    pub effort_limit: Option<f64>,
+    /// Passive viscous damping.
+    pub damping: f64,
+    /// Reflected rotor inertia.
+    pub armature: f64,
+}
+
+impl Default for JointActuatorConfig {
+    fn default() -> Self {
+        Self { mode: ActuationMode::Position, kp: 1000.0, kd: 30.0, effort_limit: None, damping: 0.0, armature: 0.0 }
+    }
+}
+
+/// Override of some fields of one joint's actuator (unset fields keep the default actuator's value).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointActuatorOverride {
+    /// Joint name (must exist in the model).
+    pub name: String,
+    /// Servo mode.
+    #[serde(default)]
+    pub mode: Option<ActuationMode>,
+    /// Position gain.
+    #[serde(default)]
+    pub kp: Option<f64>,
+    /// Velocity gain.
+    #[serde(default)]
+    pub kd: Option<f64>,
+    /// Motor torque bound.
+    #[serde(default)]
+    pub effort_limit: Option<f64>,
+    /// Passive viscous damping.
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Reflected rotor inertia.
+    #[serde(default)]
+    pub armature: Option<f64>,
+}
+
+/// Sensors.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `imu_frame` | – | `imu_frame` | frame of the IMU; if absent from the model, the root link |
+/// | `noise` | – | off | [`NoiseConfig`] |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SensorConfig {
+    /// IMU frame name (falls back to the root link when the model has no frame of that name).
+    pub imu_frame: String,
+    /// Additive white Gaussian noise.
+    pub noise: NoiseConfig,
+}
+
+impl Default for SensorConfig {
+    fn default() -> Self {
+        Self { imu_frame: "imu_frame".to_string(), noise: NoiseConfig::default() }
+    }
+}
+
+/// Additive white Gaussian noise on the measurements (all standard deviations; zero = off, the default).
+/// The ground-truth state in the output is never noisy. The noise sequence is reproducible from `seed`.
+///
+/// | field | unit | default |
+/// |---|---|---|
+/// | `seed` | – | 0 |
+/// | `joint_position` | rad | 0 |
+/// | `joint_velocity` | rad/s | 0 |
+/// | `force` | N | 0 |
+/// | `torque` | N·m | 0 |
+/// | `gyroscope` | rad/s | 0 |
+/// | `accelerometer` | m/s² | 0 |
+/// | `orientation` | rad | 0 (small random rotation of the IMU orientation) |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NoiseConfig {
+    /// Seed of the ChaCha8 noise generator.
+    pub seed: u64,
+    /// Encoder position noise, rad.
+    pub joint_position: f64,
+    /// Encoder velocity noise, rad/s.
+    pub joint_velocity: f64,
+    /// Force noise of the force/torque sensors, N.
+    pub force: f64,
+    /// Torque noise of the force/torque sensors, N·m.
+    pub torque: f64,
+    /// Gyroscope noise, rad/s.
+    pub gyroscope: f64,
+    /// Accelerometer noise, m/s².
+    pub accelerometer: f64,
+    /// IMU orientation noise (angle of a random rotation), rad.
+    pub orientation: f64,
+}
+
+impl Default for NoiseConfig {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            joint_position: 0.0,
+            joint_velocity: 0.0,
+            force: 0.0,
+            torque: 0.0,
+            gyroscope: 0.0,
+            accelerometer: 0.0,
+            orientation: 0.0,
+        }
+    }
+}
+
+/// An external wrench applied on a frame of the robot during a time window.
+///
+/// | field | unit | meaning |
+/// |---|---|---|
+/// | `frame` | – | model frame the wrench is applied at |
+/// | `start` | s | simulated time at which the push starts |
+/// | `duration` | s | how long it lasts |
+/// | `wrench` | N, N·m | `[fx, fy, fz, τx, τy, τz]` applied on the robot, world orientation, torque about the frame origin |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PushConfig {
+    /// Model frame the wrench acts at.
+    pub frame: String,
+    /// Start time, s.
+    pub start: f64,
+    /// Duration, s.
+    pub duration: f64,
+    /// `[force; torque]` on the robot, world orientation, torque about the frame origin.
+    pub wrench: [f64; 6],
+}
+
+/// Fall detection. A fall is reported (and latched until reset) when the root link origin is closer to the
+/// ground plane than `min_base_height` or its z axis is tilted from the ground normal by more than `max_tilt`.
+///
+/// | field | unit | default |
+/// |---|---|---|
+/// | `min_base_height` | m | 0.25 |
+/// | `max_tilt` | rad | 1.0 |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FallConfig {
+    /// Minimum height of the root link origin above the ground plane, m.
+    pub min_base_height: f64,
+    /// Maximum angle between the root link z axis and the ground normal, rad.
+    pub max_tilt: f64,
+}
+
+impl Default for FallConfig {
+    fn default() -> Self {
+        Self { min_base_height: 0.25, max_tilt: 1.0 }
+    }
+}
+
+/// Divergence detection: a step whose result exceeds one of these bounds fails with
+/// [`SimError::Diverged`] and the state before the step is kept.
+///
+/// | field | unit | default |
+/// |---|---|---|
+/// | `max_joint_velocity` | rad/s (m/s) | 200 |
+/// | `max_base_velocity` | m/s, rad/s | 100 |
+/// | `max_penetration` | m | 0.1 |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SafetyConfig {
+    /// Largest joint speed.
+    pub max_joint_velocity: f64,
+    /// Largest base linear or angular speed.
+    pub max_base_velocity: f64,
+    /// Largest penetration of a contact point into the ground.
+    pub max_penetration: f64,
+}
+
+impl Default for SafetyConfig {
+    fn default() -> Self {
+        Self { max_joint_velocity: 200.0, max_base_velocity: 100.0, max_penetration: 0.1 }
+    }
+}
+
+fn check(ok: bool, parameter: &str, message: &str) -> Result<(), SimError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(SimError::InvalidConfig { parameter: parameter.to_string(), message: message.to_string() })
+    }
+}
+
+fn finite_nonneg(x: f64) -> bool {
+    x.is_finite() && x >= 0.0
+}
+
+impl SimConfig {
+    /// The step period in nanoseconds (`1e9 / rate_hz`).
+    pub fn period_ns(&self) -> u64 {
+        if self.rate_hz == 0 {
+            0
+        } else {
+            1_000_000_000 / u64::from(self.rate_hz)
+        }
+    }
+
+    /// The step period in seconds.
+    pub fn period(&self) -> f64 {
+        self.period_ns() as f64 * 1e-9
+    }
+
+    /// Checks the values that do not need the model (ranges, finiteness, the rate).
+    pub fn validate(&self) -> Result<(), SimError> {
+        check(self.rate_hz > 0, "rate_hz", "must be positive")?;
+        check(
+            1_000_000_000 % u64::from(self.rate_hz) == 0,
+            "rate_hz",
+            "1e9 / rate_hz must be a whole number of nanoseconds",
+        )?;
+        check(self.gravity.iter().all(|g| g.is_finite()), "gravity", "must be finite")?;
+        check(self.ground.height.is_finite(), "ground.height", "must be finite")?;
+        check(
+            self.ground.inclination.iter().all(|a| a.is_finite() && a.abs() < std::f64::consts::FRAC_PI_2),
+            "ground.inclination",
+            "angles must be finite and within (-90°, 90°)",
+        )?;
+        let c = &self.contact;
+        check(c.normal_stiffness.is_finite() && c.normal_stiffness > 0.0, "contact.normal_stiffness", "must be > 0")?;
+        check(finite_nonneg(c.normal_damping), "contact.normal_damping", "must be ≥ 0")?;
+        check(
+            c.tangential_stiffness.is_finite() && c.tangential_stiffness > 0.0,
+            "contact.tangential_stiffness",
+            "must be > 0",
+        )?;
+        check(finite_nonneg(c.tangential_damping), "contact.tangential_damping", "must be ≥ 0")?;
+        check(finite_nonneg(c.friction_coefficient), "contact.friction_coefficient", "must be ≥ 0")?;
+        for s in &c.surfaces {
+            let p = format!("contact.surfaces[{}]", s.name);
+            check(s.length.is_finite() && s.length >= 0.0, &p, "length must be ≥ 0")?;
+            check(s.width.is_finite() && s.width >= 0.0, &p, "width must be ≥ 0")?;
+            check(s.grid[0] >= 1 && s.grid[1] >= 1, &p, "grid must have at least one point per axis")?;
+            check(s.grid[0] * s.grid[1] <= 400, &p, "at most 400 points per surface")?;
+            check(s.offset.iter().all(|x| x.is_finite()), &p, "offset must be finite")?;
+        }
+        let a = &self.actuation;
+        check_actuator(&a.default, "actuation.default")?;
+        for j in &a.joints {
+            let p = format!("actuation.joints[{}]", j.name);
+            for (v, n) in [(j.kp, "kp"), (j.kd, "kd"), (j.damping, "damping"), (j.armature, "armature")] {
+                if let Some(v) = v {
+                    check(finite_nonneg(v), &format!("{p}.{n}"), "must be finite and ≥ 0")?;
+                }
+            }
+            if let Some(e) = j.effort_limit {
+                check(e > 0.0 && !e.is_nan(), &format!("{p}.effort_limit"), "must be > 0")?;
+            }
+        }
+        let n = &self.sensors.noise;
+        for (v, name) in [
+            (n.joint_position, "joint_position"),
+            (n.joint_velocity, "joint_velocity"),
+            (n.force, "force"),
+            (n.torque, "torque"),
+            (n.gyroscope, "gyroscope"),
+            (n.accelerometer, "accelerometer"),
+            (n.orientation, "orientation"),
+        ] {
+            check(finite_nonneg(v), &format!("sensors.noise.{name}"), "must be finite and ≥ 0")?;
+        }
+        for (i, p) in self.pushes.iter().enumerate() {
+            let name = format!("pushes[{i}]");
+            check(p.start.is_finite() && p.start >= 0.0, &name, "start must be ≥ 0")?;
+            check(finite_nonneg(p.duration), &name, "duration must be ≥ 0")?;
+            check(p.wrench.iter().all(|w| w.is_finite()), &name, "wrench must be finite")?;
+        }
+        check(self.fall.min_base_height.is_finite(), "fall.min_base_height", "must be finite")?;
+        check(self.fall.max_tilt.is_finite() && self.fall.max_tilt > 0.0, "fall.max_tilt", "must be > 0")?;
+        let s = &self.safety;
+        check(s.max_joint_velocity > 0.0, "safety.max_joint_velocity", "must be > 0")?;
+        check(s.max_base_velocity > 0.0, "safety.max_base_velocity", "must be > 0")?;
+        check(s.max_penetration > 0.0, "safety.max_penetration", "must be > 0")?;
+        Ok(())
+    }
+}
+
+fn check_actuator(a: &JointActuatorConfig, p: &str) -> Result<(), SimError> {
+    check(finite_nonneg(a.kp), &format!("{p}.kp"), "must be finite and ≥ 0")?;
+    check(finite_nonneg(a.kd), &format!("{p}.kd"), "must be finite and ≥ 0")?;
+    check(finite_nonneg(a.damping), &format!("{p}.damping"), "must be finite and ≥ 0")?;
+    check(finite_nonneg(a.armature), &format!("{p}.armature"), "must be finite and ≥ 0")?;
+    if let Some(e) = a.effort_limit {
+        check(e > 0.0 && !e.is_nan(), &format!("{p}.effort_limit"), "must be > 0")?;
+    }
+    Ok(())
+}

@@ -1,0 +1,376 @@
+//! A primal–dual interior-point method (Mehrotra predictor–corrector) for convex QPs whose Hessian is
+//! banded and whose constraint rows each touch a few neighbouring variables:
+//!
+//! `min ½ xᵀPx + qᵀx  s.t.  Cx ≤ d`
+//!
+//! Each Newton system `(P + Cᵀ diag(λ/s) C) Δx = r` stays banded and is solved by a banded Cholesky in
+//! `O(n b²)`. All memory is allocated in `new`; `solve` allocates nothing.
+
+/// A sparse constraint row with at most [`MAX_ROW_ENTRIES`] non-zeros.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct SparseRow {
+    pub(crate) columns: [usize; MAX_ROW_ENTRIES],
+    pub(crate) values: [f64; MAX_ROW_ENTRIES],
+    pub(crate) len: usize,
+    pub(crate) bound: f64,
+}
+
+/// Most non-zeros of a constraint row.
+pub(crate) const MAX_ROW_ENTRIES: usize = 4;
+
+impl SparseRow {
+    fn dot(&self, x: &[f64]) -> f64 {
+        (0..self.len).map(|e| self.values[e] * x[self.columns[e]]).sum()
+    }
+}
+
+/// Outcome of a solve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum IpmOutcome {
+    /// The unconstrained minimiser was feasible: it is the solution (no iteration).
+    Unconstrained,
+    /// Converged to the tolerances.
+    Converged,
+    /// Hit the iteration limit.
+    MaxIterations,
+    /// A Newton matrix was not positive definite or a value became non-finite.
+    NumericalError,
+}
+
+/// Banded symmetric matrix storage (lower band): entry `(i, j)`, `i − bw ≤ j ≤ i`, at `i (bw+1) + (i − j)`.
+#[derive(Debug, Clone)]
+pub(crate) struct BandMatrix {
+    pub(crate) n: usize,
+    pub(crate) bw: usize,
+    pub(crate) data: Vec<f64>,
+}
+
+impl BandMatrix {
+    pub(crate) fn new(n: usize, bw: usize) -> Self {
+        Self {
+            n,
+            bw,
+            data: vec![0.0; n * (bw + 1)],
+        }
+    }
+
+    #[inline]
+    fn index(&self, i: usize, j: usize) -> usize {
+        debug_assert!(j <= i && i - j <= self.bw);
+        i * (self.bw + 1) + (i - j)
+    }
+
+    /// Adds `v` to the symmetric entry `(i, j)` (stored once, in the lower band).
+    #[inline]
+    pub(crate) fn add(&mut self, i: usize, j: usize, v: f64) {
+        let (r, c) = if i >= j { (i, j) } else { (j, i) };
+        let k = self.index(r, c);
+        self.data[k] += v;
+    }
+
+    #[inline]
+    pub(crate) fn get(&self, i: usize, j: usize) -> f64 {
+        let (r, c) = if i >= j { (i, j) } else { (j, i) };
+        if r - c > self.bw {
+            0.0
+        } else {
+            self.data[self.index(r, c)]
+        }
+    }
+
+    pub(crate) fn fill_zero(&mut self) {
+        self.data.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// `y = A x` for the symmetric matrix.
+    pub(crate) fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        y.iter_mut().for_each(|v| *v = 0.0);
+        for i in 0..self.n {
+            let lo = i.saturating_sub(self.bw);
+            for j in lo..=i {
+                let a = self.data[self.index(i, j)];
+                y[i] += a * x[j];
+                if j != i {
+                    y[j] += a * x[i];
+                }
+            }
+        }
+    }
+
+    /// In-place Cholesky `A = L Lᵀ` (L kept in the band). Returns false if not positive definite.
+    pub(crate) fn cholesky_in_place(&mut self) -> bool {
+        let (n, bw) = (self.n, self.bw);
+        for i in 0..n {
+            let lo = i.saturating_sub(bw);
+            for j in lo..=i {
+                let mut sum = self.data[self.index(i, j)];
+                for k in lo..j {
+                    sum -= self.data[self.index(i, k)] * self.data[self.index(j, k)];
+                }
+                if i == j {
+                    if !(sum > 0.0 && sum.is_finite()) {
+                        return false;
+                    }
+                    let idx = self.index(i, i);
+                    self.data[idx] = sum.sqrt();
+                } else {
+                    let idx = self.index(i, j);
+                    self.data[idx] = sum / self.data[self.index(j, j)];
+                }
+            }
+        }
+        true
+    }
+
+    /// Solves `L Lᵀ x = b` in place (after `cholesky_in_place`).
+    pub(crate) fn cholesky_solve(&self, b: &mut [f64]) {
+        let (n, bw) = (self.n, self.bw);
+        for i in 0..n {
+            let lo = i.saturating_sub(bw);
+            let mut sum = b[i];
+            for k in lo..i {
+                sum -= self.data[self.index(i, k)] * b[k];
+            }
+            b[i] = sum / self.data[self.index(i, i)];
+        }
+        for i in (0..n).rev() {
+            let hi = (i + bw).min(n - 1);
+            let mut sum = b[i];
+            for k in i + 1..=hi {
+                sum -= self.data[self.index(k, i)] * b[k];
+            }
+            b[i] = sum / self.data[self.index(i, i)];
+        }
+    }
+}
+
+/// Settings of the interior-point method.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct IpmSettings {
+    pub(crate) tolerance: f64,
+    pub(crate) max_iterations: u32,
+}
+
+/// Workspace and problem data of the banded QP.
+#[derive(Debug, Clone)]
+pub(crate) struct BandedQp {
+    pub(crate) hessian: BandMatrix,
+    pub(crate) gradient: Vec<f64>,
+    pub(crate) rows: Vec<SparseRow>,
+    pub(crate) row_count: usize,
+    // iterates
+    pub(crate) x: Vec<f64>,
+    pub(crate) slack: Vec<f64>,
+    pub(crate) multiplier: Vec<f64>,
+    // scratch
+    newton: BandMatrix,
+    residual_dual: Vec<f64>,
+    residual_primal: Vec<f64>,
+    dx: Vec<f64>,
+    ds: Vec<f64>,
+    dl: Vec<f64>,
+    ds_aff: Vec<f64>,
+    dl_aff: Vec<f64>,
+    rhs_rows: Vec<f64>,
+}
+
+impl BandedQp {
+    /// Workspace for `n` variables, half-bandwidth `bw` and at most `max_rows` constraint rows.
+    pub(crate) fn new(n: usize, bw: usize, max_rows: usize) -> Self {
+        Self {
+            hessian: BandMatrix::new(n, bw),
+            gradient: vec![0.0; n],
+            rows: vec![SparseRow::default(); max_rows],
+            row_count: 0,
+            x: vec![0.0; n],
+            slack: vec![0.0; max_rows],
+            multiplier: vec![0.0; max_rows],
+            newton: BandMatrix::new(n, bw),
+            residual_dual: vec![0.0; n],
+            residual_primal: vec![0.0; max_rows],
+            dx: vec![0.0; n],
+            ds: vec![0.0; max_rows],
+            dl: vec![0.0; max_rows],
+            ds_aff: vec![0.0; max_rows],
+            dl_aff: vec![0.0; max_rows],
+            rhs_rows: vec![0.0; max_rows],
+        }
+    }
+
+    fn n(&self) -> usize {
+        self.hessian.n
+    }
+
+    /// `out = Cᵀ v` over the active rows.
+    fn add_transpose_product(rows: &[SparseRow], v: &[f64], out: &mut [f64]) {
+        for (row, &vi) in rows.iter().zip(v.iter()) {
+            for e in 0..row.len {
+                out[row.columns[e]] += row.values[e] * vi;
+            }
+        }
+    }
+
+    fn compute_residuals(&mut self) {
+        let m = self.row_count;
+        self.hessian.mul_vec(&self.x, &mut self.residual_dual);
+        for (r, g) in self.residual_dual.iter_mut().zip(self.gradient.iter()) {
+            *r += g;
+        }
+        Self::add_transpose_product(
+            &self.rows[..m],
+            &self.multiplier[..m],
+            &mut self.residual_dual,
+        );
+        for i in 0..m {
+            let row = &self.rows[i];
+            self.residual_primal[i] = row.dot(&self.x) + self.slack[i] - row.bound;
+        }
+    }
+
+    /// Solves the Newton system for right-hand side `rc` (complementarity residual, in `rhs_rows`),
+    /// writing `dx`, `ds`, `dl`. The factorization must be current.
+    fn newton_direction(&mut self) {
+        let m = self.row_count;
+        // KΔx = −rd + Cᵀ((rc − λ∘rp)/s)
+        for i in 0..m {
+            self.ds[i] = (self.rhs_rows[i] - self.multiplier[i] * self.residual_primal[i]) / self.slack[i];
+        }
+        for (d, r) in self.dx.iter_mut().zip(self.residual_dual.iter()) {
+            *d = -r;
+        }
+        Self::add_transpose_product(&self.rows[..m], &self.ds[..m], &mut self.dx);
+        self.newton.cholesky_solve(&mut self.dx);
+        for i in 0..m {
+            let c_dx = self.rows[i].dot(&self.dx);
+            self.ds[i] = -self.residual_primal[i] - c_dx;
+            self.dl[i] = (-self.rhs_rows[i] - self.multiplier[i] * self.ds[i]) / self.slack[i];
+        }
+    }
+
+    fn max_step(values: &[f64], steps: &[f64]) -> f64 {
+        let mut alpha: f64 = 1.0;
+        for (&v, &d) in values.iter().zip(steps.iter()) {
+            if d < 0.0 {
+                alpha = alpha.min(-v / d);
+            }
+        }
+        alpha
+    }
+
+    /// Solves the QP; on return `x`, `slack`, `multiplier` hold the solution. Returns the outcome and
+    /// the number of iterations.
+    pub(crate) fn solve(&mut self, settings: &IpmSettings) -> (IpmOutcome, u32) {
+        let n = self.n();
+        let m = self.row_count;
+        // Unconstrained minimiser.
+        self.newton.data.copy_from_slice(&self.hessian.data);
+        if !self.newton.cholesky_in_place() {
+            return (IpmOutcome::NumericalError, 0);
+        }
+        for (x, g) in self.x.iter_mut().zip(self.gradient.iter()) {
+            *x = -g;
+        }
+        self.newton.cholesky_solve(&mut self.x);
+        if self.x.iter().any(|v| !v.is_finite()) {
+            return (IpmOutcome::NumericalError, 0);
+        }
+        let mut min_slack = f64::INFINITY;
+        for i in 0..m {
+            let s = self.rows[i].bound - self.rows[i].dot(&self.x);
+            self.slack[i] = s;
+            min_slack = min_slack.min(s);
+        }
+        if m == 0 || min_slack >= 0.0 {
+            self.multiplier[..m].iter_mut().for_each(|v| *v = 0.0);
+            return (IpmOutcome::Unconstrained, 0);
+        }
+        // Infeasible start: positive slacks and multipliers (Mehrotra-style shift).
+        let shift = (-1.5 * min_slack).max(0.0);
+        let floor = 1e-4;
+        for i in 0..m {
+            self.slack[i] = (self.slack[i] + shift).max(floor);
+            self.multiplier[i] = 1.0;
+        }
+        let scale_gradient = self
+            .gradient
+            .iter()
+            .fold(0.0_f64, |a, v| a.max(v.abs()))
+            .max(1.0);
+        let scale_bound = self.rows[..m]
+            .iter()
+            .fold(0.0_f64, |a, r| a.max(r.bound.abs()))
+            .max(1.0);
+        let tol = settings.tolerance;
+        let mut iterations = 0u32;
+        loop {
+            self.compute_residuals();
+            let mu = self.slack[..m]
+                .iter()
+                .zip(self.multiplier[..m].iter())
+                .map(|(s, l)| s * l)
+                .sum::<f64>()
+                / m as f64;
+            let dual_inf = self.residual_dual.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            let primal_inf = self.residual_primal[..m]
+                .iter()
+                .fold(0.0_f64, |a, v| a.max(v.abs()));
+            if !(mu.is_finite() && dual_inf.is_finite() && primal_inf.is_finite()) {
+                return (IpmOutcome::NumericalError, iterations);
+            }
+            if dual_inf <= tol * scale_gradient && primal_inf <= tol * scale_bound && mu <= tol * tol.sqrt()
+            {
+                return (IpmOutcome::Converged, iterations);
+            }
+            if iterations >= settings.max_iterations {
+                return (IpmOutcome::MaxIterations, iterations);
+            }
+            iterations += 1;
+            // Newton matrix K = P + Cᵀ diag(λ/s) C.
+            self.newton.data.copy_from_slice(&self.hessian.data);
+            for i in 0..m {
+                let w = self.multiplier[i] / self.slack[i];
+                let row = self.rows[i];
+                for a in 0..row.len {
+                    for b in 0..=a {
+                        self.newton
+                            .add(row.columns[a], row.columns[b], w * row.values[a] * row.values[b]);
+                    }
+                }
+            }
+            if !self.newton.cholesky_in_place() {
+                return (IpmOutcome::NumericalError, iterations);
+            }
+            // Predictor (affine scaling).
+            for i in 0..m {
+                self.rhs_rows[i] = self.slack[i] * self.multiplier[i];
+            }
+            self.newton_direction();
+            let alpha_aff = Self::max_step(&self.slack[..m], &self.ds[..m])
+                .min(Self::max_step(&self.multiplier[..m], &self.dl[..m]));
+            let mut mu_aff = 0.0;
+            for i in 0..m {
+                mu_aff += (self.slack[i] + alpha_aff * self.ds[i]) * (self.multiplier[i] + alpha_aff * self.dl[i]);
+            }
+            mu_aff /= m as f64;
+            let sigma = (mu_aff / mu).clamp(0.0, 1.0).powi(3);
+            self.ds_aff[..m].copy_from_slice(&self.ds[..m]);
+            self.dl_aff[..m].copy_from_slice(&self.dl[..m]);
+            // Corrector.
+            for i in 0..m {
+                self.rhs_rows[i] = self.slack[i] * self.multiplier[i] + self.ds_aff[i] * self.dl_aff[i]
+                    - sigma * mu;
+            }
+            self.newton_direction();
+            let alpha_max = Self::max_step(&self.slack[..m], &self.ds[..m])
+                .min(Self::max_step(&self.multiplier[..m], &self.dl[..m]));
+            let alpha = (0.99 * alpha_max).min(1.0);
+            for j in 0..n {
+                self.x[j] += alpha * self.dx[j];
+            }
+            for i in 0..m {
+                self.slack[i] += alpha * self.ds[i];
+                self.multiplier[i] += alpha * self.dl[i];
+            }
+        }
+    }
+}

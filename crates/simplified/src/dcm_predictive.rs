@@ -1,0 +1,704 @@
+//! DCM predictive controller (thesis (10.2.19)–(10.2.24), after Krause et al. 2012): an MPC over a
+//! horizon (default 2 s) that picks a piecewise-constant ZMP sequence keeping the predicted DCM on the
+//! plan, with the ZMP of each stage inside the support polygon of the planned contact sequence.
+//!
+//! # Formulation
+//!
+//! Prediction model (10.2.19), exact ZOH with the layer period `T`: `ξ_{k+1} = F ξ_k + G z_k`,
+//! `F = e^{ωT}`, `G = 1 − e^{ωT}`, `ξ_0 = ξ̄` (measured DCM). Cost, summed over the `N` stages:
+//!
+//! `½ Λ_ξ Σ_{k=1..N} ‖ξ_k − ξ_ref,k‖² + ½ Λ_z Σ_{k=0..N−1} ‖(z_k − z_{k−1}) − (ẑ_k − ẑ_{k−1})‖²`
+//!
+//! with `z_{−1}` the previous tick's desired ZMP (10.2.23e) and `ẑ` the planned ZMP. With
+//! `zmp_rate_reference = "plan"` (default) the ZMP rate is penalised relative to the planned rate, so a
+//! consistent plan is an exact fixed point of the MPC (zero cost); `"zero"` penalises the absolute rate as
+//! printed in (10.2.21) (smoother, but it then lags the plan at every ZMP transfer). Constraints
+//! (10.2.22): `A_k z_k ≤ b_k`, the H-representation of the support polygon of stage `k`.
+//!
+//! # Solution method (structure exploited)
+//!
+//! The thesis condenses onto the ZMP sequence (10.2.24), which gives a dense Hessian and, because the
+//! DCM is unstable (`F^N = e^{ωNT}` ≈ 5·10³ over 2 s), a badly conditioned one. Instead, the map
+//! `z_k = (ξ_{k+1} − F ξ_k)/G` is inverted: the decision variables are the predicted DCMs
+//! `ξ_1 … ξ_N` (2N unknowns, same optimum since the change of variables is bijective). The tracking
+//! cost is then diagonal, the rate cost pentadiagonal per axis, and each polygon row touches two
+//! consecutive stages, so every Newton matrix `P + Cᵀ diag(λ/s) C` is banded (half-bandwidth 5) and is
+//! factorised in `O(N)`. A primal–dual Mehrotra interior-point method runs on this banded system
+//! (`solver = "banded_interior_point"`, default); when the unconstrained minimiser is feasible it is
+//! returned at once (status `Unconstrained`, exact). `solver = "clarabel"` solves the same QP with
+//! clarabel (sparse, reference; allocates every tick).
+//!
+//! Interior-point methods do not benefit from warm starts; what is reused across ticks is all memory and
+//! the band structure (nothing is allocated by `step` with the banded solver).
+
+use std::time::Instant;
+
+use nalgebra::Vector2;
+use serde::{Deserialize, Serialize};
+
+use crate::banded::{BandedQp, IpmOutcome, IpmSettings, SparseRow};
+use crate::error::{check_positive, Result, SimplifiedError};
+use crate::lipm::{check_omega, check_point, LipmDiscretization};
+use crate::polygon::{SupportPolygon, MAX_POLYGON_VERTICES};
+
+/// How the ZMP-rate cost is referenced.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ZmpRateReference {
+    /// Penalise `(z_k − z_{k−1}) − (ẑ_k − ẑ_{k−1})`: the plan is an exact fixed point.
+    #[default]
+    Plan,
+    /// Penalise `z_k − z_{k−1}` as printed in (10.2.21).
+    Zero,
+}
+
+/// Which QP solver the MPC uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum MpcSolverKind {
+    /// The structure-exploiting banded interior-point method of this crate (no allocation per tick).
+    #[default]
+    BandedInteriorPoint,
+    /// clarabel on the same (sparse) QP; allocates every tick.
+    Clarabel,
+}
+
+/// Parameters of the DCM predictive controller.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `horizon` | s | 2.0 | prediction horizon; `N = round(horizon / period)` stages at the layer period |
+/// | `dcm_weight` | m⁻² | 7500 | `Λ_ξ`, DCM tracking weight (walking-controllers value) |
+/// | `zmp_rate_weight` | m⁻² | 90000 | `Λ_z`, weight of the per-stage ZMP change (walking-controllers value) |
+/// | `zmp_rate_reference` | – | `"plan"` | `"plan"` or `"zero"`, see the module docs |
+/// | `solver` | – | `"banded_interior_point"` | or `"clarabel"` |
+/// | `tolerance` | – | 1e-9 | interior-point tolerance on scaled residuals and complementarity |
+/// | `max_iterations` | – | 50 | interior-point iteration limit |
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DcmPredictiveConfig {
+    /// Prediction horizon [s].
+    pub horizon: f64,
+    /// DCM tracking weight `Λ_ξ`.
+    pub dcm_weight: f64,
+    /// ZMP-rate weight `Λ_z`.
+    pub zmp_rate_weight: f64,
+    /// Reference of the ZMP-rate cost.
+    pub zmp_rate_reference: ZmpRateReference,
+    /// QP solver.
+    pub solver: MpcSolverKind,
+    /// Solver tolerance.
+    pub tolerance: f64,
+    /// Solver iteration limit.
+    pub max_iterations: u32,
+}
+
+impl Default for DcmPredictiveConfig {
+    fn default() -> Self {
+        Self {
+            horizon: 2.0,
+            dcm_weight: 7500.0,
+            zmp_rate_weight: 90000.0,
+            zmp_rate_reference: ZmpRateReference::Plan,
+            solver: MpcSolverKind::BandedInteriorPoint,
+            tolerance: 1e-9,
+            max_iterations: 50,
+        }
+    }
+}
+
+impl DcmPredictiveConfig {
+    /// Checks the ranges documented on the struct.
+    pub fn validate(&self) -> Result<()> {
+        check_positive("predictive.horizon", self.horizon)?;
+        check_positive("predictive.dcm_weight", self.dcm_weight)?;
+        crate::error::check_non_negative("predictive.zmp_rate_weight", self.zmp_rate_weight)?;
+        check_positive("predictive.tolerance", self.tolerance)?;
+        if self.max_iterations == 0 {
+            return Err(SimplifiedError::InvalidParameter {
+                name: "predictive.max_iterations",
+                value: 0.0,
+                reason: "must be >= 1",
+            });
+        }
+        Ok(())
+    }
+
+    /// Number of stages `N = round(horizon / period)` (at least 1) for a layer period [s].
+    pub fn stages(&self, period: f64) -> Result<usize> {
+        check_positive("period", period)?;
+        let n = (self.horizon / period).round();
+        if !(n.is_finite() && n <= 100_000.0) {
+            return Err(SimplifiedError::InvalidParameter {
+                name: "predictive.horizon",
+                value: self.horizon,
+                reason: "horizon / period must be at most 100000 stages",
+            });
+        }
+        Ok((n as usize).max(1))
+    }
+}
+
+/// One sample of the plan over the MPC horizon, at time `t + k T` (k = 0 is the current time).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct HorizonSample {
+    /// Planned DCM [m].
+    pub dcm_position: Vector2<f64>,
+    /// Planned ZMP [m] (held over the stage that starts at this sample).
+    pub zmp: Vector2<f64>,
+    /// Support polygon of the planned contacts at this sample.
+    pub support: SupportPolygon,
+}
+
+/// Fixed-capacity buffer of plan samples over the MPC horizon, filled by the caller every tick
+/// (`clear` then `push`), allocation-free after construction.
+///
+/// The controller needs `N + 1` samples ([`DcmPredictiveController::horizon_samples`]): sample `k` at
+/// time `t + k T` for `k = 0..=N`. Sample 0 must be the plan at the current time. **When fewer samples
+/// are given (the plan ends inside the horizon), the last sample is held** over the remaining stages
+/// (the plan ends at rest, where holding is exact); the number of held samples is reported in the
+/// diagnostics. An empty horizon is an error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DcmHorizon {
+    samples: Vec<HorizonSample>,
+    capacity: usize,
+}
+
+impl DcmHorizon {
+    /// Buffer for up to `capacity` samples (allocates once).
+    pub fn with_capacity(capacity: usize) -> Self {
+        Self {
+            samples: Vec::with_capacity(capacity),
+            capacity,
+        }
+    }
+
+    /// Removes every sample (keeps the memory).
+    pub fn clear(&mut self) {
+        self.samples.clear();
+    }
+
+    /// Appends a sample; `HorizonFull` when the capacity is reached (nothing is allocated).
+    pub fn push(&mut self, sample: HorizonSample) -> Result<()> {
+        if self.samples.len() >= self.capacity {
+            return Err(SimplifiedError::HorizonFull {
+                capacity: self.capacity,
+            });
+        }
+        self.samples.push(sample);
+        Ok(())
+    }
+
+    /// The samples pushed since the last `clear`.
+    pub fn samples(&self) -> &[HorizonSample] {
+        &self.samples
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// True when no sample was pushed.
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    /// Capacity in samples.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+}
+
+/// Status of the last MPC solve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum MpcStatus {
+    /// The MPC has not run (instantaneous controller selected, or no tick yet).
+    #[default]
+    NotRun,
+    /// The unconstrained optimum was feasible and is the solution (no constraint active).
+    Unconstrained,
+    /// Solved to tolerance.
+    Solved,
+    /// Iteration limit reached (solution not returned).
+    MaxIterations,
+    /// Numerical failure (solution not returned).
+    NumericalError,
+}
+
+/// Diagnostics of one MPC tick.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct MpcDiagnostics {
+    /// Solver status.
+    pub status: MpcStatus,
+    /// Interior-point iterations (0 when unconstrained).
+    pub iterations: u32,
+    /// Wall-clock time of the QP assembly and solve [s].
+    pub solve_time: f64,
+    /// Number of stages `N`.
+    pub stages: usize,
+    /// Samples held because the horizon given was shorter than `N + 1`.
+    pub held_samples: usize,
+    /// Constraint rows with a multiplier above 1e-6 × the largest one (active set estimate).
+    pub active_constraints: usize,
+    /// Optimal cost (in the units of the weights).
+    pub cost: f64,
+}
+
+/// What one tick of the DCM predictive controller produces.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct DcmPredictiveOutput {
+    /// Desired ZMP [m]: the first ZMP of the optimal sequence, inside the current support polygon.
+    pub desired_zmp: Vector2<f64>,
+    /// The first ZMP of the optimal sequence before the final safety projection [m].
+    pub unprojected_zmp: Vector2<f64>,
+    /// DCM error `ξ − ξ_ref` at the current time [m].
+    pub dcm_error: Vector2<f64>,
+    /// True when the solver's ZMP was outside the current support polygon by more than 1e-9 m.
+    pub projection_active: bool,
+    /// Solver diagnostics.
+    pub diagnostics: MpcDiagnostics,
+}
+
+/// Half-bandwidth of the Newton matrices (interleaved x/y ordering, rate rows span 3 stages).
+const BANDWIDTH: usize = 5;
+
+/// The DCM predictive controller. Built for a fixed layer period; every buffer is allocated in `new`.
+/// A failed step (error returned) leaves the controller's memory of the previous desired ZMP unchanged.
+#[derive(Debug, Clone)]
+pub struct DcmPredictiveController {
+    config: DcmPredictiveConfig,
+    period: f64,
+    stages: usize,
+    qp: BandedQp,
+    reference_dcm: Vec<Vector2<f64>>,
+    reference_zmp: Vec<Vector2<f64>>,
+    supports: Vec<SupportPolygon>,
+    row_stage: Vec<(usize, usize)>,
+    solution_zmp: Vec<Vector2<f64>>,
+    solution_dcm: Vec<Vector2<f64>>,
+    multipliers: Vec<f64>,
+    previous_desired_zmp: Option<Vector2<f64>>,
+    previous_planned_zmp: Option<Vector2<f64>>,
+    last_problem: Option<ProblemConstants>,
+}
+
+/// The constants of the last solved problem (used to report its data).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ProblemConstants {
+    omega: f64,
+    initial_dcm: Vector2<f64>,
+    previous_zmp: Vector2<f64>,
+    previous_planned_zmp: Vector2<f64>,
+}
+
+/// The data of the last MPC problem and its solution, for inspection and testing.
+#[derive(Debug, Clone, Copy)]
+pub struct MpcProblemView<'a> {
+    /// Natural frequency used [s⁻¹].
+    pub omega: f64,
+    /// Stage length `T` [s].
+    pub period: f64,
+    /// Measured DCM `ξ̄` the prediction starts from [m].
+    pub initial_dcm: Vector2<f64>,
+    /// `z_{−1}`: previous desired ZMP [m].
+    pub previous_zmp: Vector2<f64>,
+    /// `ẑ_{−1}`: previous planned ZMP [m] (used when the rate is referenced to the plan).
+    pub previous_planned_zmp: Vector2<f64>,
+    /// Reference DCM `ξ_ref,k`, k = 0..=N (after holding) [m].
+    pub reference_dcm: &'a [Vector2<f64>],
+    /// Planned ZMP `ẑ_k`, k = 0..N−1 [m].
+    pub reference_zmp: &'a [Vector2<f64>],
+    /// Support polygon of stage k, k = 0..N−1.
+    pub supports: &'a [SupportPolygon],
+    /// Optimal ZMP sequence `z_k`, k = 0..N−1 [m].
+    pub zmp: &'a [Vector2<f64>],
+    /// Predicted DCM `ξ_k`, k = 0..=N [m].
+    pub dcm: &'a [Vector2<f64>],
+    /// Multipliers of the polygon constraints (cost units per metre), in the order of
+    /// `constraint_rows`.
+    pub multipliers: &'a [f64],
+    /// `(stage, edge)` of each constraint row: row `i` is `nᵀ z_stage ≤ b` with
+    /// `(n, b) = supports[stage].half_plane(edge)`.
+    pub constraint_rows: &'a [(usize, usize)],
+    /// The configuration (weights).
+    pub config: &'a DcmPredictiveConfig,
+}
+
+impl DcmPredictiveController {
+    /// Builds the controller for a layer period [s] (= the MPC stage length).
+    pub fn new(config: DcmPredictiveConfig, period: f64) -> Result<Self> {
+        config.validate()?;
+        let stages = config.stages(period)?;
+        let max_rows = stages * MAX_POLYGON_VERTICES;
+        let placeholder = SupportPolygon::rectangle(-1.0, 1.0, -1.0, 1.0)?;
+        Ok(Self {
+            config,
+            period,
+            stages,
+            qp: BandedQp::new(2 * stages, BANDWIDTH, max_rows),
+            reference_dcm: vec![Vector2::zeros(); stages + 1],
+            reference_zmp: vec![Vector2::zeros(); stages],
+            supports: vec![placeholder; stages],
+            row_stage: vec![(0, 0); max_rows],
+            solution_zmp: vec![Vector2::zeros(); stages],
+            solution_dcm: vec![Vector2::zeros(); stages + 1],
+            multipliers: vec![0.0; max_rows],
+            previous_desired_zmp: None,
+            previous_planned_zmp: None,
+            last_problem: None,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &DcmPredictiveConfig {
+        &self.config
+    }
+
+    /// Number of stages `N`.
+    pub fn stages(&self) -> usize {
+        self.stages
+    }
+
+    /// Number of plan samples a full horizon holds (`N + 1`); size the [`DcmHorizon`] with it.
+    pub fn horizon_samples(&self) -> usize {
+        self.stages + 1
+    }
+
+    /// Forgets the previous desired ZMP (back to the state after `new`).
+    pub fn reset(&mut self) {
+        self.previous_desired_zmp = None;
+        self.previous_planned_zmp = None;
+        self.last_problem = None;
+    }
+
+    /// Overrides `z_{−1}`, the previous desired ZMP (e.g. after switching from another controller).
+    pub fn set_previous_desired_zmp(&mut self, zmp: Vector2<f64>) {
+        self.previous_desired_zmp = Some(zmp);
+    }
+
+    /// The last solved problem and its solution (None before the first successful step).
+    pub fn last_problem(&self) -> Option<MpcProblemView<'_>> {
+        let c = self.last_problem?;
+        let rows = self.qp.row_count;
+        Some(MpcProblemView {
+            omega: c.omega,
+            period: self.period,
+            initial_dcm: c.initial_dcm,
+            previous_zmp: c.previous_zmp,
+            previous_planned_zmp: c.previous_planned_zmp,
+            reference_dcm: &self.reference_dcm,
+            reference_zmp: &self.reference_zmp,
+            supports: &self.supports,
+            zmp: &self.solution_zmp,
+            dcm: &self.solution_dcm,
+            multipliers: &self.multipliers[..rows],
+            constraint_rows: &self.row_stage[..rows],
+            config: &self.config,
+        })
+    }
+
+    /// One tick: solves the MPC from the measured DCM [m] over the plan `horizon`, with natural frequency
+    /// `omega` [s⁻¹]; the result is finally projected onto `support` (the current support polygon).
+    ///
+    /// Errors: `NonFiniteInput`, `EmptyHorizon`, `SolverFailed` (status `MaxIterations` or
+    /// `NumericalError`). On error the controller keeps its previous `z_{−1}`.
+    pub fn step(
+        &mut self,
+        omega: f64,
+        measured_dcm: Vector2<f64>,
+        horizon: &DcmHorizon,
+        support: &SupportPolygon,
+    ) -> Result<DcmPredictiveOutput> {
+        let start = Instant::now();
+        check_omega(omega)?;
+        check_point("measured_dcm", &measured_dcm)?;
+        let samples = horizon.samples();
+        let Some(last) = samples.last() else {
+            return Err(SimplifiedError::EmptyHorizon);
+        };
+        for s in samples {
+            check_point("horizon.dcm_position", &s.dcm_position)?;
+            check_point("horizon.zmp", &s.zmp)?;
+        }
+        let n = self.stages;
+        let held_samples = (n + 1).saturating_sub(samples.len());
+        for k in 0..=n {
+            let s = samples.get(k).unwrap_or(last);
+            self.reference_dcm[k] = s.dcm_position;
+            if k < n {
+                self.reference_zmp[k] = s.zmp;
+                self.supports[k] = s.support;
+            }
+        }
+        let planned_zmp_now = samples[0].zmp;
+        let previous_zmp = self.previous_desired_zmp.unwrap_or(planned_zmp_now);
+        let previous_planned_zmp = self.previous_planned_zmp.unwrap_or(planned_zmp_now);
+        let constants = ProblemConstants {
+            omega,
+            initial_dcm: measured_dcm,
+            previous_zmp,
+            previous_planned_zmp,
+        };
+        let discretization = LipmDiscretization::new(omega, self.period)?;
+        let f = discretization.dcm_transition();
+        let g = discretization.dcm_input();
+        // z_k = a ξ_{k+1} + c ξ_k
+        let a = 1.0 / g;
+        let c = -f / g;
+        self.assemble(&constants, a, c);
+        let (outcome, iterations) = match self.config.solver {
+            MpcSolverKind::BandedInteriorPoint => self.qp.solve(&IpmSettings {
+                tolerance: self.config.tolerance,
+                max_iterations: self.config.max_iterations,
+            }),
+            MpcSolverKind::Clarabel => solve_with_clarabel(&mut self.qp, &self.config),
+        };
+        let status = match outcome {
+            IpmOutcome::Unconstrained => MpcStatus::Unconstrained,
+            IpmOutcome::Converged => MpcStatus::Solved,
+            IpmOutcome::MaxIterations => MpcStatus::MaxIterations,
+            IpmOutcome::NumericalError => MpcStatus::NumericalError,
+        };
+        if !matches!(status, MpcStatus::Unconstrained | MpcStatus::Solved)
+            || self.qp.x.iter().any(|v| !v.is_finite())
+        {
+            return Err(SimplifiedError::SolverFailed { status, iterations });
+        }
+        // Unpack the solution.
+        self.solution_dcm[0] = measured_dcm;
+        for k in 1..=n {
+            self.solution_dcm[k] = Vector2::new(self.qp.x[2 * (k - 1)], self.qp.x[2 * (k - 1) + 1]);
+        }
+        for k in 0..n {
+            self.solution_zmp[k] = self.solution_dcm[k + 1] * a + self.solution_dcm[k] * c;
+        }
+        let rows = self.qp.row_count;
+        let mut largest: f64 = 0.0;
+        for i in 0..rows {
+            self.multipliers[i] = self.qp.multiplier[i] * self.config.dcm_weight;
+            largest = largest.max(self.multipliers[i]);
+        }
+        let active_constraints = if largest > 0.0 {
+            self.multipliers[..rows]
+                .iter()
+                .filter(|&&l| l > 1e-6 * largest)
+                .count()
+        } else {
+            0
+        };
+        let cost = self.cost(&constants);
+        let unprojected = self.solution_zmp[0];
+        let (desired, _) = support.project(unprojected);
+        let projection_active = support.max_violation(unprojected) > 1e-9;
+        self.previous_desired_zmp = Some(desired);
+        self.previous_planned_zmp = Some(planned_zmp_now);
+        self.last_problem = Some(constants);
+        Ok(DcmPredictiveOutput {
+            desired_zmp: desired,
+            unprojected_zmp: unprojected,
+            dcm_error: measured_dcm - samples[0].dcm_position,
+            projection_active,
+            diagnostics: MpcDiagnostics {
+                status,
+                iterations,
+                solve_time: start.elapsed().as_secs_f64(),
+                stages: n,
+                held_samples,
+                active_constraints,
+                cost,
+            },
+        })
+    }
+
+    /// Cost of the current solution (original weights).
+    fn cost(&self, constants: &ProblemConstants) -> f64 {
+        let n = self.stages;
+        let mut tracking = 0.0;
+        for k in 1..=n {
+            tracking += (self.solution_dcm[k] - self.reference_dcm[k]).norm_squared();
+        }
+        let mut rate = 0.0;
+        for k in 0..n {
+            let (z_prev, zhat_prev) = if k == 0 {
+                (constants.previous_zmp, constants.previous_planned_zmp)
+            } else {
+                (self.solution_zmp[k - 1], self.reference_zmp[k - 1])
+            };
+            let planned_rate = match self.config.zmp_rate_reference {
+                ZmpRateReference::Plan => self.reference_zmp[k] - zhat_prev,
+                ZmpRateReference::Zero => Vector2::zeros(),
+            };
+            rate += (self.solution_zmp[k] - z_prev - planned_rate).norm_squared();
+        }
+        0.5 * self.config.dcm_weight * tracking + 0.5 * self.config.zmp_rate_weight * rate
+    }
+
+    /// Builds the banded QP in the DCM variables `x = [ξ_1; …; ξ_N]` (x/y interleaved), with the cost
+    /// divided by `Λ_ξ` (scaling does not change the minimiser; multipliers are scaled back).
+    fn assemble(&mut self, constants: &ProblemConstants, a: f64, c: f64) {
+        let n = self.stages;
+        let rate_weight = self.config.zmp_rate_weight / self.config.dcm_weight;
+        let qp = &mut self.qp;
+        qp.hessian.fill_zero();
+        qp.gradient.iter_mut().for_each(|v| *v = 0.0);
+        // A residual row per axis: Σ coef · ξ_stage + constant, stage 0 being the constant ξ̄.
+        // Adds ½ w (row)² to the cost.
+        let mut add_row = |terms: &[(usize, f64)], constant: Vector2<f64>, weight: f64| {
+            let mut offset = constant;
+            for &(stage, coef) in terms {
+                if stage == 0 {
+                    offset += constants.initial_dcm * coef;
+                }
+            }
+            for &(si, ci) in terms {
+                if si == 0 {
+                    continue;
+                }
+                for axis in 0..2 {
+                    let i = 2 * (si - 1) + axis;
+                    qp.gradient[i] += weight * ci * offset[axis];
+                }
+                for &(sj, cj) in terms {
+                    if sj == 0 || sj > si {
+                        continue;
+                    }
+                    for axis in 0..2 {
+                        qp.hessian
+                            .add(2 * (si - 1) + axis, 2 * (sj - 1) + axis, weight * ci * cj);
+                    }
+                }
+            }
+        };
+        for k in 1..=n {
+            add_row(&[(k, 1.0)], -self.reference_dcm[k], 1.0);
+        }
+        if rate_weight > 0.0 {
+            for k in 0..n {
+                let zhat_prev = if k == 0 {
+                    constants.previous_planned_zmp
+                } else {
+                    self.reference_zmp[k - 1]
+                };
+                let planned_rate = match self.config.zmp_rate_reference {
+                    ZmpRateReference::Plan => self.reference_zmp[k] - zhat_prev,
+                    ZmpRateReference::Zero => Vector2::zeros(),
+                };
+                if k == 0 {
+                    // z_0 − z_{−1} = a ξ_1 + c ξ̄ − z̄
+                    add_row(
+                        &[(1, a), (0, c)],
+                        -constants.previous_zmp - planned_rate,
+                        rate_weight,
+                    );
+                } else {
+                    // z_k − z_{k−1} = a ξ_{k+1} + (c − a) ξ_k − c ξ_{k−1}
+                    add_row(
+                        &[(k + 1, a), (k, c - a), (k - 1, -c)],
+                        -planned_rate,
+                        rate_weight,
+                    );
+                }
+            }
+        }
+        // Polygon rows: nᵀ (a ξ_{k+1} + c ξ_k) ≤ b.
+        let mut r = 0;
+        for k in 0..n {
+            let polygon = &self.supports[k];
+            for e in 0..polygon.len() {
+                let (normal, bound) = polygon.half_plane(e);
+                let mut row = SparseRow {
+                    bound,
+                    ..SparseRow::default()
+                };
+                let mut push = |column: usize, value: f64| {
+                    row.columns[row.len] = column;
+                    row.values[row.len] = value;
+                    row.len += 1;
+                };
+                if k == 0 {
+                    row.bound -= c * normal.dot(&constants.initial_dcm);
+                } else {
+                    push(2 * (k - 1), c * normal.x);
+                    push(2 * (k - 1) + 1, c * normal.y);
+                }
+                push(2 * k, a * normal.x);
+                push(2 * k + 1, a * normal.y);
+                qp.rows[r] = row;
+                self.row_stage[r] = (k, e);
+                r += 1;
+            }
+        }
+        qp.row_count = r;
+    }
+}
+
+/// Solves the banded QP with clarabel (reference path, allocates).
+fn solve_with_clarabel(qp: &mut BandedQp, config: &DcmPredictiveConfig) -> (IpmOutcome, u32) {
+    use clarabel::algebra::CscMatrix;
+    use clarabel::solver::{
+        DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT,
+    };
+    let n = qp.x.len();
+    let m = qp.row_count;
+    // P upper triangle, column by column.
+    let mut colptr = Vec::with_capacity(n + 1);
+    let mut rowval = Vec::new();
+    let mut nzval = Vec::new();
+    colptr.push(0);
+    for j in 0..n {
+        for i in j.saturating_sub(qp.hessian.bw)..=j {
+            let v = qp.hessian.get(j, i);
+            if v != 0.0 {
+                rowval.push(i);
+                nzval.push(v);
+            }
+        }
+        colptr.push(rowval.len());
+    }
+    let p = CscMatrix::new(n, n, colptr, rowval, nzval);
+    let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
+    for (i, row) in qp.rows[..m].iter().enumerate() {
+        for e in 0..row.len {
+            triplets.push((row.columns[e], i, row.values[e]));
+        }
+    }
+    triplets.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.cmp(&y.1)));
+    let mut colptr = vec![0usize; n + 1];
+    for &(col, _, _) in &triplets {
+        colptr[col + 1] += 1;
+    }
+    for j in 0..n {
+        colptr[j + 1] += colptr[j];
+    }
+    let rowval: Vec<usize> = triplets.iter().map(|t| t.1).collect();
+    let nzval: Vec<f64> = triplets.iter().map(|t| t.2).collect();
+    let a = CscMatrix::new(m, n, colptr, rowval, nzval);
+    let b: Vec<f64> = qp.rows[..m].iter().map(|r| r.bound).collect();
+    let cones: Vec<SupportedConeT<f64>> = vec![NonnegativeConeT(m)];
+    let Ok(settings) = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .max_iter(config.max_iterations.max(50))
+        .tol_gap_abs(config.tolerance)
+        .tol_gap_rel(config.tolerance)
+        .tol_feas(config.tolerance)
+        .build()
+    else {
+        return (IpmOutcome::NumericalError, 0);
+    };
+    let Ok(mut solver) = DefaultSolver::new(&p, &qp.gradient, &a, &b, &cones, settings) else {
+        return (IpmOutcome::NumericalError, 0);
+    };
+    solver.solve();
+    let iterations = solver.solution.iterations;
+    let outcome = match solver.solution.status {
+        SolverStatus::Solved | SolverStatus::AlmostSolved => IpmOutcome::Converged,
+        SolverStatus::MaxIterations | SolverStatus::MaxTime => IpmOutcome::MaxIterations,
+        _ => IpmOutcome::NumericalError,
+    };
+    qp.x.copy_from_slice(&solver.solution.x);
+    qp.multiplier[..m].copy_from_slice(&solver.solution.z);
+    qp.slack[..m].copy_from_slice(&solver.solution.s);
+    (outcome, iterations)
+}

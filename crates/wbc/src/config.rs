@@ -1,0 +1,796 @@
+//! Configuration of the whole-body controllers: a list of tasks, each with a type, a frame, gains, a mask,
+//! a priority and a weight. Deserializable from TOML (`serde`, unknown keys and unknown task types are
+//! errors). [`IkConfig::default_for_bundled_model`] and [`TsidConfig::default_for_bundled_model`] give
+//! working task sets for `models/stride_humanoid.urdf`.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+pub use stride_qp::{Backend, QpSettings};
+
+/// Priority of an equality task.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Priority {
+    /// A hard constraint (`A x = b` exactly).
+    Hard,
+    /// A weighted least-squares cost `‖A x − b‖²_W`.
+    #[default]
+    Soft,
+}
+
+/// A task weight: one number for every row, or one per row (after masking).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Weight {
+    /// The same weight on every row.
+    Scalar(f64),
+    /// One weight per (masked) row.
+    PerRow(Vec<f64>),
+}
+
+impl Default for Weight {
+    fn default() -> Self {
+        Weight::Scalar(1.0)
+    }
+}
+
+impl Weight {
+    /// Weight of row `i` of a task with `rows` rows; `None` when a per-row list has the wrong length.
+    pub fn expand(&self, rows: usize) -> Option<Vec<f64>> {
+        match self {
+            Weight::Scalar(w) => Some(vec![*w; rows]),
+            Weight::PerRow(v) if v.len() == rows => Some(v.clone()),
+            Weight::PerRow(_) => None,
+        }
+    }
+}
+
+/// Where a frame task takes its reference from (fields of the controller input).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrameReferenceSource {
+    /// `input.left_foot` (pose, twist, acceleration).
+    LeftFoot,
+    /// `input.right_foot`.
+    RightFoot,
+    /// `input.torso` (orientation only: valid for `so3` tasks).
+    Torso,
+    /// The frame's pose at the first tick after construction or reset, held still.
+    Initial,
+}
+
+/// Which foot a contact belongs to (selects `input.left_in_contact` / `input.right_in_contact`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Foot {
+    /// The left foot.
+    Left,
+    /// The right foot.
+    Right,
+}
+
+fn default_mask6() -> [bool; 6] {
+    [true; 6]
+}
+fn default_mask3() -> [bool; 3] {
+    [true; 3]
+}
+fn one() -> f64 {
+    1.0
+}
+
+/// SE(3) tracking of a frame: `J ν = [ṗ*; ω*]` (IK, 7.1.6–7.1.8) or `J ν̇ + J̇ν = [p̈*; ω̇*]` (TSID,
+/// 7.2.9–7.2.11), feedforward + PD on R³ × SO(3), orientation error `Log(R_ref Rᵀ)`.
+///
+/// | key | unit | default | meaning |
+/// |---|---|---|---|
+/// | `name` | – | required | task name (unique; used in residual reports) |
+/// | `frame` | – | required | model frame |
+/// | `reference` | – | required | reference source |
+/// | `kp_linear`, `kp_angular` | 1/s (IK), 1/s² (TSID) | 0 | proportional gains |
+/// | `kd_linear`, `kd_angular` | 1/s | 0 | derivative gains (TSID only) |
+/// | `mask` | – | all true | rows kept: `[x, y, z, rx, ry, rz]` (world axes) |
+/// | `priority` | – | `soft` | `hard` or `soft` |
+/// | `weight` | – | 1 | soft weight (scalar or per kept row) |
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Se3TaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Frame name in the model.
+    pub frame: String,
+    /// Reference source.
+    pub reference: FrameReferenceSource,
+    /// Position gain.
+    #[serde(default)]
+    pub kp_linear: f64,
+    /// Orientation gain.
+    #[serde(default)]
+    pub kp_angular: f64,
+    /// Linear velocity gain (TSID).
+    #[serde(default)]
+    pub kd_linear: f64,
+    /// Angular velocity gain (TSID).
+    #[serde(default)]
+    pub kd_angular: f64,
+    /// Rows kept `[x, y, z, rx, ry, rz]`.
+    #[serde(default = "default_mask6")]
+    pub mask: [bool; 6],
+    /// Hard or soft.
+    #[serde(default)]
+    pub priority: Priority,
+    /// Soft weight.
+    #[serde(default)]
+    pub weight: Weight,
+}
+
+/// SO(3) (orientation) or R³ (position) tracking of a frame. Same keys as [`Se3TaskConfig`] with
+/// `kp`, `kd` and a 3-entry `mask`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Frame3TaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Frame name in the model.
+    pub frame: String,
+    /// Reference source.
+    pub reference: FrameReferenceSource,
+    /// Proportional gain (1/s in IK, 1/s² in TSID).
+    #[serde(default)]
+    pub kp: f64,
+    /// Derivative gain (1/s, TSID only).
+    #[serde(default)]
+    pub kd: f64,
+    /// Rows kept `[x, y, z]` (world axes).
+    #[serde(default = "default_mask3")]
+    pub mask: [bool; 3],
+    /// Hard or soft.
+    #[serde(default)]
+    pub priority: Priority,
+    /// Soft weight.
+    #[serde(default)]
+    pub weight: Weight,
+}
+
+/// CoM tracking: IK `J_com ν = ẋ_ref + K_p (x_ref − x)` (7.1.4); TSID linear momentum rate
+/// `Σ f_lin = m (ẍ_ref + K_d (ẋ_ref − ẋ) + K_p (x_ref − x)) − m g` (7.2.4, 7.2.7).
+///
+/// | key | unit | default |
+/// |---|---|---|
+/// | `name` | – | required |
+/// | `kp` | 1/s (IK), 1/s² (TSID) | 0 |
+/// | `kd` | 1/s (TSID) | 0 |
+/// | `mask` | – | `[true, true, true]` |
+/// | `priority` | – | `soft` |
+/// | `weight` | – | 1 |
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Proportional gain.
+    #[serde(default)]
+    pub kp: f64,
+    /// Derivative gain (TSID).
+    #[serde(default)]
+    pub kd: f64,
+    /// Rows kept `[x, y, z]`.
+    #[serde(default = "default_mask3")]
+    pub mask: [bool; 3],
+    /// Hard or soft.
+    #[serde(default)]
+    pub priority: Priority,
+    /// Soft weight.
+    #[serde(default)]
+    pub weight: Weight,
+}
+
+/// Centroidal angular momentum about the CoM: IK `J_CMM,ω ν = h_ref + K_p ∫…` (here `h_ref`, 7.1.5);
+/// TSID `Σ (p_j − x_com) × f_j + μ_j = ḣ_ref + K_p (h_ref − h)` (7.2.5, 7.2.8). The reference comes from
+/// `input.angular_momentum` (usually zero).
+///
+/// | key | unit | default |
+/// |---|---|---|
+/// | `name` | – | required |
+/// | `kp` | 1/s (TSID) | 0 |
+/// | `priority` | – | `soft` |
+/// | `weight` | – | 1 |
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AngularMomentumTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Proportional gain (TSID).
+    #[serde(default)]
+    pub kp: f64,
+    /// Hard or soft.
+    #[serde(default)]
+    pub priority: Priority,
+    /// Soft weight.
+    #[serde(default)]
+    pub weight: Weight,
+}
+
+/// Joint regularization / tracking: IK `ṡ = ṡ_ref + K_p (s_ref − s)` (7.1.12); TSID
+/// `s̈ = s̈_ref + K_d (ṡ_ref − ṡ) + K_p (s_ref − s)` (7.2.17). `s_ref` is `input.posture` when given,
+/// else `posture` below (joints not listed: 0). Velocity and acceleration references are zero.
+///
+/// | key | unit | default |
+/// |---|---|---|
+/// | `name` | – | required |
+/// | `kp` | 1/s (IK), 1/s² (TSID) | 0 |
+/// | `kd` | 1/s (TSID) | 0 |
+/// | `posture` | rad by joint name | empty (all 0) |
+/// | `weight` | – | 1 (every joint) |
+/// | `joint_weights` | by joint name | empty (overrides `weight`) |
+/// | `priority` | – | `soft` |
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointRegularizationTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Proportional gain.
+    #[serde(default)]
+    pub kp: f64,
+    /// Derivative gain (TSID).
+    #[serde(default)]
+    pub kd: f64,
+    /// Reference posture by joint name (rad).
+    #[serde(default)]
+    pub posture: BTreeMap<String, f64>,
+    /// Weight of every joint not in `joint_weights`.
+    #[serde(default = "one")]
+    pub weight: f64,
+    /// Per-joint weights.
+    #[serde(default)]
+    pub joint_weights: BTreeMap<String, f64>,
+    /// Hard or soft.
+    #[serde(default)]
+    pub priority: Priority,
+}
+
+/// Joint position limits as bounds on the decision variable (always hard). IK: one-step Euler
+/// look-ahead `(s⁻ − s)/dt ≤ ṡ ≤ (s⁺ − s)/dt` (7.1.15); TSID: `2(s⁻ − s − T ṡ)/T² ≤ s̈ ≤ 2(s⁺ − s − T ṡ)/T²`
+/// (7.2.29 with erratum 13) with look-ahead time `T`.
+///
+/// | key | unit | default | meaning |
+/// |---|---|---|---|
+/// | `name` | – | required | |
+/// | `margin` | rad | 0 | limits shrunk by this on both sides |
+/// | `look_ahead` | s | the controller period | `dt` / `T` above |
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointPositionLimitsTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Margin inside the URDF limits (rad).
+    #[serde(default)]
+    pub margin: f64,
+    /// Look-ahead time (s); `None`: the controller period.
+    #[serde(default)]
+    pub look_ahead: Option<f64>,
+}
+
+/// Joint velocity limits (always hard): IK `|ṡ| ≤ scale v_max`; TSID `(−scale v_max − ṡ)/dt ≤ s̈ ≤
+/// (scale v_max − ṡ)/dt`. `v_max` from the URDF.
+///
+/// | key | unit | default |
+/// |---|---|---|
+/// | `name` | – | required |
+/// | `scale` | – | 1 |
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointVelocityLimitsTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Fraction of the URDF velocity limit.
+    #[serde(default = "one")]
+    pub scale: f64,
+}
+
+/// Floating-base dynamics `M ν̇ + h = [0; τ] + Σ Jⱼᵀ fⱼ` (7.2.14–7.2.15), always hard. The joint rows
+/// define τ, which is eliminated (see docs/wbc.md); the 6 base rows stay as equality constraints.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FloatingBaseDynamicsTaskConfig {
+    /// Task name.
+    pub name: String,
+}
+
+/// Joint torque limits `−scale τ_max ≤ τ ≤ scale τ_max` (7.2.30), always hard; `τ_max` is the URDF
+/// effort limit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointTorqueLimitsTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Fraction of the URDF effort limit.
+    #[serde(default = "one")]
+    pub scale: f64,
+}
+
+/// A rigid planar contact of a foot (TSID). While the foot is loaded it brings: a 6D contact wrench
+/// variable (mixed: force and torque about the frame origin, world orientation), the contact constraint
+/// `J ν̇ + J̇ν = −K_d v − K_p e` (feet do not accelerate; `K_p = K_d = 0` by default) which replaces any
+/// frame task on the same frame, and the feasibility rows (linearized friction cone, unilateral and bounded
+/// normal force, CoP inside the sole rectangle, torsional friction) expressed in the frame's orientation.
+/// Load changes ramp the normal-force upper bound over `ramp_time` (see docs/wbc.md).
+///
+/// | key | unit | default | meaning |
+/// |---|---|---|---|
+/// | `name` | – | required | |
+/// | `frame` | – | required | contact frame (sole centre, z normal) |
+/// | `foot` | – | required | `left` / `right` |
+/// | `friction` | – | 0.33 | static friction coefficient μ |
+/// | `facets` | – | 1 | friction pyramid slices S (4S facets, inscribed) |
+/// | `foot_x` | m | [-0.1, 0.1] | sole rectangle, x in the frame |
+/// | `foot_y` | m | [-0.045, 0.045] | sole rectangle, y in the frame |
+/// | `torsional_friction` | m | 0.01 | `|μ_z| ≤ γ f_z` |
+/// | `min_normal_force` | N | 0 | lower bound on f_z while loaded |
+/// | `max_normal_force` | N | 1000 | upper bound on f_z when fully loaded |
+/// | `ramp_time` | s | 0.02 | load / unload ramp of the f_z upper bound |
+/// | `kp`, `kd` | 1/s², 1/s | 0, 0 | contact-constraint stabilization |
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Contact frame.
+    pub frame: String,
+    /// Which foot's contact flag drives it.
+    pub foot: Foot,
+    /// Friction coefficient.
+    #[serde(default = "default_friction")]
+    pub friction: f64,
+    /// Friction pyramid slices.
+    #[serde(default = "default_facets")]
+    pub facets: usize,
+    /// Sole rectangle along x (m).
+    #[serde(default = "default_foot_x")]
+    pub foot_x: [f64; 2],
+    /// Sole rectangle along y (m).
+    #[serde(default = "default_foot_y")]
+    pub foot_y: [f64; 2],
+    /// Torsional friction length (m).
+    #[serde(default = "default_torsional")]
+    pub torsional_friction: f64,
+    /// Minimum normal force (N).
+    #[serde(default)]
+    pub min_normal_force: f64,
+    /// Maximum normal force (N).
+    #[serde(default = "default_max_fz")]
+    pub max_normal_force: f64,
+    /// Ramp time of load changes (s).
+    #[serde(default = "default_ramp")]
+    pub ramp_time: f64,
+    /// Position stabilization gain.
+    #[serde(default)]
+    pub kp: f64,
+    /// Velocity stabilization gain.
+    #[serde(default)]
+    pub kd: f64,
+}
+
+fn default_friction() -> f64 {
+    0.33
+}
+fn default_facets() -> usize {
+    1
+}
+fn default_foot_x() -> [f64; 2] {
+    [-0.1, 0.1]
+}
+fn default_foot_y() -> [f64; 2] {
+    [-0.045, 0.045]
+}
+fn default_torsional() -> f64 {
+    0.01
+}
+fn default_max_fz() -> f64 {
+    1000.0
+}
+fn default_ramp() -> f64 {
+    0.02
+}
+
+/// Regularization of the contact wrenches toward `input.desired_wrenches` (zero when absent):
+/// `‖f − f_ref‖²_W` (7.2.25).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WrenchRegularizationTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Weight (scalar or 6 values `[fx, fy, fz, mx, my, mz]`, applied to every contact).
+    #[serde(default)]
+    pub weight: Weight,
+}
+
+/// Regularization of the joint torques toward zero: `‖τ‖²_W` (7.2.25), with τ expressed through the
+/// dynamics.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TorqueRegularizationTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Weight (scalar or one per joint).
+    #[serde(default)]
+    pub weight: Weight,
+}
+
+/// Global ZMP of the contact wrenches equal to `input.desired_zmp` (7.2.23–7.2.24). Inactive (rows
+/// zeroed) when the input has no desired ZMP. Assumes coplanar horizontal contacts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ZmpTaskConfig {
+    /// Task name.
+    pub name: String,
+    /// Hard or soft.
+    #[serde(default)]
+    pub priority: Priority,
+    /// Soft weight.
+    #[serde(default)]
+    pub weight: Weight,
+}
+
+/// One entry of a controller's task list; the TOML key `type` selects the variant.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum TaskConfig {
+    /// SE(3) tracking of a frame.
+    Se3(Se3TaskConfig),
+    /// Orientation tracking of a frame.
+    So3(Frame3TaskConfig),
+    /// Position tracking of a frame.
+    R3(Frame3TaskConfig),
+    /// CoM tracking.
+    Com(ComTaskConfig),
+    /// Centroidal angular momentum.
+    AngularMomentum(AngularMomentumTaskConfig),
+    /// Joint regularization / posture tracking.
+    JointRegularization(JointRegularizationTaskConfig),
+    /// Joint position limits.
+    JointPositionLimits(JointPositionLimitsTaskConfig),
+    /// Joint velocity limits.
+    JointVelocityLimits(JointVelocityLimitsTaskConfig),
+    /// Floating-base dynamics (TSID only).
+    FloatingBaseDynamics(FloatingBaseDynamicsTaskConfig),
+    /// Joint torque limits (TSID only).
+    JointTorqueLimits(JointTorqueLimitsTaskConfig),
+    /// Rigid contact + wrench feasibility (TSID only).
+    Contact(ContactTaskConfig),
+    /// Contact wrench regularization (TSID only).
+    WrenchRegularization(WrenchRegularizationTaskConfig),
+    /// Joint torque regularization (TSID only).
+    TorqueRegularization(TorqueRegularizationTaskConfig),
+    /// Global ZMP (TSID only).
+    Zmp(ZmpTaskConfig),
+}
+
+impl TaskConfig {
+    /// The task's name.
+    pub fn name(&self) -> &str {
+        match self {
+            TaskConfig::Se3(c) => &c.name,
+            TaskConfig::So3(c) | TaskConfig::R3(c) => &c.name,
+            TaskConfig::Com(c) => &c.name,
+            TaskConfig::AngularMomentum(c) => &c.name,
+            TaskConfig::JointRegularization(c) => &c.name,
+            TaskConfig::JointPositionLimits(c) => &c.name,
+            TaskConfig::JointVelocityLimits(c) => &c.name,
+            TaskConfig::FloatingBaseDynamics(c) => &c.name,
+            TaskConfig::JointTorqueLimits(c) => &c.name,
+            TaskConfig::Contact(c) => &c.name,
+            TaskConfig::WrenchRegularization(c) => &c.name,
+            TaskConfig::TorqueRegularization(c) => &c.name,
+            TaskConfig::Zmp(c) => &c.name,
+        }
+    }
+
+    /// The TOML `type` string.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            TaskConfig::Se3(_) => "se3",
+            TaskConfig::So3(_) => "so3",
+            TaskConfig::R3(_) => "r3",
+            TaskConfig::Com(_) => "com",
+            TaskConfig::AngularMomentum(_) => "angular_momentum",
+            TaskConfig::JointRegularization(_) => "joint_regularization",
+            TaskConfig::JointPositionLimits(_) => "joint_position_limits",
+            TaskConfig::JointVelocityLimits(_) => "joint_velocity_limits",
+            TaskConfig::FloatingBaseDynamics(_) => "floating_base_dynamics",
+            TaskConfig::JointTorqueLimits(_) => "joint_torque_limits",
+            TaskConfig::Contact(_) => "contact",
+            TaskConfig::WrenchRegularization(_) => "wrench_regularization",
+            TaskConfig::TorqueRegularization(_) => "torque_regularization",
+            TaskConfig::Zmp(_) => "zmp",
+        }
+    }
+}
+
+/// How the kinematic QP evaluates its feedback terms (thesis §7.1.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum IkFeedback {
+    /// Position-controlled robot: the IK integrates its own state and uses it for the task errors
+    /// (open-loop IK; the measured state only initializes it at the first tick after reset).
+    #[default]
+    Integrated,
+    /// Velocity-controlled robot: the task errors use the measured state of every tick; the integrated
+    /// joint positions are still returned (measured + dt ν).
+    Measured,
+}
+
+/// Kinematic QP-IK configuration (thesis 7.1.16).
+///
+/// | key | unit | default | meaning |
+/// |---|---|---|---|
+/// | `period` | s | 0.002 | control period: integration step and limit look-ahead |
+/// | `feedback` | – | `integrated` | `integrated` (position control) or `measured` |
+/// | `qp` | – | stride-qp defaults | `backend` (`active_set` / `clarabel`), `regularization`, `fallback`, `relaxation_weight`, … |
+/// | `tasks` | – | see `default_for_bundled_model` | task list |
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IkConfig {
+    /// Control period (s).
+    #[serde(default = "default_ik_period")]
+    pub period: f64,
+    /// Feedback source.
+    #[serde(default)]
+    pub feedback: IkFeedback,
+    /// stride-qp settings (backend, regularization, fallback, relaxation weight, backend settings).
+    #[serde(default)]
+    pub qp: QpSettings,
+    /// Tasks.
+    pub tasks: Vec<TaskConfig>,
+}
+
+fn default_ik_period() -> f64 {
+    0.002
+}
+fn default_tsid_period() -> f64 {
+    0.001
+}
+
+/// Torque TSID configuration (thesis 7.2.31).
+///
+/// | key | unit | default | meaning |
+/// |---|---|---|---|
+/// | `period` | s | 0.001 | control period: ramps and limit look-ahead |
+/// | `gravity` | m/s² | [0, 0, -9.81] | gravity vector |
+/// | `qp` | – | stride-qp defaults | `backend` (`active_set` / `clarabel`), `regularization`, `fallback`, `relaxation_weight`, … |
+/// | `tasks` | – | see `default_for_bundled_model` | task list |
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TsidConfig {
+    /// Control period (s).
+    #[serde(default = "default_tsid_period")]
+    pub period: f64,
+    /// Gravity (m/s²).
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// stride-qp settings (backend, regularization, fallback, relaxation weight, backend settings).
+    #[serde(default)]
+    pub qp: QpSettings,
+    /// Tasks.
+    pub tasks: Vec<TaskConfig>,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+
+/// Default posture of the bundled model (rad), slightly crouched, arms off the torso.
+pub fn bundled_posture() -> BTreeMap<String, f64> {
+    let mut p = BTreeMap::new();
+    for side in ["l", "r"] {
+        p.insert(format!("{side}_hip_pitch"), 0.35);
+        p.insert(format!("{side}_knee"), 0.7);
+        p.insert(format!("{side}_ankle_pitch"), 0.35);
+        p.insert(format!("{side}_shoulder_pitch"), 0.2);
+        p.insert(format!("{side}_shoulder_roll"), 0.25);
+        p.insert(format!("{side}_elbow"), 0.5);
+    }
+    p
+}
+
+fn arm_weights(value: f64) -> BTreeMap<String, f64> {
+    let mut w = BTreeMap::new();
+    for side in ["l", "r"] {
+        for j in [
+            "shoulder_pitch",
+            "shoulder_roll",
+            "shoulder_yaw",
+            "elbow",
+            "wrist_prosup",
+            "wrist_pitch",
+            "wrist_yaw",
+        ] {
+            w.insert(format!("{side}_{j}"), value);
+        }
+    }
+    w
+}
+
+impl IkConfig {
+    /// The thesis's QP-IK (7.1.16) for `models/stride_humanoid.urdf`, with the gains of the iCub
+    /// walking controller (anchors §1.1): feet SE(3) hard (K_p 7 / 5), CoM hard (K 1… here 2 for a 500 Hz
+    /// loop), chest SO(3) soft (K 5, weight 5), posture soft (K 5, weights 1 torso/legs, 2 arms), joint
+    /// position and velocity limits.
+    pub fn default_for_bundled_model() -> Self {
+        IkConfig {
+            period: default_ik_period(),
+            feedback: IkFeedback::Integrated,
+            qp: QpSettings::default(),
+            tasks: vec![
+                TaskConfig::Se3(Se3TaskConfig {
+                    name: "left_foot".into(),
+                    frame: "l_sole".into(),
+                    reference: FrameReferenceSource::LeftFoot,
+                    kp_linear: 7.0,
+                    kp_angular: 5.0,
+                    kd_linear: 0.0,
+                    kd_angular: 0.0,
+                    mask: [true; 6],
+                    priority: Priority::Hard,
+                    weight: Weight::Scalar(1.0),
+                }),
+                TaskConfig::Se3(Se3TaskConfig {
+                    name: "right_foot".into(),
+                    frame: "r_sole".into(),
+                    reference: FrameReferenceSource::RightFoot,
+                    kp_linear: 7.0,
+                    kp_angular: 5.0,
+                    kd_linear: 0.0,
+                    kd_angular: 0.0,
+                    mask: [true; 6],
+                    priority: Priority::Hard,
+                    weight: Weight::Scalar(1.0),
+                }),
+                TaskConfig::Com(ComTaskConfig {
+                    name: "com".into(),
+                    kp: 2.0,
+                    kd: 0.0,
+                    mask: [true; 3],
+                    priority: Priority::Hard,
+                    weight: Weight::Scalar(1.0),
+                }),
+                TaskConfig::So3(Frame3TaskConfig {
+                    name: "torso".into(),
+                    frame: "chest".into(),
+                    reference: FrameReferenceSource::Torso,
+                    kp: 5.0,
+                    kd: 0.0,
+                    mask: [true; 3],
+                    priority: Priority::Soft,
+                    weight: Weight::Scalar(5.0),
+                }),
+                TaskConfig::JointRegularization(JointRegularizationTaskConfig {
+                    name: "posture".into(),
+                    kp: 5.0,
+                    kd: 0.0,
+                    posture: bundled_posture(),
+                    weight: 1.0,
+                    joint_weights: arm_weights(2.0),
+                    priority: Priority::Soft,
+                }),
+                TaskConfig::JointPositionLimits(JointPositionLimitsTaskConfig {
+                    name: "joint_position_limits".into(),
+                    margin: 0.0,
+                    look_ahead: None,
+                }),
+                TaskConfig::JointVelocityLimits(JointVelocityLimitsTaskConfig {
+                    name: "joint_velocity_limits".into(),
+                    scale: 1.0,
+                }),
+            ],
+        }
+    }
+}
+
+impl TsidConfig {
+    /// The thesis's TSID (7.2.31) for `models/stride_humanoid.urdf`: floating-base dynamics, feet
+    /// SE(3) hard (swing tracking; contact constraint when loaded), linear momentum (CoM) hard, chest SO(3),
+    /// posture, wrench and torque regularization soft, ZMP soft, torque/position/velocity limits and
+    /// contact wrench feasibility hard.
+    pub fn default_for_bundled_model() -> Self {
+        let foot = |name: &str, frame: &str, reference| {
+            TaskConfig::Se3(Se3TaskConfig {
+                name: name.into(),
+                frame: frame.into(),
+                reference,
+                kp_linear: 400.0,
+                kp_angular: 400.0,
+                kd_linear: 40.0,
+                kd_angular: 40.0,
+                mask: [true; 6],
+                priority: Priority::Hard,
+                weight: Weight::Scalar(1.0),
+            })
+        };
+        let contact = |name: &str, frame: &str, foot| {
+            TaskConfig::Contact(ContactTaskConfig {
+                name: name.into(),
+                frame: frame.into(),
+                foot,
+                friction: default_friction(),
+                facets: default_facets(),
+                foot_x: default_foot_x(),
+                foot_y: default_foot_y(),
+                torsional_friction: default_torsional(),
+                min_normal_force: 0.0,
+                max_normal_force: default_max_fz(),
+                ramp_time: default_ramp(),
+                kp: 0.0,
+                kd: 0.0,
+            })
+        };
+        TsidConfig {
+            period: default_tsid_period(),
+            gravity: default_gravity(),
+            qp: QpSettings::default(),
+            tasks: vec![
+                TaskConfig::FloatingBaseDynamics(FloatingBaseDynamicsTaskConfig {
+                    name: "dynamics".into(),
+                }),
+                contact("left_contact", "l_sole", Foot::Left),
+                contact("right_contact", "r_sole", Foot::Right),
+                foot("left_foot", "l_sole", FrameReferenceSource::LeftFoot),
+                foot("right_foot", "r_sole", FrameReferenceSource::RightFoot),
+                TaskConfig::Com(ComTaskConfig {
+                    name: "com".into(),
+                    kp: 100.0,
+                    kd: 20.0,
+                    mask: [true; 3],
+                    priority: Priority::Hard,
+                    weight: Weight::Scalar(1.0),
+                }),
+                TaskConfig::So3(Frame3TaskConfig {
+                    name: "torso".into(),
+                    frame: "chest".into(),
+                    reference: FrameReferenceSource::Torso,
+                    kp: 100.0,
+                    kd: 20.0,
+                    mask: [true; 3],
+                    priority: Priority::Soft,
+                    weight: Weight::Scalar(10.0),
+                }),
+                TaskConfig::JointRegularization(JointRegularizationTaskConfig {
+                    name: "posture".into(),
+                    kp: 100.0,
+                    kd: 20.0,
+                    posture: bundled_posture(),
+                    weight: 1.0,
+                    joint_weights: arm_weights(2.0),
+                    priority: Priority::Soft,
+                }),
+                TaskConfig::WrenchRegularization(WrenchRegularizationTaskConfig {
+                    name: "wrench_regularization".into(),
+                    weight: Weight::Scalar(1e-4),
+                }),
+                TaskConfig::TorqueRegularization(TorqueRegularizationTaskConfig {
+                    name: "torque_regularization".into(),
+                    weight: Weight::Scalar(1e-4),
+                }),
+                TaskConfig::Zmp(ZmpTaskConfig {
+                    name: "zmp".into(),
+                    priority: Priority::Soft,
+                    weight: Weight::Scalar(1e-3),
+                }),
+                TaskConfig::JointTorqueLimits(JointTorqueLimitsTaskConfig {
+                    name: "joint_torque_limits".into(),
+                    scale: 1.0,
+                }),
+                TaskConfig::JointPositionLimits(JointPositionLimitsTaskConfig {
+                    name: "joint_position_limits".into(),
+                    margin: 0.0,
+                    look_ahead: Some(0.05),
+                }),
+                TaskConfig::JointVelocityLimits(JointVelocityLimitsTaskConfig {
+                    name: "joint_velocity_limits".into(),
+                    scale: 1.0,
+                }),
+            ],
+        }
+    }
+}

@@ -1,0 +1,500 @@
+//! Kinematic whole-body QP (QP-IK, thesis 7.1.16): decision variable `ν = [base twist (mixed); ṡ]`.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use nalgebra::{DVector, Vector6};
+use stride_block::Block;
+use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
+
+use crate::bridge::{QpBridge, VariableLayout};
+use crate::config::{IkConfig, IkFeedback, Priority, TaskConfig};
+use crate::error::WbcError;
+use crate::io::{IkOutput, SolveReport, TaskResidual, WbcInput};
+use crate::tasks::{
+    check_gain, expand_weight, joint_limits, AngularMomentumVelocityTask, ComVelocityTask, FrameTask,
+    JointRegularizationTask, Level, TaskBlock,
+};
+
+/// What a config entry became.
+#[derive(Debug, Clone, Copy)]
+enum Slot {
+    /// A row block (index into `blocks`).
+    Block(usize),
+    /// Joint position limits (variable bounds).
+    PositionLimits,
+    /// Joint velocity limits (variable bounds).
+    VelocityLimits,
+}
+
+/// The kinematic QP-IK block. See the crate docs and docs/wbc.md.
+///
+/// Each [`Block::step`]: evaluates the task errors at the integrated state (position control, thesis
+/// §7.1.3) or at the measured one, solves for ν, integrates the internal state on SE(3) × Rⁿ with
+/// [`RobotState::integrate`] (mixed representation) and returns the integrated joint positions. A failed
+/// solve falls back to the relaxed problem (hard tasks as heavily weighted soft ones, as stride-qp
+/// documents); if that fails too the last valid joint positions are held with zero velocity, the
+/// internal state is not advanced and `report.held` is set.
+pub struct QpIk {
+    model: Arc<Model>,
+    config: IkConfig,
+    kd: KinDyn,
+    frame_tasks: Vec<FrameTask>,
+    com_tasks: Vec<ComVelocityTask>,
+    momentum_tasks: Vec<AngularMomentumVelocityTask>,
+    joint_tasks: Vec<JointRegularizationTask>,
+    slots: Vec<Slot>,
+    blocks: Vec<TaskBlock>,
+    position_limits: Option<(Vec<f64>, Vec<f64>, f64)>,
+    velocity_limits: Option<Vec<f64>>,
+    lower: DVector<f64>,
+    upper: DVector<f64>,
+    x: DVector<f64>,
+    bridge: QpBridge,
+    state: RobotState,
+    initialized: bool,
+    output: IkOutput,
+}
+
+impl QpIk {
+    /// Builds the controller (all allocation happens here).
+    ///
+    /// Errors: unknown frames/joints, invalid gains or weights, task types the QP-IK does not support
+    /// (TSID-only tasks), or a QP that stride-qp rejects.
+    pub fn new(model: Arc<Model>, config: IkConfig) -> Result<Self, WbcError> {
+        if !(config.period.is_finite() && config.period > 0.0) {
+            return Err(WbcError::InvalidConfig {
+                task: "<qp-ik>".into(),
+                key: "period",
+                reason: format!("{} must be > 0", config.period),
+            });
+        }
+        let n = model.dof();
+        let nv = model.nv();
+        let mut frame_tasks = Vec::new();
+        let mut com_tasks = Vec::new();
+        let mut momentum_tasks = Vec::new();
+        let mut joint_tasks = Vec::new();
+        let mut slots = Vec::new();
+        let mut blocks: Vec<TaskBlock> = Vec::new();
+        let mut position_limits = None;
+        let mut velocity_limits = None;
+        let (lo, hi, vmax, _) = joint_limits(&model);
+        let mut names = std::collections::BTreeSet::new();
+        for task in &config.tasks {
+            if !names.insert(task.name().to_owned()) {
+                return Err(WbcError::InvalidConfig {
+                    task: task.name().to_owned(),
+                    key: "name",
+                    reason: "duplicate task name".into(),
+                });
+            }
+            let eq_block = |rows: usize, priority: Priority, weight| -> Result<TaskBlock, WbcError> {
+                let hard = priority == Priority::Hard;
+                let w = if hard {
+                    vec![1.0; rows]
+                } else {
+                    expand_weight(task.name(), weight, rows)?
+                };
+                Ok(TaskBlock::equality(task.name(), rows, nv, hard, w))
+            };
+            match task {
+                TaskConfig::Se3(c) => {
+                    let mut t = FrameTask::from_se3(&model, c, Level::Velocity)?;
+                    t.block = blocks.len();
+                    slots.push(Slot::Block(blocks.len()));
+                    blocks.push(eq_block(t.row_count(), c.priority, &c.weight)?);
+                    frame_tasks.push(t);
+                }
+                TaskConfig::So3(c) | TaskConfig::R3(c) => {
+                    let angular = matches!(task, TaskConfig::So3(_));
+                    let mut t = FrameTask::from_frame3(&model, c, angular, Level::Velocity)?;
+                    t.block = blocks.len();
+                    slots.push(Slot::Block(blocks.len()));
+                    blocks.push(eq_block(t.row_count(), c.priority, &c.weight)?);
+                    frame_tasks.push(t);
+                }
+                TaskConfig::Com(c) => {
+                    let mut t = ComVelocityTask::new(&model, c)?;
+                    t.block = blocks.len();
+                    slots.push(Slot::Block(blocks.len()));
+                    blocks.push(eq_block(t.row_count(), c.priority, &c.weight)?);
+                    com_tasks.push(t);
+                }
+                TaskConfig::AngularMomentum(c) => {
+                    let mut t = AngularMomentumVelocityTask::new(&model);
+                    t.block = blocks.len();
+                    slots.push(Slot::Block(blocks.len()));
+                    blocks.push(eq_block(3, c.priority, &c.weight)?);
+                    momentum_tasks.push(t);
+                }
+                TaskConfig::JointRegularization(c) => {
+                    let mut t = JointRegularizationTask::new(&model, c, Level::Velocity)?;
+                    t.block = blocks.len();
+                    slots.push(Slot::Block(blocks.len()));
+                    let w = if t.hard { vec![1.0; n] } else { t.weights.clone() };
+                    blocks.push(TaskBlock::equality(&c.name, n, nv, t.hard, w));
+                    joint_tasks.push(t);
+                }
+                TaskConfig::JointPositionLimits(c) => {
+                    check_gain(&c.name, "margin", c.margin)?;
+                    let look_ahead = c.look_ahead.unwrap_or(config.period);
+                    if !(look_ahead.is_finite() && look_ahead > 0.0) {
+                        return Err(WbcError::InvalidConfig {
+                            task: c.name.clone(),
+                            key: "look_ahead",
+                            reason: format!("{look_ahead} must be > 0"),
+                        });
+                    }
+                    let l: Vec<f64> = lo.iter().map(|v| v + c.margin).collect();
+                    let u: Vec<f64> = hi.iter().map(|v| v - c.margin).collect();
+                    if let Some(i) = (0..n).find(|&i| l[i] > u[i]) {
+                        return Err(WbcError::InvalidConfig {
+                            task: c.name.clone(),
+                            key: "margin",
+                            reason: format!(
+                                "larger than half the range of joint `{}`",
+                                model.joints()[i].name
+                            ),
+                        });
+                    }
+                    position_limits = Some((l, u, look_ahead));
+                    slots.push(Slot::PositionLimits);
+                }
+                TaskConfig::JointVelocityLimits(c) => {
+                    check_gain(&c.name, "scale", c.scale)?;
+                    velocity_limits = Some(vmax.iter().map(|v| v * c.scale).collect());
+                    slots.push(Slot::VelocityLimits);
+                }
+                other => {
+                    return Err(WbcError::UnsupportedTask {
+                        task: other.name().to_owned(),
+                        task_type: other.type_name(),
+                        controller: "QP-IK",
+                    })
+                }
+            }
+        }
+        let layout = VariableLayout::new(&[("base_velocity", 6), ("joint_velocities", n)])?;
+        let bridge = QpBridge::new(layout, &blocks, &config.qp)?;
+        let residuals = config
+            .tasks
+            .iter()
+            .map(|t| TaskResidual {
+                name: t.name().to_owned(),
+                hard: match t {
+                    TaskConfig::Se3(c) => c.priority == Priority::Hard,
+                    TaskConfig::So3(c) | TaskConfig::R3(c) => c.priority == Priority::Hard,
+                    TaskConfig::Com(c) => c.priority == Priority::Hard,
+                    TaskConfig::AngularMomentum(c) => c.priority == Priority::Hard,
+                    TaskConfig::JointRegularization(c) => c.priority == Priority::Hard,
+                    _ => true,
+                },
+                residual: 0.0,
+            })
+            .collect();
+        let state = RobotState::zero(&model);
+        let output = IkOutput {
+            joint_positions: DVector::zeros(n),
+            joint_velocities: DVector::zeros(n),
+            base_velocity: Vector6::zeros(),
+            base_pose: state.base_pose,
+            report: SolveReport::default(),
+            residuals,
+        };
+        let mut kd = KinDyn::new(Arc::clone(&model));
+        kd.set_representation(VelocityRepresentation::Mixed);
+        Ok(QpIk {
+            kd,
+            frame_tasks,
+            com_tasks,
+            momentum_tasks,
+            joint_tasks,
+            slots,
+            blocks,
+            position_limits,
+            velocity_limits,
+            lower: DVector::from_element(nv, f64::NEG_INFINITY),
+            upper: DVector::from_element(nv, f64::INFINITY),
+            x: DVector::zeros(nv),
+            bridge,
+            state,
+            initialized: false,
+            output,
+            model,
+            config,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &IkConfig {
+        &self.config
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Arc<Model> {
+        &self.model
+    }
+
+    /// The internal (integrated) state: the state the task errors were evaluated at in
+    /// [`IkFeedback::Integrated`] mode, advanced by the last solution.
+    pub fn integrated_state(&self) -> &RobotState {
+        &self.state
+    }
+
+    /// Replaces the internal state (e.g. to restart the integration from a known posture).
+    pub fn set_integrated_state(&mut self, state: &RobotState) -> Result<(), WbcError> {
+        check_state(&self.model, state)?;
+        copy_state(&mut self.state, state);
+        self.initialized = true;
+        Ok(())
+    }
+
+    /// The last output.
+    pub fn output(&self) -> &IkOutput {
+        &self.output
+    }
+
+    /// The stride-qp problem of the last tick: data, solution, KKT check (for fixtures and
+    /// cross-solver checks).
+    pub fn qp_problem(&self) -> &stride_qp::QpProblem {
+        self.bridge.problem()
+    }
+
+    /// Norms of the current pose errors of the frame tasks `(name, error)` at the state the tasks are
+    /// evaluated at (m and rad mixed: `‖[p_ref − p; Log(R_ref Rᵀ)]‖` on the kept rows), and of the CoM
+    /// tasks. Evaluated for `input` at the internal state. For tests and diagnostics (allocates).
+    pub fn task_errors(&mut self, input: &WbcInput) -> Result<Vec<(String, f64)>, WbcError> {
+        self.kd.set_state(&self.state)?;
+        let mut out = Vec::new();
+        for t in &mut self.frame_tasks {
+            out.push((t.name.clone(), t.pose_error_norm(&self.kd, input)));
+        }
+        for t in &self.com_tasks {
+            out.push((t.name.clone(), t.error_norm(&self.kd, input)));
+        }
+        Ok(out)
+    }
+
+    fn fill(&mut self, input: &WbcInput) -> Result<(), WbcError> {
+        self.kd.set_state(&self.state)?;
+        for t in &mut self.frame_tasks {
+            t.update(&self.kd, input, &mut self.blocks[t.block])?;
+        }
+        for t in &mut self.com_tasks {
+            t.update(&mut self.kd, input, &mut self.blocks[t.block])?;
+        }
+        for t in &mut self.momentum_tasks {
+            t.update(&mut self.kd, input, &mut self.blocks[t.block])?;
+        }
+        for t in &self.joint_tasks {
+            t.update(
+                input,
+                &self.state.joint_positions,
+                &self.state.joint_velocities,
+                &mut self.blocks[t.block],
+            );
+        }
+        let n = self.model.dof();
+        for i in 0..n {
+            let mut l = f64::NEG_INFINITY;
+            let mut u = f64::INFINITY;
+            if let Some((lo, hi, dt)) = &self.position_limits {
+                let s = self.state.joint_positions[i];
+                l = (lo[i] - s) / dt;
+                u = (hi[i] - s) / dt;
+            }
+            if let Some(v) = &self.velocity_limits {
+                l = l.max(-v[i]);
+                u = u.min(v[i]);
+            }
+            if l > u {
+                // outside the position range and slower than needed to come back: move back at the
+                // velocity limit (never an inconsistent bound pair)
+                if let Some(v) = &self.velocity_limits {
+                    if u < -v[i] {
+                        l = -v[i];
+                        u = -v[i];
+                    } else {
+                        l = v[i];
+                        u = v[i];
+                    }
+                } else {
+                    l = u;
+                }
+            }
+            self.lower[6 + i] = l;
+            self.upper[6 + i] = u;
+        }
+        Ok(())
+    }
+
+    fn write_residuals(&mut self) {
+        let n = self.model.dof();
+        for (k, slot) in self.slots.iter().enumerate() {
+            let r = match slot {
+                Slot::Block(b) => self.bridge.residual(*b),
+                Slot::PositionLimits | Slot::VelocityLimits => {
+                    let mut s = 0.0;
+                    for i in 0..n {
+                        let v = self.x[6 + i];
+                        let e = (self.lower[6 + i] - v).max(0.0) + (v - self.upper[6 + i]).max(0.0);
+                        s += e * e;
+                    }
+                    s.sqrt()
+                }
+            };
+            self.output.residuals[k].residual = r;
+        }
+    }
+}
+
+pub(crate) fn check_state(model: &Model, state: &RobotState) -> Result<(), WbcError> {
+    let n = model.dof();
+    if state.joint_positions.len() != n || state.joint_velocities.len() != n {
+        return Err(WbcError::InvalidInput(format!(
+            "state has {} joint positions and {} joint velocities, the model has {n} joints",
+            state.joint_positions.len(),
+            state.joint_velocities.len()
+        )));
+    }
+    let finite = state.joint_positions.iter().all(|v| v.is_finite())
+        && state.joint_velocities.iter().all(|v| v.is_finite())
+        && state.base_velocity.iter().all(|v| v.is_finite())
+        && state.base_pose.translation.vector.iter().all(|v| v.is_finite())
+        && state.base_pose.rotation.coords.iter().all(|v| v.is_finite());
+    if !finite {
+        return Err(WbcError::InvalidInput("state has non-finite values".into()));
+    }
+    Ok(())
+}
+
+pub(crate) fn copy_state(dst: &mut RobotState, src: &RobotState) {
+    dst.base_pose = src.base_pose;
+    dst.base_velocity = src.base_velocity;
+    dst.joint_positions.copy_from(&src.joint_positions);
+    dst.joint_velocities.copy_from(&src.joint_velocities);
+}
+
+pub(crate) fn check_references(model: &Model, input: &WbcInput) -> Result<(), WbcError> {
+    let vecs = [
+        input.com_position.iter().all(|v| v.is_finite()),
+        input.com_velocity.iter().all(|v| v.is_finite()),
+        input.com_acceleration.iter().all(|v| v.is_finite()),
+        input.left_foot.velocity.iter().all(|v| v.is_finite()),
+        input.left_foot.acceleration.iter().all(|v| v.is_finite()),
+        input.right_foot.velocity.iter().all(|v| v.is_finite()),
+        input.right_foot.acceleration.iter().all(|v| v.is_finite()),
+        input
+            .left_foot
+            .pose
+            .translation
+            .vector
+            .iter()
+            .all(|v| v.is_finite()),
+        input
+            .right_foot
+            .pose
+            .translation
+            .vector
+            .iter()
+            .all(|v| v.is_finite()),
+        input.left_foot.pose.rotation.coords.iter().all(|v| v.is_finite()),
+        input.right_foot.pose.rotation.coords.iter().all(|v| v.is_finite()),
+        input.torso.orientation.coords.iter().all(|v| v.is_finite()),
+        input.torso.angular_velocity.iter().all(|v| v.is_finite()),
+        input.torso.angular_acceleration.iter().all(|v| v.is_finite()),
+        input.angular_momentum.iter().all(|v| v.is_finite()),
+        input
+            .desired_zmp
+            .map(|z| z.iter().all(|v| v.is_finite()))
+            .unwrap_or(true),
+        input
+            .desired_wrenches
+            .map(|w| w.iter().all(|x| x.iter().all(|v| v.is_finite())))
+            .unwrap_or(true),
+    ];
+    if !vecs.iter().all(|ok| *ok) {
+        return Err(WbcError::InvalidInput("non-finite reference".into()));
+    }
+    if let Some(p) = &input.posture {
+        if p.len() != model.dof() || !p.iter().all(|v| v.is_finite()) {
+            return Err(WbcError::InvalidInput(format!(
+                "posture reference must have {} finite entries",
+                model.dof()
+            )));
+        }
+    }
+    Ok(())
+}
+
+impl Block for QpIk {
+    type Input = WbcInput;
+    type Output = IkOutput;
+    type Error = WbcError;
+
+    fn step(&mut self, input: &WbcInput) -> Result<&IkOutput, WbcError> {
+        let start = Instant::now();
+        check_state(&self.model, &input.state)?;
+        check_references(&self.model, input)?;
+        if !self.initialized || self.config.feedback == IkFeedback::Measured {
+            copy_state(&mut self.state, &input.state);
+            if !self.initialized {
+                self.output
+                    .joint_positions
+                    .copy_from(&input.state.joint_positions);
+                self.output.base_pose = input.state.base_pose;
+            }
+            self.initialized = true;
+        }
+        self.fill(input)?;
+        let report = self
+            .bridge
+            .solve(&self.blocks, &self.lower, &self.upper, &mut self.x);
+        let n = self.model.dof();
+        self.output.report = report;
+        if report.held {
+            // keep the last valid joint positions, command zero velocity
+            self.output.joint_velocities.fill(0.0);
+            self.output.base_velocity.fill(0.0);
+        } else {
+            self.state
+                .base_velocity
+                .copy_from(&self.x.fixed_rows::<6>(0));
+            for i in 0..n {
+                self.state.joint_velocities[i] = self.x[6 + i];
+            }
+            self.state.integrate(
+                &self.model,
+                VelocityRepresentation::Mixed,
+                self.config.period,
+            )?;
+            self.output
+                .joint_positions
+                .copy_from(&self.state.joint_positions);
+            self.output
+                .joint_velocities
+                .copy_from(&self.state.joint_velocities);
+            self.output.base_velocity = self.state.base_velocity;
+            self.output.base_pose = self.state.base_pose;
+        }
+        self.write_residuals();
+        self.output.report.tick_time = start.elapsed().as_secs_f64();
+        Ok(&self.output)
+    }
+
+    fn reset(&mut self) {
+        self.initialized = false;
+        self.bridge.reset();
+        for t in &mut self.frame_tasks {
+            t.reset();
+        }
+        self.x.fill(0.0);
+        self.output.report = SolveReport::default();
+        self.output.joint_velocities.fill(0.0);
+        self.output.base_velocity.fill(0.0);
+        for r in &mut self.output.residuals {
+            r.residual = 0.0;
+        }
+    }
+}
