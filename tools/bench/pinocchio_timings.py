@@ -4,6 +4,7 @@
 For each model it loads the URDF with a free-flyer root, takes the joint positions / velocities / torques of the
 states of crates/model/tests/fixtures/<model>.json (joints mapped by name), and times, per call:
 
+  set_state  forwardKinematics(q, v) (joint placements and velocities: what stride's KinDyn::set_state does)
   fk         framesForwardKinematics (placements of every joint and frame)
   jacobians  computeJointJacobians (the Jacobians of every joint; a frame Jacobian is then a copy + transform)
   crba       crba (mass matrix)
@@ -14,6 +15,10 @@ states of crates/model/tests/fixtures/<model>.json (joints mapped by name), and 
 Each algorithm is run in a loop over the states (cycling) for --repeat rounds of --calls calls; the reported
 time is the best round's mean, in microseconds. The Python call overhead (about 0.2-0.4 us per call) is
 included and also measured alone ("overhead": a call of a trivial Pinocchio function) so it can be judged.
+
+With --harness BIN the same algorithms are timed by the C++ program pinocchio_bench.cpp (linked against the
+wheel's libpinocchio_default), on the same model (passed through Model.saveToBinary) and states, without the
+Python overhead.
 
 Output: one JSON object {"<model>/<algorithm>": microseconds, ...} on stdout (or --out FILE).
 """
@@ -92,6 +97,11 @@ def main():
     ap.add_argument("--calls", type=int, default=20000)
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--out")
+    ap.add_argument("--harness", metavar="BIN",
+                    help="time with the C++ harness pinocchio_bench (built from pinocchio_bench.cpp) instead of "
+                         "Python loops")
+    ap.add_argument("--dump", metavar="DIR",
+                    help="write <model>.bin (Model.saveToBinary) and <model>.states for pinocchio_bench, then exit")
     args = ap.parse_args()
     results = {}
     for name in args.models:
@@ -102,8 +112,36 @@ def main():
         m = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())
         d = m.createData()
         states = states_for(m, name)
+        if args.harness:
+            import subprocess
+            import tempfile
+
+            with tempfile.TemporaryDirectory() as tmp:
+                m.saveToBinary(os.path.join(tmp, name + ".bin"))
+                with open(os.path.join(tmp, name + ".states"), "w") as f:
+                    for q, v, a, tau in states:
+                        f.write(" ".join(repr(float(x)) for x in np.concatenate([q, v, a, tau])) + "\n")
+                out = subprocess.run(
+                    [args.harness, name, os.path.join(tmp, name + ".bin"), os.path.join(tmp, name + ".states"),
+                     str(args.calls)],
+                    check=True, capture_output=True, text=True,
+                )
+            for line in out.stdout.splitlines():
+                key, us = line.split()
+                results[key] = float(us)
+            print(out.stderr.strip(), file=sys.stderr)
+            continue
+        if args.dump:
+            os.makedirs(args.dump, exist_ok=True)
+            m.saveToBinary(os.path.join(args.dump, name + ".bin"))
+            with open(os.path.join(args.dump, name + ".states"), "w") as f:
+                for q, v, a, tau in states:
+                    f.write(" ".join(repr(float(x)) for x in np.concatenate([q, v, a, tau])) + "\n")
+            print(os.path.join(args.dump, name))
+            continue
         algos = {
             "overhead": lambda q, v, a, tau: pin.SE3.Identity(),
+            "set_state": lambda q, v, a, tau: pin.forwardKinematics(m, d, q, v),
             "fk": lambda q, v, a, tau: pin.framesForwardKinematics(m, d, q),
             "jacobians": lambda q, v, a, tau: pin.computeJointJacobians(m, d, q),
             "crba": lambda q, v, a, tau: pin.crba(m, d, q),
@@ -114,6 +152,8 @@ def main():
         for algo, fn in algos.items():
             results["%s/%s" % (name, algo)] = time_loop(fn, states, args.calls, args.repeat)
         print("pinocchio_timings: %s nq=%d nv=%d frames=%d" % (name, m.nq, m.nv, m.nframes), file=sys.stderr)
+    if args.dump:
+        return
     text = json.dumps(results, indent=1, sort_keys=True)
     if args.out:
         with open(args.out, "w") as f:

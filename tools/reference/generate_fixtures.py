@@ -39,6 +39,8 @@ Conventions of the fixture (also written into each file under "conventions"):
   * Centroidal momentum [linear; angular about the CoM] in world orientation (G[A]) in every representation;
     its matrix maps nu of the representation to it (iDynTree's body representation would give G[B]).
   * Gravity [0, 0, -9.81].
+  * The inputs of a state (pose, velocities, nu_dot, torques, wrenches) are written with all 17 digits, so the
+    references are exact for them; the outputs are rounded to DIGITS significant digits.
 
 Usage: python3 tools/reference/generate_fixtures.py [--states N] [--full-states K] [--out DIR]
 Requires the pinned packages of tools/reference/requirements.txt.
@@ -62,7 +64,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 GRAVITY = np.array([0.0, 0.0, -9.81])
 AGREEMENT_TOL = 1e-10
-DIGITS = 12  # significant digits written (errors from rounding ~5e-14 relative, far below the 1e-9 test tolerance)
+DIGITS = 12  # significant digits of the outputs (rounding error <= 5e-12 relative, 200x below the 1e-9 test tolerance)
 
 # model name -> (how to find the URDF, frames with full kinematics, frames for external wrenches)
 MODELS = {
@@ -176,6 +178,11 @@ def rnd(x):
     return [rnd(v) for v in a]
 
 
+def exact(x):
+    """Inputs are written with every digit (shortest round-trip repr), so the references are exact for them."""
+    return [float(v) for v in np.asarray(x, dtype=float)]
+
+
 def check(name, a, b, tol=AGREEMENT_TOL):
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
@@ -241,10 +248,10 @@ class Models:
         for f in frames + pose_frames + wrench_frames + [self.base]:
             assert self.pin_model.existFrame(f), "Pinocchio: no frame %s" % f
             assert self.kd.getFrameIndex(f) >= 0, "iDynTree: no frame %s" % f
-        self.ft_sensors = [
-            loader.sensors().getSensor(idt.SIX_AXIS_FORCE_TORQUE, i).getName()
-            for i in range(loader.sensors().getNrOfSensors(idt.SIX_AXIS_FORCE_TORQUE))
-        ]
+        sensors = loader.sensors()
+        count = sensors.getNrOfSensors(idt.SIX_AXIS_FORCE_TORQUE)
+        self.ft_sensors = [sensors.getSixAxisForceTorqueSensor(i).getName() for i in range(count)]
+        self.ft_sensor_joints = [sensors.getSixAxisForceTorqueSensor(i).getParentJoint() for i in range(count)]
 
     def dof_joint(self, dof):
         m = self.idt_model
@@ -487,14 +494,14 @@ def generate(model_name, spec, urdf_path, n_states, n_full, errors):
         st = random_state(models, rng)
         bv = base_velocities(st)
         rec = {
-            "base_position": rnd(st["p"]),
-            "base_orientation_xyzw": rnd(st["quat"]),
-            "joint_positions": rnd(st["s"]),
-            "base_velocity": {r: rnd(bv[r]) for r in REPS},
-            "joint_velocities": rnd(st["s_dot"]),
-            "nu_dot": rnd(st["nu_dot"]),
-            "joint_torques": rnd(st["tau"]),
-            "external_wrenches": [{"frame": f, "wrench": rnd(w)} for f, w in st["wrenches"]],
+            "base_position": exact(st["p"]),
+            "base_orientation_xyzw": exact(st["quat"]),
+            "joint_positions": exact(st["s"]),
+            "base_velocity": {r: exact(bv[r]) for r in REPS},
+            "joint_velocities": exact(st["s_dot"]),
+            "nu_dot": exact(st["nu_dot"]),
+            "joint_torques": exact(st["tau"]),
+            "external_wrenches": [{"frame": f, "wrench": exact(w)} for f, w in st["wrenches"]],
         }
         reps_out = {}
         for rep in REPS:
@@ -597,6 +604,7 @@ def generate(model_name, spec, urdf_path, n_states, n_full, errors):
         "frames": models.frames,
         "pose_frames": models.pose_frames + models.frames,
         "ft_sensors": models.ft_sensors,
+        "ft_sensor_joints": models.ft_sensor_joints,
         "states": states,
     }
     return fixture

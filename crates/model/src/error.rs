@@ -146,7 +146,11 @@ pub enum ModelError {
 }
 
 /// Builds a [`ModelError::DimensionMismatch`] for a vector.
-pub(crate) fn check_len(what: &'static str, expected: usize, actual: usize) -> Result<(), ModelError> {
+pub(crate) fn check_len(
+    what: &'static str,
+    expected: usize,
+    actual: usize,
+) -> Result<(), ModelError> {
     if expected == actual {
         Ok(())
     } else {

@@ -135,8 +135,18 @@ impl KinDyn {
         let n = self.model.dof();
         check_len("joint_positions", n, state.joint_positions.len())?;
         check_len("joint_velocities", n, state.joint_velocities.len())?;
-        let pose_ok = state.base_pose.translation.vector.iter().all(|v| v.is_finite())
-            && state.base_pose.rotation.coords.iter().all(|v| v.is_finite());
+        let pose_ok = state
+            .base_pose
+            .translation
+            .vector
+            .iter()
+            .all(|v| v.is_finite())
+            && state
+                .base_pose
+                .rotation
+                .coords
+                .iter()
+                .all(|v| v.is_finite());
         if !pose_ok {
             return Err(ModelError::NonFiniteInput { what: "base_pose" });
         }
@@ -294,9 +304,10 @@ impl KinDyn {
     fn base_t_inv_mul(&self, v: &Vector6<f64>) -> Vector6<f64> {
         match self.repr {
             VelocityRepresentation::Mixed => *v,
-            VelocityRepresentation::Body => {
-                join(&(self.base_rot.tr_mul(&lin(v))), &(self.base_rot.tr_mul(&ang(v))))
-            }
+            VelocityRepresentation::Body => join(
+                &(self.base_rot.tr_mul(&lin(v))),
+                &(self.base_rot.tr_mul(&ang(v))),
+            ),
             VelocityRepresentation::Inertial => shift_motion(v, &(-self.base_pos)),
         }
     }
@@ -306,9 +317,10 @@ impl KinDyn {
     fn base_t_tr_mul(&self, f: &Vector6<f64>) -> Vector6<f64> {
         match self.repr {
             VelocityRepresentation::Mixed => *f,
-            VelocityRepresentation::Body => {
-                join(&(self.base_rot.tr_mul(&lin(f))), &(self.base_rot.tr_mul(&ang(f))))
-            }
+            VelocityRepresentation::Body => join(
+                &(self.base_rot.tr_mul(&lin(f))),
+                &(self.base_rot.tr_mul(&ang(f))),
+            ),
             VelocityRepresentation::Inertial => {
                 // T = [[1, −o^],[0, 1]] ⇒ Tᵀ = [[1, 0],[o^, 1]].
                 let fl = lin(f);
@@ -551,6 +563,7 @@ impl KinDyn {
         let nv = self.model.nv();
         check_shape("mass_matrix output", (nv, nv), out.shape())?;
         self.composites();
+        out.fill(0.0);
         let t = self.base_t();
         let base = t.transpose() * self.composite[0].matrix() * t;
         out.fixed_view_mut::<6, 6>(0, 0).copy_from(&base);
@@ -566,32 +579,13 @@ impl KinDyn {
                 out[(col, 5 + k)] = v;
                 k = m.parent[k];
             }
-            // Bodies not on the path: zero.
             let fb = self.base_t_tr_mul(&f);
             for r in 0..6 {
                 out[(r, col)] = fb[r];
                 out[(col, r)] = fb[r];
             }
         }
-        // Zero the entries between joints on different branches.
-        for i in 1..m.body_count() {
-            for j in (i + 1)..m.body_count() {
-                if !self.is_ancestor(i, j) {
-                    out[(5 + i, 5 + j)] = 0.0;
-                    out[(5 + j, 5 + i)] = 0.0;
-                }
-            }
-        }
         Ok(())
-    }
-
-    #[inline]
-    fn is_ancestor(&self, a: usize, mut b: usize) -> bool {
-        // Bodies are numbered depth-first: an ancestor has a smaller index.
-        while b > a {
-            b = self.model.parent[b];
-        }
-        a == b
     }
 
     /// Generalized bias forces `h = C ν + G` (nv), base part dual to the representation's base velocity.

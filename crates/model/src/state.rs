@@ -1,8 +1,6 @@
 //! Floating-base state, velocity representations and state integration.
 
-use nalgebra::{
-    DVector, Isometry3, Matrix3, Translation3, UnitQuaternion, Vector6,
-};
+use nalgebra::{DVector, Isometry3, Matrix3, Translation3, UnitQuaternion, Vector6};
 
 use crate::error::{check_len, ModelError};
 use crate::model::Model;
@@ -10,7 +8,9 @@ use crate::spatial::{ang, join, lin, skew};
 
 /// How the base velocity (and frame velocities, Jacobians, accelerations) are expressed (Traversaro 2017,
 /// Table 2.1; iDynTree semantics).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum VelocityRepresentation {
     /// `[d/dt ^A o_B; ^A ω_{A,B}]`: linear velocity of the frame origin and angular velocity, both in world

@@ -4,9 +4,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use nalgebra::{
-    Isometry3, Matrix3, SymmetricEigen, Translation3, UnitQuaternion, Vector3,
-};
+use nalgebra::{Isometry3, Matrix3, SymmetricEigen, Translation3, UnitQuaternion, Vector3};
 
 use crate::error::ModelError;
 use crate::model::{Body, Frame, FrameKind, FtSensor, Joint, JointKind, Mimic, Model};
@@ -64,15 +62,19 @@ fn parse_triplet(text: Option<&str>, element: &str, field: &str) -> Result<[f64;
         let mut count = 0;
         for (k, token) in text.split_whitespace().enumerate() {
             if k >= 3 {
-                return Err(ModelError::Urdf(format!("{element}: `{field}` has more than three numbers")));
+                return Err(ModelError::Urdf(format!(
+                    "{element}: `{field}` has more than three numbers"
+                )));
             }
-            out[k] = token
-                .parse::<f64>()
-                .map_err(|_| ModelError::Urdf(format!("{element}: cannot parse `{field}` = `{text}`")))?;
+            out[k] = token.parse::<f64>().map_err(|_| {
+                ModelError::Urdf(format!("{element}: cannot parse `{field}` = `{text}`"))
+            })?;
             count += 1;
         }
         if count != 3 {
-            return Err(ModelError::Urdf(format!("{element}: `{field}` needs three numbers")));
+            return Err(ModelError::Urdf(format!(
+                "{element}: `{field}` needs three numbers"
+            )));
         }
     }
     Ok(out)
@@ -128,7 +130,10 @@ fn read_raw(text: &str) -> Result<RawInfo, ModelError> {
         if sensor.get_attribute("type", None) != Some("force_torque") {
             continue;
         }
-        let name = sensor.get_attribute("name", None).unwrap_or_default().to_string();
+        let name = sensor
+            .get_attribute("name", None)
+            .unwrap_or_default()
+            .to_string();
         let Some(joint) = sensor
             .get_child("parent", None)
             .and_then(|p| p.get_attribute("joint", None))
@@ -164,8 +169,16 @@ fn read_raw(text: &str) -> Result<RawInfo, ModelError> {
             if sensor.get_attribute("type", None) != Some("force_torque") {
                 continue;
             }
-            let name = sensor.get_attribute("name", None).unwrap_or(reference).to_string();
-            if sensors.iter().any(|s| s.name == name) {
+            let name = sensor
+                .get_attribute("name", None)
+                .unwrap_or(reference)
+                .to_string();
+            // One sensor per joint: the iDynTree-style declaration wins (iCub files declare both, sometimes
+            // with different names).
+            if sensors
+                .iter()
+                .any(|s| s.name == name || s.joint == reference)
+            {
                 continue;
             }
             let element = format!("sensor `{name}`");
@@ -177,7 +190,9 @@ fn read_raw(text: &str) -> Result<RawInfo, ModelError> {
                         .collect::<Result<_, _>>()
                         .map_err(|_| ModelError::Urdf(format!("{element}: cannot parse <pose>")))?;
                     if values.len() != 6 {
-                        return Err(ModelError::Urdf(format!("{element}: <pose> needs six numbers")));
+                        return Err(ModelError::Urdf(format!(
+                            "{element}: <pose> needs six numbers"
+                        )));
                     }
                     check_finite(&values, &element, "pose")?;
                     pose(
@@ -346,12 +361,13 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
                 });
             }
         }
-        let parent = *link_index
-            .get(&joint.parent.link)
-            .ok_or_else(|| ModelError::MissingLink {
-                joint: joint.name.clone(),
-                link: joint.parent.link.clone(),
-            })?;
+        let parent =
+            *link_index
+                .get(&joint.parent.link)
+                .ok_or_else(|| ModelError::MissingLink {
+                    joint: joint.name.clone(),
+                    link: joint.parent.link.clone(),
+                })?;
         let child = *link_index
             .get(&joint.child.link)
             .ok_or_else(|| ModelError::MissingLink {
@@ -373,7 +389,9 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
         parent_joint[child] = Some(k);
         children[parent].push(k);
     }
-    let roots: Vec<usize> = (0..links.len()).filter(|&l| parent_joint[l].is_none()).collect();
+    let roots: Vec<usize> = (0..links.len())
+        .filter(|&l| parent_joint[l].is_none())
+        .collect();
     if roots.is_empty() {
         return Err(ModelError::NoRoot);
     }
@@ -596,7 +614,10 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
     }
     // Massless bodies: the joint moving them must move some inertia further down, otherwise forward dynamics
     // is singular.
-    let mut subtree_mass = body_inertia.iter().map(|i| i.m + i.i.trace()).collect::<Vec<_>>();
+    let mut subtree_mass = body_inertia
+        .iter()
+        .map(|i| i.m + i.i.trace())
+        .collect::<Vec<_>>();
     for k in (1..bodies.len()).rev() {
         let p = parent[k];
         subtree_mass[p] += subtree_mass[k];
@@ -678,7 +699,10 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
         .iter()
         .map(|f| f.placement.rotation.to_rotation_matrix().into_inner())
         .collect();
-    let frame_pos = frames.iter().map(|f| f.placement.translation.vector).collect();
+    let frame_pos = frames
+        .iter()
+        .map(|f| f.placement.translation.vector)
+        .collect();
     Ok(Model {
         name: robot.name.clone(),
         root_link: robot.links[root].name.clone(),

@@ -43,8 +43,16 @@ fn test_model_structure() {
     // Bodies and frames.
     assert_eq!(m.bodies().len(), 10);
     for name in [
-        "torso", "head", "l_thigh", "l_shin_upper", "l_shin_lower", "l_foot", "l_sole", "r_sole",
-        "tool", "finger_b",
+        "torso",
+        "head",
+        "l_thigh",
+        "l_shin_upper",
+        "l_shin_lower",
+        "l_foot",
+        "l_sole",
+        "r_sole",
+        "tool",
+        "finger_b",
     ] {
         assert!(m.frame_id(name).is_some(), "frame {name}");
     }
@@ -79,7 +87,9 @@ fn revolute_without_limit_warns_and_is_unbounded() {
     assert!(j.lower == f64::NEG_INFINITY && j.upper == f64::INFINITY);
     assert!(j.velocity_limit == f64::INFINITY && j.effort_limit == f64::INFINITY);
     assert!(
-        m.warnings().iter().any(|w| w.contains("`j`") && w.contains("<limit>")),
+        m.warnings()
+            .iter()
+            .any(|w| w.contains("`j`") && w.contains("<limit>")),
         "{:?}",
         m.warnings()
     );
@@ -96,36 +106,57 @@ fn two_links(joint_type: &str, extra_link_b: &str) -> String {
 #[test]
 fn errors_name_the_culprit() {
     let e = Model::from_urdf_str(&two_links("floating", "")).unwrap_err();
-    assert!(matches!(&e, ModelError::UnsupportedJoint { joint, .. } if joint == "j"), "{e}");
+    assert!(
+        matches!(&e, ModelError::UnsupportedJoint { joint, .. } if joint == "j"),
+        "{e}"
+    );
     let e = Model::from_urdf_str(&two_links("planar", "")).unwrap_err();
-    assert!(matches!(&e, ModelError::UnsupportedJoint { joint, .. } if joint == "j"), "{e}");
+    assert!(
+        matches!(&e, ModelError::UnsupportedJoint { joint, .. } if joint == "j"),
+        "{e}"
+    );
     let e = Model::from_urdf_str(&two_links(
         "revolute",
         r#"<inertial><mass value="-1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>"#,
     ))
     .unwrap_err();
-    assert!(matches!(&e, ModelError::NegativeMass { link, .. } if link == "b"), "{e}");
+    assert!(
+        matches!(&e, ModelError::NegativeMass { link, .. } if link == "b"),
+        "{e}"
+    );
     let e = Model::from_urdf_str(&two_links(
         "revolute",
         r#"<inertial><mass value="1"/><inertia ixx="1" ixy="2" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>"#,
     ))
     .unwrap_err();
-    assert!(matches!(&e, ModelError::NegativeInertia { link, .. } if link == "b"), "{e}");
+    assert!(
+        matches!(&e, ModelError::NegativeInertia { link, .. } if link == "b"),
+        "{e}"
+    );
     let e = Model::from_urdf_str(&two_links(
         "revolute",
         r#"<inertial><mass value="nan"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>"#,
     ))
     .unwrap_err();
-    assert!(matches!(&e, ModelError::NonFinite { element, .. } if element.contains("`b`")), "{e}");
+    assert!(
+        matches!(&e, ModelError::NonFinite { element, .. } if element.contains("`b`")),
+        "{e}"
+    );
 
     // Missing link.
     let urdf = r#"<robot name="r"><link name="a"/><joint name="j" type="fixed"><parent link="a"/><child link="zz"/></joint></robot>"#;
     let e = Model::from_urdf_str(urdf).unwrap_err();
-    assert!(matches!(&e, ModelError::MissingLink { link, .. } if link == "zz"), "{e}");
+    assert!(
+        matches!(&e, ModelError::MissingLink { link, .. } if link == "zz"),
+        "{e}"
+    );
     // Duplicate link.
     let urdf = r#"<robot name="r"><link name="a"/><link name="a"/></robot>"#;
     let e = Model::from_urdf_str(urdf).unwrap_err();
-    assert!(matches!(&e, ModelError::DuplicateLink { link } if link == "a"), "{e}");
+    assert!(
+        matches!(&e, ModelError::DuplicateLink { link } if link == "a"),
+        "{e}"
+    );
     // Loop with no root.
     let urdf = r#"<robot name="r"><link name="a"/><link name="b"/>
       <joint name="j1" type="fixed"><parent link="a"/><child link="b"/></joint>
@@ -138,7 +169,10 @@ fn errors_name_the_culprit() {
       <joint name="j2" type="fixed"><parent link="a"/><child link="c"/></joint>
       <joint name="j3" type="fixed"><parent link="b"/><child link="c"/></joint></robot>"#;
     let e = Model::from_urdf_str(urdf).unwrap_err();
-    assert!(matches!(&e, ModelError::MultipleParents { link, .. } if link == "c"), "{e}");
+    assert!(
+        matches!(&e, ModelError::MultipleParents { link, .. } if link == "c"),
+        "{e}"
+    );
     // A detached cycle next to a valid root.
     let urdf = r#"<robot name="r"><link name="a"/><link name="b"/><link name="c"/>
       <joint name="j1" type="fixed"><parent link="b"/><child link="c"/></joint>
@@ -157,15 +191,24 @@ fn inconsistent_inertias_and_point_masses_load_with_warnings() {
         r#"<inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="3"/></inertial>"#,
     ))
     .unwrap();
-    assert!(m.warnings().iter().any(|w| w.contains("`b`") && w.contains("triangle")));
+    assert!(m
+        .warnings()
+        .iter()
+        .any(|w| w.contains("`b`") && w.contains("triangle")));
     let m = Model::from_urdf_str(&two_links(
         "revolute",
         r#"<inertial><mass value="1"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>"#,
     ))
     .unwrap();
-    assert!(m.warnings().iter().any(|w| w.contains("`b`") && w.contains("point mass")));
+    assert!(m
+        .warnings()
+        .iter()
+        .any(|w| w.contains("`b`") && w.contains("point mass")));
     let m = Model::from_urdf_str(&two_links("revolute", "")).unwrap();
-    assert!(m.warnings().iter().any(|w| w.contains("`b`") && w.contains("massless")));
+    assert!(m
+        .warnings()
+        .iter()
+        .any(|w| w.contains("`b`") && w.contains("massless")));
 }
 
 #[test]
@@ -191,5 +234,7 @@ fn top_level_sensor_declares_a_frame() {
     assert_eq!(s.measure_direction, "parent_to_child");
     let f = &m.frames()[s.frame.index()];
     assert_eq!(f.kind, FrameKind::Sensor);
-    assert!((f.placement.translation.vector - nalgebra::Vector3::new(0.0, 0.0, -0.09)).norm() < 1e-15);
+    assert!(
+        (f.placement.translation.vector - nalgebra::Vector3::new(0.0, 0.0, -0.09)).norm() < 1e-15
+    );
 }

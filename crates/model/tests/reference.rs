@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use nalgebra::{
-    DMatrix, DVector, Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3, Vector6,
+    DMatrix, DVector, Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3,
+    Vector6,
 };
 use serde_json::Value;
 use stride_model::{ExternalWrench, KinDyn, Model, RobotState, VelocityRepresentation};
@@ -29,8 +30,12 @@ fn manifest_dir() -> PathBuf {
 }
 
 fn load_fixture(name: &str) -> Value {
-    let path = manifest_dir().join("tests").join("fixtures").join(format!("{name}.json"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    let path = manifest_dir()
+        .join("tests")
+        .join("fixtures")
+        .join(format!("{name}.json"));
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("cannot parse {}: {e}", path.display()))
 }
 
@@ -40,7 +45,9 @@ fn urdf_path(fx: &Value) -> Option<PathBuf> {
     if let Some(rel) = fx["urdf"].as_str() {
         return Some(manifest_dir().join("..").join("..").join(rel));
     }
-    let icub = fx["icub_model"].as_str().expect("fixture has neither urdf nor icub_model");
+    let icub = fx["icub_model"]
+        .as_str()
+        .expect("fixture has neither urdf nor icub_model");
     match std::env::var_os("STRIDE_ICUB_MODELS_DIR") {
         Some(dir) => {
             let path = Path::new(&dir).join(icub).join("model.urdf");
@@ -69,7 +76,10 @@ fn vec_of(v: &Value) -> Vec<f64> {
     v.as_array()
         .unwrap_or_else(|| panic!("expected an array, got {v}"))
         .iter()
-        .map(|x| x.as_f64().unwrap_or_else(|| panic!("expected a number, got {x}")))
+        .map(|x| {
+            x.as_f64()
+                .unwrap_or_else(|| panic!("expected a number, got {x}"))
+        })
         .collect()
 }
 
@@ -108,7 +118,12 @@ struct Report {
 
 impl Report {
     fn new(model: &str) -> Self {
-        Self { model: model.to_string(), worst: Vec::new(), failures: Vec::new(), checks: 0 }
+        Self {
+            model: model.to_string(),
+            worst: Vec::new(),
+            failures: Vec::new(),
+            checks: 0,
+        }
     }
 
     /// Compares `got` with `reference` (same shape, flattened) and records the relative error.
@@ -139,7 +154,10 @@ impl Report {
     }
 
     fn finish(self) {
-        println!("{}: {} comparisons; worst relative error per quantity:", self.model, self.checks);
+        println!(
+            "{}: {} comparisons; worst relative error per quantity:",
+            self.model, self.checks
+        );
         for (q, w) in &self.worst {
             println!("  {q:<36} {w:.2e}");
         }
@@ -150,7 +168,11 @@ impl Report {
                 self.model,
                 self.failures.len(),
                 self.checks,
-                shown.iter().map(|s| s.as_str()).collect::<Vec<_>>().join("\n")
+                shown
+                    .iter()
+                    .map(|s| s.as_str())
+                    .collect::<Vec<_>>()
+                    .join("\n")
             );
         }
     }
@@ -164,10 +186,17 @@ struct Ordering {
 
 impl Ordering {
     fn new(model: &Model, joint_names: &[String]) -> Self {
-        assert_eq!(model.dof(), joint_names.len(), "number of joints: stride {} vs fixture", model.dof());
+        assert_eq!(
+            model.dof(),
+            joint_names.len(),
+            "number of joints: stride {} vs fixture",
+            model.dof()
+        );
         let mut nu: Vec<usize> = (0..6).collect();
         for name in joint_names {
-            let j = model.joint_index(name).unwrap_or_else(|| panic!("stride model has no joint `{name}`"));
+            let j = model
+                .joint_index(name)
+                .unwrap_or_else(|| panic!("stride model has no joint `{name}`"));
             nu.push(6 + j);
         }
         Self { nu }
@@ -256,22 +285,62 @@ fn check_model(name: &str) {
     let mut report = Report::new(name);
 
     // ---- model-level facts ----
-    let joint_names: Vec<String> =
-        fx["joint_names"].as_array().unwrap().iter().map(|v| v.as_str().unwrap().to_string()).collect();
+    let joint_names: Vec<String> = fx["joint_names"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_string())
+        .collect();
     let order = Ordering::new(&model, &joint_names);
     let nv = model.nv();
     assert_eq!(nv, joint_names.len() + 6);
     let base = fx["base_link"].as_str().unwrap();
     assert_eq!(model.root_link(), base, "{name}: root link");
-    report.compare("total_mass", "model", &[model.total_mass()], &[fx["total_mass"].as_f64().unwrap()]);
-    let mut fixture_sensors: Vec<String> =
-        fx["ft_sensors"].as_array().unwrap().iter().map(|v| v.as_str().unwrap().to_string()).collect();
-    let mut model_sensors: Vec<String> = model.ft_sensors().iter().map(|s| s.name.clone()).collect();
-    fixture_sensors.sort();
-    model_sensors.sort();
-    assert_eq!(model_sensors, fixture_sensors, "{name}: force/torque sensors (iDynTree's list)");
+    report.compare(
+        "total_mass",
+        "model",
+        &[model.total_mass()],
+        &[fx["total_mass"].as_f64().unwrap()],
+    );
+    // Force/torque sensors: the same mounting joints as iDynTree finds, and iDynTree's names among ours
+    // (a URDF may name a sensor twice, in a gazebo block and in an iDynTree <sensor>: stride may list both).
+    let strings = |v: &Value| -> Vec<String> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_str().unwrap().to_string())
+            .collect()
+    };
+    let mut fixture_joints = strings(&fx["ft_sensor_joints"]);
+    fixture_joints.sort();
+    let mut model_joints: Vec<String> =
+        model.ft_sensors().iter().map(|s| s.joint.clone()).collect();
+    model_joints.sort();
+    model_joints.dedup();
+    assert_eq!(
+        model_joints, fixture_joints,
+        "{name}: joints carrying force/torque sensors"
+    );
+    let model_names: Vec<&str> = model.ft_sensors().iter().map(|s| s.name.as_str()).collect();
+    for sensor in strings(&fx["ft_sensors"]) {
+        assert!(
+            model_names.contains(&sensor.as_str()),
+            "{name}: no force/torque sensor `{sensor}` in {model_names:?}"
+        );
+    }
+    if model_names.len() != fixture_joints.len() {
+        println!(
+            "{name}: note: {} force/torque sensor entries on {} joints: {model_names:?}",
+            model_names.len(),
+            fixture_joints.len()
+        );
+    }
 
-    let frame = |n: &str| model.frame_id(n).unwrap_or_else(|| panic!("{name}: stride model has no frame `{n}`"));
+    let frame = |n: &str| {
+        model
+            .frame_id(n)
+            .unwrap_or_else(|| panic!("{name}: stride model has no frame `{n}`"))
+    };
     let gravity = vec_of(&fx["gravity"]);
 
     let mut kd = KinDyn::new(Arc::clone(&model));
@@ -283,7 +352,10 @@ fn check_model(name: &str) {
     let mut vec_nv = DVector::zeros(nv);
 
     for (k, st) in fx["states"].as_array().unwrap().iter().enumerate() {
-        let base_pose = pose_of(&vec_of(&st["base_position"]), &vec_of(&st["base_orientation_xyzw"]));
+        let base_pose = pose_of(
+            &vec_of(&st["base_position"]),
+            &vec_of(&st["base_orientation_xyzw"]),
+        );
         let q = order.joints_to_model(&vec_of(&st["joint_positions"]));
         let qd = order.joints_to_model(&vec_of(&st["joint_velocities"]));
         let nu_dot = order.nu_to_model(&vec_of(&st["nu_dot"]));
@@ -292,7 +364,10 @@ fn check_model(name: &str) {
             .as_array()
             .unwrap()
             .iter()
-            .map(|w| ExternalWrench { frame: frame(w["frame"].as_str().unwrap()), wrench: v6(&vec_of(&w["wrench"])) })
+            .map(|w| ExternalWrench {
+                frame: frame(w["frame"].as_str().unwrap()),
+                wrench: v6(&vec_of(&w["wrench"])),
+            })
             .collect();
 
         for (rep_name, rep) in st["representations"].as_object().unwrap() {
@@ -308,14 +383,37 @@ fn check_model(name: &str) {
 
             // ---- representation-independent kinematics ----
             for (fname, pose) in st["poses"].as_object().unwrap() {
-                let reference = pose_of(&vec_of(&pose["position"]), &vec_of(&pose["orientation_xyzw"]));
+                let reference = pose_of(
+                    &vec_of(&pose["position"]),
+                    &vec_of(&pose["orientation_xyzw"]),
+                );
                 let got = kd.frame_pose(frame(fname));
                 let c = format!("{ctx}, {fname}");
-                report.compare("frame position", &c, got.translation.vector.as_slice(), reference.translation.vector.as_slice());
-                report.compare("frame rotation", &c, rotation_of(&got).as_slice(), rotation_of(&reference).as_slice());
+                report.compare(
+                    "frame position",
+                    &c,
+                    got.translation.vector.as_slice(),
+                    reference.translation.vector.as_slice(),
+                );
+                report.compare(
+                    "frame rotation",
+                    &c,
+                    rotation_of(&got).as_slice(),
+                    rotation_of(&reference).as_slice(),
+                );
             }
-            report.compare("com position", &ctx, kd.com_position().as_slice(), &vec_of(&st["com_position"]));
-            report.compare("com velocity", &ctx, kd.com_velocity().as_slice(), &vec_of(&st["com_velocity"]));
+            report.compare(
+                "com position",
+                &ctx,
+                kd.com_position().as_slice(),
+                &vec_of(&st["com_position"]),
+            );
+            report.compare(
+                "com velocity",
+                &ctx,
+                kd.com_velocity().as_slice(),
+                &vec_of(&st["com_velocity"]),
+            );
             report.compare(
                 "centroidal momentum",
                 &ctx,
@@ -326,30 +424,60 @@ fn check_model(name: &str) {
             // ---- dynamics ----
             kd.mass_matrix(&mut mass).unwrap();
             let m_ref = sym_of_upper(&rep["mass_matrix_upper"]);
-            report.compare("mass matrix", &ctx, &order.square_from_model(&mass), &row_major(&m_ref));
+            report.compare(
+                "mass matrix",
+                &ctx,
+                &order.square_from_model(&mass),
+                &row_major(&m_ref),
+            );
             kd.bias_forces(&mut vec_nv).unwrap();
-            report.compare("bias forces h", &ctx, &order.nu_from_model(&vec_nv), &vec_of(&rep["bias_forces"]));
+            report.compare(
+                "bias forces h",
+                &ctx,
+                &order.nu_from_model(&vec_nv),
+                &vec_of(&rep["bias_forces"]),
+            );
             kd.gravity_forces(&mut vec_nv).unwrap();
-            report.compare("gravity forces G", &ctx, &order.nu_from_model(&vec_nv), &vec_of(&rep["gravity_forces"]));
+            report.compare(
+                "gravity forces G",
+                &ctx,
+                &order.nu_from_model(&vec_nv),
+                &vec_of(&rep["gravity_forces"]),
+            );
 
             // ---- frames ----
             for (fname, fr) in rep["frames"].as_object().unwrap() {
                 let id = frame(fname);
                 let c = format!("{ctx}, {fname}");
                 kd.frame_jacobian(id, &mut jac).unwrap();
-                report.compare("frame jacobian", &c, &order.cols_from_model(&jac), &row_major(&mat_of(&fr["jacobian"])));
+                report.compare(
+                    "frame jacobian",
+                    &c,
+                    &order.cols_from_model(&jac),
+                    &row_major(&mat_of(&fr["jacobian"])),
+                );
                 report.compare(
                     "frame bias acceleration",
                     &c,
                     kd.frame_bias_acceleration(id).as_slice(),
                     &vec_of(&fr["bias_acceleration"]),
                 );
-                report.compare("frame velocity", &c, kd.frame_velocity(id).as_slice(), &vec_of(&fr["velocity"]));
+                report.compare(
+                    "frame velocity",
+                    &c,
+                    kd.frame_velocity(id).as_slice(),
+                    &vec_of(&fr["velocity"]),
+                );
             }
 
             // ---- CoM and centroidal ----
             kd.com_jacobian(&mut com_jac).unwrap();
-            report.compare("com jacobian", &ctx, &order.cols_from_model(&com_jac), &row_major(&mat_of(&rep["com_jacobian"])));
+            report.compare(
+                "com jacobian",
+                &ctx,
+                &order.cols_from_model(&com_jac),
+                &row_major(&mat_of(&rep["com_jacobian"])),
+            );
             report.compare(
                 "com bias acceleration",
                 &ctx,
@@ -371,14 +499,25 @@ fn check_model(name: &str) {
             );
 
             // ---- inverse dynamics with external wrenches ----
-            kd.inverse_dynamics(&nu_dot, &wrenches, &mut vec_nv).unwrap();
-            report.compare("inverse dynamics", &ctx, &order.nu_from_model(&vec_nv), &vec_of(&rep["inverse_dynamics"]));
+            kd.inverse_dynamics(&nu_dot, &wrenches, &mut vec_nv)
+                .unwrap();
+            report.compare(
+                "inverse dynamics",
+                &ctx,
+                &order.nu_from_model(&vec_nv),
+                &vec_of(&rep["inverse_dynamics"]),
+            );
 
             // ---- forward dynamics (ABA) with external wrenches ----
             let mut acc = DVector::zeros(nv);
             kd.forward_dynamics(&tau, &wrenches, &mut acc).unwrap();
             if let Some(fd) = rep.get("forward_dynamics") {
-                report.compare("forward dynamics", &ctx, &order.nu_from_model(&acc), &vec_of(fd));
+                report.compare(
+                    "forward dynamics",
+                    &ctx,
+                    &order.nu_from_model(&acc),
+                    &vec_of(fd),
+                );
             }
             // The equations of motion must hold for the computed acceleration: ID(FD(τ)) = [0; τ], relative to
             // the size of the terms M ν̇ that cancel (well defined even when M is badly conditioned).
@@ -418,23 +557,123 @@ fn reference_icub_lisboa01() {
 /// cannot hide behind a matching wrong conversion in stride.
 #[test]
 fn fixture_base_velocities_are_one_motion() {
-    for name in ["stride_humanoid", "iCubGazeboV2_7", "iCubGenova04", "iCubLisboa01"] {
+    for name in [
+        "stride_humanoid",
+        "iCubGazeboV2_7",
+        "iCubGenova04",
+        "iCubLisboa01",
+    ] {
         let fx = load_fixture(name);
         for st in fx["states"].as_array().unwrap() {
-            let pose = pose_of(&vec_of(&st["base_position"]), &vec_of(&st["base_orientation_xyzw"]));
+            let pose = pose_of(
+                &vec_of(&st["base_position"]),
+                &vec_of(&st["base_orientation_xyzw"]),
+            );
             let r = rotation_of(&pose);
             let p = pose.translation.vector;
             let m = vec_of(&st["base_velocity"]["mixed"]);
             let b = vec_of(&st["base_velocity"]["body"]);
             let i = vec_of(&st["base_velocity"]["inertial"]);
-            let (pdot, w) = (Vector3::new(m[0], m[1], m[2]), Vector3::new(m[3], m[4], m[5]));
+            let (pdot, w) = (
+                Vector3::new(m[0], m[1], m[2]),
+                Vector3::new(m[3], m[4], m[5]),
+            );
             let body_lin = r.transpose() * pdot;
             let body_ang = r.transpose() * w;
             let inertial_lin = pdot - w.cross(&p);
             for k in 0..3 {
-                assert!((body_lin[k] - b[k]).abs() < 1e-10 && (body_ang[k] - b[3 + k]).abs() < 1e-10, "{name} body");
-                assert!((inertial_lin[k] - i[k]).abs() < 1e-10 && (w[k] - i[3 + k]).abs() < 1e-10, "{name} inertial");
+                assert!(
+                    (body_lin[k] - b[k]).abs() < 1e-10 && (body_ang[k] - b[3 + k]).abs() < 1e-10,
+                    "{name} body"
+                );
+                assert!(
+                    (inertial_lin[k] - i[k]).abs() < 1e-10 && (w[k] - i[3 + k]).abs() < 1e-10,
+                    "{name} inertial"
+                );
             }
         }
     }
+}
+
+/// The bundled humanoid is what docs/models.md says it is.
+#[test]
+fn bundled_humanoid_matches_its_documentation() {
+    let path = manifest_dir().join("../../models/stride_humanoid.urdf");
+    let model = Arc::new(Model::from_urdf_file(&path).unwrap());
+    assert_eq!(model.root_link(), "root_link");
+    assert_eq!(model.dof(), 32);
+    assert!(
+        (model.total_mass() - 32.8).abs() < 1e-9,
+        "total mass {}",
+        model.total_mass()
+    );
+    assert!(
+        model.warnings().is_empty(),
+        "warnings: {:?}",
+        model.warnings()
+    );
+    let mut sensors: Vec<&str> = model.ft_sensors().iter().map(|s| s.name.as_str()).collect();
+    sensors.sort_unstable();
+    assert_eq!(
+        sensors,
+        [
+            "l_foot_ft_sensor",
+            "l_leg_ft_sensor",
+            "r_foot_ft_sensor",
+            "r_leg_ft_sensor"
+        ]
+    );
+    for name in [
+        "imu_frame",
+        "head_imu",
+        "l_hand_palm",
+        "r_hand_palm",
+        "l_sole",
+        "r_sole",
+    ] {
+        assert!(model.frame_id(name).is_some(), "frame {name}");
+    }
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    let mut state = RobotState::zero(&model);
+    state.base_pose = Isometry3::translation(0.0, 0.0, 0.6);
+    kd.set_state(&state).unwrap();
+    // zero configuration: soles flat on z = 0, aligned with the world, 0.15 m apart, 0.03 m ahead of the ankles
+    let l = kd.frame_pose(model.frame_id("l_sole").unwrap());
+    let r = kd.frame_pose(model.frame_id("r_sole").unwrap());
+    for (sole, y) in [(l, 0.075), (r, -0.075)] {
+        assert!(
+            (sole.translation.vector - Vector3::new(0.03, y, 0.0)).norm() < 1e-12,
+            "{sole}"
+        );
+        assert!(sole.rotation.angle() < 1e-12);
+    }
+    let top_of_head = kd.frame_pose(model.frame_id("head").unwrap()).translation.z + 0.05 + 0.06;
+    assert!((top_of_head - 1.05).abs() < 1e-9, "height {top_of_head}");
+    assert!(
+        (kd.com_position().z - 0.560).abs() < 1e-3,
+        "straight CoM height {}",
+        kd.com_position().z
+    );
+    // knee-bent stance hip = a, knee = 2a, ankle = a keeps the soles flat; positive knee bends backwards
+    let a = 0.4;
+    for side in ["l", "r"] {
+        state.joint_positions[model.joint_index(&format!("{side}_hip_pitch")).unwrap()] = a;
+        state.joint_positions[model.joint_index(&format!("{side}_knee")).unwrap()] = 2.0 * a;
+        state.joint_positions[model.joint_index(&format!("{side}_ankle_pitch")).unwrap()] = a;
+    }
+    kd.set_state(&state).unwrap();
+    let l = kd.frame_pose(model.frame_id("l_sole").unwrap());
+    let knee = kd.frame_pose(model.frame_id("l_lower_leg").unwrap());
+    let hip = kd.frame_pose(model.frame_id("l_hip_1").unwrap());
+    let ankle = kd.frame_pose(model.frame_id("l_ankle_1").unwrap());
+    assert!(l.rotation.angle() < 1e-12, "sole stays flat");
+    assert!(
+        knee.translation.x > hip.translation.x && knee.translation.x > ankle.translation.x,
+        "knee ahead"
+    );
+    let com_above_sole = kd.com_position().z - l.translation.z;
+    assert!(
+        (com_above_sole - 0.531).abs() < 1e-3,
+        "bent CoM height {com_above_sole}"
+    );
 }

@@ -186,7 +186,12 @@ impl PlannerConfig {
     /// Checks every field; the error names the first offending parameter.
     pub fn validate(&self) -> Result<(), PlannerError> {
         let c = self;
-        check("com_height", c.com_height, c.com_height > 0.0, "must be > 0")?;
+        check(
+            "com_height",
+            c.com_height,
+            c.com_height > 0.0,
+            "must be > 0",
+        )?;
         check("gravity", c.gravity, c.gravity > 0.0, "must be > 0")?;
         check(
             "step_duration_min",
@@ -225,8 +230,18 @@ impl PlannerConfig {
             c.final_double_support_duration > 0.0,
             "must be > 0",
         )?;
-        check("foot_length", c.foot_length, c.foot_length > 0.0, "must be > 0")?;
-        check("foot_width", c.foot_width, c.foot_width > 0.0, "must be > 0")?;
+        check(
+            "foot_length",
+            c.foot_length,
+            c.foot_length > 0.0,
+            "must be > 0",
+        )?;
+        check(
+            "foot_width",
+            c.foot_width,
+            c.foot_width > 0.0,
+            "must be > 0",
+        )?;
         check(
             "max_yaw_per_step",
             c.max_yaw_per_step,
@@ -261,7 +276,12 @@ impl PlannerConfig {
             c.step_length_min >= 0.0 && c.step_length_min <= c.min_width,
             "must lie in [0, min_width]",
         )?;
-        check("swing_height", c.swing_height, c.swing_height > 0.0, "must be > 0")?;
+        check(
+            "swing_height",
+            c.swing_height,
+            c.swing_height > 0.0,
+            "must be > 0",
+        )?;
         check(
             "swing_apex_fraction",
             c.swing_apex_fraction,
@@ -293,7 +313,12 @@ impl PlannerConfig {
         ] {
             check(name, v, v > 0.0 && v <= 1.0, "must lie in (0, 1]")?;
         }
-        check("unicycle_gain", c.unicycle_gain, c.unicycle_gain > 0.0, "must be > 0")?;
+        check(
+            "unicycle_gain",
+            c.unicycle_gain,
+            c.unicycle_gain > 0.0,
+            "must be > 0",
+        )?;
         check(
             "reference_point",
             c.reference_point[0],
@@ -306,7 +331,12 @@ impl PlannerConfig {
             true,
             "y must be finite",
         )?;
-        check("time_weight", c.time_weight, c.time_weight >= 0.0, "must be >= 0")?;
+        check(
+            "time_weight",
+            c.time_weight,
+            c.time_weight >= 0.0,
+            "must be >= 0",
+        )?;
         check(
             "position_weight",
             c.position_weight,
@@ -384,7 +414,9 @@ impl PlannerConfig {
 
     /// Step durations as numbers of unicycle samples: [ceil(t_min/dt), floor(t_max/dt)].
     pub(crate) fn step_sample_window(&self) -> (usize, usize) {
-        let n_min = (self.step_duration_min / self.unicycle_dt - 1e-9).ceil().max(1.0);
+        let n_min = (self.step_duration_min / self.unicycle_dt - 1e-9)
+            .ceil()
+            .max(1.0);
         let n_max = (self.step_duration_max / self.unicycle_dt + 1e-9).floor();
         if !(n_min.is_finite() && n_max.is_finite()) || n_max < 0.0 || n_min > 1e9 || n_max > 1e9 {
             return (1, 0);

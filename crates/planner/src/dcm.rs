@@ -40,7 +40,12 @@ pub(crate) fn dcm_particular(z: &Cubic2, omega: f64) -> Cubic2 {
 /// `Q` coefficients from `Z` coefficients.
 pub(crate) fn com_particular(z: &Cubic2, omega: f64) -> Cubic2 {
     let w2 = omega * omega;
-    [z[0] + z[2] * (2.0 / w2), z[1] + z[3] * (6.0 / w2), z[2], z[3]]
+    [
+        z[0] + z[2] * (2.0 / w2),
+        z[1] + z[3] * (6.0 / w2),
+        z[2],
+        z[3],
+    ]
 }
 
 /// One closed-form segment of the DCM plan.
@@ -80,8 +85,9 @@ pub struct PlanarState {
 }
 
 impl DcmSegment {
-    /// A segment with ZMP `zmp`; `growth` and `decay` are set later by the passes.
-    pub(crate) fn new(start: f64, duration: Option<f64>, zmp: Cubic2, omega: f64) -> Self {
+    /// A segment starting at `start` [s] with ZMP cubic `zmp` (coefficients in local time); `growth` and
+    /// `decay` start at zero and are set by the backward (DCM) and forward (CoM) passes.
+    pub fn new(start: f64, duration: Option<f64>, zmp: Cubic2, omega: f64) -> Self {
         Self {
             start,
             duration,
@@ -126,8 +132,9 @@ impl DcmSegment {
         }
     }
 
-    /// DCM particular value at the start and end of the segment, and e^{−ωT}.
-    pub(crate) fn growth_for_end_dcm(&self, dcm_end: Vector2<f64>, omega: f64) -> Vector2<f64> {
+    /// The `growth` coefficient that makes the DCM reach `dcm_end` at the end of the segment (zero for the
+    /// unbounded segment): the backward recursion (10.1.17).
+    pub fn growth_for_end_dcm(&self, dcm_end: Vector2<f64>, omega: f64) -> Vector2<f64> {
         match self.duration {
             Some(d) => {
                 let [p_end, _, _] = eval_cubic(&self.dcm_poly, d);
@@ -138,12 +145,12 @@ impl DcmSegment {
     }
 
     /// DCM at τ = 0 given the growth coefficient.
-    pub(crate) fn dcm_start(&self) -> Vector2<f64> {
+    pub fn dcm_start(&self) -> Vector2<f64> {
         self.dcm_poly[0] + self.growth
     }
 
     /// Sets `decay` so that the CoM at τ = 0 equals `com_start`.
-    pub(crate) fn set_com_start(&mut self, com_start: Vector2<f64>) {
+    pub fn set_com_start(&mut self, com_start: Vector2<f64>) {
         self.decay = com_start - self.com_poly[0] - self.growth * 0.5;
     }
 }

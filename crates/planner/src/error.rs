@@ -32,7 +32,9 @@ pub enum PlannerError {
         reason: String,
     },
     /// The footstep search found no step satisfying the length/width/yaw/duration bounds.
-    #[error("no feasible footstep for step {step} (swing foot {foot}) after t = {time:.3} s: {reason}")]
+    #[error(
+        "no feasible footstep for step {step} (swing foot {foot}) after t = {time:.3} s: {reason}"
+    )]
     NoFeasibleStep {
         /// Index of the step (0 = first step of this plan).
         step: usize,

@@ -126,7 +126,8 @@ impl SupportPolygon {
         for i in 1..n {
             let mut j = i;
             while j > 0
-                && (pts[j - 1].x > pts[j].x || (pts[j - 1].x == pts[j].x && pts[j - 1].y > pts[j].y))
+                && (pts[j - 1].x > pts[j].x
+                    || (pts[j - 1].x == pts[j].x && pts[j - 1].y > pts[j].y))
             {
                 pts.swap(j - 1, j);
                 j -= 1;
@@ -153,7 +154,11 @@ impl SupportPolygon {
             hull[k] = p;
             k += 1;
         }
-        let len = if n <= 1 { n } else { (k - 1).min(MAX_POLYGON_VERTICES) };
+        let len = if n <= 1 {
+            n
+        } else {
+            (k - 1).min(MAX_POLYGON_VERTICES)
+        };
         let mut out = Self::default();
         out.vertices[..len].copy_from_slice(&hull[..len]);
         out.len = len;

@@ -66,4 +66,4 @@ pub use geometry::{Pose2, SupportPolygon};
 pub use goal::{Goal, Waypoint};
 pub use plan::{FootSample, Plan, PlanOutcome, PlanReport, PlanSample};
 pub use planner::{plan_from_standing, Planner, PlannerInput};
-pub use swing::SwingTrajectory;
+pub use swing::{SwingShape, SwingTrajectory};

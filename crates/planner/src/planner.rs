@@ -14,7 +14,7 @@ use crate::error::PlannerError;
 use crate::geometry::{wrap_angle, Pose2, SupportPolygon};
 use crate::goal::Goal;
 use crate::plan::{Plan, PlanOutcome, PlanSample};
-use crate::swing::SwingTrajectory;
+use crate::swing::{SwingShape, SwingTrajectory};
 use crate::unicycle::{choose_first_swing, search_footsteps, unicycle_path};
 
 /// Everything a new (partial) plan starts from.
@@ -90,7 +90,9 @@ pub fn plan_from_standing(
             ),
         });
     }
-    if rel.y < config.foot_width || rel.norm() > config.step_length_max.max(config.nominal_width) * 1.5 {
+    if rel.y < config.foot_width
+        || rel.norm() > config.step_length_max.max(config.nominal_width) * 1.5
+    {
         return Err(PlannerError::InvalidStart {
             name: "left_sole",
             reason: format!(
@@ -225,7 +227,12 @@ fn build_plan(cfg: &PlannerConfig, start: &StartState, goal: &Goal) -> Result<Pl
                 omega,
             ));
         }
-        segments.push(DcmSegment::new(end_time, None, zmp_constant(final_mid), omega));
+        segments.push(DcmSegment::new(
+            end_time,
+            None,
+            zmp_constant(final_mid),
+            omega,
+        ));
 
         // backward pass: DCM at each segment end (10.1.17), the final DCM on the final ZMP
         let mut dcm_end = final_mid;
@@ -335,9 +342,11 @@ fn build_plan(cfg: &PlannerConfig, start: &StartState, goal: &Goal) -> Result<Pl
                 step_poses[k],
                 lift[k],
                 land[k],
-                cfg.swing_height,
-                cfg.swing_apex_fraction,
-                cfg.landing_velocity,
+                SwingShape {
+                    height: cfg.swing_height,
+                    apex_fraction: cfg.swing_apex_fraction,
+                    landing_velocity: cfg.landing_velocity,
+                },
             ));
         }
         let [lc, rc] = contacts;
@@ -467,7 +476,9 @@ impl Planner {
                 };
                 let ds_start = current_ds.map_or(plan.start_time, |p| p.start);
                 let ds_end = current_ds.map_or(m, |p| p.end);
-                if landed.activation_time > plan.start_time && landed.activation_time >= ds_start - 1e-12 {
+                if landed.activation_time > plan.start_time
+                    && landed.activation_time >= ds_start - 1e-12
+                {
                     let p = Pose2::from_isometry(&landed.pose);
                     let c = p.transform_point(Vector2::new(
                         0.0,
@@ -534,8 +545,7 @@ fn mid_pose(l: &Isometry3<f64>, r: &Isometry3<f64>) -> Pose2 {
 fn merge_point(cfg: &PlannerConfig, plan: &Plan, t: f64) -> Result<f64, PlannerError> {
     let t = t.max(plan.start_time);
     let r = cfg.merge_point_fraction;
-    let min_remaining =
-        0.5 * (1.0 - r) * cfg.double_support_fraction * cfg.step_duration_min;
+    let min_remaining = 0.5 * (1.0 - r) * cfg.double_support_fraction * cfg.step_duration_min;
     let last = plan.phases.len().saturating_sub(1);
     for (i, p) in plan.phases.iter().enumerate() {
         if p.kind != PhaseKind::DoubleSupport {
@@ -591,7 +601,8 @@ fn merge(old: &Plan, new: Plan, m: f64) -> Plan {
         }
     };
     let keep_swings = |old: &[SwingTrajectory], new: Vec<SwingTrajectory>| {
-        let mut s: Vec<SwingTrajectory> = old.iter().filter(|s| s.land_time <= m).cloned().collect();
+        let mut s: Vec<SwingTrajectory> =
+            old.iter().filter(|s| s.land_time <= m).cloned().collect();
         s.extend(new);
         s
     };

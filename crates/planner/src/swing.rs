@@ -37,6 +37,43 @@ pub fn eval_quintic(c: &Quintic, t: f64) -> [f64; 4] {
     [p, v, a, j]
 }
 
+/// Minimum and maximum of a quintic over [0, δ]: end points and the roots of its derivative (found by sign
+/// changes on a 64-interval grid refined by bisection).
+pub fn quintic_range(c: &Quintic, delta: f64) -> (f64, f64) {
+    let mut lo = eval_quintic(c, 0.0)[0].min(eval_quintic(c, delta)[0]);
+    let mut hi = eval_quintic(c, 0.0)[0].max(eval_quintic(c, delta)[0]);
+    const N: usize = 64;
+    let mut t0 = 0.0;
+    let mut v0 = eval_quintic(c, 0.0)[1];
+    for i in 1..=N {
+        let t1 = delta * i as f64 / N as f64;
+        let v1 = eval_quintic(c, t1)[1];
+        if v0 * v1 < 0.0 {
+            let (mut a, mut b, mut va) = (t0, t1, v0);
+            for _ in 0..60 {
+                let m = 0.5 * (a + b);
+                let vm = eval_quintic(c, m)[1];
+                if va * vm <= 0.0 {
+                    b = m;
+                } else {
+                    a = m;
+                    va = vm;
+                }
+            }
+            let x = eval_quintic(c, 0.5 * (a + b))[0];
+            lo = lo.min(x);
+            hi = hi.max(x);
+        }
+        // also the grid values, in case of a double root
+        let x = eval_quintic(c, t1)[0];
+        lo = lo.min(x);
+        hi = hi.max(x);
+        t0 = t1;
+        v0 = v1;
+    }
+    (lo, hi)
+}
+
 /// Position, velocity, acceleration of the minimum-jerk blend s(u) = 10u³ − 15u⁴ + 6u⁵ with u = τ/T
 /// (derivatives with respect to τ).
 pub fn min_jerk_blend(tau: f64, duration: f64) -> [f64; 3] {
@@ -58,6 +95,17 @@ pub struct FootState {
     pub twist: Vector6<f64>,
     /// Mixed acceleration [linear; angular], world orientation.
     pub acceleration: Vector6<f64>,
+}
+
+/// Shape parameters of a swing.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SwingShape {
+    /// Apex height above the higher foothold [m].
+    pub height: f64,
+    /// Apex time as a fraction of the swing duration, in (0, 1).
+    pub apex_fraction: f64,
+    /// Vertical velocity at touch-down [m/s].
+    pub landing_velocity: f64,
 }
 
 /// One swing of one foot from `start` (lift-off at `lift_time`) to `end` (touch-down at `land_time`).
@@ -93,17 +141,20 @@ pub struct SwingTrajectory {
 }
 
 impl SwingTrajectory {
-    /// Builds the swing. `lift_time < land_time`, `0 < apex_fraction < 1` are the caller's contract.
+    /// Builds the swing. `lift_time < land_time`, `0 < shape.apex_fraction < 1` are the caller's contract.
     pub fn new(
         foot: Foot,
         start: Isometry3<f64>,
         end: Isometry3<f64>,
         lift_time: f64,
         land_time: f64,
-        swing_height: f64,
-        apex_fraction: f64,
-        landing_velocity: f64,
+        shape: SwingShape,
     ) -> Self {
+        let SwingShape {
+            height: swing_height,
+            apex_fraction,
+            landing_velocity,
+        } = shape;
         let duration = land_time - lift_time;
         let p0 = start.translation.vector;
         let p1 = end.translation.vector;
@@ -121,11 +172,34 @@ impl SwingTrajectory {
         let g0 = jerk_gap(0.0);
         let g1 = jerk_gap(1.0);
         let slope = g1 - g0;
-        let apex_acc = if slope.abs() > 1e-12 && (g0 / slope).is_finite() {
+        let continuous_acc = if slope.abs() > 1e-12 && (g0 / slope).is_finite() {
             -g0 / slope
         } else {
             0.0
         };
+        // keep the height within [lower foothold, apex]: if the jerk-continuous apex acceleration over- or
+        // undershoots, take the closest acceleration (towards 0, then more negative) that does not.
+        let low = p0.z.min(p1.z);
+        let within = |a: f64| {
+            let up = quintic(p0.z, 0.0, 0.0, apex_height, 0.0, a, d1);
+            let down = quintic(apex_height, 0.0, a, p1.z, landing_velocity, 0.0, d2);
+            let (lo1, hi1) = quintic_range(&up, d1);
+            let (lo2, hi2) = quintic_range(&down, d2);
+            lo1.min(lo2) >= low - 1e-12 && hi1.max(hi2) <= apex_height + 1e-12
+        };
+        let h_up = apex_height - p0.z;
+        let h_down = apex_height - p1.z;
+        let a_scale = 20.0 * (h_up / (d1 * d1)).max(h_down / (d2 * d2));
+        let candidates = (0..=20)
+            .map(|k| continuous_acc * (1.0 - k as f64 / 20.0))
+            .chain((1..=20).map(|j| -a_scale * j as f64 / 20.0));
+        let mut apex_acc = 0.0;
+        for a in candidates {
+            if within(a) {
+                apex_acc = a;
+                break;
+            }
+        }
         let z_up = quintic(p0.z, 0.0, 0.0, apex_height, 0.0, apex_acc, d1);
         let z_down = quintic(apex_height, 0.0, apex_acc, p1.z, landing_velocity, 0.0, d2);
         let rotation_log = (end.rotation * start.rotation.inverse()).scaled_axis();
@@ -159,7 +233,8 @@ impl SwingTrajectory {
             eval_quintic(&self.z_down, tau - d1)
         };
         let [s, ds, dds] = min_jerk_blend(tau, duration);
-        let rotation = UnitQuaternion::from_scaled_axis(self.rotation_log * s) * self.start.rotation;
+        let rotation =
+            UnitQuaternion::from_scaled_axis(self.rotation_log * s) * self.start.rotation;
         let omega = self.rotation_log * ds;
         let omega_dot = self.rotation_log * dds;
         FootState {

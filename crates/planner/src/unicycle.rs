@@ -48,12 +48,25 @@ fn rot(yaw: f64, v: Vector2<f64>) -> Vector2<f64> {
     Vector2::new(c * v.x - s * v.y, s * v.x + c * v.y)
 }
 
-/// Reference of the point F: a chain of legs.
+/// What the reference does next; instantiated into a [`Leg`] from the actual unicycle state when the
+/// previous leg is done (so that turning in place happens about where the unicycle really is).
+#[derive(Clone, Copy, Debug)]
+enum LegSpec {
+    /// Move F to `point + R(travel_yaw) d` on a straight line at `speed`.
+    Line {
+        point: Vector2<f64>,
+        travel_yaw: f64,
+        speed: f64,
+    },
+    /// Turn in place to `yaw` at `rate`.
+    Turn { yaw: f64, rate: f64 },
+}
+
+/// Reference of the point F: a chain of legs decided from the goal.
 struct Reference {
-    legs: Vec<Leg>,
+    specs: Vec<LegSpec>,
     offset: Vector2<f64>,
     final_pose: Pose2,
-    end_point: Vector2<f64>,
 }
 
 impl Reference {
@@ -62,20 +75,18 @@ impl Reference {
         let v_fwd = cfg.reference_speed_fraction * cfg.max_forward_speed();
         let v_back = cfg.reference_speed_fraction * cfg.max_backward_speed();
         let w_ref = cfg.reference_speed_fraction * cfg.max_yaw_rate();
-        let mut legs = Vec::new();
+        let mut specs = Vec::new();
         let mut p = start.position();
         let mut yaw = start.yaw;
         let thr = cfg.turn_in_place_threshold;
-        let turn = |legs: &mut Vec<Leg>, p: Vector2<f64>, yaw: &mut f64, target: f64| {
+        let turn = |specs: &mut Vec<LegSpec>, yaw: &mut f64, target: f64| {
             let delta = wrap_angle(target - *yaw);
             if delta.abs() > 1e-9 {
-                legs.push(Leg::Arc {
-                    center: p,
-                    yaw_from: *yaw,
-                    yaw_to: *yaw + delta,
-                    duration: delta.abs() / w_ref,
-                });
                 *yaw += delta;
+                specs.push(LegSpec::Turn {
+                    yaw: *yaw,
+                    rate: w_ref,
+                });
             }
         };
         for &(wp, wp_yaw) in points {
@@ -94,54 +105,66 @@ impl Reference {
                     (phi, v_fwd)
                 };
                 if wrap_angle(travel_yaw - yaw).abs() > thr {
-                    turn(&mut legs, p, &mut yaw, travel_yaw);
+                    turn(&mut specs, &mut yaw, travel_yaw);
                 }
-                let from = p + rot(yaw, d);
                 let new_yaw = yaw + wrap_angle(travel_yaw - yaw);
-                let to = wp + rot(new_yaw, d);
-                let length = (to - from).norm();
-                if length > 0.0 {
-                    legs.push(Leg::Line {
-                        from,
-                        to,
-                        duration: length / speed,
-                    });
-                }
+                specs.push(LegSpec::Line {
+                    point: wp,
+                    travel_yaw: new_yaw,
+                    speed,
+                });
                 p = wp;
                 yaw = new_yaw;
             }
             if let Some(y) = wp_yaw {
-                turn(&mut legs, p, &mut yaw, y);
+                turn(&mut specs, &mut yaw, y);
             }
         }
         Self {
-            legs,
+            specs,
             offset: d,
             final_pose: Pose2 {
                 x: p.x,
                 y: p.y,
                 yaw,
             },
-            end_point: p + rot(yaw, d),
         }
     }
 
-    fn duration(&self) -> f64 {
-        self.legs.iter().map(Leg::duration).sum()
+    /// The leg for `spec` starting from the actual unicycle pose `u` and F* end point `f_ref`.
+    fn instantiate(&self, spec: LegSpec, u: Pose2, f_ref: Vector2<f64>) -> Leg {
+        match spec {
+            LegSpec::Line {
+                point,
+                travel_yaw,
+                speed,
+            } => {
+                let to = point + rot(travel_yaw, self.offset);
+                Leg::Line {
+                    from: f_ref,
+                    to,
+                    duration: ((to - f_ref).norm() / speed).max(1e-9),
+                }
+            }
+            LegSpec::Turn { yaw, rate } => {
+                let target = u.yaw + wrap_angle(yaw - u.yaw);
+                Leg::Arc {
+                    center: u.position(),
+                    yaw_from: u.yaw,
+                    yaw_to: target,
+                    duration: ((target - u.yaw).abs() / rate).max(1e-9),
+                }
+            }
+        }
     }
 
-    /// F*(t) and its velocity. `cursor` is the current leg index and the start time of that leg.
-    fn evaluate(&self, t: f64, cursor: &mut (usize, f64)) -> (Vector2<f64>, Vector2<f64>) {
-        while cursor.0 < self.legs.len() && t >= cursor.1 + self.legs[cursor.0].duration() {
-            cursor.1 += self.legs[cursor.0].duration();
-            cursor.0 += 1;
-        }
-        let Some(leg) = self.legs.get(cursor.0) else {
-            return (self.end_point, Vector2::zeros());
-        };
-        let tau = t - cursor.1;
+    /// F*(τ) and its velocity on `leg` at local time τ.
+    fn evaluate(&self, leg: &Leg, tau: f64) -> (Vector2<f64>, Vector2<f64>) {
         match *leg {
             Leg::Line { from, to, duration } => {
+                if tau >= duration {
+                    return (to, Vector2::zeros());
+                }
                 let s = (tau / duration).clamp(0.0, 1.0);
                 (from + (to - from) * s, (to - from) / duration)
             }
@@ -153,7 +176,11 @@ impl Reference {
             } => {
                 let s = (tau / duration).clamp(0.0, 1.0);
                 let yaw = yaw_from + (yaw_to - yaw_from) * s;
-                let rate = (yaw_to - yaw_from) / duration;
+                let rate = if tau >= duration {
+                    0.0
+                } else {
+                    (yaw_to - yaw_from) / duration
+                };
                 let r = rot(yaw, self.offset);
                 (center + r, Vector2::new(-r.y, r.x) * rate)
             }
@@ -190,6 +217,68 @@ fn integrate(p: Pose2, v: f64, v_lat: f64, omega: f64, dt: f64) -> Pose2 {
     }
 }
 
+/// Whether moving with constant commands for one minimum step duration keeps the next footstep feasible for
+/// either swing foot (with a small margin): steady walking places consecutive feet on unicycle poses one step
+/// duration apart, and shorter steps are always easier.
+fn twist_feasible(cfg: &PlannerConfig, v: f64, v_lat: f64, omega: f64) -> bool {
+    let u1 = Pose2 {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let u2 = integrate(u1, v, v_lat, omega, cfg.step_duration_min);
+    let margin = PlannerConfig {
+        step_length_max: cfg.step_length_max - 0.002,
+        min_width: cfg.min_width + 0.002,
+        max_yaw_per_step: cfg.max_yaw_per_step * 0.98,
+        ..cfg.clone()
+    };
+    let w = cfg.nominal_width;
+    feet_feasible(
+        &margin,
+        foot_on(u2, Foot::Left, w),
+        foot_on(u1, Foot::Right, w),
+    )
+    .is_ok()
+        && feet_feasible(
+            &margin,
+            foot_on(u1, Foot::Left, w),
+            foot_on(u2, Foot::Right, w),
+        )
+        .is_ok()
+}
+
+/// Slows the translation (and, if that is not enough, the rotation) down until [`twist_feasible`] holds
+/// ("slow down when turning").
+fn feasible_twist(cfg: &PlannerConfig, v: f64, v_lat: f64, omega: f64) -> (f64, f64, f64) {
+    if twist_feasible(cfg, v, v_lat, omega) {
+        return (v, v_lat, omega);
+    }
+    let mut w = omega;
+    if !twist_feasible(cfg, 0.0, 0.0, w) {
+        let (mut lo, mut hi) = (0.0, 1.0);
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            if twist_feasible(cfg, 0.0, 0.0, omega * mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        w = omega * lo;
+    }
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..30 {
+        let mid = 0.5 * (lo + hi);
+        if twist_feasible(cfg, v * mid, v_lat * mid, w) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (v * lo, v_lat * lo, w)
+}
+
 /// Integrates the unicycle for `goal` from `start`.
 pub(crate) fn unicycle_path(
     cfg: &PlannerConfig,
@@ -219,6 +308,7 @@ pub(crate) fn unicycle_path(
             let v = forward.clamp(-v_back, v_fwd);
             let vl = lateral.clamp(-v_lat_max, v_lat_max);
             let w = yaw_rate.clamp(-w_max, w_max);
+            let (v, vl, w) = feasible_twist(cfg, v, vl, w);
             let wanted = duration.unwrap_or(cfg.horizon);
             let n = ((wanted / dt).round() as usize).min(max_samples);
             let truncated = duration.is_some_and(|d| d > cfg.horizon + 0.5 * dt);
@@ -265,7 +355,6 @@ fn follow(
 ) -> Result<UnicyclePath, PlannerError> {
     let dt = cfg.unicycle_dt;
     let reference = Reference::build(cfg, start, points);
-    let t_ref = reference.duration();
     let d = reference.offset;
     let k = cfg.unicycle_gain;
     let (v_fwd, v_back, w_max) = (
@@ -273,27 +362,65 @@ fn follow(
         cfg.max_backward_speed(),
         cfg.max_yaw_rate(),
     );
+    // a leg ends when its time is over and F has converged to its end (or after this extra wait)
+    let max_wait = 2.0;
     let mut p = start;
-    let mut cursor = (0usize, 0.0f64);
+    let mut next_spec = 0usize;
+    let mut f_end = p.position() + rot(p.yaw, d);
+    let mut leg: Option<(Leg, f64)> = None;
     let mut truncated = true;
     for i in 0..max_samples {
         let t = i as f64 * dt;
-        let (f_ref, df_ref) = reference.evaluate(t, &mut cursor);
         let f = p.position() + rot(p.yaw, d);
-        let err = f - f_ref;
-        if t >= t_ref && err.norm() < 1e-6 {
-            truncated = false;
-            break;
+        // advance to the next leg when the current one is done (legs are checked again at the next sample)
+        let done = match &leg {
+            None => true,
+            Some((l, t0)) => {
+                let tau = t - t0;
+                let dur = l.duration();
+                tau >= dur && ((f - f_end).norm() < 1e-5 || tau >= dur + max_wait)
+            }
+        };
+        if done {
+            match reference.specs.get(next_spec) {
+                Some(spec) => {
+                    let l = reference.instantiate(*spec, p, f_end);
+                    f_end = reference.evaluate(&l, l.duration()).0;
+                    leg = Some((l, t));
+                    next_spec += 1;
+                }
+                None => leg = None,
+            }
         }
+        let Some((l, t0)) = &leg else {
+            if (f - f_end).norm() < 1e-5 {
+                truncated = false;
+                break;
+            }
+            // no leg left but not converged yet: hold the last point
+            let err = f - f_end;
+            let local = rot(-p.yaw, -err * k);
+            let v = (local.x + d.y / d.x * local.y).clamp(-v_back, v_fwd);
+            let w = (local.y / d.x).clamp(-w_max, w_max);
+            p = integrate(p, v, 0.0, w, dt);
+            samples.push(p);
+            continue;
+        };
+        let (f_ref, df_ref) = reference.evaluate(l, t - t0);
+        let err = f - f_ref;
         // u = B⁻¹ (ẋ_F* − K e),  B⁻¹ = [[1, dy/dx], [0, 1/dx]] R(θ)ᵀ
         let q = df_ref - err * k;
         let local = rot(-p.yaw, q);
         let v = (local.x + d.y / d.x * local.y).clamp(-v_back, v_fwd);
         let w = (local.y / d.x).clamp(-w_max, w_max);
+        let (v, _, w) = feasible_twist(cfg, v, 0.0, w);
         p = integrate(p, v, 0.0, w, dt);
         samples.push(p);
     }
-    if !samples.iter().all(|s| s.x.is_finite() && s.y.is_finite() && s.yaw.is_finite()) {
+    if !samples
+        .iter()
+        .all(|s| s.x.is_finite() && s.y.is_finite() && s.yaw.is_finite())
+    {
         return Err(PlannerError::InvalidGoal {
             name: "goal".into(),
             reason: "the unicycle integration diverged".into(),
@@ -349,7 +476,7 @@ fn foot_on(u: Pose2, foot: Foot, width: f64) -> Pose2 {
 }
 
 fn close(a: Pose2, b: Pose2) -> bool {
-    (a.position() - b.position()).norm() <= 1e-3 && wrap_angle(a.yaw - b.yaw).abs() <= 1e-3
+    (a.position() - b.position()).norm() <= 2e-4 && wrap_angle(a.yaw - b.yaw).abs() <= 4e-4
 }
 
 /// Picks the first swing foot: explicit, or the side the unicycle moves/turns to.
@@ -385,7 +512,8 @@ pub(crate) fn search_footsteps(
     let final_pose = samples[last];
     let target = |f: Foot| foot_on(final_pose, f, cfg.nominal_width);
     let (n_min, n_max) = cfg.step_sample_window();
-    let n_nom = ((cfg.step_duration_nominal / cfg.unicycle_dt).round() as usize).clamp(n_min, n_max);
+    let n_nom =
+        ((cfg.step_duration_nominal / cfg.unicycle_dt).round() as usize).clamp(n_min, n_max);
     let dt = cfg.unicycle_dt;
     let limit = 2 * (samples.len() / n_min.max(1)) + 8;
     let mut feet = [left, right];
@@ -425,7 +553,8 @@ pub(crate) fn search_footsteps(
                 Ok(()) => {
                     let duration = n as f64 * dt;
                     let dx = (l.position() - r.position()).norm();
-                    let cost = cfg.time_weight / (duration * duration) + cfg.position_weight * dx * dx;
+                    let cost =
+                        cfg.time_weight / (duration * duration) + cfg.position_weight * dx * dx;
                     let cost = if all_final {
                         // all candidates are the same pose: take the nominal duration
                         (n as f64 - n_nom as f64).abs()
@@ -439,6 +568,42 @@ pub(crate) fn search_footsteps(
                 Err(reason) => last_reason = reason,
             }
         }
+        let best = best.or_else(|| {
+            // No candidate on the unicycle path is feasible (the feet lag behind the unicycle, e.g. after a
+            // start from feet that are not at the nominal width): take the step from the pose parallel to the
+            // stance foot towards the nominal-duration candidate, as far as the constraints allow.
+            let n = n_nom;
+            let cand = foot_on(samples[(prev + n).min(last)], swing, cfg.nominal_width);
+            let par_pos =
+                stance.transform_point(Vector2::new(0.0, swing.side() * cfg.nominal_width));
+            let parallel = Pose2 {
+                x: par_pos.x,
+                y: par_pos.y,
+                yaw: stance.yaw,
+            };
+            let at = |lambda: f64| Pose2 {
+                x: parallel.x + lambda * (cand.x - parallel.x),
+                y: parallel.y + lambda * (cand.y - parallel.y),
+                yaw: parallel.yaw + lambda * wrap_angle(cand.yaw - parallel.yaw),
+            };
+            let ok = |p: Pose2| match swing {
+                Foot::Left => feet_feasible(cfg, p, stance).is_ok(),
+                Foot::Right => feet_feasible(cfg, stance, p).is_ok(),
+            };
+            if !ok(parallel) {
+                return None;
+            }
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..40 {
+                let mid = 0.5 * (lo + hi);
+                if ok(at(mid)) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            Some((0.0, n, at(lo)))
+        });
         let Some((_, n, pose)) = best else {
             return Err(PlannerError::NoFeasibleStep {
                 step: steps.len(),

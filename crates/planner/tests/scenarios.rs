@@ -22,9 +22,16 @@ fn final_mid(plan: &stride_planner::Plan) -> (f64, f64, f64) {
 
 #[test]
 fn straight_two_meters() {
-    let plan = run(Goal::Pose { x: 2.0, y: 0.0, yaw: 0.0 });
+    let plan = run(Goal::Pose {
+        x: 2.0,
+        y: 0.0,
+        yaw: 0.0,
+    });
     let (x, y, yaw) = final_mid(&plan);
-    assert!((x - 2.0).abs() < 0.01 && y.abs() < 0.01 && yaw.abs() < 0.01, "{x} {y} {yaw}");
+    assert!(
+        (x - 2.0).abs() < 0.01 && y.abs() < 0.01 && yaw.abs() < 0.01,
+        "{x} {y} {yaw}"
+    );
     assert_eq!(plan.outcome, PlanOutcome::Complete);
     assert!(plan.step_count() >= 10, "steps {}", plan.step_count());
     eprintln!("2 m: {} steps, {:.2} s", plan.step_count(), plan.end_time);
@@ -32,7 +39,11 @@ fn straight_two_meters() {
 
 #[test]
 fn turn_in_place_90_degrees() {
-    let plan = run(Goal::Pose { x: 0.0, y: 0.0, yaw: std::f64::consts::FRAC_PI_2 });
+    let plan = run(Goal::Pose {
+        x: 0.0,
+        y: 0.0,
+        yaw: std::f64::consts::FRAC_PI_2,
+    });
     let (x, y, yaw) = final_mid(&plan);
     assert!(x.abs() < 0.01 && y.abs() < 0.01, "{x} {y}");
     assert!((yaw - std::f64::consts::FRAC_PI_2).abs() < 0.01, "{yaw}");
@@ -42,9 +53,21 @@ fn turn_in_place_90_degrees() {
 fn curve_through_waypoints() {
     let plan = run(Goal::Waypoints {
         points: vec![
-            Waypoint { x: 0.6, y: 0.0, yaw: None },
-            Waypoint { x: 1.2, y: 0.4, yaw: None },
-            Waypoint { x: 1.5, y: 1.0, yaw: Some(1.2) },
+            Waypoint {
+                x: 0.6,
+                y: 0.0,
+                yaw: None,
+            },
+            Waypoint {
+                x: 1.2,
+                y: 0.4,
+                yaw: None,
+            },
+            Waypoint {
+                x: 1.5,
+                y: 1.0,
+                yaw: Some(1.2),
+            },
         ],
     });
     let (x, y, yaw) = final_mid(&plan);
@@ -54,7 +77,12 @@ fn curve_through_waypoints() {
 
 #[test]
 fn velocity_command() {
-    let plan = run(Goal::Velocity { forward: 0.1, lateral: 0.0, yaw_rate: 0.05, duration: Some(8.0) });
+    let plan = run(Goal::Velocity {
+        forward: 0.1,
+        lateral: 0.0,
+        yaw_rate: 0.05,
+        duration: Some(8.0),
+    });
     let (x, _, yaw) = final_mid(&plan);
     assert!(x > 0.5, "{x}");
     assert!(yaw > 0.2, "{yaw}");
@@ -62,13 +90,66 @@ fn velocity_command() {
 
 #[test]
 fn lateral_and_backward_velocity() {
-    run(Goal::Velocity { forward: 0.0, lateral: 0.05, yaw_rate: 0.0, duration: Some(6.0) });
-    run(Goal::Velocity { forward: -0.1, lateral: 0.0, yaw_rate: 0.0, duration: Some(6.0) });
-    run(Goal::Pose { x: -0.3, y: 0.0, yaw: 0.0 });
+    run(Goal::Velocity {
+        forward: 0.0,
+        lateral: 0.05,
+        yaw_rate: 0.0,
+        duration: Some(6.0),
+    });
+    run(Goal::Velocity {
+        forward: -0.1,
+        lateral: 0.0,
+        yaw_rate: 0.0,
+        duration: Some(6.0),
+    });
+    run(Goal::Pose {
+        x: -0.3,
+        y: 0.0,
+        yaw: 0.0,
+    });
 }
 
 #[test]
 fn stand_goal_is_a_valid_standing_plan() {
     let plan = run(Goal::Stand);
     assert_eq!(plan.step_count(), 0);
+}
+
+/// Replanning towards the same goal mid-walk keeps the gait: the new footsteps land where the old ones would
+/// have (the unicycle is re-anchored on the last touch-down), so the merge is seamless.
+#[test]
+fn replanning_with_the_same_goal_keeps_the_footsteps() {
+    let cfg = PlannerConfig::default();
+    let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+    let goal = Goal::Pose { x: 2.0, y: 0.0, yaw: 0.0 };
+    let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
+    let old = planner.start(0.0, &l, &r, &goal).unwrap().clone();
+    let m = planner.replan(4.0, &goal).unwrap();
+    let new = planner.plan().unwrap();
+    assert_eq!(new.merge_times, vec![m]);
+    check_steps(&cfg, new, false);
+    check_dynamics(&cfg, new, 0.01);
+    check_swings(&cfg, new);
+    let (a, b) = (old.footsteps(), new.footsteps());
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(b.iter()) {
+        assert_eq!(x.foot, y.foot);
+        assert!((x.pose.translation.vector - y.pose.translation.vector).norm() < 0.02);
+    }
+}
+
+/// A new goal mid-walk (turn left) merges and the plan still satisfies every invariant.
+#[test]
+fn replanning_to_a_new_goal() {
+    let cfg = PlannerConfig::default();
+    let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+    let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
+    planner.start(0.0, &l, &r, &Goal::Pose { x: 2.0, y: 0.0, yaw: 0.0 }).unwrap();
+    planner.replan(5.0, &Goal::Pose { x: 1.5, y: 1.0, yaw: 1.5 }).unwrap();
+    planner.replan(9.0, &Goal::Velocity { forward: 0.1, lateral: 0.0, yaw_rate: -0.1, duration: Some(4.0) }).unwrap();
+    let plan = planner.plan().unwrap();
+    assert_eq!(plan.merge_times.len(), 2);
+    check_steps(&cfg, plan, false);
+    check_dynamics(&cfg, plan, 0.01);
+    check_swings(&cfg, plan);
 }

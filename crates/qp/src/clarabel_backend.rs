@@ -18,7 +18,7 @@ use crate::sparse::{SparseQp, SparseSolution};
 ///
 /// | field | default | meaning |
 /// |---|---|---|
-/// | `tolerance` | `1e-9` | clarabel `tol_gap_abs`, `tol_gap_rel` and `tol_feas` |
+/// | `tolerance` | `1e-10` | clarabel `tol_gap_abs`, `tol_gap_rel` and `tol_feas` |
 /// | `max_iterations` | `200` | interior-point iteration limit |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -31,7 +31,7 @@ pub struct ClarabelSettings {
 
 impl Default for ClarabelSettings {
     fn default() -> Self {
-        Self { tolerance: 1e-9, max_iterations: 200 }
+        Self { tolerance: 1e-10, max_iterations: 200 }
     }
 }
 

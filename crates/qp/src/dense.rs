@@ -194,14 +194,16 @@ impl DenseQp {
     /// Checks the data: finite `H`, `g`, `E`, `f`, `C`; no NaN in `l`, `u`, `lb`, `ub`; `l ≤ u`, `lb ≤ ub`;
     /// no `+∞` lower side nor `−∞` upper side. Returns `false` on any violation.
     pub fn is_valid(&self) -> bool {
-        let finite = |it: &mut dyn Iterator<Item = &f64>| it.all(|v| v.is_finite());
-        if !finite(&mut self.h.iter()) || !finite(&mut self.g.iter()) {
+        fn finite<'a>(mut it: impl Iterator<Item = &'a f64>) -> bool {
+            it.all(|v| v.is_finite())
+        }
+        if !finite(self.h.iter()) || !finite(self.g.iter()) {
             return false;
         }
-        if !finite(&mut self.eq_matrix().iter()) || !finite(&mut self.eq_rhs().iter()) {
+        if !finite(self.eq_matrix().iter()) || !finite(self.eq_rhs().iter()) {
             return false;
         }
-        if !finite(&mut self.ineq_matrix().iter()) {
+        if !finite(self.ineq_matrix().iter()) {
             return false;
         }
         let sides_ok = |lo: f64, hi: f64| !lo.is_nan() && !hi.is_nan() && lo <= hi && lo < f64::INFINITY && hi > f64::NEG_INFINITY;

@@ -23,6 +23,7 @@ mod kkt;
 mod problem;
 mod solver;
 mod sparse;
+pub mod testing;
 mod variables;
 
 pub use active_set::{ActiveSetSettings, ActiveSetSolver};

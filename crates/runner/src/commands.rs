@@ -4,7 +4,11 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use crate::cli::{CliError, LayerName, ModelCommand};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
 use crate::config::{Goal, PlannerMode, Scenario};
+use crate::run::{run_scenario, Outcome, RunOptions};
 
 /// `stride check <CONFIG>`.
 pub fn check(path: &Path) -> Result<ExitCode, CliError> {
@@ -37,8 +41,8 @@ pub fn check(path: &Path) -> Result<ExitCode, CliError> {
         Goal::Stand {} => "stand".into(),
     };
     println!("  goal: {goal}");
-    if !c.pushes.is_empty() {
-        println!("  pushes: {}", c.pushes.len());
+    if !c.sim.pushes.is_empty() {
+        println!("  pushes: {}", c.sim.pushes.len());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -53,15 +57,41 @@ pub fn plan(_path: &Path, _json: bool, _dt: Option<f64>) -> Result<ExitCode, Cli
     Err(CliError::msg("`stride plan`: the planner is not wired into the runner yet"))
 }
 
-/// `stride run`.
+/// `stride run`: Ctrl-C stops the loop at the next tick and the log is closed properly.
 pub fn run(
-    _path: &Path,
-    _output: Option<PathBuf>,
-    _duration: Option<f64>,
-    _realtime: bool,
-    _no_progress: bool,
+    path: &Path,
+    output: Option<PathBuf>,
+    duration: Option<f64>,
+    realtime: bool,
+    no_progress: bool,
 ) -> Result<ExitCode, CliError> {
-    Err(CliError::msg("`stride run`: not wired yet"))
+    let scenario = Scenario::load(path)?;
+    if let Some(d) = duration {
+        if !(d.is_finite() && d > 0.0) {
+            return Err(CliError::msg(format!("--duration {d}: expected a positive number of seconds")));
+        }
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = Arc::clone(&stop);
+        // A second Ctrl-C while stopping is ignored; the first one ends the run at the next tick.
+        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
+    }
+    let options = RunOptions {
+        output,
+        duration,
+        realtime,
+        progress: !no_progress,
+        stop: Some(stop),
+        ..RunOptions::default()
+    };
+    let summary = run_scenario(&scenario, &options).map_err(|e| CliError::msg(crate::cli::one_paragraph(&e)))?;
+    print!("{}", summary.render());
+    Ok(match summary.outcome {
+        Outcome::DurationReached | Outcome::GoalReached | Outcome::Interrupted => ExitCode::SUCCESS,
+        Outcome::Fell { .. } => ExitCode::from(3),
+        Outcome::Error { .. } => ExitCode::FAILURE,
+    })
 }
 
 /// `stride replay`.

@@ -6,3 +6,8 @@ pub mod commands;
 pub mod config;
 pub mod log;
 pub mod model_cmd;
+pub mod records;
+pub mod robot;
+pub mod run;
+pub mod sim_plant;
+pub mod stack;

@@ -105,7 +105,7 @@ enum Msg {
 }
 
 /// Counters of a finished log.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
 pub struct LogStats {
     /// Messages written.
     pub messages: u64,

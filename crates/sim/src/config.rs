@@ -101,7 +101,10 @@ pub struct GroundConfig {
 
 impl Default for GroundConfig {
     fn default() -> Self {
-        Self { height: 0.0, inclination: [0.0, 0.0] }
+        Self {
+            height: 0.0,
+            inclination: [0.0, 0.0],
+        }
     }
 }
 
@@ -245,7 +248,7 @@ pub enum EffortLimitPolicy {
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
-/// | `default` | – | position servo, kp 1000 N·m/rad, kd 30 N·m·s/rad | [`JointActuatorConfig`] of every joint |
+/// | `default` | – | position servo, kp 1000 N·m/rad, kd 60 N·m·s/rad | [`JointActuatorConfig`] of every joint |
 /// | `joints` | – | none | [`JointActuatorOverride`] list by joint name |
 /// | `effort_limit_policy` | – | `saturate` | [`EffortLimitPolicy`] |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -275,7 +278,7 @@ impl Default for ActuationConfig {
 /// |---|---|---|---|
 /// | `mode` | – | `position` | [`ActuationMode`] |
 /// | `kp` | N·m/rad (N/m) | 1000 | position gain |
-/// | `kd` | N·m·s/rad (N·s/m) | 30 | velocity gain (position and velocity modes) |
+/// | `kd` | N·m·s/rad (N·s/m) | 60 | velocity gain (position and velocity modes) |
 /// | `effort_limit` | N·m (N) | model's limit | motor torque bound; `None` uses the URDF `effort` (unbounded if absent) |
 /// | `damping` | N·m·s/rad | 0 | passive viscous joint damping (not limited by the effort limit) |
 /// | `armature` | kg·m² | 0 | reflected rotor inertia added to the joint's diagonal of the mass matrix |
@@ -298,7 +301,14 @@ pub struct JointActuatorConfig {
 
 impl Default for JointActuatorConfig {
     fn default() -> Self {
-        Self { mode: ActuationMode::Position, kp: 1000.0, kd: 30.0, effort_limit: None, damping: 0.0, armature: 0.0 }
+        Self {
+            mode: ActuationMode::Position,
+            kp: 1000.0,
+            kd: 60.0,
+            effort_limit: None,
+            damping: 0.0,
+            armature: 0.0,
+        }
     }
 }
 
@@ -345,7 +355,10 @@ pub struct SensorConfig {
 
 impl Default for SensorConfig {
     fn default() -> Self {
-        Self { imu_frame: "imu_frame".to_string(), noise: NoiseConfig::default() }
+        Self {
+            imu_frame: "imu_frame".to_string(),
+            noise: NoiseConfig::default(),
+        }
     }
 }
 
@@ -437,7 +450,10 @@ pub struct FallConfig {
 
 impl Default for FallConfig {
     fn default() -> Self {
-        Self { min_base_height: 0.25, max_tilt: 1.0 }
+        Self {
+            min_base_height: 0.25,
+            max_tilt: 1.0,
+        }
     }
 }
 
@@ -462,7 +478,11 @@ pub struct SafetyConfig {
 
 impl Default for SafetyConfig {
     fn default() -> Self {
-        Self { max_joint_velocity: 200.0, max_base_velocity: 100.0, max_penetration: 0.1 }
+        Self {
+            max_joint_velocity: 200.0,
+            max_base_velocity: 100.0,
+            max_penetration: 0.1,
+        }
     }
 }
 
@@ -470,7 +490,10 @@ fn check(ok: bool, parameter: &str, message: &str) -> Result<(), SimError> {
     if ok {
         Ok(())
     } else {
-        Err(SimError::InvalidConfig { parameter: parameter.to_string(), message: message.to_string() })
+        Err(SimError::InvalidConfig {
+            parameter: parameter.to_string(),
+            message: message.to_string(),
+        })
     }
 }
 
@@ -501,42 +524,102 @@ impl SimConfig {
             "rate_hz",
             "1e9 / rate_hz must be a whole number of nanoseconds",
         )?;
-        check(self.gravity.iter().all(|g| g.is_finite()), "gravity", "must be finite")?;
-        check(self.ground.height.is_finite(), "ground.height", "must be finite")?;
         check(
-            self.ground.inclination.iter().all(|a| a.is_finite() && a.abs() < std::f64::consts::FRAC_PI_2),
+            self.gravity.iter().all(|g| g.is_finite()),
+            "gravity",
+            "must be finite",
+        )?;
+        check(
+            self.ground.height.is_finite(),
+            "ground.height",
+            "must be finite",
+        )?;
+        check(
+            self.ground
+                .inclination
+                .iter()
+                .all(|a| a.is_finite() && a.abs() < std::f64::consts::FRAC_PI_2),
             "ground.inclination",
             "angles must be finite and within (-90°, 90°)",
         )?;
         let c = &self.contact;
-        check(c.normal_stiffness.is_finite() && c.normal_stiffness > 0.0, "contact.normal_stiffness", "must be > 0")?;
-        check(finite_nonneg(c.normal_damping), "contact.normal_damping", "must be ≥ 0")?;
+        check(
+            c.normal_stiffness.is_finite() && c.normal_stiffness > 0.0,
+            "contact.normal_stiffness",
+            "must be > 0",
+        )?;
+        check(
+            finite_nonneg(c.normal_damping),
+            "contact.normal_damping",
+            "must be ≥ 0",
+        )?;
         check(
             c.tangential_stiffness.is_finite() && c.tangential_stiffness > 0.0,
             "contact.tangential_stiffness",
             "must be > 0",
         )?;
-        check(finite_nonneg(c.tangential_damping), "contact.tangential_damping", "must be ≥ 0")?;
-        check(finite_nonneg(c.friction_coefficient), "contact.friction_coefficient", "must be ≥ 0")?;
+        check(
+            finite_nonneg(c.tangential_damping),
+            "contact.tangential_damping",
+            "must be ≥ 0",
+        )?;
+        check(
+            finite_nonneg(c.friction_coefficient),
+            "contact.friction_coefficient",
+            "must be ≥ 0",
+        )?;
         for s in &c.surfaces {
             let p = format!("contact.surfaces[{}]", s.name);
-            check(s.length.is_finite() && s.length >= 0.0, &p, "length must be ≥ 0")?;
-            check(s.width.is_finite() && s.width >= 0.0, &p, "width must be ≥ 0")?;
-            check(s.grid[0] >= 1 && s.grid[1] >= 1, &p, "grid must have at least one point per axis")?;
-            check(s.grid[0] * s.grid[1] <= 400, &p, "at most 400 points per surface")?;
-            check(s.offset.iter().all(|x| x.is_finite()), &p, "offset must be finite")?;
+            check(
+                s.length.is_finite() && s.length >= 0.0,
+                &p,
+                "length must be ≥ 0",
+            )?;
+            check(
+                s.width.is_finite() && s.width >= 0.0,
+                &p,
+                "width must be ≥ 0",
+            )?;
+            check(
+                s.grid[0] >= 1 && s.grid[1] >= 1,
+                &p,
+                "grid must have at least one point per axis",
+            )?;
+            check(
+                s.grid[0] * s.grid[1] <= 10_000,
+                &p,
+                "at most 10000 points per surface",
+            )?;
+            check(
+                s.offset.iter().all(|x| x.is_finite()),
+                &p,
+                "offset must be finite",
+            )?;
         }
         let a = &self.actuation;
         check_actuator(&a.default, "actuation.default")?;
         for j in &a.joints {
             let p = format!("actuation.joints[{}]", j.name);
-            for (v, n) in [(j.kp, "kp"), (j.kd, "kd"), (j.damping, "damping"), (j.armature, "armature")] {
+            for (v, n) in [
+                (j.kp, "kp"),
+                (j.kd, "kd"),
+                (j.damping, "damping"),
+                (j.armature, "armature"),
+            ] {
                 if let Some(v) = v {
-                    check(finite_nonneg(v), &format!("{p}.{n}"), "must be finite and ≥ 0")?;
+                    check(
+                        finite_nonneg(v),
+                        &format!("{p}.{n}"),
+                        "must be finite and ≥ 0",
+                    )?;
                 }
             }
             if let Some(e) = j.effort_limit {
-                check(e > 0.0 && !e.is_nan(), &format!("{p}.effort_limit"), "must be > 0")?;
+                check(
+                    e > 0.0 && !e.is_nan(),
+                    &format!("{p}.effort_limit"),
+                    "must be > 0",
+                )?;
             }
         }
         let n = &self.sensors.noise;
@@ -549,31 +632,83 @@ impl SimConfig {
             (n.accelerometer, "accelerometer"),
             (n.orientation, "orientation"),
         ] {
-            check(finite_nonneg(v), &format!("sensors.noise.{name}"), "must be finite and ≥ 0")?;
+            check(
+                finite_nonneg(v),
+                &format!("sensors.noise.{name}"),
+                "must be finite and ≥ 0",
+            )?;
         }
         for (i, p) in self.pushes.iter().enumerate() {
             let name = format!("pushes[{i}]");
-            check(p.start.is_finite() && p.start >= 0.0, &name, "start must be ≥ 0")?;
+            check(
+                p.start.is_finite() && p.start >= 0.0,
+                &name,
+                "start must be ≥ 0",
+            )?;
             check(finite_nonneg(p.duration), &name, "duration must be ≥ 0")?;
-            check(p.wrench.iter().all(|w| w.is_finite()), &name, "wrench must be finite")?;
+            check(
+                p.wrench.iter().all(|w| w.is_finite()),
+                &name,
+                "wrench must be finite",
+            )?;
         }
-        check(self.fall.min_base_height.is_finite(), "fall.min_base_height", "must be finite")?;
-        check(self.fall.max_tilt.is_finite() && self.fall.max_tilt > 0.0, "fall.max_tilt", "must be > 0")?;
+        check(
+            self.fall.min_base_height.is_finite(),
+            "fall.min_base_height",
+            "must be finite",
+        )?;
+        check(
+            self.fall.max_tilt.is_finite() && self.fall.max_tilt > 0.0,
+            "fall.max_tilt",
+            "must be > 0",
+        )?;
         let s = &self.safety;
-        check(s.max_joint_velocity > 0.0, "safety.max_joint_velocity", "must be > 0")?;
-        check(s.max_base_velocity > 0.0, "safety.max_base_velocity", "must be > 0")?;
-        check(s.max_penetration > 0.0, "safety.max_penetration", "must be > 0")?;
+        check(
+            s.max_joint_velocity > 0.0,
+            "safety.max_joint_velocity",
+            "must be > 0",
+        )?;
+        check(
+            s.max_base_velocity > 0.0,
+            "safety.max_base_velocity",
+            "must be > 0",
+        )?;
+        check(
+            s.max_penetration > 0.0,
+            "safety.max_penetration",
+            "must be > 0",
+        )?;
         Ok(())
     }
 }
 
 fn check_actuator(a: &JointActuatorConfig, p: &str) -> Result<(), SimError> {
-    check(finite_nonneg(a.kp), &format!("{p}.kp"), "must be finite and ≥ 0")?;
-    check(finite_nonneg(a.kd), &format!("{p}.kd"), "must be finite and ≥ 0")?;
-    check(finite_nonneg(a.damping), &format!("{p}.damping"), "must be finite and ≥ 0")?;
-    check(finite_nonneg(a.armature), &format!("{p}.armature"), "must be finite and ≥ 0")?;
+    check(
+        finite_nonneg(a.kp),
+        &format!("{p}.kp"),
+        "must be finite and ≥ 0",
+    )?;
+    check(
+        finite_nonneg(a.kd),
+        &format!("{p}.kd"),
+        "must be finite and ≥ 0",
+    )?;
+    check(
+        finite_nonneg(a.damping),
+        &format!("{p}.damping"),
+        "must be finite and ≥ 0",
+    )?;
+    check(
+        finite_nonneg(a.armature),
+        &format!("{p}.armature"),
+        "must be finite and ≥ 0",
+    )?;
     if let Some(e) = a.effort_limit {
-        check(e > 0.0 && !e.is_nan(), &format!("{p}.effort_limit"), "must be > 0")?;
+        check(
+            e > 0.0 && !e.is_nan(),
+            &format!("{p}.effort_limit"),
+            "must be > 0",
+        )?;
     }
     Ok(())
 }

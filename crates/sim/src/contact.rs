@@ -21,7 +21,10 @@ impl GroundPlane {
         let [roll, pitch] = config.inclination;
         let rotation = Rotation3::from_axis_angle(&Vector3::x_axis(), roll)
             * Rotation3::from_axis_angle(&Vector3::y_axis(), pitch);
-        Self { origin: Vector3::new(0.0, 0.0, config.height), normal: rotation * Vector3::z() }
+        Self {
+            origin: Vector3::new(0.0, 0.0, config.height),
+            normal: rotation * Vector3::z(),
+        }
     }
 
     /// Signed height of `p` above the plane (negative: below, i.e. penetrating), m.
@@ -70,13 +73,19 @@ pub struct PointLaw {
 
 impl PointLaw {
     /// The 3×3 stiffness (`K`) and damping (`D`) of the point in a given mode (`f = −K Δx − D v`).
-    pub fn matrices(&self, mode: ContactMode, normal: &Vector3<f64>) -> (Matrix3<f64>, Matrix3<f64>) {
+    pub fn matrices(
+        &self,
+        mode: ContactMode,
+        normal: &Vector3<f64>,
+    ) -> (Matrix3<f64>, Matrix3<f64>) {
         let nn = normal * normal.transpose();
         match mode {
             ContactMode::Separated => (Matrix3::zeros(), Matrix3::zeros()),
             ContactMode::Sticking => (
-                Matrix3::identity() * self.tangential_stiffness + nn * (self.normal_stiffness - self.tangential_stiffness),
-                Matrix3::identity() * self.tangential_damping + nn * (self.normal_damping - self.tangential_damping),
+                Matrix3::identity() * self.tangential_stiffness
+                    + nn * (self.normal_stiffness - self.tangential_stiffness),
+                Matrix3::identity() * self.tangential_damping
+                    + nn * (self.normal_damping - self.tangential_damping),
             ),
             ContactMode::Sliding => (nn * self.normal_stiffness, nn * self.normal_damping),
         }
@@ -119,7 +128,11 @@ pub fn surface_points(surface: &ContactSurfaceConfig, contact: &ContactConfig) -
             let weight = wx * wy;
             let share = area * weight;
             points.push(PointSpec {
-                local: Vector3::new(surface.offset[0] + x, surface.offset[1] + y, surface.offset[2]),
+                local: Vector3::new(
+                    surface.offset[0] + x,
+                    surface.offset[1] + y,
+                    surface.offset[2],
+                ),
                 weight,
                 law: PointLaw {
                     normal_stiffness: contact.normal_stiffness * share,
@@ -152,7 +165,10 @@ mod tests {
 
     #[test]
     fn inclined_plane_descends_along_x_for_positive_pitch() {
-        let g = GroundPlane::from_config(&GroundConfig { height: 0.0, inclination: [0.0, 0.1] });
+        let g = GroundPlane::from_config(&GroundConfig {
+            height: 0.0,
+            inclination: [0.0, 0.1],
+        });
         assert!(g.height_of(&Vector3::new(1.0, 0.0, 0.0)) > 0.0);
         assert!((g.normal.norm() - 1.0).abs() < 1e-15);
         let p = Vector3::new(0.3, 0.2, 0.5);

@@ -29,12 +29,14 @@ mod noise;
 mod robot;
 
 pub use config::{
-    ActuationConfig, ActuationMode, ContactConfig, ContactSurfaceConfig, EffortLimitPolicy, FallConfig,
-    GroundConfig, IntegratorKind, JointActuatorConfig, JointActuatorOverride, NoiseConfig, PushConfig,
-    SafetyConfig, SensorConfig, SimConfig,
+    ActuationConfig, ActuationMode, ContactConfig, ContactSurfaceConfig, EffortLimitPolicy,
+    FallConfig, GroundConfig, IntegratorKind, JointActuatorConfig, JointActuatorOverride,
+    NoiseConfig, PushConfig, SafetyConfig, SensorConfig, SimConfig,
 };
 pub use contact::{surface_points, trapezoid_nodes, ContactMode, GroundPlane, PointLaw, PointSpec};
 pub use error::SimError;
 pub use linalg::{cholesky_in_place, cholesky_solve_in_place};
 pub use noise::GaussianNoise;
-pub use robot::{ContactPointState, ImuMeasurement, SimInput, SimOutput, SimRobot, SurfaceMeasurement};
+pub use robot::{
+    ContactPointState, ImuMeasurement, SimInput, SimOutput, SimRobot, SurfaceMeasurement,
+};

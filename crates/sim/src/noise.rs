@@ -14,7 +14,10 @@ pub struct GaussianNoise {
 impl GaussianNoise {
     /// A generator started from `seed`.
     pub fn new(seed: u64) -> Self {
-        Self { rng: ChaCha8Rng::seed_from_u64(seed), seed }
+        Self {
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            seed,
+        }
     }
 
     /// Restarts the sequence from the seed.

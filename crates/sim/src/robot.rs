@@ -7,7 +7,9 @@ use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Matrix6, UnitQuaternion, Ve
 use stride_block::Block;
 use stride_model::{ExternalWrench, FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 
-use crate::config::{ActuationMode, EffortLimitPolicy, IntegratorKind, JointActuatorConfig, PushConfig, SimConfig};
+use crate::config::{
+    ActuationMode, EffortLimitPolicy, IntegratorKind, JointActuatorConfig, PushConfig, SimConfig,
+};
 use crate::contact::{surface_points, ContactMode, GroundPlane, PointLaw};
 use crate::error::SimError;
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place};
@@ -41,7 +43,11 @@ impl SimInput {
     /// Commands that hold the given joint positions (zero velocity and feed-forward).
     pub fn hold(joint_positions: &DVector<f64>) -> Self {
         let n = joint_positions.len();
-        Self { joint_positions: joint_positions.clone(), joint_velocities: DVector::zeros(n), joint_torques: DVector::zeros(n) }
+        Self {
+            joint_positions: joint_positions.clone(),
+            joint_velocities: DVector::zeros(n),
+            joint_torques: DVector::zeros(n),
+        }
     }
 }
 
@@ -147,6 +153,8 @@ struct Surface {
     twist: Vector6<f64>,
     ft_pose: Isometry3<f64>,
     jacobian: DMatrix<f64>,
+    /// Indices of the non-zero columns of `jacobian`.
+    columns: Vec<usize>,
     scratch: DMatrix<f64>,
     acceleration: Vector6<f64>,
     wrench: Vector6<f64>,
@@ -276,7 +284,12 @@ impl SimRobot {
     pub fn new(model: Arc<Model>, config: SimConfig) -> Result<Self, SimError> {
         config.validate()?;
         if config.integrator == IntegratorKind::Explicit
-            && (config.actuation.default.armature > 0.0 || config.actuation.joints.iter().any(|j| j.armature.unwrap_or(0.0) > 0.0))
+            && (config.actuation.default.armature > 0.0
+                || config
+                    .actuation
+                    .joints
+                    .iter()
+                    .any(|j| j.armature.unwrap_or(0.0) > 0.0))
         {
             return Err(SimError::InvalidConfig {
                 parameter: "actuation.armature".into(),
@@ -300,10 +313,12 @@ impl SimRobot {
             .map(|j| resolve_actuator(&config.actuation.default, j.effort_limit))
             .collect();
         for o in &config.actuation.joints {
-            let index = model.joint_index(&o.name).ok_or_else(|| SimError::UnknownJoint {
-                parameter: "actuation.joints".into(),
-                joint: o.name.clone(),
-            })?;
+            let index = model
+                .joint_index(&o.name)
+                .ok_or_else(|| SimError::UnknownJoint {
+                    parameter: "actuation.joints".into(),
+                    joint: o.name.clone(),
+                })?;
             let a = &mut actuators[index];
             if let Some(m) = o.mode {
                 a.mode = m;
@@ -331,7 +346,10 @@ impl SimRobot {
         for (si, sc) in config.contact.surfaces.iter().enumerate() {
             let frame = find_frame(&format!("contact.surfaces[{}].frame", sc.name), &sc.frame)?;
             let ft_frame = match &sc.ft_sensor {
-                Some(name) => Some(find_frame(&format!("contact.surfaces[{}].ft_sensor", sc.name), name)?),
+                Some(name) => Some(find_frame(
+                    &format!("contact.surfaces[{}].ft_sensor", sc.name),
+                    name,
+                )?),
                 None => None,
             };
             let specs = surface_points(sc, &config.contact);
@@ -344,6 +362,7 @@ impl SimRobot {
                 twist: Vector6::zeros(),
                 ft_pose: Isometry3::identity(),
                 jacobian: DMatrix::zeros(6, nv),
+                columns: Vec::with_capacity(nv),
                 scratch: DMatrix::zeros(6, nv),
                 acceleration: Vector6::zeros(),
                 wrench: Vector6::zeros(),
@@ -513,8 +532,15 @@ impl SimRobot {
     /// Schedules an additional push. Allocates (call it between runs, not in a real-time loop).
     pub fn add_push(&mut self, push: &PushConfig) -> Result<(), SimError> {
         let p = make_push(&self.model, push, "push.frame")?;
-        if !push.start.is_finite() || !push.duration.is_finite() || push.duration < 0.0 || !push.wrench.iter().all(|w| w.is_finite()) {
-            return Err(SimError::InvalidConfig { parameter: "push".into(), message: "non-finite or negative values".into() });
+        if !push.start.is_finite()
+            || !push.duration.is_finite()
+            || push.duration < 0.0
+            || !push.wrench.iter().all(|w| w.is_finite())
+        {
+            return Err(SimError::InvalidConfig {
+                parameter: "push".into(),
+                message: "non-finite or negative values".into(),
+            });
         }
         self.pushes.push(p);
         self.config.pushes.push(push.clone());
@@ -528,11 +554,18 @@ impl SimRobot {
     }
 
     /// Changes one joint's actuator at run time (e.g. switch a joint to torque mode).
-    pub fn set_joint_actuator(&mut self, joint: &str, actuator: &JointActuatorConfig) -> Result<(), SimError> {
-        let index = self.model.joint_index(joint).ok_or_else(|| SimError::UnknownJoint {
-            parameter: "set_joint_actuator".into(),
-            joint: joint.to_string(),
-        })?;
+    pub fn set_joint_actuator(
+        &mut self,
+        joint: &str,
+        actuator: &JointActuatorConfig,
+    ) -> Result<(), SimError> {
+        let index = self
+            .model
+            .joint_index(joint)
+            .ok_or_else(|| SimError::UnknownJoint {
+                parameter: "set_joint_actuator".into(),
+                joint: joint.to_string(),
+            })?;
         if self.config.integrator == IntegratorKind::Explicit && actuator.armature > 0.0 {
             return Err(SimError::InvalidConfig {
                 parameter: "armature".into(),
@@ -551,7 +584,9 @@ impl SimRobot {
         self.state.base_pose = state.base_pose;
         self.state.base_velocity = state.base_velocity;
         self.state.joint_positions.copy_from(&state.joint_positions);
-        self.state.joint_velocities.copy_from(&state.joint_velocities);
+        self.state
+            .joint_velocities
+            .copy_from(&state.joint_velocities);
         for p in &mut self.points {
             p.anchor = None;
         }
@@ -573,7 +608,10 @@ impl SimRobot {
     /// at x = y = 0) so that its lowest contact points sink into the ground by the static penetration expected
     /// under the robot's weight (`m g / Σ k` over the lowest points, within 0.1 mm of the lowest). Makes this the
     /// initial state and returns it.
-    pub fn set_standing_on_ground(&mut self, joint_positions: &DVector<f64>) -> Result<RobotState, SimError> {
+    pub fn set_standing_on_ground(
+        &mut self,
+        joint_positions: &DVector<f64>,
+    ) -> Result<RobotState, SimError> {
         let mut state = RobotState::zero(&self.model);
         if joint_positions.len() != state.joint_positions.len() {
             return Err(SimError::Dimension {
@@ -588,19 +626,29 @@ impl SimRobot {
         let mut lowest = f64::INFINITY;
         for p in &self.points {
             let pose = self.kd.frame_pose(self.surfaces[p.surface].frame);
-            lowest = lowest.min(self.ground.height_of(&(pose * nalgebra::Point3::from(p.local)).coords));
+            lowest = lowest.min(
+                self.ground
+                    .height_of(&(pose * nalgebra::Point3::from(p.local)).coords),
+            );
         }
         if lowest.is_finite() {
             let mut stiffness = 0.0;
             for p in &self.points {
                 let pose = self.kd.frame_pose(self.surfaces[p.surface].frame);
-                let h = self.ground.height_of(&(pose * nalgebra::Point3::from(p.local)).coords);
+                let h = self
+                    .ground
+                    .height_of(&(pose * nalgebra::Point3::from(p.local)).coords);
                 if h < lowest + 1e-4 {
                     stiffness += p.law.normal_stiffness;
                 }
             }
-            let weight = self.model.total_mass() * (-self.gravity.dot(&self.ground.normal)).max(0.0);
-            let sink = if stiffness > 0.0 { weight / stiffness } else { 0.0 };
+            let weight =
+                self.model.total_mass() * (-self.gravity.dot(&self.ground.normal)).max(0.0);
+            let sink = if stiffness > 0.0 {
+                weight / stiffness
+            } else {
+                0.0
+            };
             let shift = self.ground.normal * (-(lowest + sink));
             state.base_pose.translation.vector += shift;
         }
@@ -610,24 +658,47 @@ impl SimRobot {
 
     fn check_state(&self, state: &RobotState) -> Result<(), SimError> {
         let n = self.model.dof();
-        for (what, len) in [("joint_positions", state.joint_positions.len()), ("joint_velocities", state.joint_velocities.len())] {
+        for (what, len) in [
+            ("joint_positions", state.joint_positions.len()),
+            ("joint_velocities", state.joint_velocities.len()),
+        ] {
             if len != n {
-                return Err(SimError::Dimension { what, expected: n, actual: len });
+                return Err(SimError::Dimension {
+                    what,
+                    expected: n,
+                    actual: len,
+                });
             }
         }
-        let pose_ok = state.base_pose.translation.vector.iter().all(|x| x.is_finite())
-            && state.base_pose.rotation.coords.iter().all(|x| x.is_finite());
+        let pose_ok = state
+            .base_pose
+            .translation
+            .vector
+            .iter()
+            .all(|x| x.is_finite())
+            && state
+                .base_pose
+                .rotation
+                .coords
+                .iter()
+                .all(|x| x.is_finite());
         if !pose_ok {
             return Err(SimError::NonFiniteState { what: "base pose" });
         }
         if !state.base_velocity.iter().all(|x| x.is_finite()) {
-            return Err(SimError::NonFiniteState { what: "base velocity" });
+            return Err(SimError::NonFiniteState {
+                what: "base velocity",
+            });
         }
         if !state.joint_positions.iter().all(|x| x.is_finite()) {
-            return Err(SimError::NonFiniteState { what: "joint positions" });
+            return Err(SimError::NonFiniteState {
+                what: "joint positions",
+            });
         }
         if !state.joint_velocities.iter().all(|x| x.is_finite()) {
-            return Err(SimError::NonFiniteState { what: "joint velocities" });
+            return Err(SimError::NonFiniteState {
+                what: "joint velocities",
+            });
         }
         Ok(())
     }
@@ -644,7 +715,11 @@ impl SimRobot {
                 p.anchor = None;
             }
             // Explicit estimate of the current forces for the initial output.
-            p.mode = if p.penetration > 0.0 { ContactMode::Sticking } else { ContactMode::Separated };
+            p.mode = if p.penetration > 0.0 {
+                ContactMode::Sticking
+            } else {
+                ContactMode::Separated
+            };
             let f = explicit_point_force(p, &self.ground);
             p.force = f.0;
             p.mode = f.1;
@@ -686,23 +761,49 @@ impl SimRobot {
             ("joint torque commands", input.joint_torques.len()),
         ] {
             if len != n {
-                return Err(SimError::Dimension { what, expected: n, actual: len });
+                return Err(SimError::Dimension {
+                    what,
+                    expected: n,
+                    actual: len,
+                });
             }
         }
         for (j, a) in self.actuators.iter().enumerate() {
             let name = || self.model.joints()[j].name.clone();
-            let (qd, vd, tau) = (input.joint_positions[j], input.joint_velocities[j], input.joint_torques[j]);
+            let (qd, vd, tau) = (
+                input.joint_positions[j],
+                input.joint_velocities[j],
+                input.joint_torques[j],
+            );
             if a.mode == ActuationMode::Position && !qd.is_finite() {
-                return Err(SimError::NonFiniteCommand { what: "position", joint: name(), value: qd });
+                return Err(SimError::NonFiniteCommand {
+                    what: "position",
+                    joint: name(),
+                    value: qd,
+                });
             }
             if a.mode != ActuationMode::Torque && !vd.is_finite() {
-                return Err(SimError::NonFiniteCommand { what: "velocity", joint: name(), value: vd });
+                return Err(SimError::NonFiniteCommand {
+                    what: "velocity",
+                    joint: name(),
+                    value: vd,
+                });
             }
             if !tau.is_finite() {
-                return Err(SimError::NonFiniteCommand { what: "torque", joint: name(), value: tau });
+                return Err(SimError::NonFiniteCommand {
+                    what: "torque",
+                    joint: name(),
+                    value: tau,
+                });
             }
-            if self.config.actuation.effort_limit_policy == EffortLimitPolicy::Error && tau.abs() > a.limit {
-                return Err(SimError::EffortLimit { joint: name(), torque: tau, limit: a.limit });
+            if self.config.actuation.effort_limit_policy == EffortLimitPolicy::Error
+                && tau.abs() > a.limit
+            {
+                return Err(SimError::EffortLimit {
+                    joint: name(),
+                    torque: tau,
+                    limit: a.limit,
+                });
             }
         }
         Ok(())
@@ -718,10 +819,14 @@ impl SimRobot {
                 match self.config.integrator {
                     IntegratorKind::Implicit => {
                         self.kd.frame_jacobian(p.frame, &mut self.push_jacobian)?;
-                        self.external_forces.gemv_tr(1.0, &self.push_jacobian, &p.wrench, 1.0);
+                        self.external_forces
+                            .gemv_tr(1.0, &self.push_jacobian, &p.wrench, 1.0);
                     }
                     IntegratorKind::Explicit => {
-                        self.wrenches.push(ExternalWrench { frame: p.frame, wrench: p.wrench });
+                        self.wrenches.push(ExternalWrench {
+                            frame: p.frame,
+                            wrench: p.wrench,
+                        });
                     }
                 }
             }
@@ -731,12 +836,20 @@ impl SimRobot {
 
     /// One implicit step: fills `acceleration`, point forces and motor torques. Returns the number of solves.
     fn solve_implicit(&mut self, input: &SimInput) -> Result<usize, SimError> {
-        let dt = self.dt;
         self.kd.mass_matrix(&mut self.mass)?;
         self.kd.bias_forces(&mut self.bias)?;
         for s in &mut self.surfaces {
-            s.jacobian.fill(0.0);
             self.kd.frame_jacobian(s.frame, &mut s.jacobian)?;
+            s.columns.clear();
+            for c in 0..s.jacobian.ncols() {
+                if s.jacobian
+                    .fixed_view::<6, 1>(0, c)
+                    .iter()
+                    .any(|x| *x != 0.0)
+                {
+                    s.columns.push(c);
+                }
+            }
         }
         for p in &mut self.points {
             if p.penetration > 0.0 {
@@ -754,7 +867,9 @@ impl SimRobot {
         loop {
             self.assemble_implicit(input);
             if !cholesky_in_place(&mut self.system) {
-                return Err(SimError::NotPositiveDefinite { time: self.time_ns as f64 * 1e-9 });
+                return Err(SimError::NotPositiveDefinite {
+                    time: self.time_ns as f64 * 1e-9,
+                });
             }
             self.acceleration.copy_from(&self.rhs);
             cholesky_solve_in_place(&self.system, &mut self.acceleration);
@@ -813,11 +928,13 @@ impl SimRobot {
                 let n = self.ground.normal;
                 let (k, d) = p.law.matrices(p.mode, &n);
                 let vn = n.dot(&p.velocity);
-                let mut f0 = n * (p.law.normal_stiffness * p.penetration - p.law.normal_damping * vn);
+                let mut f0 =
+                    n * (p.law.normal_stiffness * p.penetration - p.law.normal_damping * vn);
                 match p.mode {
                     ContactMode::Sticking => {
                         let anchor = p.anchor.unwrap_or(p.position);
-                        f0 -= self.ground.tangential(&(p.position - anchor)) * p.law.tangential_stiffness;
+                        f0 -= self.ground.tangential(&(p.position - anchor))
+                            * p.law.tangential_stiffness;
                         f0 -= self.ground.tangential(&p.velocity) * p.law.tangential_damping;
                     }
                     ContactMode::Sliding => {
@@ -837,9 +954,20 @@ impl SimRobot {
             }
             let g6 = k6 * (dt * dt) + d6 * dt;
             let w = w0 - k6 * s.twist * dt;
-            g6.mul_to(&s.jacobian, &mut s.scratch);
-            self.system.gemm_tr(1.0, &s.jacobian, &s.scratch, 1.0);
-            self.rhs.gemv_tr(1.0, &s.jacobian, &w, 1.0);
+            // Jᵀ G J and Jᵀ w over the non-zero columns of J only (the joints that move the surface).
+            for &c in &s.columns {
+                let col = s.jacobian.fixed_view::<6, 1>(0, c);
+                s.scratch
+                    .fixed_view_mut::<6, 1>(0, c)
+                    .copy_from(&(g6 * col));
+                self.rhs[c] += col.dot(&w);
+            }
+            for &c in &s.columns {
+                let gc = s.scratch.fixed_view::<6, 1>(0, c);
+                for &r in &s.columns {
+                    self.system[(r, c)] += s.jacobian.fixed_view::<6, 1>(0, r).dot(&gc);
+                }
+            }
         }
     }
 
@@ -873,7 +1001,9 @@ impl SimRobot {
         let n = self.ground.normal;
         for s in &mut self.surfaces {
             s.acceleration = Vector6::zeros();
-            s.acceleration.gemv(1.0, &s.jacobian, &self.acceleration, 0.0);
+            for &c in &s.columns {
+                s.acceleration += s.jacobian.fixed_view::<6, 1>(0, c) * self.acceleration[c];
+            }
         }
         for p in &mut self.points {
             if p.mode == ContactMode::Separated {
@@ -914,10 +1044,13 @@ impl SimRobot {
                         p.mode = ContactMode::Sticking;
                         p.anchor = Some(
                             self.ground.project(&p.position)
-                                + p.slide_direction * (mu * p.normal_force_estimate / p.law.tangential_stiffness),
+                                + p.slide_direction
+                                    * (mu * p.normal_force_estimate / p.law.tangential_stiffness),
                         );
                         changed = true;
-                    } else if (fn_end - p.normal_force_estimate).abs() > 1e-6 * (1.0 + p.normal_force_estimate) {
+                    } else if (fn_end - p.normal_force_estimate).abs()
+                        > 1e-6 * (1.0 + p.normal_force_estimate)
+                    {
                         p.normal_force_estimate = fn_end;
                         changed = true;
                     }
@@ -966,33 +1099,49 @@ impl SimRobot {
             p.mode = mode;
             p.velocity_end = p.velocity;
             if mode == ContactMode::Sliding {
-                p.anchor = Some(self.ground.project(&p.position) + self.ground.tangential(&f) / p.law.tangential_stiffness);
+                p.anchor = Some(
+                    self.ground.project(&p.position)
+                        + self.ground.tangential(&f) / p.law.tangential_stiffness,
+                );
             }
             let s = &mut self.surfaces[p.surface];
             s.wrench += join(&f, &p.arm.cross(&f));
         }
         for s in &self.surfaces {
             if s.wrench != Vector6::zeros() {
-                self.wrenches.push(ExternalWrench { frame: s.frame, wrench: s.wrench });
+                self.wrenches.push(ExternalWrench {
+                    frame: s.frame,
+                    wrench: s.wrench,
+                });
             }
         }
         for j in 0..n {
             self.joint_torque_buffer[j] = self.motor_torques[j] - self.actuators[j].damping * qd[j];
         }
-        self.kd.forward_dynamics(&self.joint_torque_buffer, &self.wrenches, &mut self.acceleration)?;
+        self.kd.forward_dynamics(
+            &self.joint_torque_buffer,
+            &self.wrenches,
+            &mut self.acceleration,
+        )?;
         Ok(1)
     }
 
     /// Fills the output from the committed state and the forces of the last step.
-    fn update_output(&mut self, imu_acceleration: Option<Vector3<f64>>, solves: usize) -> Result<(), SimError> {
+    fn update_output(
+        &mut self,
+        imu_acceleration: Option<Vector3<f64>>,
+        solves: usize,
+    ) -> Result<(), SimError> {
         let noise_cfg = self.config.sensors.noise.clone();
         let out = &mut self.output;
         out.time = Duration::from_nanos(self.time_ns);
-        out.state.clone_from(&self.state);
+        copy_state(&mut out.state, &self.state);
         out.solves = solves;
         for j in 0..self.state.joint_positions.len() {
-            out.joint_positions[j] = self.state.joint_positions[j] + self.noise.sample(noise_cfg.joint_position);
-            out.joint_velocities[j] = self.state.joint_velocities[j] + self.noise.sample(noise_cfg.joint_velocity);
+            out.joint_positions[j] =
+                self.state.joint_positions[j] + self.noise.sample(noise_cfg.joint_position);
+            out.joint_velocities[j] =
+                self.state.joint_velocities[j] + self.noise.sample(noise_cfg.joint_velocity);
             out.joint_torques[j] = self.motor_torques[j];
             out.saturated[j] = self.saturated[j];
         }
@@ -1004,7 +1153,10 @@ impl SimRobot {
             let mut w = Vector6::zeros();
             let mut w_ft = Vector6::zeros();
             let mut in_contact = false;
-            for (pi, p) in self.points[s.first_point..s.first_point + s.point_count].iter().enumerate() {
+            for (pi, p) in self.points[s.first_point..s.first_point + s.point_count]
+                .iter()
+                .enumerate()
+            {
                 let f = p.force;
                 if f != Vector3::zeros() {
                     in_contact = true;
@@ -1019,8 +1171,10 @@ impl SimRobot {
                 cp.mode = p.mode;
             }
             let r_ft = s.ft_pose.rotation;
-            let f_s = r_ft.inverse_transform_vector(&lin(&w_ft)) + self.noise.sample3(noise_cfg.force);
-            let t_s = r_ft.inverse_transform_vector(&ang(&w_ft)) + self.noise.sample3(noise_cfg.torque);
+            let f_s =
+                r_ft.inverse_transform_vector(&lin(&w_ft)) + self.noise.sample3(noise_cfg.force);
+            let t_s =
+                r_ft.inverse_transform_vector(&ang(&w_ft)) + self.noise.sample3(noise_cfg.torque);
             let m = &mut out.surfaces[si];
             m.in_contact = in_contact;
             m.wrench = w;
@@ -1045,16 +1199,19 @@ impl SimRobot {
         let rot = pose.rotation;
         let orientation_noise = self.noise.sample3(noise_cfg.orientation);
         out.imu.orientation = rot * UnitQuaternion::from_scaled_axis(orientation_noise);
-        out.imu.angular_velocity = rot.inverse_transform_vector(&ang(&vel)) + self.noise.sample3(noise_cfg.gyroscope);
-        out.imu.proper_acceleration =
-            rot.inverse_transform_vector(&(acc_world - self.gravity)) + self.noise.sample3(noise_cfg.accelerometer);
+        out.imu.angular_velocity =
+            rot.inverse_transform_vector(&ang(&vel)) + self.noise.sample3(noise_cfg.gyroscope);
+        out.imu.proper_acceleration = rot.inverse_transform_vector(&(acc_world - self.gravity))
+            + self.noise.sample3(noise_cfg.accelerometer);
 
         // Fall detection.
         let base = &self.state.base_pose;
         let height = self.ground.height_of(&base.translation.vector);
         let z_axis = base.rotation * Vector3::z();
         let tilt = z_axis.dot(&n).clamp(-1.0, 1.0).acos();
-        if self.fall_time_ns.is_none() && (height < self.config.fall.min_base_height || tilt > self.config.fall.max_tilt) {
+        if self.fall_time_ns.is_none()
+            && (height < self.config.fall.min_base_height || tilt > self.config.fall.max_tilt)
+        {
             self.fall_time_ns = Some(self.time_ns);
         }
         out.fallen = self.fall_time_ns.is_some();
@@ -1104,12 +1261,23 @@ impl SimRobot {
         let pose_ok = s.base_pose.translation.vector.iter().all(|x| x.is_finite())
             && s.base_pose.rotation.coords.iter().all(|x| x.is_finite());
         if !pose_ok {
-            return Err(SimError::Diverged { time, what: "base pose", name: "base".into(), value: f64::NAN, bound: f64::NAN });
+            return Err(SimError::Diverged {
+                time,
+                what: "base pose",
+                name: "base".into(),
+                value: f64::NAN,
+                bound: f64::NAN,
+            });
         }
         for (i, p) in self.points.iter().enumerate() {
-            if !(p.penetration <= limits.max_penetration) || !p.force.iter().all(|x| x.is_finite()) {
+            if !(p.penetration <= limits.max_penetration) || !p.force.iter().all(|x| x.is_finite())
+            {
                 let s = &self.surfaces[p.surface];
-                let name = format!("{}[{}]", self.config.contact.surfaces[p.surface].name, i - s.first_point);
+                let name = format!(
+                    "{}[{}]",
+                    self.config.contact.surfaces[p.surface].name,
+                    i - s.first_point
+                );
                 return Err(SimError::Diverged {
                     time,
                     what: "contact penetration",
@@ -1143,15 +1311,20 @@ impl SimRobot {
         };
         // New velocities and configuration.
         let dt = self.dt;
-        self.next_state.clone_from(&self.state);
+        copy_state(&mut self.next_state, &self.state);
         for i in 0..6 {
             self.next_state.base_velocity[i] += dt * self.acceleration[i];
         }
         for j in 0..self.model.dof() {
             self.next_state.joint_velocities[j] += dt * self.acceleration[6 + j];
         }
-        let integrated = self.next_state.integrate(&self.model, VelocityRepresentation::Mixed, dt);
-        if let Err(e) = integrated.map_err(SimError::from).and_then(|_| self.check_divergence()) {
+        let integrated = self
+            .next_state
+            .integrate(&self.model, VelocityRepresentation::Mixed, dt);
+        if let Err(e) = integrated
+            .map_err(SimError::from)
+            .and_then(|_| self.check_divergence())
+        {
             self.restore_after_failure();
             return Err(e);
         }
@@ -1162,7 +1335,10 @@ impl SimRobot {
                 ContactMode::Sticking => {}
                 ContactMode::Sliding => {
                     let end = p.position + p.velocity_end * dt;
-                    p.anchor = Some(self.ground.project(&end) + self.ground.tangential(&p.force) / p.law.tangential_stiffness);
+                    p.anchor = Some(
+                        self.ground.project(&end)
+                            + self.ground.tangential(&p.force) / p.law.tangential_stiffness,
+                    );
                 }
             }
         }
@@ -1186,6 +1362,14 @@ impl SimRobot {
         // The state was not modified; re-synchronise the kinematics (cannot fail for a state that was accepted).
         let _ = self.update_kinematics();
     }
+}
+
+/// `dst = src` without allocating (the derived `clone_from` of `RobotState` reallocates its vectors).
+fn copy_state(dst: &mut RobotState, src: &RobotState) {
+    dst.base_pose = src.base_pose;
+    dst.base_velocity = src.base_velocity;
+    dst.joint_positions.copy_from(&src.joint_positions);
+    dst.joint_velocities.copy_from(&src.joint_velocities);
 }
 
 fn add_point_matrix(m6: &mut Matrix6<f64>, k: &Matrix3<f64>, r: &Matrix3<f64>) {
@@ -1226,7 +1410,11 @@ fn explicit_point_force(p: &Point, ground: &GroundPlane) -> (Vector3<f64>, Conta
 }
 
 fn resolve_actuator(c: &JointActuatorConfig, model_limit: f64) -> Actuator {
-    let model_limit = if model_limit.is_finite() && model_limit > 0.0 { model_limit } else { f64::INFINITY };
+    let model_limit = if model_limit.is_finite() && model_limit > 0.0 {
+        model_limit
+    } else {
+        f64::INFINITY
+    };
     Actuator {
         mode: c.mode,
         kp: c.kp,
@@ -1238,13 +1426,20 @@ fn resolve_actuator(c: &JointActuatorConfig, model_limit: f64) -> Actuator {
 }
 
 fn make_push(model: &Model, p: &PushConfig, parameter: &str) -> Result<Push, SimError> {
-    let frame = model.frame_id(&p.frame).ok_or_else(|| SimError::UnknownFrame {
-        parameter: parameter.to_string(),
-        frame: p.frame.clone(),
-        model: model.name().to_string(),
-    })?;
+    let frame = model
+        .frame_id(&p.frame)
+        .ok_or_else(|| SimError::UnknownFrame {
+            parameter: parameter.to_string(),
+            frame: p.frame.clone(),
+            model: model.name().to_string(),
+        })?;
     let start_ns = secs_to_ns(p.start);
-    Ok(Push { frame, start_ns, end_ns: start_ns + secs_to_ns(p.duration), wrench: Vector6::from_row_slice(&p.wrench) })
+    Ok(Push {
+        frame,
+        start_ns,
+        end_ns: start_ns + secs_to_ns(p.duration),
+        wrench: Vector6::from_row_slice(&p.wrench),
+    })
 }
 
 impl Block for SimRobot {

@@ -1,1 +1,105 @@
-fn main() {}
+//! Benchmarks: DCM PI step, ZMP-CoM step, whole block tick, DCM MPC with a 2 s horizon at 100 Hz.
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use nalgebra::Vector2;
+use stride_block::Block;
+use stride_simplified::*;
+
+const OMEGA: f64 = 4.302_325_511_579_751;
+
+fn foot() -> SupportPolygon {
+    SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap()
+}
+
+fn horizon(samples: usize, transfer: bool) -> DcmHorizon {
+    let foot = foot();
+    let both = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.19).unwrap();
+    let mut horizon = DcmHorizon::with_capacity(samples);
+    let center = Vector2::new(0.01, 0.0);
+    for k in 0..samples {
+        let (support, zmp) = if k < 30 || !transfer {
+            (foot, center)
+        } else {
+            let s = ((k - 30) as f64 / 20.0).min(1.0);
+            (both, center + Vector2::new(0.0, 0.08 * s))
+        };
+        horizon.push(HorizonSample { dcm_position: zmp, zmp, support }).unwrap();
+    }
+    horizon
+}
+
+fn benches(c: &mut Criterion) {
+    let support = foot();
+    let mut pi = DcmInstantaneousController::new(DcmInstantaneousConfig { ki: 0.5, ..Default::default() }).unwrap();
+    c.bench_function("dcm_pi_step", |b| {
+        b.iter(|| {
+            pi.step(
+                black_box(Vector2::new(0.01, 0.0)),
+                black_box(Vector2::new(0.05, 0.01)),
+                black_box(Vector2::new(0.012, 0.001)),
+                OMEGA,
+                &support,
+                0.01,
+            )
+            .unwrap()
+        })
+    });
+    let mut zc = ZmpComController::new(ZmpComConfig::default()).unwrap();
+    c.bench_function("zmp_com_step", |b| {
+        b.iter(|| {
+            zc.step(
+                true,
+                OMEGA,
+                black_box(Vector2::new(0.01, 0.0)),
+                black_box(Vector2::new(0.012, 0.001)),
+                black_box(Vector2::new(0.0, 0.0)),
+                black_box(Vector2::new(0.1, 0.0)),
+                black_box(Vector2::new(0.001, 0.0)),
+                0.01,
+            )
+            .unwrap()
+        })
+    });
+    let config = SimplifiedConfig::default();
+    let mut block = SimplifiedController::new(&config, Duration::from_millis(10)).unwrap();
+    let mut input = SimplifiedInput::new(0, support);
+    input.omega = OMEGA;
+    input.walking = true;
+    input.measured_dcm = Vector2::new(0.003, 0.0);
+    c.bench_function("block_step_instantaneous", |b| b.iter(|| *block.step(black_box(&input)).unwrap()));
+
+    for (name, transfer, push) in [
+        ("dcm_mpc_2s_100hz_nominal", false, Vector2::new(0.003, 0.0)),
+        ("dcm_mpc_2s_100hz_constrained", true, Vector2::new(0.05, 0.0)),
+    ] {
+        let mut mpc = DcmPredictiveController::new(DcmPredictiveConfig::default(), 0.01).unwrap();
+        let h = horizon(mpc.horizon_samples(), transfer);
+        let dcm = Vector2::new(0.01, 0.0) + push;
+        let out = mpc.step(OMEGA, dcm, &h, &support).unwrap();
+        eprintln!("{name}: status {:?}, iterations {}", out.diagnostics.status, out.diagnostics.iterations);
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                mpc.reset();
+                mpc.step(OMEGA, black_box(dcm), &h, &support).unwrap()
+            })
+        });
+    }
+    let mut mpc = DcmPredictiveController::new(
+        DcmPredictiveConfig { solver: MpcSolverKind::Clarabel, ..Default::default() },
+        0.01,
+    )
+    .unwrap();
+    let h = horizon(mpc.horizon_samples(), true);
+    let dcm = Vector2::new(0.06, 0.0);
+    c.bench_function("dcm_mpc_2s_100hz_constrained_clarabel", |b| {
+        b.iter(|| {
+            mpc.reset();
+            mpc.step(OMEGA, black_box(dcm), &h, &support).unwrap()
+        })
+    });
+}
+
+criterion_group!(group, benches);
+criterion_main!(group);

@@ -801,7 +801,7 @@ impl Tsid {
                     let zmp = input.desired_zmp.unwrap_or_default();
                     // ground height: mean of the loaded contacts' heights
                     let mut z0 = 0.0;
-                    let mut count = 0.0;
+                    let mut count: f64 = 0.0;
                     for (c, contact) in self.contacts.iter().enumerate() {
                         if variant.offsets[c].is_some() {
                             z0 += contact.pose.translation.vector.z;

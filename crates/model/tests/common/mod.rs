@@ -122,7 +122,9 @@ pub fn humanoid_path() -> PathBuf {
 pub fn humanoid_model() -> Option<Arc<Model>> {
     let path = humanoid_path();
     if path.exists() {
-        Some(Arc::new(Model::from_urdf_file(&path).expect("bundled humanoid loads")))
+        Some(Arc::new(
+            Model::from_urdf_file(&path).expect("bundled humanoid loads"),
+        ))
     } else {
         None
     }

@@ -229,20 +229,6 @@ impl Default for Goal {
     }
 }
 
-/// `[[pushes]]`: an external force applied to a link for a while.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(deny_unknown_fields, default)]
-pub struct Push {
-    /// Start [s].
-    pub start: f64,
-    /// Duration [s].
-    pub duration: f64,
-    /// Force [N] in world orientation, applied at the frame origin.
-    pub force: [f64; 3],
-    /// Frame (link or fixed frame) the force is applied to.
-    pub frame: String,
-}
-
 /// MCAP chunk compression.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -321,6 +307,26 @@ impl Default for EndSection {
     }
 }
 
+/// `[wbc]`: the whole-body controllers; `ik` is used in position mode, `tsid` in torque mode. Their
+/// `period` is set by the runner from `rates.wbc_hz` (writing a different one is an error).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WbcSection {
+    /// Kinematic QP-IK (`stride_wbc::IkConfig`).
+    pub ik: stride_wbc::IkConfig,
+    /// TSID (`stride_wbc::TsidConfig`).
+    pub tsid: stride_wbc::TsidConfig,
+}
+
+impl Default for WbcSection {
+    fn default() -> Self {
+        Self {
+            ik: stride_wbc::IkConfig::default_for_bundled_model(),
+            tsid: stride_wbc::TsidConfig::default_for_bundled_model(),
+        }
+    }
+}
+
 /// A whole scenario. The file may also hold `include = [...]` (see [`load`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
@@ -333,12 +339,33 @@ pub struct ScenarioConfig {
     pub rates: RatesSection,
     /// The goal.
     pub goal: Goal,
-    /// External pushes.
-    pub pushes: Vec<Push>,
+    /// Planner parameters (`stride_planner::PlannerConfig`).
+    pub planner: stride_planner::PlannerConfig,
+    /// Simplified-model layer parameters (`stride_simplified::SimplifiedConfig`).
+    pub simplified: stride_simplified::SimplifiedConfig,
+    /// Whole-body layer parameters.
+    pub wbc: WbcSection,
+    /// Simulator parameters (`stride_sim::SimConfig`), pushes included (`[[sim.pushes]]`).
+    pub sim: stride_sim::SimConfig,
     /// The log.
     pub log: LogSection,
     /// Run endings.
     pub end: EndSection,
+}
+
+/// The dotted key a layer's validation error is about: the section plus the first backquoted or leading
+/// identifier of the message that names one of its keys (best effort; the section otherwise).
+fn layer_key(section: &str, message: &str) -> String {
+    let ident: String = message
+        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '.'))
+        .find(|w| w.contains('_') && w.chars().next().is_some_and(|c| c.is_ascii_lowercase()))
+        .unwrap_or("")
+        .to_string();
+    if ident.is_empty() {
+        section.to_string()
+    } else {
+        format!("{section}.{ident}")
+    }
 }
 
 /// A loaded, validated scenario with its sources (for error locations and relative paths).
@@ -531,18 +558,6 @@ impl Scenario {
             Goal::Stand {} => {}
         }
 
-        for (i, p) in c.pushes.iter().enumerate() {
-            let k = format!("pushes[{i}]");
-            in_range(&format!("{k}.start"), p.start, 0.0, c.scenario.duration, "[s] (within the scenario duration)")?;
-            finite_pos(&format!("{k}.duration"), p.duration, "[s]")?;
-            if p.force.iter().any(|f| !f.is_finite()) {
-                return Err(self.invalid(&format!("{k}.force"), "expected three finite numbers [N]"));
-            }
-            if p.frame.is_empty() {
-                return Err(self.invalid(&format!("{k}.frame"), "empty; expected a link or frame name of the model"));
-            }
-        }
-
         let e = &c.end;
         if !(e.fall_height_fraction > 0.0 && e.fall_height_fraction < 1.0) {
             return Err(self.invalid(
@@ -563,6 +578,39 @@ impl Scenario {
                 ));
             }
         }
+        // Layer periods are derived from [rates]; an explicit, different value is a contradiction.
+        let wbc_period = 1.0 / f64::from(r.wbc_hz);
+        for (key, period) in [("wbc.ik.period", c.wbc.ik.period), ("wbc.tsid.period", c.wbc.tsid.period)] {
+            if self.sources.key_location(key).is_some() && (period - wbc_period).abs() > 1e-12 {
+                return Err(self.invalid(
+                    key,
+                    format!(
+                        "{period} s contradicts rates.wbc_hz = {} Hz; remove this key (the runner sets it) or \
+                         set it to {wbc_period} [s]",
+                        r.wbc_hz
+                    ),
+                ));
+            }
+        }
+        if self.sources.key_location("sim.rate_hz").is_some() && c.sim.rate_hz != r.sim_hz {
+            return Err(self.invalid(
+                "sim.rate_hz",
+                format!(
+                    "{} Hz contradicts rates.sim_hz = {} Hz; remove this key (the runner sets it) or set it to {} [Hz]",
+                    c.sim.rate_hz, r.sim_hz, r.sim_hz
+                ),
+            ));
+        }
+        c.planner
+            .validate()
+            .map_err(|e| self.invalid(&layer_key("planner", &e.to_string()), e.to_string()))?;
+        c.simplified
+            .validate()
+            .map_err(|e| self.invalid(&layer_key("simplified", &e.to_string()), e.to_string()))?;
+        let mut sim = c.sim.clone();
+        sim.rate_hz = r.sim_hz;
+        sim.validate()
+            .map_err(|e| self.invalid(&layer_key("sim", &e.to_string()), e.to_string()))?;
         Ok(())
     }
 
@@ -573,6 +621,13 @@ impl Scenario {
             }
         }
         Ok(())
+    }
+
+    /// The simulator configuration with the runner's rate applied.
+    pub fn sim_config(&self) -> stride_sim::SimConfig {
+        let mut sim = self.config.sim.clone();
+        sim.rate_hz = self.config.rates.sim_hz;
+        sim
     }
 
     /// The merged configuration as TOML text (what logs store).

@@ -1,0 +1,102 @@
+//! After `KinDyn::new`, neither `set_state` nor any computation allocates (counting global allocator).
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+
+use nalgebra::{DMatrix, DVector, Vector6};
+use stride_model::{ExternalWrench, KinDyn, Model, VelocityRepresentation};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn exercise(model: Arc<Model>) {
+    let nv = model.nv();
+    let n = model.dof();
+    let states: Vec<_> = (0..3).map(|k| common::random_state(&model, k)).collect();
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    let frames: Vec<_> = model
+        .frames()
+        .iter()
+        .map(|f| model.frame_id(&f.name).unwrap())
+        .collect();
+    let mut jac = DMatrix::zeros(6, nv);
+    let mut jcom = DMatrix::zeros(3, nv);
+    let mut cmm = DMatrix::zeros(6, nv);
+    let mut mass = DMatrix::zeros(nv, nv);
+    let mut vec_nv = DVector::zeros(nv);
+    let mut acc = DVector::zeros(nv);
+    let nu_dot = common::random_vector(nv, 5, 1.0);
+    let tau = common::random_vector(n, 6, 10.0);
+    let wrenches = [ExternalWrench {
+        frame: frames[frames.len() - 1],
+        wrench: Vector6::new(1.0, 2.0, 3.0, 0.1, 0.2, 0.3),
+    }];
+    let mut integrated = states[0].clone();
+
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let mut sink = 0.0;
+    for rep in [
+        VelocityRepresentation::Mixed,
+        VelocityRepresentation::Body,
+        VelocityRepresentation::Inertial,
+    ] {
+        kd.set_representation(rep);
+        for state in &states {
+            kd.set_state(state).unwrap();
+            for &f in &frames {
+                sink += kd.frame_pose(f).translation.vector.x;
+                sink += kd.relative_transform(frames[0], f).translation.vector.y;
+                sink += kd.frame_velocity(f)[0];
+                sink += kd.frame_bias_acceleration(f)[3];
+                kd.frame_jacobian(f, &mut jac).unwrap();
+            }
+            sink += kd.com_position().x + kd.com_velocity().y + kd.com_bias_acceleration().z;
+            kd.com_jacobian(&mut jcom).unwrap();
+            sink += kd.centroidal_momentum()[4] + kd.centroidal_momentum_bias()[5];
+            kd.centroidal_momentum_matrix(&mut cmm).unwrap();
+            kd.mass_matrix(&mut mass).unwrap();
+            kd.bias_forces(&mut vec_nv).unwrap();
+            kd.gravity_forces(&mut vec_nv).unwrap();
+            kd.inverse_dynamics(&nu_dot, &wrenches, &mut vec_nv)
+                .unwrap();
+            kd.forward_dynamics(&tau, &wrenches, &mut acc).unwrap();
+            kd.state_into(&mut integrated);
+            integrated.integrate(&model, rep, 1e-3).unwrap();
+        }
+    }
+    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    assert!(sink.is_finite());
+    assert_eq!(
+        after - before,
+        0,
+        "{} allocations after KinDyn::new",
+        after - before
+    );
+}
+
+#[test]
+fn no_allocation_after_new() {
+    exercise(common::test_model());
+    exercise(common::humanoid_model().expect("models/stride_humanoid.urdf must exist"));
+}

@@ -1,0 +1,425 @@
+//! Serializable records of what flows between the layers, written to the log and read back by replay.
+//!
+//! Layer types that already derive serde (`SimplifiedInput`, `SimplifiedOutput`, `IkOutput`,
+//! `TsidOutput`) are logged as they are (wall-clock fields zeroed: those go to the `*/timing` topics).
+//! The others get a mirror here with an exact, lossless conversion both ways (f64 values round-trip
+//! bit-exactly through JSON). Vectors are borrowed (`Cow`) when writing so logging does not allocate.
+
+use std::borrow::Cow;
+
+use nalgebra::{DVector, Isometry3, Quaternion, Translation3, UnitQuaternion, Vector2, Vector3, Vector6};
+use serde::{Deserialize, Serialize};
+use stride_model::RobotState;
+use stride_planner::{FootSample, Goal as PlannerGoal, PhaseKind, PlanSample, PlannerInput};
+use stride_wbc::{FootReference, OrientationReference, WbcInput};
+
+/// A pose: position [m] and orientation quaternion `[x, y, z, w]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct PoseRecord {
+    /// Position [m].
+    pub position: [f64; 3],
+    /// Orientation `[x, y, z, w]`.
+    pub orientation_xyzw: [f64; 4],
+}
+
+impl PoseRecord {
+    /// From an isometry.
+    pub fn from_iso(p: &Isometry3<f64>) -> Self {
+        let q = p.rotation.coords;
+        Self {
+            position: [p.translation.x, p.translation.y, p.translation.z],
+            orientation_xyzw: [q.x, q.y, q.z, q.w],
+        }
+    }
+    /// Back to an isometry (bit-exact inverse of [`PoseRecord::from_iso`]).
+    pub fn to_iso(&self) -> Isometry3<f64> {
+        let [x, y, z, w] = self.orientation_xyzw;
+        Isometry3::from_parts(
+            Translation3::new(self.position[0], self.position[1], self.position[2]),
+            UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z)),
+        )
+    }
+}
+
+fn v3(v: &Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+fn v6(v: &Vector6<f64>) -> [f64; 6] {
+    [v[0], v[1], v[2], v[3], v[4], v[5]]
+}
+
+/// Floating-base state (mixed velocities).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StateRecord<'a> {
+    /// Base pose.
+    pub base: PoseRecord,
+    /// Joint positions [rad], model order.
+    pub joint_positions: Cow<'a, [f64]>,
+    /// Base twist `[v; ω]` (mixed) [m/s; rad/s].
+    pub base_velocity: [f64; 6],
+    /// Joint velocities [rad/s].
+    pub joint_velocities: Cow<'a, [f64]>,
+}
+
+impl<'a> StateRecord<'a> {
+    /// Borrowing view of a state.
+    pub fn from_state(s: &'a RobotState) -> Self {
+        Self {
+            base: PoseRecord::from_iso(&s.base_pose),
+            joint_positions: Cow::Borrowed(s.joint_positions.as_slice()),
+            base_velocity: v6(&s.base_velocity),
+            joint_velocities: Cow::Borrowed(s.joint_velocities.as_slice()),
+        }
+    }
+    /// Writes into `s` (sizes must match the model).
+    pub fn to_state(&self, s: &mut RobotState) -> Result<(), String> {
+        if s.joint_positions.len() != self.joint_positions.len()
+            || s.joint_velocities.len() != self.joint_velocities.len()
+        {
+            return Err(format!(
+                "state record has {} joints, the model {}",
+                self.joint_positions.len(),
+                s.joint_positions.len()
+            ));
+        }
+        s.base_pose = self.base.to_iso();
+        s.joint_positions.copy_from_slice(&self.joint_positions);
+        s.base_velocity = Vector6::from_column_slice(&self.base_velocity);
+        s.joint_velocities.copy_from_slice(&self.joint_velocities);
+        Ok(())
+    }
+}
+
+/// `/planner/input`: what the planner block received on an event tick.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlannerInputRecord {
+    /// Time [ns].
+    pub time_ns: u64,
+    /// The new goal, if any.
+    pub goal: Option<PlannerGoal>,
+    /// Measured left sole pose.
+    pub left_sole: PoseRecord,
+    /// Measured right sole pose.
+    pub right_sole: PoseRecord,
+}
+
+impl PlannerInputRecord {
+    /// From the block input.
+    pub fn from_input(time_ns: u64, i: &PlannerInput) -> Self {
+        Self {
+            time_ns,
+            goal: i.goal.clone(),
+            left_sole: PoseRecord::from_iso(&i.left_sole),
+            right_sole: PoseRecord::from_iso(&i.right_sole),
+        }
+    }
+    /// Back to the block input.
+    pub fn to_input(&self) -> PlannerInput {
+        PlannerInput {
+            time: std::time::Duration::from_nanos(self.time_ns),
+            goal: self.goal.clone(),
+            left_sole: self.left_sole.to_iso(),
+            right_sole: self.right_sole.to_iso(),
+        }
+    }
+}
+
+/// A planned foot sample.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct FootSampleRecord {
+    /// Sole pose.
+    pub pose: PoseRecord,
+    /// Twist `[v; ω]` (mixed).
+    pub twist: [f64; 6],
+    /// Acceleration `[a; α]`.
+    pub acceleration: [f64; 6],
+    /// In contact.
+    pub in_contact: bool,
+}
+
+impl FootSampleRecord {
+    fn from_sample(f: &FootSample) -> Self {
+        Self {
+            pose: PoseRecord::from_iso(&f.pose),
+            twist: v6(&f.twist),
+            acceleration: v6(&f.acceleration),
+            in_contact: f.in_contact,
+        }
+    }
+}
+
+/// `/planner/references`: the plan sampled at a tick.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct PlanSampleRecord {
+    /// Plan time [s].
+    pub time: f64,
+    /// LIPM natural frequency [1/s].
+    pub omega: f64,
+    /// DCM [m].
+    pub dcm_position: [f64; 3],
+    /// DCM velocity [m/s].
+    pub dcm_velocity: [f64; 3],
+    /// ZMP [m].
+    pub zmp: [f64; 3],
+    /// CoM [m].
+    pub com_position: [f64; 3],
+    /// CoM velocity [m/s].
+    pub com_velocity: [f64; 3],
+    /// CoM acceleration [m/s²].
+    pub com_acceleration: [f64; 3],
+    /// Left foot.
+    pub left: FootSampleRecord,
+    /// Right foot.
+    pub right: FootSampleRecord,
+    /// `double_support`, `left_stance` or `right_stance`.
+    pub phase: Cow<'static, str>,
+}
+
+/// Name of a gait phase.
+pub fn phase_name(p: &PhaseKind) -> &'static str {
+    match p {
+        PhaseKind::DoubleSupport => "double_support",
+        PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Left,
+        } => "left_stance",
+        PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Right,
+        } => "right_stance",
+    }
+}
+
+impl PlanSampleRecord {
+    /// From a plan sample.
+    pub fn from_sample(s: &PlanSample) -> Self {
+        Self {
+            time: s.time,
+            omega: s.omega,
+            dcm_position: v3(&s.dcm_position),
+            dcm_velocity: v3(&s.dcm_velocity),
+            zmp: v3(&s.zmp),
+            com_position: v3(&s.com_position),
+            com_velocity: v3(&s.com_velocity),
+            com_acceleration: v3(&s.com_acceleration),
+            left: FootSampleRecord::from_sample(&s.left),
+            right: FootSampleRecord::from_sample(&s.right),
+            phase: Cow::Borrowed(phase_name(&s.phase)),
+        }
+    }
+}
+
+/// A foot reference of the whole-body input.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct FootReferenceRecord {
+    /// Pose.
+    pub pose: PoseRecord,
+    /// Twist (mixed).
+    pub velocity: [f64; 6],
+    /// Acceleration.
+    pub acceleration: [f64; 6],
+}
+
+/// Torso orientation reference.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct OrientationRecord {
+    /// Orientation `[x, y, z, w]`.
+    pub orientation_xyzw: [f64; 4],
+    /// Angular velocity [rad/s].
+    pub angular_velocity: [f64; 3],
+    /// Angular acceleration [rad/s²].
+    pub angular_acceleration: [f64; 3],
+}
+
+/// `/wbc/input`: everything the whole-body block received.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WbcInputRecord<'a> {
+    /// Time [ns].
+    pub time_ns: u64,
+    /// Measured state.
+    pub state: StateRecord<'a>,
+    /// CoM position reference [m].
+    pub com_position: [f64; 3],
+    /// CoM velocity reference [m/s].
+    pub com_velocity: [f64; 3],
+    /// CoM acceleration reference [m/s²].
+    pub com_acceleration: [f64; 3],
+    /// Left sole reference.
+    pub left_foot: FootReferenceRecord,
+    /// Right sole reference.
+    pub right_foot: FootReferenceRecord,
+    /// Left foot in contact.
+    pub left_in_contact: bool,
+    /// Right foot in contact.
+    pub right_in_contact: bool,
+    /// Desired ZMP [m].
+    pub desired_zmp: Option<[f64; 2]>,
+    /// Desired contact wrenches.
+    pub desired_wrenches: Option<[[f64; 6]; 2]>,
+    /// Torso orientation reference.
+    pub torso: OrientationRecord,
+    /// Posture reference [rad] (model order), if overriding the configured one.
+    pub posture: Option<Cow<'a, [f64]>>,
+    /// Centroidal angular momentum reference [kg m²/s].
+    pub angular_momentum: [f64; 3],
+}
+
+fn foot_ref(f: &FootReference) -> FootReferenceRecord {
+    FootReferenceRecord {
+        pose: PoseRecord::from_iso(&f.pose),
+        velocity: v6(&f.velocity),
+        acceleration: v6(&f.acceleration),
+    }
+}
+
+fn foot_ref_back(r: &FootReferenceRecord, f: &mut FootReference) {
+    f.pose = r.pose.to_iso();
+    f.velocity = Vector6::from_column_slice(&r.velocity);
+    f.acceleration = Vector6::from_column_slice(&r.acceleration);
+}
+
+impl<'a> WbcInputRecord<'a> {
+    /// Borrowing view of a whole-body input.
+    pub fn from_input(time_ns: u64, i: &'a WbcInput) -> Self {
+        let q = i.torso.orientation.coords;
+        Self {
+            time_ns,
+            state: StateRecord::from_state(&i.state),
+            com_position: v3(&i.com_position),
+            com_velocity: v3(&i.com_velocity),
+            com_acceleration: v3(&i.com_acceleration),
+            left_foot: foot_ref(&i.left_foot),
+            right_foot: foot_ref(&i.right_foot),
+            left_in_contact: i.left_in_contact,
+            right_in_contact: i.right_in_contact,
+            desired_zmp: i.desired_zmp.map(|z| [z.x, z.y]),
+            desired_wrenches: i.desired_wrenches.map(|w| [v6(&w[0]), v6(&w[1])]),
+            torso: OrientationRecord {
+                orientation_xyzw: [q.x, q.y, q.z, q.w],
+                angular_velocity: v3(&i.torso.angular_velocity),
+                angular_acceleration: v3(&i.torso.angular_acceleration),
+            },
+            posture: i.posture.as_ref().map(|p| Cow::Borrowed(p.as_slice())),
+            angular_momentum: v3(&i.angular_momentum),
+        }
+    }
+
+    /// Writes the record into a whole-body input sized for the model.
+    pub fn to_input(&self, i: &mut WbcInput) -> Result<(), String> {
+        self.state.to_state(&mut i.state)?;
+        i.com_position = Vector3::from(self.com_position);
+        i.com_velocity = Vector3::from(self.com_velocity);
+        i.com_acceleration = Vector3::from(self.com_acceleration);
+        foot_ref_back(&self.left_foot, &mut i.left_foot);
+        foot_ref_back(&self.right_foot, &mut i.right_foot);
+        i.left_in_contact = self.left_in_contact;
+        i.right_in_contact = self.right_in_contact;
+        i.desired_zmp = self.desired_zmp.map(|z| Vector2::new(z[0], z[1]));
+        i.desired_wrenches = self
+            .desired_wrenches
+            .map(|w| [Vector6::from_column_slice(&w[0]), Vector6::from_column_slice(&w[1])]);
+        let [x, y, z, w] = self.torso.orientation_xyzw;
+        i.torso = OrientationReference {
+            orientation: UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z)),
+            angular_velocity: Vector3::from(self.torso.angular_velocity),
+            angular_acceleration: Vector3::from(self.torso.angular_acceleration),
+        };
+        i.posture = self.posture.as_ref().map(|p| DVector::from_column_slice(p));
+        i.angular_momentum = Vector3::from(self.angular_momentum);
+        Ok(())
+    }
+}
+
+/// `/wbc/output` in position mode: `stride_wbc::IkOutput` with the wall-clock fields of its report zeroed
+/// (same JSON shape, so it deserializes as `IkOutput`).
+#[derive(Debug, Serialize)]
+pub struct IkOutputRecord<'a> {
+    /// Joint position commands [rad].
+    pub joint_positions: &'a DVector<f64>,
+    /// Joint velocities [rad/s].
+    pub joint_velocities: &'a DVector<f64>,
+    /// Base twist (mixed).
+    pub base_velocity: &'a Vector6<f64>,
+    /// Integrated base pose.
+    pub base_pose: &'a Isometry3<f64>,
+    /// Solver report (solve_time and tick_time set to 0).
+    pub report: stride_wbc::SolveReport,
+    /// Task residuals.
+    pub residuals: &'a [stride_wbc::TaskResidual],
+}
+
+impl<'a> IkOutputRecord<'a> {
+    /// View of an output without its wall-clock fields.
+    pub fn new(o: &'a stride_wbc::IkOutput) -> Self {
+        let mut report = o.report;
+        report.solve_time = 0.0;
+        report.tick_time = 0.0;
+        Self {
+            joint_positions: &o.joint_positions,
+            joint_velocities: &o.joint_velocities,
+            base_velocity: &o.base_velocity,
+            base_pose: &o.base_pose,
+            report,
+            residuals: &o.residuals,
+        }
+    }
+}
+
+/// `/wbc/output` in torque mode: `stride_wbc::TsidOutput` with wall-clock fields zeroed.
+#[derive(Debug, Serialize)]
+pub struct TsidOutputRecord<'a> {
+    /// Joint torques [N m].
+    pub joint_torques: &'a DVector<f64>,
+    /// ν̇.
+    pub accelerations: &'a DVector<f64>,
+    /// Planned contact wrenches.
+    pub contact_wrenches: &'a [Vector6<f64>; 2],
+    /// Contact load factors.
+    pub contact_load: [f64; 2],
+    /// Solver report (solve_time and tick_time set to 0).
+    pub report: stride_wbc::SolveReport,
+    /// Task residuals.
+    pub residuals: &'a [stride_wbc::TaskResidual],
+}
+
+impl<'a> TsidOutputRecord<'a> {
+    /// View of an output without its wall-clock fields.
+    pub fn new(o: &'a stride_wbc::TsidOutput) -> Self {
+        let mut report = o.report;
+        report.solve_time = 0.0;
+        report.tick_time = 0.0;
+        Self {
+            joint_torques: &o.joint_torques,
+            accelerations: &o.accelerations,
+            contact_wrenches: &o.contact_wrenches,
+            contact_load: o.contact_load,
+            report,
+            residuals: &o.residuals,
+        }
+    }
+}
+
+/// `/simplified/output`: the layer's output with the MPC solve time zeroed.
+pub fn simplified_output_record(o: &stride_simplified::SimplifiedOutput) -> stride_simplified::SimplifiedOutput {
+    let mut r = *o;
+    r.diagnostics.mpc.solve_time = 0.0;
+    r
+}
+
+/// `/*/timing`: wall-clock measurements of one layer tick (not deterministic, kept apart).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct TimingRecord {
+    /// QP solve time [s].
+    pub solve_time: f64,
+    /// Whole tick time [s].
+    pub tick_time: f64,
+}
+
+/// `/events`: something that happened.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EventRecord {
+    /// Simulated time [s].
+    pub time: f64,
+    /// `start`, `replan`, `phase`, `fallback`, `hold`, `fall`, `push`, `end`, `error`.
+    pub kind: String,
+    /// Human-readable detail.
+    pub detail: String,
+}

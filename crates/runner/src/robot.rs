@@ -1,0 +1,337 @@
+//! The plant side of the loop: the [`Robot`] trait and its implementations.
+//!
+//! The scheduler talks to the robot only through [`Robot`]: read a [`Measurement`], send a
+//! [`JointCommand`], advance one plant period. The simulator ([`crate::sim_plant::SimPlant`]) is the first
+//! implementation, [`IdealPlant`] the second; a real robot or another simulator plugs in by implementing
+//! the trait (its `advance` would wait for the next sample instead of integrating).
+
+use std::sync::Arc;
+
+use nalgebra::{DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
+use serde::Serialize;
+use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
+
+use crate::config::ControlMode;
+
+/// A failure of the robot interface (or of the simulator).
+#[derive(Debug, thiserror::Error)]
+#[error("robot: {0}")]
+pub struct RobotError(pub String);
+
+/// Measured contact wrench of one foot.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FootMeasurement {
+    /// Whether the foot touches the ground.
+    pub in_contact: bool,
+    /// `[f; τ]` applied by the ground on the robot, world orientation, torque about the sole frame origin
+    /// [N; N m].
+    pub wrench: Vector6<f64>,
+    /// World position of the sole frame origin the torque is taken about [m].
+    pub point: Vector3<f64>,
+}
+
+impl Default for FootMeasurement {
+    fn default() -> Self {
+        Self {
+            in_contact: false,
+            wrench: Vector6::zeros(),
+            point: Vector3::zeros(),
+        }
+    }
+}
+
+/// IMU reading.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ImuReading {
+    /// Orientation of the IMU (world_R_imu).
+    pub orientation: UnitQuaternion<f64>,
+    /// Angular velocity in the IMU frame [rad/s].
+    pub angular_velocity: Vector3<f64>,
+    /// Proper acceleration in the IMU frame [m/s²].
+    pub linear_acceleration: Vector3<f64>,
+}
+
+impl Default for ImuReading {
+    fn default() -> Self {
+        Self {
+            orientation: UnitQuaternion::identity(),
+            angular_velocity: Vector3::zeros(),
+            linear_acceleration: Vector3::zeros(),
+        }
+    }
+}
+
+/// What the robot reports each plant period.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measurement {
+    /// Plant time [ns].
+    pub time_ns: u64,
+    /// Base pose, joint positions, base twist (mixed) and joint velocities (estimated on a real robot).
+    pub state: RobotState,
+    /// Measured joint torques [N m].
+    pub joint_torques: DVector<f64>,
+    /// Left and right foot wrenches.
+    pub feet: [FootMeasurement; 2],
+    /// IMU.
+    pub imu: ImuReading,
+    /// The plant's own fall detector (the runner also checks base height and tilt).
+    pub fallen: bool,
+}
+
+impl Measurement {
+    /// A zero measurement sized for `model`.
+    pub fn new(model: &Model) -> Self {
+        Self {
+            time_ns: 0,
+            state: RobotState::zero(model),
+            joint_torques: DVector::zeros(model.dof()),
+            feet: [FootMeasurement::default(); 2],
+            imu: ImuReading::default(),
+            fallen: false,
+        }
+    }
+}
+
+/// What the whole-body layer sends to the robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointCommand {
+    /// Which fields the servos use.
+    pub mode: ControlMode,
+    /// Joint position set-points [rad] (position mode).
+    pub joint_positions: DVector<f64>,
+    /// Joint velocity feed-forward [rad/s] (position mode).
+    pub joint_velocities: DVector<f64>,
+    /// Joint torques [N m] (torque mode; feed-forward in position mode, usually 0).
+    pub joint_torques: DVector<f64>,
+    /// Planned contact state of the left and right foot (used by the ideal plant to anchor the base).
+    pub contacts: [bool; 2],
+}
+
+impl JointCommand {
+    /// A command holding `q`.
+    pub fn hold(mode: ControlMode, q: &DVector<f64>) -> Self {
+        let n = q.len();
+        Self {
+            mode,
+            joint_positions: q.clone(),
+            joint_velocities: DVector::zeros(n),
+            joint_torques: DVector::zeros(n),
+            contacts: [true, true],
+        }
+    }
+}
+
+/// The plant interface of the loop.
+pub trait Robot {
+    /// Short name for logs and the summary (`simulator`, `ideal`, ...).
+    fn name(&self) -> &str;
+    /// The model the robot is described by.
+    fn model(&self) -> &Arc<Model>;
+    /// Plant period [ns]: how much [`Robot::advance`] moves time.
+    fn period_ns(&self) -> u64;
+    /// The latest measurement (at the current plant time).
+    fn measurement(&self) -> &Measurement;
+    /// Sets the command applied from now on.
+    fn command(&mut self, command: &JointCommand) -> Result<(), RobotError>;
+    /// Advances one period (simulation step; a real robot would wait for the next sample) and refreshes
+    /// the measurement.
+    fn advance(&mut self) -> Result<(), RobotError>;
+}
+
+/// The ideal kinematic plant (design.md, "Bring-up"): commanded joint positions are applied exactly and the
+/// base pose follows from keeping the anchored stance foot where it is (legged odometry). Joint and base
+/// velocities are finite differences over the plant period; foot wrenches are the static weight split so
+/// that the measured ZMP is the CoM's ground projection (clamped between the feet in double support).
+pub struct IdealPlant {
+    model: Arc<Model>,
+    kd: KinDyn,
+    period_ns: u64,
+    feet: [FrameId; 2],
+    anchor: usize,
+    anchor_pose: Isometry3<f64>,
+    pending: JointCommand,
+    meas: Measurement,
+    previous: RobotState,
+    gravity: f64,
+}
+
+impl IdealPlant {
+    /// Builds the plant at `initial` (base pose as given: callers put the soles on the ground first).
+    pub fn new(
+        model: Arc<Model>,
+        period_ns: u64,
+        left_sole: FrameId,
+        right_sole: FrameId,
+        initial: &RobotState,
+    ) -> Result<Self, RobotError> {
+        let mut kd = KinDyn::new(Arc::clone(&model));
+        kd.set_representation(VelocityRepresentation::Mixed);
+        kd.set_state(initial).map_err(|e| RobotError(e.to_string()))?;
+        let anchor_pose = kd.frame_pose(left_sole);
+        let mut meas = Measurement::new(&model);
+        meas.state = initial.clone();
+        let pending = JointCommand::hold(ControlMode::Position, &initial.joint_positions);
+        let mut plant = Self {
+            kd,
+            period_ns,
+            feet: [left_sole, right_sole],
+            anchor: 0,
+            anchor_pose,
+            pending,
+            meas,
+            previous: initial.clone(),
+            gravity: 9.81,
+            model,
+        };
+        plant.update_wrenches();
+        Ok(plant)
+    }
+
+    fn update_wrenches(&mut self) {
+        let com = self.kd.com_position();
+        let weight = self.model.total_mass() * self.gravity;
+        let pl = self.kd.frame_pose(self.feet[0]).translation.vector;
+        let pr = self.kd.frame_pose(self.feet[1]).translation.vector;
+        let contacts = self.pending.contacts;
+        let (wl, wr) = match contacts {
+            [true, true] | [false, false] => {
+                // Fraction of the weight on the right foot: CoM projected on the segment left → right.
+                let d = (pr - pl).xy();
+                let len2 = d.norm_squared();
+                let alpha = if len2 > 1e-12 {
+                    ((com.xy() - pl.xy()).dot(&d) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.5
+                };
+                ((1.0 - alpha) * weight, alpha * weight)
+            }
+            [true, false] => (weight, 0.0),
+            [false, true] => (0.0, weight),
+        };
+        let single = contacts[0] != contacts[1];
+        for (i, (f, p)) in [(wl, pl), (wr, pr)].into_iter().enumerate() {
+            let force = Vector3::new(0.0, 0.0, f);
+            // Single support: the centre of pressure is the CoM projection; double support: the sole centre.
+            let cop = if single && f > 0.0 {
+                Vector3::new(com.x, com.y, p.z)
+            } else {
+                p
+            };
+            let torque = (cop - p).cross(&force);
+            self.meas.feet[i] = FootMeasurement {
+                in_contact: f > 0.0,
+                wrench: Vector6::new(force.x, force.y, force.z, torque.x, torque.y, torque.z),
+                point: p,
+            };
+        }
+    }
+}
+
+impl Robot for IdealPlant {
+    fn name(&self) -> &str {
+        "ideal"
+    }
+    fn model(&self) -> &Arc<Model> {
+        &self.model
+    }
+    fn period_ns(&self) -> u64 {
+        self.period_ns
+    }
+    fn measurement(&self) -> &Measurement {
+        &self.meas
+    }
+    fn command(&mut self, command: &JointCommand) -> Result<(), RobotError> {
+        if command.joint_positions.len() != self.model.dof()
+            || command.joint_positions.iter().any(|q| !q.is_finite())
+        {
+            return Err(RobotError(format!(
+                "ideal plant: expected {} finite joint positions",
+                self.model.dof()
+            )));
+        }
+        self.pending.mode = command.mode;
+        self.pending.joint_positions.copy_from(&command.joint_positions);
+        self.pending.contacts = command.contacts;
+        Ok(())
+    }
+    fn advance(&mut self) -> Result<(), RobotError> {
+        let dt = self.period_ns as f64 * 1e-9;
+        self.previous.clone_from(&self.meas.state);
+        // Re-anchor when the anchored foot leaves the ground and the other one is down.
+        let contacts = self.pending.contacts;
+        if !contacts[self.anchor] && contacts[1 - self.anchor] {
+            self.anchor = 1 - self.anchor;
+            self.anchor_pose = self.kd.frame_pose(self.feet[self.anchor]);
+        }
+        let state = &mut self.meas.state;
+        state.joint_positions.copy_from(&self.pending.joint_positions);
+        self.kd.set_state(state).map_err(|e| RobotError(e.to_string()))?;
+        // base_H_anchor with the new joints; world_H_base = world_H_anchor · anchor_H_base.
+        let base_to_anchor = self.kd.relative_transform_from_base(self.feet[self.anchor]);
+        let base = self.anchor_pose * base_to_anchor.inverse();
+        let state = &mut self.meas.state;
+        state.base_pose = base;
+        // Finite-difference velocities (mixed).
+        let prev = &self.previous;
+        for i in 0..state.joint_velocities.len() {
+            state.joint_velocities[i] = (state.joint_positions[i] - prev.joint_positions[i]) / dt;
+        }
+        let lin = (base.translation.vector - prev.base_pose.translation.vector) / dt;
+        let rot = base.rotation * prev.base_pose.rotation.inverse();
+        let ang = rot.scaled_axis() / dt;
+        state.base_velocity = Vector6::new(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z);
+        self.kd.set_state(state).map_err(|e| RobotError(e.to_string()))?;
+        self.meas.time_ns += self.period_ns;
+        self.meas.imu.orientation = base.rotation;
+        self.meas.imu.angular_velocity = base.rotation.inverse() * ang;
+        self.meas.imu.linear_acceleration = base.rotation.inverse() * Vector3::new(0.0, 0.0, self.gravity);
+        self.update_wrenches();
+        Ok(())
+    }
+}
+
+/// `base_H_frame` helper on [`KinDyn`] for the plant (pose of a frame relative to the base, from the
+/// current world poses).
+trait RelativeToBase {
+    fn relative_transform_from_base(&self, frame: FrameId) -> Isometry3<f64>;
+}
+
+impl RelativeToBase for KinDyn {
+    fn relative_transform_from_base(&self, frame: FrameId) -> Isometry3<f64> {
+        // world_H_base is the state's base pose; world_H_frame from FK.
+        let world_frame = self.frame_pose(frame);
+        let base = self
+            .model()
+            .frame_id(self.model().root_link())
+            .map(|b| self.frame_pose(b))
+            .unwrap_or_else(Isometry3::identity);
+        base.inverse() * world_frame
+    }
+}
+
+/// Puts the robot standing: sets the base pose so that the lower sole is flat at z = 0 and the two soles'
+/// mid-point is at the world origin (x, y), heading along x.
+pub fn standing_state(
+    model: &Arc<Model>,
+    joint_positions: &DVector<f64>,
+    left_sole: FrameId,
+    right_sole: FrameId,
+) -> Result<RobotState, RobotError> {
+    let mut state = RobotState::zero(model);
+    state.joint_positions.copy_from(joint_positions);
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_state(&state).map_err(|e| RobotError(e.to_string()))?;
+    let l = kd.frame_pose(left_sole);
+    let r = kd.frame_pose(right_sole);
+    // Level the left sole: base orientation such that world_R_sole = identity (yaw kept 0).
+    let base_rot = l.rotation.inverse();
+    state.base_pose = Isometry3::from_parts(nalgebra::Translation3::identity(), base_rot);
+    kd.set_state(&state).map_err(|e| RobotError(e.to_string()))?;
+    let l = kd.frame_pose(left_sole).translation.vector;
+    let r2 = kd.frame_pose(right_sole).translation.vector;
+    let _ = r;
+    let mid = (l + r2) * 0.5;
+    let lowest = l.z.min(r2.z);
+    state.base_pose.translation.vector -= Vector3::new(mid.x, mid.y, lowest);
+    Ok(state)
+}

@@ -1,0 +1,148 @@
+//! [`Robot`] implementation on stride-sim.
+use std::sync::Arc;
+
+use nalgebra::DVector;
+use stride_block::Block;
+use stride_model::{FrameId, KinDyn, Model, RobotState};
+use stride_sim::{ActuationMode, SimConfig, SimInput, SimRobot};
+
+use crate::config::ControlMode;
+use crate::robot::{FootMeasurement, JointCommand, Measurement, Robot, RobotError};
+
+/// The simulated robot behind the [`Robot`] trait. The measurement is the simulator's ground-truth base
+/// state (a real robot would need a base estimator here), its encoders, the contact wrenches of the two
+/// sole surfaces (world orientation, about the sole frame origins) and its IMU.
+pub struct SimPlant {
+    sim: SimRobot,
+    model: Arc<Model>,
+    kd: KinDyn,
+    period_ns: u64,
+    soles: [FrameId; 2],
+    surfaces: [Option<usize>; 2],
+    input: SimInput,
+    meas: Measurement,
+}
+
+impl SimPlant {
+    /// Builds the simulator with `config` (its `rate_hz` already set by the runner), places the robot
+    /// standing on the ground at `joint_positions`, and sets every joint's actuation to `mode`.
+    pub fn new(
+        model: Arc<Model>,
+        mut config: SimConfig,
+        mode: ControlMode,
+        joint_positions: &DVector<f64>,
+        soles: [FrameId; 2],
+    ) -> Result<Self, RobotError> {
+        let err = |e: stride_sim::SimError| RobotError(format!("simulator: {e}"));
+        let rate = config.rate_hz;
+        if rate == 0 {
+            return Err(RobotError("simulator rate is 0 Hz".into()));
+        }
+        if mode == ControlMode::Torque {
+            config.actuation.default.mode = ActuationMode::Torque;
+            for j in &mut config.actuation.joints {
+                j.mode = Some(ActuationMode::Torque);
+            }
+        }
+        let mut sim = SimRobot::new(Arc::clone(&model), config).map_err(err)?;
+        let state = sim.set_standing_on_ground(joint_positions).map_err(err)?;
+        let mut surfaces = [None, None];
+        for (i, s) in sim.config().contact.surfaces.iter().enumerate() {
+            for (k, sole) in soles.iter().enumerate() {
+                if s.frame == model.frame_name(*sole) {
+                    surfaces[k] = Some(i);
+                }
+            }
+        }
+        let mut plant = Self {
+            kd: KinDyn::new(Arc::clone(&model)),
+            period_ns: 1_000_000_000 / u64::from(rate),
+            soles,
+            surfaces,
+            input: SimInput::hold(joint_positions),
+            meas: Measurement::new(&model),
+            sim,
+            model,
+        };
+        plant.meas.state = state;
+        plant.refresh_from_state()?;
+        Ok(plant)
+    }
+
+    /// The simulator (for its configuration and contact details).
+    pub fn sim(&self) -> &SimRobot {
+        &self.sim
+    }
+
+    fn refresh_from_state(&mut self) -> Result<(), RobotError> {
+        self.kd
+            .set_state(&self.meas.state)
+            .map_err(|e| RobotError(e.to_string()))?;
+        for k in 0..2 {
+            self.meas.feet[k].point = self.kd.frame_pose(self.soles[k]).translation.vector;
+        }
+        Ok(())
+    }
+
+    fn read_output(&mut self) -> Result<(), RobotError> {
+        let out = self.sim.output();
+        self.meas.time_ns = u64::try_from(out.time.as_nanos()).unwrap_or(u64::MAX);
+        // Ground-truth base, measured joints.
+        self.meas.state.base_pose = out.state.base_pose;
+        self.meas.state.base_velocity = out.state.base_velocity;
+        self.meas.state.joint_positions.copy_from(&out.joint_positions);
+        self.meas.state.joint_velocities.copy_from(&out.joint_velocities);
+        self.meas.joint_torques.copy_from(&out.joint_torques);
+        self.meas.imu.orientation = out.imu.orientation;
+        self.meas.imu.angular_velocity = out.imu.angular_velocity;
+        self.meas.imu.linear_acceleration = out.imu.proper_acceleration;
+        self.meas.fallen = out.fallen;
+        for k in 0..2 {
+            self.meas.feet[k] = match self.surfaces[k].and_then(|i| out.surfaces.get(i)) {
+                Some(s) => FootMeasurement {
+                    in_contact: s.in_contact,
+                    wrench: s.wrench,
+                    point: self.meas.feet[k].point,
+                },
+                None => FootMeasurement::default(),
+            };
+        }
+        self.refresh_from_state()
+    }
+}
+
+impl Robot for SimPlant {
+    fn name(&self) -> &str {
+        "simulator"
+    }
+    fn model(&self) -> &Arc<Model> {
+        &self.model
+    }
+    fn period_ns(&self) -> u64 {
+        self.period_ns
+    }
+    fn measurement(&self) -> &Measurement {
+        &self.meas
+    }
+    fn command(&mut self, command: &JointCommand) -> Result<(), RobotError> {
+        let n = self.model.dof();
+        if command.joint_positions.len() != n || command.joint_torques.len() != n {
+            return Err(RobotError(format!("command sized for {n} joints expected")));
+        }
+        self.input.joint_positions.copy_from(&command.joint_positions);
+        self.input.joint_velocities.copy_from(&command.joint_velocities);
+        self.input.joint_torques.copy_from(&command.joint_torques);
+        Ok(())
+    }
+    fn advance(&mut self) -> Result<(), RobotError> {
+        self.sim
+            .step(&self.input)
+            .map_err(|e| RobotError(format!("simulator: {e}")))?;
+        self.read_output()
+    }
+}
+
+/// The initial state the simulator placed the robot in (for the ideal plant and tests).
+pub fn initial_state(plant: &SimPlant) -> RobotState {
+    plant.meas.state.clone()
+}

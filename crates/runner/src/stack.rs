@@ -1,0 +1,568 @@
+//! The three layers wired together: planner → simplified → whole-body, and the conversions between them.
+//!
+//! [`Stack`] owns one instance of each layer, their preallocated inputs and the runner's own kinematics
+//! workspace for the measured quantities. The scheduler ([`crate::run`]) calls, within one base tick and
+//! in this order: [`Stack::estimate`] (measured CoM, DCM, ZMP from the robot's measurement),
+//! [`Stack::planner_tick`] (only on events: start, new goal segment), [`Stack::simplified_tick`] and
+//! [`Stack::wbc_tick`] (each at its rate), then the command goes to the robot.
+//!
+//! Measured quantities (design.md, "Bring-up" step 3): the CoM position and velocity from the measured
+//! base state and joints through the model; the DCM `ξ = x + ẋ/ω` with the plan's ω; the ZMP from the
+//! feet wrenches ([`stride_simplified::measured_zmp`]), falling back to the CoM's ground projection when
+//! no foot carries more than 5 % of the weight.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use nalgebra::{DVector, UnitQuaternion, Vector2, Vector3};
+use stride_block::Block;
+use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
+use stride_planner::{Goal as PlannerGoal, PhaseKind, PlanSample, Planner, PlannerInput, Waypoint};
+use stride_simplified::{
+    feet_support_polygon, measured_zmp, FootRectangle, FootWrench, HorizonSample, SimplifiedController,
+    SimplifiedInput, SimplifiedOutput, SupportPolygon,
+};
+use stride_wbc::{QpIk, Tsid, WbcInput};
+
+use crate::config::{ControlMode, Goal, Scenario};
+use crate::robot::{JointCommand, Measurement};
+
+/// A failure inside one layer, named.
+#[derive(Debug, thiserror::Error)]
+pub enum StackError {
+    /// The planner failed.
+    #[error("planner: {0}")]
+    Planner(#[from] stride_planner::PlannerError),
+    /// The simplified layer failed.
+    #[error("simplified layer: {0}")]
+    Simplified(#[from] stride_simplified::SimplifiedError),
+    /// The whole-body layer failed.
+    #[error("whole-body layer: {0}")]
+    Wbc(#[from] stride_wbc::WbcError),
+    /// The model rejected a state.
+    #[error("model: {0}")]
+    Model(#[from] stride_model::ModelError),
+    /// Anything else.
+    #[error("{0}")]
+    Other(String),
+}
+
+/// The whole-body controller of the configured control mode.
+#[allow(clippy::large_enum_variant)]
+pub enum Wbc {
+    /// Kinematic QP-IK (position mode).
+    Ik(QpIk),
+    /// TSID (torque mode).
+    Tsid(Tsid),
+}
+
+/// A planner event scheduled in simulated time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GoalEvent {
+    /// When [ns].
+    pub time_ns: u64,
+    /// The goal handed to the planner.
+    pub goal: PlannerGoal,
+}
+
+/// Converts the scenario goal into the planner's goal events (one at t = 0, one per velocity segment).
+pub fn goal_events(goal: &Goal) -> Vec<GoalEvent> {
+    let to_ns = |s: f64| (s.max(0.0) * 1e9).round() as u64;
+    match goal {
+        Goal::Pose(p) => vec![GoalEvent {
+            time_ns: 0,
+            goal: PlannerGoal::Pose {
+                x: p.x,
+                y: p.y,
+                yaw: p.heading_deg.to_radians(),
+            },
+        }],
+        Goal::Waypoints { points } => vec![GoalEvent {
+            time_ns: 0,
+            goal: PlannerGoal::Waypoints {
+                points: points
+                    .iter()
+                    .map(|p| Waypoint {
+                        x: p.x,
+                        y: p.y,
+                        yaw: Some(p.heading_deg.to_radians()),
+                    })
+                    .collect(),
+            },
+        }],
+        Goal::Velocity { segments } => segments
+            .iter()
+            .enumerate()
+            .map(|(i, s)| GoalEvent {
+                time_ns: to_ns(s.start),
+                goal: PlannerGoal::Velocity {
+                    forward: s.forward,
+                    lateral: s.lateral,
+                    yaw_rate: s.yaw_rate_deg.to_radians(),
+                    duration: segments.get(i + 1).map(|n| n.start - s.start),
+                },
+            })
+            .collect(),
+        Goal::Stand {} => vec![GoalEvent {
+            time_ns: 0,
+            goal: PlannerGoal::Stand,
+        }],
+    }
+}
+
+/// Measured quantities of one tick.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Measured {
+    /// CoM [m].
+    pub com: Vector3<f64>,
+    /// CoM velocity [m/s].
+    pub com_velocity: Vector3<f64>,
+    /// DCM (xy) with the plan's ω [m].
+    pub dcm: Vector2<f64>,
+    /// ZMP from the feet wrenches [m].
+    pub zmp: Vector2<f64>,
+    /// Whether the ZMP came from the wrenches (false: CoM projection fallback).
+    pub zmp_from_wrenches: bool,
+    /// Left and right sole poses.
+    pub soles: [nalgebra::Isometry3<f64>; 2],
+    /// Torso tilt from vertical [rad].
+    pub tilt: f64,
+    /// Base height [m].
+    pub base_height: f64,
+}
+
+/// The three layers and their wiring.
+pub struct Stack {
+    model: Arc<Model>,
+    kd: KinDyn,
+    soles: [FrameId; 2],
+    torso: FrameId,
+    mode: ControlMode,
+    foot_half_length: f64,
+    foot_half_width: f64,
+    /// The planner.
+    pub planner: Planner,
+    /// The last planner input (event ticks).
+    pub planner_input: PlannerInput,
+    /// The plan sampled at the current tick.
+    pub plan_sample: PlanSample,
+    horizon_sample: PlanSample,
+    /// The simplified layer.
+    pub simplified: SimplifiedController,
+    /// Its input of the last tick.
+    pub simplified_input: SimplifiedInput,
+    /// Its last valid output (held on error).
+    pub simplified_output: SimplifiedOutput,
+    simplified_period: f64,
+    simplified_valid: bool,
+    /// The whole-body layer.
+    pub wbc: Wbc,
+    /// Its input of the last tick.
+    pub wbc_input: WbcInput,
+    /// The command of the last whole-body tick.
+    pub command: JointCommand,
+    /// Measured quantities of the last estimate.
+    pub measured: Measured,
+    events: Vec<GoalEvent>,
+    next_event: usize,
+    /// Fallback/hold counters: simplified errors held, wbc QP fallbacks, wbc holds.
+    pub counters: Counters,
+}
+
+/// Counters the summary reports.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Simplified-layer ticks that failed and held the previous references.
+    pub simplified_holds: u64,
+    /// Whole-body ticks solved by the relaxed fallback QP.
+    pub wbc_fallbacks: u64,
+    /// Whole-body ticks that held the last command.
+    pub wbc_holds: u64,
+    /// Planner replans.
+    pub replans: u64,
+}
+
+impl Stack {
+    /// Builds every layer from the scenario. `initial` is the robot's measured initial state.
+    pub fn new(scenario: &Scenario, model: Arc<Model>, initial: &RobotState) -> Result<Self, StackError> {
+        let c = &scenario.config;
+        let frame = |name: &str, key: &str| {
+            model.frame_id(name).ok_or_else(|| {
+                StackError::Other(format!(
+                    "{}",
+                    scenario.invalid(key, format!("the model has no frame `{name}`; expected one of its links or frames"))
+                ))
+            })
+        };
+        let soles = [
+            frame(&c.robot.left_sole, "robot.left_sole")?,
+            frame(&c.robot.right_sole, "robot.right_sole")?,
+        ];
+        let torso = frame(&c.robot.torso_frame, "robot.torso_frame")?;
+        let mut kd = KinDyn::new(Arc::clone(&model));
+        kd.set_representation(VelocityRepresentation::Mixed);
+        kd.set_state(initial)?;
+        let planner = Planner::new(c.planner.clone())?;
+        let simplified_period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
+        let simplified = SimplifiedController::new(&c.simplified, simplified_period)?;
+        let wbc_period = 1.0 / f64::from(c.rates.wbc_hz);
+        let wbc = match c.scenario.control_mode {
+            ControlMode::Position => {
+                let mut cfg = c.wbc.ik.clone();
+                cfg.period = wbc_period;
+                Wbc::Ik(QpIk::new(Arc::clone(&model), cfg)?)
+            }
+            ControlMode::Torque => {
+                let mut cfg = c.wbc.tsid.clone();
+                cfg.period = wbc_period;
+                Wbc::Tsid(Tsid::new(Arc::clone(&model), cfg)?)
+            }
+        };
+        let polygon = Self::polygon_of(
+            &[kd.frame_pose(soles[0]), kd.frame_pose(soles[1])],
+            [true, true],
+            c.planner.foot_length * 0.5,
+            c.planner.foot_width * 0.5,
+        )?;
+        let simplified_input = SimplifiedInput::new(simplified.horizon_samples(), polygon);
+        let mut wbc_input = WbcInput::new(&model);
+        wbc_input.state.clone_from(initial);
+        let command = JointCommand::hold(c.scenario.control_mode, &initial.joint_positions);
+        let planner_input = PlannerInput {
+            time: Duration::ZERO,
+            goal: None,
+            left_sole: kd.frame_pose(soles[0]),
+            right_sole: kd.frame_pose(soles[1]),
+        };
+        Ok(Self {
+            soles,
+            torso,
+            mode: c.scenario.control_mode,
+            foot_half_length: c.planner.foot_length * 0.5,
+            foot_half_width: c.planner.foot_width * 0.5,
+            planner,
+            planner_input,
+            plan_sample: PlanSample::default(),
+            horizon_sample: PlanSample::default(),
+            simplified_output: *simplified.output(),
+            simplified,
+            simplified_input,
+            simplified_period: simplified_period.as_secs_f64(),
+            simplified_valid: false,
+            wbc,
+            wbc_input,
+            command,
+            measured: Measured::default(),
+            events: goal_events(&c.goal),
+            next_event: 0,
+            counters: Counters::default(),
+            kd,
+            model,
+        })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Arc<Model> {
+        &self.model
+    }
+
+    /// Sole frames (left, right).
+    pub fn soles(&self) -> [FrameId; 2] {
+        self.soles
+    }
+
+    /// The runner's kinematics workspace, set to the last measured state.
+    pub fn kin_dyn(&self) -> &KinDyn {
+        &self.kd
+    }
+
+    fn polygon_of(
+        soles: &[nalgebra::Isometry3<f64>; 2],
+        contacts: [bool; 2],
+        hl: f64,
+        hw: f64,
+    ) -> Result<SupportPolygon, StackError> {
+        let mut feet = [FootRectangle {
+            position: Vector2::zeros(),
+            yaw: 0.0,
+            x_min: -hl,
+            x_max: hl,
+            y_min: -hw,
+            y_max: hw,
+        }; 2];
+        let mut n = 0;
+        for k in 0..2 {
+            if contacts[k] {
+                let p = &soles[k];
+                feet[n].position = p.translation.vector.xy();
+                feet[n].yaw = p.rotation.euler_angles().2;
+                n += 1;
+            }
+        }
+        if n == 0 {
+            // Flight phase in the plan cannot happen; use both feet.
+            for k in 0..2 {
+                feet[k].position = soles[k].translation.vector.xy();
+                feet[k].yaw = soles[k].rotation.euler_angles().2;
+            }
+            n = 2;
+        }
+        Ok(feet_support_polygon(&feet[..n])?)
+    }
+
+    /// Measured CoM, DCM, ZMP, soles, tilt from the robot's measurement (first step of every tick that
+    /// runs a layer).
+    pub fn estimate(&mut self, m: &Measurement) -> Result<(), StackError> {
+        self.kd.set_state(&m.state)?;
+        let com = self.kd.com_position();
+        let vcom = self.kd.com_velocity();
+        let omega = if self.plan_sample.omega > 0.0 {
+            self.plan_sample.omega
+        } else {
+            (9.81 / com.z.max(1e-3)).sqrt()
+        };
+        let weight = self.model.total_mass() * 9.81;
+        let mut feet = [FootWrench {
+            wrench: nalgebra::Vector6::zeros(),
+            point: Vector3::zeros(),
+        }; 2];
+        let mut n = 0;
+        for f in m.feet.iter() {
+            if f.in_contact && f.wrench[2] > 0.0 {
+                feet[n] = FootWrench {
+                    wrench: f.wrench,
+                    point: f.point,
+                };
+                n += 1;
+            }
+        }
+        let (zmp, ok) = match measured_zmp(&feet[..n], 0.0, 0.05 * weight) {
+            Ok(z) => (z, true),
+            Err(_) => (com.xy(), false),
+        };
+        let torso = self.kd.frame_pose(self.torso);
+        let up = torso.rotation * Vector3::z();
+        self.measured = Measured {
+            com,
+            com_velocity: vcom,
+            dcm: com.xy() + vcom.xy() / omega,
+            zmp,
+            zmp_from_wrenches: ok,
+            soles: [self.kd.frame_pose(self.soles[0]), self.kd.frame_pose(self.soles[1])],
+            tilt: up.z.clamp(-1.0, 1.0).acos(),
+            base_height: m.state.base_pose.translation.z,
+        };
+        Ok(())
+    }
+
+    /// Whether a planner event is due at `time_ns` (the first tick always is).
+    pub fn planner_due(&self, time_ns: u64) -> bool {
+        self.planner.plan().is_none() || self.events.get(self.next_event).is_some_and(|e| e.time_ns <= time_ns)
+    }
+
+    /// Runs the planner block with the due event's goal (a replan, or the first plan from the measured
+    /// soles). Returns true when it ran.
+    pub fn planner_tick(&mut self, time_ns: u64) -> Result<bool, StackError> {
+        if !self.planner_due(time_ns) {
+            return Ok(false);
+        }
+        let goal = match self.events.get(self.next_event) {
+            Some(e) if e.time_ns <= time_ns => {
+                self.next_event += 1;
+                Some(e.goal.clone())
+            }
+            _ => None,
+        };
+        if self.planner.plan().is_some() {
+            self.counters.replans += 1;
+        }
+        self.planner_input = PlannerInput {
+            time: Duration::from_nanos(time_ns),
+            goal,
+            left_sole: self.measured.soles[0],
+            right_sole: self.measured.soles[1],
+        };
+        let sample = self.planner.step(&self.planner_input)?;
+        self.plan_sample = *sample;
+        Ok(true)
+    }
+
+    /// Samples the plan at `time_ns` into [`Stack::plan_sample`].
+    pub fn sample_plan(&mut self, time_ns: u64) -> Result<(), StackError> {
+        self.planner.sample(time_ns as f64 * 1e-9, &mut self.plan_sample)?;
+        Ok(())
+    }
+
+    /// One simplified-layer tick at `time_ns` (plan sampled first). On a layer error the previous
+    /// references are held and the error is returned as `Ok(Some(message))` for the event log.
+    pub fn simplified_tick(&mut self, time_ns: u64) -> Result<Option<String>, StackError> {
+        self.sample_plan(time_ns)?;
+        let s = self.plan_sample;
+        let contacts = [s.left.in_contact, s.right.in_contact];
+        let polygon = Self::polygon_of(
+            &self.measured.soles,
+            contacts,
+            self.foot_half_length,
+            self.foot_half_width,
+        )?;
+        let i = &mut self.simplified_input;
+        i.time = Duration::from_nanos(time_ns);
+        i.omega = s.omega;
+        i.walking = self
+            .planner
+            .plan()
+            .is_some_and(|p| p.step_count() > 0 && s.time < p.end_time);
+        i.planned_dcm_position = s.dcm_position.xy();
+        i.planned_dcm_velocity = s.dcm_velocity.xy();
+        i.planned_zmp = s.zmp.xy();
+        i.planned_com_position = s.com_position.xy();
+        i.planned_com_velocity = s.com_velocity.xy();
+        i.measured_com_position = self.measured.com.xy();
+        i.measured_com_velocity = self.measured.com_velocity.xy();
+        i.measured_dcm = self.measured.com.xy() + self.measured.com_velocity.xy() / s.omega;
+        i.measured_zmp = self.measured.zmp;
+        i.support_polygon = polygon;
+        i.horizon.clear();
+        let n = self.simplified.horizon_samples();
+        if n > 0 {
+            let plan = self
+                .planner
+                .plan()
+                .ok_or_else(|| StackError::Other("no plan before the simplified layer".into()))?;
+            for k in 0..n {
+                let t = time_ns as f64 * 1e-9 + k as f64 * self.simplified_period;
+                plan.sample(t, &mut self.horizon_sample);
+                let h = &self.horizon_sample;
+                let support = Self::polygon_of(
+                    &[h.left.pose, h.right.pose],
+                    [h.left.in_contact, h.right.in_contact],
+                    self.foot_half_length,
+                    self.foot_half_width,
+                )?;
+                self.simplified_input.horizon.push(HorizonSample {
+                    dcm_position: h.dcm_position.xy(),
+                    zmp: h.zmp.xy(),
+                    support,
+                })?;
+            }
+        }
+        match self.simplified.step(&self.simplified_input) {
+            Ok(out) => {
+                self.simplified_output = *out;
+                self.simplified_valid = true;
+                Ok(None)
+            }
+            Err(e) => {
+                self.counters.simplified_holds += 1;
+                Ok(Some(e.to_string()))
+            }
+        }
+    }
+
+    /// One whole-body tick at `time_ns`: references from the plan (feet, CoM height, torso) and the
+    /// simplified layer (CoM xy, desired ZMP), measured state in; [`Stack::command`] out.
+    pub fn wbc_tick(&mut self, time_ns: u64, m: &Measurement) -> Result<(), StackError> {
+        self.sample_plan(time_ns)?;
+        let s = &self.plan_sample;
+        let i = &mut self.wbc_input;
+        i.state.clone_from(&m.state);
+        let so = &self.simplified_output;
+        if self.simplified_valid {
+            i.com_position = Vector3::new(so.com_position.x, so.com_position.y, s.com_position.z);
+            i.com_velocity = Vector3::new(so.com_velocity.x, so.com_velocity.y, s.com_velocity.z);
+            i.com_acceleration = Vector3::new(so.com_acceleration.x, so.com_acceleration.y, s.com_acceleration.z);
+            i.desired_zmp = Some(so.desired_zmp);
+        } else {
+            i.com_position = s.com_position;
+            i.com_velocity = s.com_velocity;
+            i.com_acceleration = s.com_acceleration;
+            i.desired_zmp = Some(s.zmp.xy());
+        }
+        i.left_foot.pose = s.left.pose;
+        i.left_foot.velocity = s.left.twist;
+        i.left_foot.acceleration = s.left.acceleration;
+        i.right_foot.pose = s.right.pose;
+        i.right_foot.velocity = s.right.twist;
+        i.right_foot.acceleration = s.right.acceleration;
+        i.left_in_contact = s.left.in_contact;
+        i.right_in_contact = s.right.in_contact;
+        // Torso: upright, heading the mean of the feet yaws.
+        let yl = s.left.pose.rotation.euler_angles().2;
+        let yr = s.right.pose.rotation.euler_angles().2;
+        let yaw = yl + 0.5 * wrap_angle(yr - yl);
+        i.torso.orientation = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
+        let wl = s.left.twist[5];
+        let wr = s.right.twist[5];
+        i.torso.angular_velocity = Vector3::new(0.0, 0.0, 0.5 * (wl + wr));
+        i.torso.angular_acceleration = Vector3::zeros();
+        i.posture = None;
+        i.angular_momentum = Vector3::zeros();
+        let cmd = &mut self.command;
+        cmd.contacts = [s.left.in_contact, s.right.in_contact];
+        match &mut self.wbc {
+            Wbc::Ik(ik) => {
+                let out = ik.step(&self.wbc_input)?;
+                cmd.mode = ControlMode::Position;
+                cmd.joint_positions.copy_from(&out.joint_positions);
+                cmd.joint_velocities.copy_from(&out.joint_velocities);
+                cmd.joint_torques.fill(0.0);
+                if out.report.fallback {
+                    self.counters.wbc_fallbacks += 1;
+                }
+                if out.report.held {
+                    self.counters.wbc_holds += 1;
+                }
+            }
+            Wbc::Tsid(t) => {
+                let out = t.step(&self.wbc_input)?;
+                cmd.mode = ControlMode::Torque;
+                cmd.joint_torques.copy_from(&out.joint_torques);
+                cmd.joint_positions.copy_from(&m.state.joint_positions);
+                cmd.joint_velocities.fill(0.0);
+                if out.report.fallback {
+                    self.counters.wbc_fallbacks += 1;
+                }
+                if out.report.held {
+                    self.counters.wbc_holds += 1;
+                }
+            }
+        }
+        let _ = self.mode;
+        Ok(())
+    }
+
+    /// Current gait phase of the sampled plan.
+    pub fn phase(&self) -> PhaseKind {
+        self.plan_sample.phase
+    }
+
+    /// Whether the plan has ended (the robot should be standing at the goal).
+    pub fn plan_finished(&self, time_ns: u64) -> bool {
+        self.planner.plan().is_some_and(|p| {
+            let t = time_ns as f64 * 1e-9;
+            t >= p.end_time && self.next_event >= self.events.len()
+        })
+    }
+
+    /// The posture the whole-body layer holds, as joint positions (for logs).
+    pub fn joint_count(&self) -> usize {
+        self.model.dof()
+    }
+
+    /// A zero joint vector (helper).
+    pub fn zero_joints(&self) -> DVector<f64> {
+        DVector::zeros(self.model.dof())
+    }
+}
+
+/// Wraps an angle to (−π, π].
+pub fn wrap_angle(a: f64) -> f64 {
+    let two_pi = std::f64::consts::TAU;
+    let mut x = a % two_pi;
+    if x <= -std::f64::consts::PI {
+        x += two_pi;
+    } else if x > std::f64::consts::PI {
+        x -= two_pi;
+    }
+    x
+}

@@ -1,0 +1,94 @@
+//! One step of the bundled humanoid standing on both feet, and the real-time factor of 10 s of standing.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use nalgebra::DVector;
+use stride_block::Block;
+use stride_model::Model;
+use stride_sim::{IntegratorKind, SimConfig, SimInput, SimRobot};
+
+fn humanoid() -> Arc<Model> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/stride_humanoid.urdf"
+    );
+    Arc::new(Model::from_urdf_file(path).expect("bundled model loads"))
+}
+
+fn bent_knees(model: &Model, a: f64) -> DVector<f64> {
+    let mut q = DVector::zeros(model.dof());
+    for (name, v) in [
+        ("l_hip_pitch", a),
+        ("r_hip_pitch", a),
+        ("l_knee", 2.0 * a),
+        ("r_knee", 2.0 * a),
+        ("l_ankle_pitch", a),
+        ("r_ankle_pitch", a),
+    ] {
+        q[model.joint_index(name).expect("joint")] = v;
+    }
+    q
+}
+
+fn standing(config: SimConfig) -> (SimRobot, SimInput) {
+    let model = humanoid();
+    let q = bent_knees(&model, 0.2);
+    let mut sim = SimRobot::new(Arc::clone(&model), config).expect("sim");
+    sim.set_standing_on_ground(&q).expect("stand");
+    let input = SimInput::hold(&q);
+    // Let the contacts settle so that both feet are in contact.
+    for _ in 0..1000 {
+        sim.step(&input).expect("step");
+    }
+    (sim, input)
+}
+
+fn bench_step(c: &mut Criterion) {
+    let (mut sim, input) = standing(SimConfig::default());
+    c.bench_function("humanoid_step_two_feet_implicit", |b| {
+        b.iter(|| sim.step(&input).map(|o| o.time).expect("step"))
+    });
+    let mut config = SimConfig::default();
+    config.integrator = IntegratorKind::Explicit;
+    config.rate_hz = 10_000;
+    config.actuation.default.kp = 300.0;
+    config.actuation.default.kd = 3.0;
+    let (mut sim, input) = standing(config);
+    c.bench_function("humanoid_step_two_feet_explicit_aba", |b| {
+        b.iter(|| sim.step(&input).map(|o| o.time).expect("step"))
+    });
+}
+
+fn bench_real_time_factor(c: &mut Criterion) {
+    let mut group = c.benchmark_group("real_time_factor");
+    group.sample_size(10);
+    group.bench_function("humanoid_standing_10s", |b| {
+        b.iter_custom(|iters| {
+            let mut total = std::time::Duration::ZERO;
+            for _ in 0..iters {
+                let (mut sim, input) = standing(SimConfig::default());
+                sim.set_standing_on_ground(&input.joint_positions)
+                    .expect("stand");
+                let steps = 10 * sim.config().rate_hz as usize;
+                let start = Instant::now();
+                for _ in 0..steps {
+                    sim.step(&input).expect("step");
+                }
+                let elapsed = start.elapsed();
+                eprintln!(
+                    "10 s simulated in {:.3} s: real-time factor {:.1}",
+                    elapsed.as_secs_f64(),
+                    10.0 / elapsed.as_secs_f64()
+                );
+                total += elapsed;
+            }
+            total
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_step, bench_real_time_factor);
+criterion_main!(benches);

@@ -1,0 +1,290 @@
+//! DCM predictive controller: plan reproduction, constraint satisfaction, KKT conditions in the thesis'
+//! condensed ZMP formulation (built here independently), agreement with clarabel on that dense
+//! formulation and with the unconstrained closed form.
+mod common;
+
+use std::time::Duration;
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus};
+use common::{Plan, OMEGA};
+use nalgebra::{DMatrix, DVector, Vector2};
+use stride_block::Block;
+use stride_simplified::*;
+
+fn fill_horizon(horizon: &mut DcmHorizon, plan: &Plan, k: usize, samples: usize) {
+    horizon.clear();
+    for j in k..(k + samples).min(plan.len()) {
+        horizon
+            .push(HorizonSample {
+                dcm_position: plan.dcm[j],
+                zmp: plan.zmp[j],
+                support: plan.support[j],
+            })
+            .unwrap();
+    }
+}
+
+fn predictive(horizon: f64) -> SimplifiedConfig {
+    SimplifiedConfig {
+        dcm_controller: DcmControllerKind::Predictive,
+        predictive: DcmPredictiveConfig {
+            horizon,
+            ..DcmPredictiveConfig::default()
+        },
+        ..SimplifiedConfig::default()
+    }
+}
+
+#[test]
+fn closed_loop_lipm_follows_the_plan_exactly() {
+    let plan = Plan::default_walk();
+    let d = LipmDiscretization::new(plan.omega, plan.period).unwrap();
+    let mut block = SimplifiedController::new(&predictive(2.0), Duration::from_millis(10)).unwrap();
+    let samples = block.horizon_samples();
+    assert_eq!(samples, 201);
+    let mut input = SimplifiedInput::new(samples, plan.support[0]);
+    let (mut x, mut v) = (plan.com[0], plan.com_velocity[0]);
+    let mut worst: f64 = 0.0;
+    for k in 0..plan.len() {
+        fill_horizon(&mut input.horizon, &plan, k, samples);
+        input.time = Duration::from_secs_f64(k as f64 * plan.period);
+        input.omega = plan.omega;
+        input.walking = plan.walking[k];
+        input.planned_dcm_position = plan.dcm[k];
+        input.planned_dcm_velocity = plan.dcm_velocity[k];
+        input.planned_zmp = plan.zmp[k];
+        input.planned_com_position = plan.com[k];
+        input.planned_com_velocity = plan.com_velocity[k];
+        input.support_polygon = plan.support[k];
+        input.measured_com_position = x;
+        input.measured_com_velocity = v;
+        input.measured_dcm = dcm_from_com(x, v, plan.omega);
+        input.measured_zmp = plan.zmp[k];
+        let out = *block.step(&input).unwrap();
+        worst = worst.max((input.measured_dcm - plan.dcm[k]).norm());
+        worst = worst.max((out.desired_zmp - plan.zmp[k]).norm());
+        worst = worst.max((out.com_position - plan.com[k]).norm());
+        worst = worst.max((out.com_velocity - plan.com_velocity[k]).norm());
+        assert!(matches!(out.diagnostics.mpc.status, MpcStatus::Unconstrained | MpcStatus::Solved));
+        assert_eq!(out.diagnostics.mpc.held_samples, (k + samples).saturating_sub(plan.len()));
+        (x, v) = d.step_com(x, v, out.desired_zmp);
+    }
+    assert!(worst <= 1e-9, "worst deviation {worst}");
+}
+
+/// The thesis' condensed problem (10.2.24) in w = [z_x(0..N); z_y(0..N)], built from the problem data
+/// only: H, g, A, b.
+struct Dense {
+    h: DMatrix<f64>,
+    g: DVector<f64>,
+    a: DMatrix<f64>,
+    b: DVector<f64>,
+    n: usize,
+}
+
+fn dense_problem(view: &MpcProblemView) -> Dense {
+    let n = view.zmp.len();
+    let f = (view.omega * view.period).exp();
+    let gg = 1.0 - f;
+    let w_xi = view.config.dcm_weight;
+    let w_z = view.config.zmp_rate_weight;
+    // Per axis: ξ = s0 ξ̄ + S z (rows k = 1..N).
+    let mut s = DMatrix::zeros(n, n);
+    let mut s0 = DVector::zeros(n);
+    for k in 1..=n {
+        s0[k - 1] = f.powi(k as i32);
+        for j in 0..k {
+            s[(k - 1, j)] = f.powi((k - 1 - j) as i32) * gg;
+        }
+    }
+    let mut dmat = DMatrix::zeros(n, n);
+    for k in 0..n {
+        dmat[(k, k)] = 1.0;
+        if k > 0 {
+            dmat[(k, k - 1)] = -1.0;
+        }
+    }
+    let mut h = DMatrix::zeros(2 * n, 2 * n);
+    let mut g = DVector::zeros(2 * n);
+    let block_h = &s.transpose() * &s * w_xi + &dmat.transpose() * &dmat * w_z;
+    for axis in 0..2 {
+        let xi_bar = view.initial_dcm[axis];
+        let r = DVector::from_iterator(n, (1..=n).map(|k| view.reference_dcm[k][axis]));
+        let mut rate_target = DVector::zeros(n);
+        for k in 0..n {
+            let zhat_prev = if k == 0 { view.previous_planned_zmp[axis] } else { view.reference_zmp[k - 1][axis] };
+            let planned_rate = match view.config.zmp_rate_reference {
+                ZmpRateReference::Plan => view.reference_zmp[k][axis] - zhat_prev,
+                ZmpRateReference::Zero => 0.0,
+            };
+            rate_target[k] = planned_rate + if k == 0 { view.previous_zmp[axis] } else { 0.0 };
+        }
+        let ga = s.transpose() * (&s0 * xi_bar - r) * w_xi - dmat.transpose() * rate_target * w_z;
+        h.view_mut((axis * n, axis * n), (n, n)).copy_from(&block_h);
+        g.rows_mut(axis * n, n).copy_from(&ga);
+    }
+    let rows: usize = view.supports.iter().map(|p| p.len()).sum();
+    let mut a = DMatrix::zeros(rows, 2 * n);
+    let mut b = DVector::zeros(rows);
+    let mut r = 0;
+    for (k, polygon) in view.supports.iter().enumerate() {
+        for e in 0..polygon.len() {
+            let (normal, bound) = polygon.half_plane(e);
+            a[(r, k)] = normal.x;
+            a[(r, n + k)] = normal.y;
+            b[r] = bound;
+            r += 1;
+        }
+    }
+    Dense { h, g, a, b, n }
+}
+
+fn solution_vector(view: &MpcProblemView) -> DVector<f64> {
+    let n = view.zmp.len();
+    DVector::from_iterator(2 * n, (0..2 * n).map(|i| if i < n { view.zmp[i].x } else { view.zmp[i - n].y }))
+}
+
+fn multipliers_in_dense_order(view: &MpcProblemView) -> DVector<f64> {
+    // rows of the dense problem are stage-major, edges in polygon order: the same order as the MPC's
+    let rows: usize = view.supports.iter().map(|p| p.len()).sum();
+    assert_eq!(rows, view.multipliers.len());
+    let mut r = 0;
+    for (k, polygon) in view.supports.iter().enumerate() {
+        for e in 0..polygon.len() {
+            assert_eq!(view.constraint_rows[r], (k, e));
+            r += 1;
+        }
+    }
+    DVector::from_column_slice(view.multipliers)
+}
+
+fn check_kkt(view: &MpcProblemView, dense: &Dense) {
+    let w = solution_vector(view);
+    let lambda = multipliers_in_dense_order(view);
+    // primal feasibility
+    let slack = &dense.b - &dense.a * &w;
+    assert!(slack.min() >= -1e-6, "constraint violation {}", -slack.min());
+    // dual feasibility
+    assert!(lambda.min() >= -1e-9 * lambda.amax().max(1.0), "negative multiplier {}", lambda.min());
+    // stationarity, relative to the size of the terms
+    let hw = &dense.h * &w;
+    let at_l = dense.a.transpose() * &lambda;
+    let stationarity = &hw + &dense.g + &at_l;
+    let scale = hw.amax().max(dense.g.amax()).max(at_l.amax()).max(1.0);
+    assert!(stationarity.amax() <= 1e-6 * scale, "stationarity {} (scale {scale})", stationarity.amax());
+    // complementarity
+    let comp = slack.component_mul(&lambda).amax();
+    assert!(comp <= 1e-6 * scale.max(1.0) * 1e-3, "complementarity {comp}");
+}
+
+fn solve_dense_with_clarabel(dense: &Dense) -> DVector<f64> {
+    let n = 2 * dense.n;
+    let p = CscMatrix::from(&dense.h.upper_triangle().row_iter().map(|r| r.iter().copied().collect::<Vec<_>>()).collect::<Vec<_>>());
+    let a = CscMatrix::from(&dense.a.row_iter().map(|r| r.iter().copied().collect::<Vec<_>>()).collect::<Vec<_>>());
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .tol_gap_abs(1e-12)
+        .tol_gap_rel(1e-12)
+        .tol_feas(1e-12)
+        .max_iter(300)
+        .build()
+        .unwrap();
+    let q: Vec<f64> = dense.g.iter().copied().collect();
+    let b: Vec<f64> = dense.b.iter().copied().collect();
+    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &[NonnegativeConeT(dense.b.len())], settings).unwrap();
+    solver.solve();
+    assert!(matches!(solver.solution.status, SolverStatus::Solved | SolverStatus::AlmostSolved), "{:?}", solver.solution.status);
+    assert_eq!(solver.solution.x.len(), n);
+    DVector::from_vec(solver.solution.x.clone())
+}
+
+/// A standing-on-one-foot plan with a pushed DCM: the MPC must put the ZMP on the foot's edge.
+/// With `transfer = false` the plan stays on the foot for the whole horizon.
+fn pushed_problem(controller: &mut DcmPredictiveController, push: Vector2<f64>, transfer: bool) -> DcmPredictiveOutput {
+    let foot = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap();
+    let both = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.19).unwrap();
+    let mut horizon = DcmHorizon::with_capacity(controller.horizon_samples());
+    let center = Vector2::new(0.01, 0.0);
+    for k in 0..controller.horizon_samples() {
+        // single support for 0.3 s, then double support with the ZMP moving to the middle
+        let (support, zmp) = if k < 30 || !transfer {
+            (foot, center)
+        } else {
+            let s = ((k - 30) as f64 / 20.0).min(1.0);
+            (both, center + Vector2::new(0.0, 0.08 * s))
+        };
+        horizon.push(HorizonSample { dcm_position: zmp, zmp, support }).unwrap();
+    }
+    controller.step(OMEGA, center + push, &horizon, &foot).unwrap()
+}
+
+#[test]
+fn solutions_satisfy_constraints_and_kkt_and_agree_with_clarabel() {
+    for (horizon, push, rate) in [
+        (0.5, Vector2::new(0.05, 0.0), ZmpRateReference::Plan),
+        (0.5, Vector2::new(-0.04, 0.02), ZmpRateReference::Zero),
+        (0.3, Vector2::new(0.0, -0.025), ZmpRateReference::Plan),
+        (2.0, Vector2::new(0.055, 0.0), ZmpRateReference::Plan),
+    ] {
+        for solver in [MpcSolverKind::BandedInteriorPoint, MpcSolverKind::Clarabel] {
+            let config = DcmPredictiveConfig { horizon, zmp_rate_reference: rate, solver, ..Default::default() };
+            let mut controller = DcmPredictiveController::new(config, 0.01).unwrap();
+            let out = pushed_problem(&mut controller, push, true);
+            assert_eq!(out.diagnostics.status, MpcStatus::Solved, "{horizon} {push:?} {solver:?}");
+            assert!(out.diagnostics.active_constraints > 0);
+            let view = controller.last_problem().unwrap();
+            let dense = dense_problem(&view);
+            check_kkt(&view, &dense);
+            let w = solution_vector(&view);
+            let reference = solve_dense_with_clarabel(&dense);
+            let difference = (&w - &reference).amax();
+            assert!(difference <= 1e-6, "{horizon} {push:?} {solver:?}: differs from dense clarabel by {difference}");
+            // the predicted DCM follows the prediction model from the measured DCM
+            let d = LipmDiscretization::new(view.omega, view.period).unwrap();
+            for k in 0..view.zmp.len() {
+                let next = d.step_dcm(view.dcm[k], view.zmp[k]);
+                assert!((next - view.dcm[k + 1]).norm() <= 1e-9 * (1.0 + next.norm()));
+            }
+            assert!(view.supports[0].contains(out.desired_zmp, 1e-12));
+        }
+    }
+}
+
+#[test]
+fn unconstrained_solution_matches_the_closed_form() {
+    // A small push: no constraint is active, the optimum is −H⁻¹g of the dense condensed problem.
+    for rate in [ZmpRateReference::Plan, ZmpRateReference::Zero] {
+        let config = DcmPredictiveConfig { horizon: 0.5, zmp_rate_reference: rate, ..Default::default() };
+        let mut controller = DcmPredictiveController::new(config, 0.01).unwrap();
+        let out = pushed_problem(&mut controller, Vector2::new(0.004, -0.003), false);
+        assert_eq!(out.diagnostics.status, MpcStatus::Unconstrained);
+        let view = controller.last_problem().unwrap();
+        let dense = dense_problem(&view);
+        let closed_form = -dense.h.clone().cholesky().unwrap().solve(&dense.g);
+        let w = solution_vector(&view);
+        assert!((&w - &closed_form).amax() <= 1e-8, "{}", (&w - &closed_form).amax());
+        check_kkt(&view, &dense);
+    }
+}
+
+#[test]
+fn plan_is_a_fixed_point_and_constant_reference_gives_constant_zmp() {
+    // 17.4 #24: a constant DCM reference inside the support yields x_ZMP ≡ ξ_ref.
+    let foot = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap();
+    let mut controller = DcmPredictiveController::new(DcmPredictiveConfig::default(), 0.01).unwrap();
+    let mut horizon = DcmHorizon::with_capacity(controller.horizon_samples());
+    let reference = Vector2::new(0.02, -0.01);
+    for _ in 0..controller.horizon_samples() {
+        horizon.push(HorizonSample { dcm_position: reference, zmp: reference, support: foot }).unwrap();
+    }
+    for config_rate in [ZmpRateReference::Plan, ZmpRateReference::Zero] {
+        let mut c = DcmPredictiveController::new(DcmPredictiveConfig { zmp_rate_reference: config_rate, ..Default::default() }, 0.01).unwrap();
+        let out = c.step(OMEGA, reference, &horizon, &foot).unwrap();
+        assert!((out.desired_zmp - reference).norm() < 1e-12);
+        assert!(c.last_problem().unwrap().zmp.iter().all(|z| (z - reference).norm() < 1e-10));
+    }
+    let out = controller.step(OMEGA, reference, &horizon, &foot).unwrap();
+    assert_eq!(out.diagnostics.status, MpcStatus::Unconstrained);
+    assert!(out.diagnostics.cost < 1e-18);
+}

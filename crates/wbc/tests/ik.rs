@@ -1,0 +1,308 @@
+//! QP-IK: convergence from random reachable postures to random reachable targets, joint limits,
+//! exactness of the hard tasks, cross-solver agreement, infeasibility and the fallback.
+
+mod common;
+
+use std::sync::Arc;
+
+use common::*;
+use nalgebra::DVector;
+use stride_block::Block;
+use stride_model::{KinDyn, Model, VelocityRepresentation};
+use stride_qp::{Backend, QpStatus};
+use stride_wbc::{IkConfig, QpIk, TaskConfig, WbcInput};
+
+/// Test config: the bundled default with faster gains (the convergence rate per step is `1 − K dt`).
+fn test_config(period: f64, gain: f64) -> IkConfig {
+    let mut c = IkConfig::default_for_bundled_model();
+    c.period = period;
+    for t in &mut c.tasks {
+        match t {
+            TaskConfig::Se3(s) => {
+                s.kp_linear = gain;
+                s.kp_angular = gain;
+            }
+            TaskConfig::Com(s) => s.kp = gain,
+            _ => {}
+        }
+    }
+    c
+}
+
+fn limits(model: &Model) -> (Vec<f64>, Vec<f64>) {
+    (
+        model.joints().iter().map(|j| j.lower).collect(),
+        model.joints().iter().map(|j| j.upper).collect(),
+    )
+}
+
+/// The largest violation of the joint limits by `q` (0 when inside).
+fn limit_violation(model: &Model, q: &DVector<f64>) -> f64 {
+    let (lo, hi) = limits(model);
+    (0..q.len())
+        .map(|i| (lo[i] - q[i]).max(q[i] - hi[i]).max(0.0))
+        .fold(0.0, f64::max)
+}
+
+/// Pose errors of the three hard tasks of the bundled config at `state` against `input`, measured
+/// independently of the controller with stride-model.
+fn hard_errors(model: &Arc<Model>, state: &stride_model::RobotState, input: &WbcInput) -> f64 {
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    kd.set_state(state).unwrap();
+    let mut worst: f64 = 0.0;
+    for (frame, r) in [("l_sole", &input.left_foot), ("r_sole", &input.right_foot)] {
+        let p = kd.frame_pose(model.frame_id(frame).unwrap());
+        worst = worst.max((p.translation.vector - r.pose.translation.vector).norm());
+        worst = worst.max((r.pose.rotation * p.rotation.inverse()).angle());
+    }
+    worst.max((kd.com_position() - input.com_position).norm())
+}
+
+#[test]
+fn converges_from_random_postures_to_random_reachable_targets() {
+    let model = bundled_model();
+    let mut rng = rng(7);
+    let max_steps = 400;
+    for trial in 0..6 {
+        // reachable target: feet and CoM of a random posture at a random base pose
+        let q_target = random_posture(&model, &mut rng, 0.25, 0.05);
+        let mut target_state = standing_state(&model, &q_target);
+        target_state.base_pose = random_pose(&mut rng, 0.05, 0.1) * target_state.base_pose;
+        let mut input = references_at(&model, &target_state);
+        // start: another random posture
+        let q0 = random_posture(&model, &mut rng, 0.25, 0.05);
+        input.state = standing_state(&model, &q0);
+
+        let mut ik = QpIk::new(Arc::clone(&model), test_config(0.01, 10.0)).unwrap();
+        let mut converged_at = None;
+        for step in 0..max_steps {
+            let out = ik.step(&input).unwrap();
+            assert_eq!(out.report.status, QpStatus::Solved, "trial {trial} step {step}");
+            assert!(!out.report.fallback && !out.report.held);
+            assert!(out.joint_positions.iter().all(|v| v.is_finite()));
+            let v = limit_violation(&model, &out.joint_positions);
+            assert!(v < 1e-9, "trial {trial} step {step}: joint limits violated by {v}");
+            let e = hard_errors(&model, ik.integrated_state(), &input);
+            if e < 1e-6 {
+                converged_at = Some(step);
+                break;
+            }
+        }
+        let step = converged_at.unwrap_or_else(|| {
+            panic!(
+                "trial {trial}: not converged within {max_steps} steps (error {})",
+                hard_errors(&model, ik.integrated_state(), &input)
+            )
+        });
+        assert!(step < max_steps);
+    }
+}
+
+#[test]
+fn joint_limits_hold_when_the_target_needs_more_than_the_range() {
+    let model = bundled_model();
+    let q = common::default_posture(&model);
+    let state = standing_state(&model, &q);
+    let mut input = references_at(&model, &state);
+    // CoM far down: needs more knee flexion than the range allows (CoM soft so the QP stays feasible)
+    input.com_position.z -= 0.5;
+    let mut config = test_config(0.01, 10.0);
+    for t in &mut config.tasks {
+        if let TaskConfig::Com(c) = t {
+            c.priority = stride_wbc::Priority::Soft;
+            c.weight = stride_wbc::Weight::Scalar(100.0);
+        }
+    }
+    let mut ik = QpIk::new(Arc::clone(&model), config).unwrap();
+    let mut reached_a_limit = false;
+    let (lo, hi) = limits(&model);
+    for _ in 0..300 {
+        let out = ik.step(&input).unwrap();
+        assert!(out.report.status.is_success());
+        let v = limit_violation(&model, &out.joint_positions);
+        assert!(v < 1e-9, "joint limits violated by {v}");
+        reached_a_limit |= (0..q.len())
+            .any(|i| (out.joint_positions[i] - lo[i]).abs() < 1e-6 || (hi[i] - out.joint_positions[i]).abs() < 1e-6);
+    }
+    assert!(reached_a_limit, "the test should drive some joint to its limit");
+}
+
+#[test]
+fn hard_tasks_are_satisfied_exactly_and_velocity_mode_reproduces_reference_rates() {
+    let model = bundled_model();
+    let mut rng = rng(11);
+    let q = random_posture(&model, &mut rng, 0.2, 0.1);
+    let state = standing_state(&model, &q);
+    let mut input = references_at(&model, &state);
+    // zero errors, non-zero reference velocities of the feet and the CoM
+    input.left_foot.velocity = nalgebra::Vector6::new(0.1, 0.0, 0.05, 0.0, 0.0, 0.2);
+    input.com_velocity = nalgebra::Vector3::new(0.05, 0.01, 0.0);
+    let mut config = test_config(0.002, 10.0);
+    config.feedback = stride_wbc::IkFeedback::Measured;
+    let mut ik = QpIk::new(Arc::clone(&model), config).unwrap();
+    let out = ik.step(&input).unwrap().clone();
+    assert_eq!(out.report.status, QpStatus::Solved);
+    let mut nu = DVector::zeros(model.nv());
+    nu.fixed_rows_mut::<6>(0).copy_from(&out.base_velocity);
+    nu.rows_mut(6, model.dof()).copy_from(&out.joint_velocities);
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    kd.set_state(&state).unwrap();
+    let mut j = nalgebra::DMatrix::zeros(6, model.nv());
+    kd.frame_jacobian(model.frame_id("l_sole").unwrap(), &mut j).unwrap();
+    assert!((&j * &nu - input.left_foot.velocity).norm() < 1e-9);
+    kd.frame_jacobian(model.frame_id("r_sole").unwrap(), &mut j).unwrap();
+    assert!((&j * &nu).norm() < 1e-9);
+    let mut jc = nalgebra::DMatrix::zeros(3, model.nv());
+    kd.com_jacobian(&mut jc).unwrap();
+    assert!((&jc * &nu - input.com_velocity).norm() < 1e-9);
+    // per-task residuals of the hard tasks are reported and tiny
+    for r in out.residuals.iter().filter(|r| r.hard) {
+        assert!(r.residual < 1e-9, "{}: {}", r.name, r.residual);
+    }
+    // KKT of the solved QP
+    let kkt = ik.qp_problem().check_kkt();
+    assert!(kkt.is_satisfied(1e-7), "{kkt:?}");
+}
+
+#[test]
+fn clarabel_and_active_set_agree_on_ik_ticks() {
+    let model = bundled_model();
+    let mut rng = rng(3);
+    for _ in 0..5 {
+        let q_target = random_posture(&model, &mut rng, 0.2, 0.05);
+        let input_target = references_at(&model, &standing_state(&model, &q_target));
+        let mut input = input_target.clone();
+        input.state = standing_state(&model, &random_posture(&model, &mut rng, 0.2, 0.05));
+        let mut a = test_config(0.01, 10.0);
+        a.qp.backend = Backend::ActiveSet;
+        let mut c = a.clone();
+        c.qp.backend = Backend::Clarabel;
+        let mut ik_a = QpIk::new(Arc::clone(&model), a).unwrap();
+        let mut ik_c = QpIk::new(Arc::clone(&model), c).unwrap();
+        for _ in 0..3 {
+            let oa = ik_a.step(&input).unwrap().clone();
+            let oc = ik_c.step(&input).unwrap().clone();
+            assert!(oa.report.status.is_success() && oc.report.status.is_success());
+            let d = (&oa.joint_velocities - &oc.joint_velocities).amax()
+                .max((oa.base_velocity - oc.base_velocity).amax());
+            assert!(d < 1e-6, "active set vs clarabel differ by {d}");
+            // keep both integrating from the same state
+            let s = ik_a.integrated_state().clone();
+            ik_c.set_integrated_state(&s).unwrap();
+        }
+    }
+}
+
+#[test]
+fn unreachable_feet_fall_back_to_the_relaxed_problem_without_nan() {
+    let model = bundled_model();
+    let q = common::default_posture(&model);
+    let state = standing_state(&model, &q);
+    let mut input = references_at(&model, &state);
+    // feet 3 m apart: the joint-limit bounds make the hard feet + CoM rows infeasible at once
+    input.left_foot.pose.translation.vector.y += 1.5;
+    input.right_foot.pose.translation.vector.y -= 1.5;
+    let mut ik = QpIk::new(Arc::clone(&model), test_config(0.01, 100.0)).unwrap();
+    let out = ik.step(&input).unwrap();
+    assert_eq!(out.report.status, QpStatus::Infeasible);
+    assert!(out.report.fallback, "the relaxed problem should give the command");
+    assert_eq!(out.report.relaxed_status, Some(QpStatus::Solved));
+    assert!(!out.report.held);
+    assert!(out.joint_positions.iter().all(|v| v.is_finite()));
+    assert!(limit_violation(&model, &out.joint_positions) < 1e-9);
+    // the hard feet tasks are violated and say so
+    let feet: f64 = out.residuals.iter().filter(|r| r.name.ends_with("foot")).map(|r| r.residual).sum();
+    assert!(feet > 1.0);
+}
+
+#[test]
+fn a_failed_tick_holds_the_last_valid_command() {
+    let model = bundled_model();
+    let q = common::default_posture(&model);
+    let state = standing_state(&model, &q);
+    let input = references_at(&model, &state);
+    let mut config = test_config(0.01, 10.0);
+    config.qp.fallback = false;
+    let mut ik = QpIk::new(Arc::clone(&model), config).unwrap();
+    let good = ik.step(&input).unwrap().joint_positions.clone();
+    let mut bad = input.clone();
+    bad.left_foot.pose.translation.vector.y += 1.5;
+    bad.right_foot.pose.translation.vector.y -= 1.5;
+    let out = ik.step(&bad).unwrap();
+    assert!(out.report.held);
+    assert_eq!(out.joint_positions, good);
+    assert!(out.joint_velocities.iter().all(|v| *v == 0.0));
+}
+
+#[test]
+fn config_parses_from_toml_and_rejects_unknown_types_and_keys() {
+    let text = r#"
+period = 0.01
+feedback = "integrated"
+
+[qp]
+backend = "active_set"
+
+[[tasks]]
+type = "se3"
+name = "left_foot"
+frame = "l_sole"
+reference = "left_foot"
+kp_linear = 7.0
+kp_angular = 5.0
+priority = "hard"
+
+[[tasks]]
+type = "com"
+name = "com"
+kp = 2.0
+mask = [true, true, false]
+priority = "hard"
+
+[[tasks]]
+type = "so3"
+name = "torso"
+frame = "chest"
+reference = "torso"
+kp = 5.0
+weight = [5.0, 5.0, 1.0]
+
+[[tasks]]
+type = "joint_regularization"
+name = "posture"
+kp = 5.0
+posture = { l_knee = 0.5 }
+joint_weights = { l_elbow = 2.0 }
+
+[[tasks]]
+type = "joint_position_limits"
+name = "limits"
+"#;
+    let config: IkConfig = toml::from_str(text).unwrap();
+    assert_eq!(config.tasks.len(), 5);
+    let model = bundled_model();
+    QpIk::new(Arc::clone(&model), config).unwrap();
+
+    let unknown_type = text.replace("type = \"com\"", "type = \"centre_of_mass\"");
+    assert!(toml::from_str::<IkConfig>(&unknown_type).is_err());
+    let unknown_key = text.replace("kp = 2.0", "kp = 2.0\nki = 1.0");
+    assert!(toml::from_str::<IkConfig>(&unknown_key).is_err());
+
+    // model-level errors carry names
+    let bad_frame = text.replace("frame = \"l_sole\"", "frame = \"l_foot_sole\"");
+    let err = QpIk::new(Arc::clone(&model), toml::from_str(&bad_frame).unwrap()).err().unwrap();
+    assert!(err.to_string().contains("l_foot_sole"), "{err}");
+    let bad_joint = text.replace("l_knee = 0.5", "l_kne = 0.5");
+    let err = QpIk::new(Arc::clone(&model), toml::from_str(&bad_joint).unwrap()).err().unwrap();
+    assert!(err.to_string().contains("l_kne"), "{err}");
+    // TSID-only task in the IK
+    let tsid_task = format!("{text}\n[[tasks]]\ntype = \"joint_torque_limits\"\nname = \"tau\"\n");
+    let err = QpIk::new(Arc::clone(&model), toml::from_str(&tsid_task).unwrap()).err().unwrap();
+    assert!(err.to_string().contains("joint_torque_limits"), "{err}");
+    // the defaults serialize and parse back identically
+    let default = IkConfig::default_for_bundled_model();
+    let back: IkConfig = toml::from_str(&toml::to_string(&default).unwrap()).unwrap();
+    assert_eq!(back, default);
+}
