@@ -19,7 +19,11 @@ fn random_states(model: &Model, count: usize) -> Vec<RobotState> {
     let n = model.dof();
     (0..count)
         .map(|_| {
-            let pos = Vector3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 0.6);
+            let pos = Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                0.6,
+            );
             let axis = Vector3::new(
                 rng.random_range(-1.0..1.0),
                 rng.random_range(-1.0..1.0),

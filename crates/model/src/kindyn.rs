@@ -9,7 +9,7 @@
 use std::sync::Arc;
 
 use nalgebra::{
-    DMatrix, DVector, Isometry3, Matrix3, Matrix6, Rotation3, Translation3, Unit, UnitQuaternion,
+    DMatrix, DVector, Isometry3, Matrix3, Matrix6, Rotation3, Translation3, UnitQuaternion,
     Vector3, Vector6,
 };
 
@@ -53,7 +53,9 @@ pub struct KinDyn {
     c: Vec<Vector6<f64>>,
     /// Body acceleration for ν̇ = 0 in the current representation (J̇ν of the body, frame A').
     bias: Vec<Vector6<f64>>,
+    /// World inertias (valid when `inertia_ready`).
     inertia: Vec<Inertia>,
+    inertia_ready: bool,
     // ---- scratch ----
     acc: Vec<Vector6<f64>>,
     force: Vec<Vector6<f64>>,
@@ -87,6 +89,7 @@ impl KinDyn {
             c: vec![Vector6::zeros(); nb],
             bias: vec![Vector6::zeros(); nb],
             inertia: vec![Inertia::zero(); nb],
+            inertia_ready: false,
             acc: vec![Vector6::zeros(); nb],
             force: vec![Vector6::zeros(); nb],
             ext: vec![Vector6::zeros(); nb],
@@ -215,22 +218,25 @@ impl KinDyn {
             }
             _ => Vector6::zeros(),
         };
-        self.inertia[0] = m.inertia[0].transformed(&self.rot[0], &self.pos[0]);
+        self.inertia_ready = false;
         for i in 1..m.body_count() {
             let p = m.parent[i];
             let j = i - 1;
             let rp = self.rot[p];
-            let rj = rp * m.placement_rot[i];
             let pj = self.pos[p] + rp * m.placement_pos[i];
-            let axis_w = rj * m.axis[i];
+            // Joint axis in world orientation (invariant under the joint's own rotation).
+            let axis_w = rp * m.axis_in_parent[i];
             let q = self.q[j];
             if m.prismatic[i] {
-                self.rot[i] = rj;
+                self.rot[i] = rp * m.placement_rot[i];
                 self.pos[i] = pj + axis_w * q;
                 self.s[i] = join(&axis_w, &Vector3::zeros());
             } else {
-                let r = Rotation3::from_axis_angle(&Unit::new_unchecked(m.axis[i]), q);
-                self.rot[i] = rj * r.matrix();
+                // placement · R(axis, q) = P + sin q · P K + (1 − cos q) · P K²  (Rodrigues).
+                let (sin, cos) = q.sin_cos();
+                let local =
+                    m.placement_rot[i] + m.placement_k[i] * sin + m.placement_k2[i] * (1.0 - cos);
+                self.rot[i] = rp * local;
                 self.pos[i] = pj;
                 self.s[i] = join(&pj.cross(&axis_w), &axis_w);
             }
@@ -238,7 +244,39 @@ impl KinDyn {
             self.vel[i] = self.vel[p] + self.s[i] * qd;
             self.c[i] = cross_motion(&self.vel[p], &self.s[i]) * qd;
             self.bias[i] = self.bias[p] + self.c[i];
-            self.inertia[i] = m.inertia[i].transformed(&self.rot[i], &self.pos[i]);
+        }
+    }
+
+    /// World (A') inertia of body `i` from the current pose.
+    #[inline]
+    fn compute_inertia(&self, i: usize) -> Inertia {
+        let m = &*self.model;
+        Inertia::from_body_com(
+            m.inertia[i].m,
+            &m.body_com[i],
+            &m.body_inertia_com[i],
+            &self.rot[i],
+            &self.pos[i],
+        )
+    }
+
+    /// Inertia of body `i`: cached when the dynamics have been prepared, computed otherwise.
+    #[inline]
+    fn body_inertia(&self, i: usize) -> Inertia {
+        if self.inertia_ready {
+            self.inertia[i]
+        } else {
+            self.compute_inertia(i)
+        }
+    }
+
+    /// Computes the world inertias of all bodies once per state (lazily: kinematics-only users skip it).
+    fn ensure_inertias(&mut self) {
+        if !self.inertia_ready {
+            for i in 0..self.model.body_count() {
+                self.inertia[i] = self.compute_inertia(i);
+            }
+            self.inertia_ready = true;
         }
     }
 
@@ -352,6 +390,7 @@ impl KinDyn {
     }
 
     fn composites(&mut self) {
+        self.ensure_inertias();
         let m = &*self.model;
         self.composite.copy_from_slice(&self.inertia);
         for i in (1..m.body_count()).rev() {
@@ -363,14 +402,16 @@ impl KinDyn {
 
     /// CoM relative to the base origin (world orientation).
     fn com_rel(&self) -> Vector3<f64> {
-        let mut m = 0.0;
+        let m = &*self.model;
+        let mut mass = 0.0;
         let mut h = Vector3::zeros();
-        for i in &self.inertia {
-            m += i.m;
-            h += i.h;
+        for i in 0..m.body_count() {
+            let mi = m.inertia[i].m;
+            mass += mi;
+            h += (self.rot[i] * m.body_com[i] + self.pos[i]) * mi;
         }
-        if m > 0.0 {
-            h / m
+        if mass > 0.0 {
+            h / mass
         } else {
             Vector3::zeros()
         }
@@ -380,7 +421,8 @@ impl KinDyn {
     fn momentum_and_rate(&self) -> (Vector6<f64>, Vector6<f64>) {
         let mut h = Vector6::zeros();
         let mut hd = Vector6::zeros();
-        for (k, inertia) in self.inertia.iter().enumerate() {
+        for k in 0..self.model.body_count() {
+            let inertia = self.body_inertia(k);
             let iv = inertia.mul_motion(&self.vel[k]);
             h += iv;
             hd += inertia.mul_motion(&self.bias[k]) + cross_force(&self.vel[k], &iv);
@@ -435,18 +477,30 @@ impl KinDyn {
         self.frame_checked(frame)?;
         let nv = self.model.nv();
         check_shape("frame_jacobian output", (6, nv), out.shape())?;
-        out.fill(0.0);
         let (b, r, p) = self.frame_rt(frame);
-        let t = self.base_t();
-        for k in 0..6 {
-            let col = self.out_motion(&r, &p, &t.column(k).into_owned());
-            out.fixed_view_mut::<6, 1>(0, k).copy_from(&col);
-        }
+        // Column-major 6 × nv storage: column c is data[6c .. 6c + 6].
+        let data = out.as_mut_slice();
+        data.fill(0.0);
+        let base = match self.repr {
+            VelocityRepresentation::Mixed => translation_x(&(-p)),
+            _ => {
+                let t = self.base_t();
+                let mut base = Matrix6::zeros();
+                for k in 0..6 {
+                    let col = self.out_motion(&r, &p, &t.column(k).into_owned());
+                    base.set_column(k, &col);
+                }
+                base
+            }
+        };
+        data[..36].copy_from_slice(base.as_slice());
+        let parent = &self.model.parent;
         let mut i = b;
         while i != 0 {
             let col = self.out_motion(&r, &p, &self.s[i]);
-            out.fixed_view_mut::<6, 1>(0, 5 + i).copy_from(&col);
-            i = self.model.parent[i];
+            let start = 6 * (5 + i);
+            data[start..start + 6].copy_from_slice(col.as_slice());
+            i = parent[i];
         }
         Ok(())
     }
@@ -479,8 +533,8 @@ impl KinDyn {
             return Vector3::zeros();
         }
         let mut p = Vector3::zeros();
-        for (k, inertia) in self.inertia.iter().enumerate() {
-            p += lin(&inertia.mul_motion(&self.vel[k]));
+        for k in 0..self.model.body_count() {
+            p += lin(&self.body_inertia(k).mul_motion(&self.vel[k]));
         }
         p / mass
     }
@@ -630,6 +684,7 @@ impl KinDyn {
 
     /// RNEA in frame A'. `velocity = false` computes gravity only.
     fn rnea(&mut self, nu_dot: Option<&DVector<f64>>, velocity: bool, out: &mut DVector<f64>) {
+        self.ensure_inertias();
         let nb = self.model.body_count();
         let g6 = self.world_gravity6();
         if velocity {
@@ -689,6 +744,7 @@ impl KinDyn {
             return Err(ModelError::NonFiniteInput { what: "tau" });
         }
         self.gather_wrenches(wrenches)?;
+        self.ensure_inertias();
         let nb = self.model.body_count();
         for i in 0..nb {
             let iv = self.inertia[i].mul_motion(&self.vel[i]);

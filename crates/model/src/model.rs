@@ -158,8 +158,15 @@ pub struct Model {
     pub(crate) placement_rot: Vec<Matrix3<f64>>,
     pub(crate) placement_pos: Vec<Vector3<f64>>,
     pub(crate) axis: Vec<Vector3<f64>>,
+    /// Joint axis in the parent body frame (`placement_rot · axis`).
+    pub(crate) axis_in_parent: Vec<Vector3<f64>>,
+    /// `placement_rot · K` and `placement_rot · K²` with `K = skew(axis)` (Rodrigues).
+    pub(crate) placement_k: Vec<Matrix3<f64>>,
+    pub(crate) placement_k2: Vec<Matrix3<f64>>,
     pub(crate) prismatic: Vec<bool>,
     pub(crate) inertia: Vec<Inertia>,
+    pub(crate) body_com: Vec<Vector3<f64>>,
+    pub(crate) body_inertia_com: Vec<Matrix3<f64>>,
     pub(crate) frame_rot: Vec<Matrix3<f64>>,
     pub(crate) frame_pos: Vec<Vector3<f64>>,
 }

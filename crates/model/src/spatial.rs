@@ -93,6 +93,30 @@ impl Inertia {
         }
     }
 
+    /// World (parent) inertia of a body with mass `m`, CoM `c` and rotational inertia `i_com` about the CoM in
+    /// body coordinates, the body having orientation `r` and origin `p`. Cheaper than
+    /// [`Inertia::transformed`] (no 3×3 products beyond `R I Rᵀ`).
+    #[inline]
+    pub fn from_body_com(
+        m: f64,
+        c: &Vector3<f64>,
+        i_com: &Matrix3<f64>,
+        r: &Matrix3<f64>,
+        p: &Vector3<f64>,
+    ) -> Self {
+        let cw = r * c + p;
+        let mut i = r * i_com * r.transpose();
+        // Parallel axis: I_o = I_c + m (|c|² 1 − c cᵀ).
+        let c2 = cw.norm_squared();
+        for a in 0..3 {
+            for b in 0..3 {
+                let d = if a == b { c2 } else { 0.0 };
+                i[(a, b)] += m * (d - cw[a] * cw[b]);
+            }
+        }
+        Self { m, h: cw * m, i }
+    }
+
     #[inline]
     pub fn add(&mut self, other: &Inertia) {
         self.m += other.m;
@@ -182,6 +206,8 @@ mod tests {
         assert!((e0 - e1).abs() < 1e-12);
         assert!((t.com() - (r * inertia.com() + p)).norm() < 1e-14);
         assert!((t.inertia_at_com() - r * i_com * r.transpose()).norm() < 1e-13);
+        let f = Inertia::from_body_com(2.0, &Vector3::new(0.1, -0.2, 0.3), &i_com, &r, &p);
+        assert!((f.matrix() - t.matrix()).norm() < 1e-13);
     }
 
     #[test]

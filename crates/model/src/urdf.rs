@@ -703,6 +703,24 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
         .iter()
         .map(|f| f.placement.translation.vector)
         .collect();
+    let axis_in_parent = placement_rot
+        .iter()
+        .zip(&axes)
+        .map(|(r, a)| r * a)
+        .collect();
+    let placement_k = placement_rot
+        .iter()
+        .zip(&axes)
+        .map(|(r, a)| r * crate::spatial::skew(a))
+        .collect();
+    let placement_k2 = placement_rot
+        .iter()
+        .zip(&axes)
+        .map(|(r, a)| {
+            let k = crate::spatial::skew(a);
+            r * k * k
+        })
+        .collect();
     Ok(Model {
         name: robot.name.clone(),
         root_link: robot.links[root].name.clone(),
@@ -717,8 +735,13 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
         parent,
         placement_rot,
         placement_pos,
+        axis_in_parent,
+        placement_k,
+        placement_k2,
         axis: axes,
         prismatic,
+        body_com: body_inertia.iter().map(|i| i.com()).collect(),
+        body_inertia_com: body_inertia.iter().map(|i| i.inertia_at_com()).collect(),
         inertia: body_inertia,
         frame_rot,
         frame_pos,

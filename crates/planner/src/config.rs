@@ -16,6 +16,18 @@ pub enum FirstSwingFoot {
     Right,
 }
 
+/// How the DCM is planned in double support.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DcmInterpolation {
+    /// Plan the ZMP (smooth move between the stance soles) and solve the DCM exactly: the ZMP stays in the
+    /// support polygon by construction (default).
+    ZmpFirst,
+    /// The thesis' method (10.1.21)–(10.1.23): DCM cubics between single-support exponentials, last-step
+    /// condition with `last_step_dcm_alpha`; the resulting ZMP is checked against the support polygon.
+    DcmCubic,
+}
+
 /// All parameters of the trajectory layer. Defaults are iCub-v2.7-like (see `anchors-walking-stacks.md` §1.1,
 /// §1.3 and the thesis digest §7).
 ///
@@ -54,6 +66,8 @@ pub enum FirstSwingFoot {
 /// | `backward_max_distance` | m | 0.5 | a waypoint behind the robot closer than this is reached walking backwards |
 /// | `merge_point_fraction` | – | 0.4 | where inside a double support a new plan is merged, in [0, 1) |
 /// | `first_swing_foot` | – | `auto` | `auto`, `left` or `right` |
+/// | `dcm_interpolation` | – | `zmp_first` | `zmp_first` or `dcm_cubic` (thesis (10.1.23)) |
+/// | `last_step_dcm_alpha` | – | 0.2 | α_LS of (10.2.3), in [0, 1] (only for `dcm_cubic`) |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerConfig {
@@ -123,6 +137,10 @@ pub struct PlannerConfig {
     pub merge_point_fraction: f64,
     /// Which foot swings first from standing.
     pub first_swing_foot: FirstSwingFoot,
+    /// Double-support DCM method.
+    pub dcm_interpolation: DcmInterpolation,
+    /// Last-step DCM weight α_LS (10.2.3), in [0, 1].
+    pub last_step_dcm_alpha: f64,
 }
 
 impl Default for PlannerConfig {
@@ -161,6 +179,8 @@ impl Default for PlannerConfig {
             backward_max_distance: 0.5,
             merge_point_fraction: 0.4,
             first_swing_foot: FirstSwingFoot::Auto,
+            dcm_interpolation: DcmInterpolation::ZmpFirst,
+            last_step_dcm_alpha: 0.2,
         }
     }
 }
@@ -379,6 +399,12 @@ impl PlannerConfig {
             c.merge_point_fraction,
             (0.0..1.0).contains(&c.merge_point_fraction),
             "must lie in [0, 1)",
+        )?;
+        check(
+            "last_step_dcm_alpha",
+            c.last_step_dcm_alpha,
+            (0.0..=1.0).contains(&c.last_step_dcm_alpha),
+            "must lie in [0, 1]",
         )?;
         Ok(())
     }

@@ -59,7 +59,7 @@ pub mod planner;
 pub mod swing;
 mod unicycle;
 
-pub use config::{FirstSwingFoot, PlannerConfig};
+pub use config::{DcmInterpolation, FirstSwingFoot, PlannerConfig};
 pub use contacts::{ContactList, Foot, Phase, PhaseKind, PlannedContact};
 pub use error::PlannerError;
 pub use geometry::{Pose2, SupportPolygon};

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use nalgebra::{Isometry3, Vector2};
 
-use crate::config::PlannerConfig;
+use crate::config::{DcmInterpolation, PlannerConfig};
 use crate::contacts::{ContactList, Foot, Phase, PhaseKind, PlannedContact};
 use crate::dcm::{
     bump_coefficients, dcm_particular, dcm_particular_scalar, eval_cubic_scalar, eval_cubic_value,
@@ -176,6 +176,20 @@ fn build_plan(cfg: &PlannerConfig, start: &StartState, goal: &Goal) -> Result<Pl
         SupportPolygon::hull_of(&[a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]])
     };
 
+    // support polygon of each double support after a touch-down
+    let ds_polygons: Vec<SupportPolygon> = {
+        let mut feet = [start.left, start.right];
+        steps
+            .iter()
+            .zip(step_poses.iter())
+            .map(|(s, pose)| {
+                feet[idx(s.foot)] = *pose;
+                let a = SupportPolygon::foot_corners(&feet[0], cfg.foot_length, cfg.foot_width);
+                let b = SupportPolygon::foot_corners(&feet[1], cfg.foot_length, cfg.foot_width);
+                SupportPolygon::hull_of(&[a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]])
+            })
+            .collect()
+    };
     let mut min_init = start.min_initial_ds;
     let mut attempt = 0;
     loop {
@@ -200,76 +214,110 @@ fn build_plan(cfg: &PlannerConfig, start: &StartState, goal: &Goal) -> Result<Pl
         let d0 = if n > 0 { lift[0] } else { end_time } - start.t_start;
         let first_target = if n > 0 { stance_zmp[0] } else { final_mid };
 
-        // segments (the first one is filled after the backward pass)
-        let mut segments = Vec::with_capacity(2 * n + 2);
-        segments.push(DcmSegment::new(
-            start.t_start,
-            Some(d0),
-            zmp_transition(start.zmp0, first_target, Vector2::zeros(), d0),
-            omega,
-        ));
-        for k in 0..n {
+        let mut segments = if cfg.dcm_interpolation == DcmInterpolation::DcmCubic && n > 0 {
+            let last_landed = xy(&step_poses[n - 1]);
+            thesis_segments(
+                omega,
+                cfg.last_step_dcm_alpha,
+                start,
+                &lift,
+                &land,
+                end_time,
+                &stance_zmp,
+                last_landed,
+                final_mid,
+            )
+        } else {
+            // segments (the first one is filled after the backward pass)
+            let mut segments = Vec::with_capacity(2 * n + 2);
             segments.push(DcmSegment::new(
-                lift[k],
-                Some(land[k] - lift[k]),
-                zmp_constant(stance_zmp[k]),
+                start.t_start,
+                Some(d0),
+                zmp_transition(start.zmp0, first_target, Vector2::zeros(), d0),
                 omega,
             ));
-            let (next_t, next_z) = if k + 1 < n {
-                (lift[k + 1], stance_zmp[k + 1])
+            for k in 0..n {
+                segments.push(DcmSegment::new(
+                    lift[k],
+                    Some(land[k] - lift[k]),
+                    zmp_constant(stance_zmp[k]),
+                    omega,
+                ));
+                let (next_t, next_z) = if k + 1 < n {
+                    (lift[k + 1], stance_zmp[k + 1])
+                } else {
+                    (end_time, final_mid)
+                };
+                segments.push(DcmSegment::new(
+                    land[k],
+                    Some(next_t - land[k]),
+                    zmp_transition(stance_zmp[k], next_z, Vector2::zeros(), next_t - land[k]),
+                    omega,
+                ));
+            }
+            segments.push(DcmSegment::new(
+                end_time,
+                None,
+                zmp_constant(final_mid),
+                omega,
+            ));
+
+            // backward pass: DCM at each segment end (10.1.17), the final DCM on the final ZMP
+            let mut dcm_end = final_mid;
+            for seg in segments.iter_mut().skip(1).rev() {
+                seg.growth = seg.growth_for_end_dcm(dcm_end, omega);
+                dcm_end = seg.dcm_start();
+            }
+            // first segment: ZMP bump so that the DCM starts at dcm0
+            let base = zmp_transition(start.zmp0, first_target, Vector2::zeros(), d0);
+            let pb = dcm_particular(&base, omega);
+            let gb = dcm_particular_scalar(&bump_coefficients(d0), omega);
+            let e = (-omega * d0).exp();
+            let coef = eval_cubic_scalar(&gb, 0.0) - eval_cubic_scalar(&gb, d0) * e;
+            let rhs = start.dcm0 - pb[0] - (dcm_end - eval_cubic_value(&pb, d0)) * e;
+            let bump = rhs / coef;
+            segments[0] = DcmSegment::new(
+                start.t_start,
+                Some(d0),
+                zmp_transition(start.zmp0, first_target, bump, d0),
+                omega,
+            );
+            segments[0].growth = segments[0].growth_for_end_dcm(dcm_end, omega);
+            segments
+        };
+
+        // The ZMP of every double support whose shape depends on the DCM boundary conditions (the first one;
+        // all of them for the thesis DCM cubic) is checked against the support polygon, 1e-4 m inside at 64
+        // points (the ZMP cubic cannot move more than ~3e-5 m away from its chords between those points).
+        let mut worst = (f64::INFINITY, start.t_start, 0usize);
+        let checked = if cfg.dcm_interpolation == DcmInterpolation::DcmCubic {
+            segments.len() - 1
+        } else {
+            1
+        };
+        for (i, seg) in segments.iter().enumerate().take(checked) {
+            let Some(d) = seg.duration else { continue };
+            if i % 2 == 1 {
+                continue; // single supports: ZMP on the stance sole by construction
+            }
+            let polygon = if i == 0 {
+                &initial_polygon
             } else {
-                (end_time, final_mid)
+                &ds_polygons[i / 2 - 1]
             };
-            segments.push(DcmSegment::new(
-                land[k],
-                Some(next_t - land[k]),
-                zmp_transition(stance_zmp[k], next_z, Vector2::zeros(), next_t - land[k]),
-                omega,
-            ));
-        }
-        segments.push(DcmSegment::new(
-            end_time,
-            None,
-            zmp_constant(final_mid),
-            omega,
-        ));
-
-        // backward pass: DCM at each segment end (10.1.17), the final DCM on the final ZMP
-        let mut dcm_end = final_mid;
-        for seg in segments.iter_mut().skip(1).rev() {
-            seg.growth = seg.growth_for_end_dcm(dcm_end, omega);
-            dcm_end = seg.dcm_start();
-        }
-        // first segment: ZMP bump so that the DCM starts at dcm0
-        let base = zmp_transition(start.zmp0, first_target, Vector2::zeros(), d0);
-        let pb = dcm_particular(&base, omega);
-        let gb = dcm_particular_scalar(&bump_coefficients(d0), omega);
-        let e = (-omega * d0).exp();
-        let coef = eval_cubic_scalar(&gb, 0.0) - eval_cubic_scalar(&gb, d0) * e;
-        let rhs = start.dcm0 - pb[0] - (dcm_end - eval_cubic_value(&pb, d0)) * e;
-        let bump = rhs / coef;
-        segments[0] = DcmSegment::new(
-            start.t_start,
-            Some(d0),
-            zmp_transition(start.zmp0, first_target, bump, d0),
-            omega,
-        );
-        segments[0].growth = segments[0].growth_for_end_dcm(dcm_end, omega);
-
-        // the first double support's ZMP depends on the initial DCM: verify it stays in the support
-        let mut worst = (f64::INFINITY, start.t_start);
-        const CHECKS: usize = 64;
-        for i in 0..=CHECKS {
-            let tau = d0 * i as f64 / CHECKS as f64;
-            let z = segments[0].evaluate_local(tau, omega).zmp;
-            let d = initial_polygon.signed_distance(z);
-            if d < worst.0 {
-                worst = (d, start.t_start + tau);
+            const CHECKS: usize = 64;
+            for k in 0..=CHECKS {
+                let tau = d * k as f64 / CHECKS as f64;
+                let z = seg.evaluate_local(tau, omega).zmp;
+                let dist = polygon.signed_distance(z) - 1e-4;
+                if dist < worst.0 {
+                    worst = (dist, seg.start + tau, i);
+                }
             }
         }
         if worst.0 < 0.0 {
             attempt += 1;
-            if attempt > 8 {
+            if attempt > 8 || worst.2 != 0 {
                 return Err(PlannerError::ZmpOutsideSupport {
                     time: worst.1,
                     distance: -worst.0,
@@ -375,6 +423,114 @@ fn build_plan(cfg: &PlannerConfig, start: &StartState, goal: &Goal) -> Result<Pl
             merge_times: Vec::new(),
         });
     }
+}
+
+/// DCM cubic of (10.1.23) on [0, T] from (ξ_a, ξ̇_a) to (ξ_b, ξ̇_b), as a segment (ZMP = ξ − ξ̇/ω).
+fn dcm_cubic_segment(
+    start: f64,
+    duration: f64,
+    (xa, va): (Vector2<f64>, Vector2<f64>),
+    (xb, vb): (Vector2<f64>, Vector2<f64>),
+    omega: f64,
+) -> DcmSegment {
+    let t = duration;
+    let p = [
+        xa,
+        va,
+        ((xb - xa) * 3.0 - (va * 2.0 + vb) * t) / (t * t),
+        ((xa - xb) * 2.0 + (va + vb) * t) / (t * t * t),
+    ];
+    let z = [
+        p[0] - p[1] / omega,
+        p[1] - p[2] * (2.0 / omega),
+        p[2] - p[3] * (3.0 / omega),
+        p[3],
+    ];
+    DcmSegment::new(start, Some(duration), z, omega)
+}
+
+/// The thesis' DCM plan (10.1.16)–(10.1.23), (10.2.1)–(10.2.3): single-support exponentials from the
+/// backward recursion with the last-step condition `ξ_eos = α x_last + (1 − α) x_stance`, exponentials
+/// switching in the middle of each double support, double supports replaced by DCM cubics matching position and
+/// velocity of the neighbouring exponentials, the first from the start state, the last to the feet mid-point at
+/// rest.
+#[allow(clippy::too_many_arguments)]
+fn thesis_segments(
+    omega: f64,
+    alpha: f64,
+    start: &StartState,
+    lift: &[f64],
+    land: &[f64],
+    end_time: f64,
+    stance_zmp: &[Vector2<f64>],
+    last_landed: Vector2<f64>,
+    final_mid: Vector2<f64>,
+) -> Vec<DcmSegment> {
+    let n = lift.len();
+    // switch times σ_k: end of the exponential of step k
+    let sigma: Vec<f64> = (0..n)
+        .map(|k| {
+            if k + 1 < n {
+                0.5 * (land[k] + lift[k + 1])
+            } else {
+                land[k]
+            }
+        })
+        .collect();
+    let mut xi_end = vec![Vector2::zeros(); n];
+    xi_end[n - 1] = last_landed * alpha + stance_zmp[n - 1] * (1.0 - alpha);
+    for k in (1..n).rev() {
+        let begin = sigma[k - 1];
+        xi_end[k - 1] =
+            stance_zmp[k] + (xi_end[k] - stance_zmp[k]) * (-omega * (sigma[k] - begin)).exp();
+    }
+    let exp_at = |k: usize, t: f64| {
+        let e = (xi_end[k] - stance_zmp[k]) * (omega * (t - sigma[k])).exp();
+        (stance_zmp[k] + e, e * omega)
+    };
+    let mut segments = Vec::with_capacity(2 * n + 2);
+    let dcm_vel0 = (start.dcm0 - start.zmp0) * omega;
+    segments.push(dcm_cubic_segment(
+        start.t_start,
+        lift[0] - start.t_start,
+        (start.dcm0, dcm_vel0),
+        exp_at(0, lift[0]),
+        omega,
+    ));
+    for k in 0..n {
+        let mut ss = DcmSegment::new(
+            lift[k],
+            Some(land[k] - lift[k]),
+            zmp_constant(stance_zmp[k]),
+            omega,
+        );
+        ss.growth = (xi_end[k] - stance_zmp[k]) * (omega * (lift[k] - sigma[k])).exp();
+        segments.push(ss);
+        if k + 1 < n {
+            segments.push(dcm_cubic_segment(
+                land[k],
+                lift[k + 1] - land[k],
+                exp_at(k, land[k]),
+                exp_at(k + 1, lift[k + 1]),
+                omega,
+            ));
+        } else {
+            segments.push(dcm_cubic_segment(
+                land[k],
+                end_time - land[k],
+                exp_at(k, land[k]),
+                (final_mid, Vector2::zeros()),
+                omega,
+            ));
+        }
+    }
+    segments.push(DcmSegment::new(
+        end_time,
+        None,
+        zmp_constant(final_mid),
+        omega,
+    ));
+    segments
 }
 
 /// The trajectory-layer object: holds the current plan, replans on new goals, samples references.

@@ -190,3 +190,68 @@ fn quintic_and_geodesic() {
         );
     }
 }
+
+/// 17.3 #20: the thesis option: DCM cubics in double support, the last single support ends at
+/// `α x_last + (1 − α) x_stance` (10.2.3), the plan starts at rest and ends on the mid-point at rest.
+#[test]
+fn thesis_dcm_cubic_option() {
+    for alpha in [0.0, 0.2, 0.5, 1.0] {
+        let cfg = PlannerConfig {
+            dcm_interpolation: stride_planner::DcmInterpolation::DcmCubic,
+            last_step_dcm_alpha: alpha,
+            ..PlannerConfig::default()
+        };
+        let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+        let plan = plan_from_standing(
+            &cfg,
+            0.0,
+            &l,
+            &r,
+            &Goal::Pose {
+                x: 2.0,
+                y: 0.0,
+                yaw: 0.0,
+            },
+        )
+        .unwrap();
+        check_all(&cfg, &plan, true);
+        let last_ss = plan
+            .phases
+            .iter()
+            .rev()
+            .find(|p| p.kind != PhaseKind::DoubleSupport)
+            .unwrap();
+        let PhaseKind::SingleSupport { stance } = last_ss.kind else {
+            unreachable!()
+        };
+        let stance_xy = plan
+            .contacts(stance)
+            .active_at(last_ss.start)
+            .unwrap()
+            .pose
+            .translation
+            .vector
+            .xy();
+        let landed = plan
+            .contacts(stance.other())
+            .active_at(last_ss.end)
+            .unwrap()
+            .pose
+            .translation
+            .vector
+            .xy();
+        let xi = sample(&plan, last_ss.end).dcm_position.xy();
+        assert!(
+            (xi - (landed * alpha + stance_xy * (1.0 - alpha))).norm() < 1e-9,
+            "alpha {alpha}: {xi:?}"
+        );
+        // DS segments are DCM cubics: no exponential term
+        for (i, seg) in plan.segments.iter().enumerate() {
+            if i % 2 == 0 {
+                assert_eq!(seg.growth, Vector2::zeros());
+            }
+        }
+        let s0 = sample(&plan, 0.0);
+        assert!(s0.dcm_velocity.norm() < 1e-12 && s0.dcm_position.xy().norm() < 1e-12);
+    }
+}

@@ -145,3 +145,25 @@ proptest! {
         check_swings(&cfg, new);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases(), .. ProptestConfig::default() })]
+
+    /// The thesis' DCM cubics (option `dcm_cubic`): either a plan satisfying every invariant, or the documented
+    /// refusal `ZmpOutsideSupport` (its ZMP is not in the support polygon by construction).
+    #[test]
+    fn thesis_dcm_cubic_plans_satisfy_the_invariants_or_refuse(cfg in config_strategy(), goal in goal_strategy(),
+                                                               alpha in 0.0f64..=1.0) {
+        let cfg = PlannerConfig {
+            dcm_interpolation: stride_planner::DcmInterpolation::DcmCubic,
+            last_step_dcm_alpha: alpha,
+            ..cfg
+        };
+        let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+        match plan_from_standing(&cfg, 0.0, &l, &r, &goal) {
+            Ok(plan) => check_all(&cfg, &plan, true),
+            Err(PlannerError::ZmpOutsideSupport { .. }) => {}
+            Err(e) => panic!("planning failed: {e}"),
+        }
+    }
+}

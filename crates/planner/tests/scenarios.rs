@@ -121,7 +121,11 @@ fn stand_goal_is_a_valid_standing_plan() {
 fn replanning_with_the_same_goal_keeps_the_footsteps() {
     let cfg = PlannerConfig::default();
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-    let goal = Goal::Pose { x: 2.0, y: 0.0, yaw: 0.0 };
+    let goal = Goal::Pose {
+        x: 2.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
     let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
     let old = planner.start(0.0, &l, &r, &goal).unwrap().clone();
     let m = planner.replan(4.0, &goal).unwrap();
@@ -144,9 +148,39 @@ fn replanning_to_a_new_goal() {
     let cfg = PlannerConfig::default();
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
     let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
-    planner.start(0.0, &l, &r, &Goal::Pose { x: 2.0, y: 0.0, yaw: 0.0 }).unwrap();
-    planner.replan(5.0, &Goal::Pose { x: 1.5, y: 1.0, yaw: 1.5 }).unwrap();
-    planner.replan(9.0, &Goal::Velocity { forward: 0.1, lateral: 0.0, yaw_rate: -0.1, duration: Some(4.0) }).unwrap();
+    planner
+        .start(
+            0.0,
+            &l,
+            &r,
+            &Goal::Pose {
+                x: 2.0,
+                y: 0.0,
+                yaw: 0.0,
+            },
+        )
+        .unwrap();
+    planner
+        .replan(
+            5.0,
+            &Goal::Pose {
+                x: 1.5,
+                y: 1.0,
+                yaw: 1.5,
+            },
+        )
+        .unwrap();
+    planner
+        .replan(
+            9.0,
+            &Goal::Velocity {
+                forward: 0.1,
+                lateral: 0.0,
+                yaw_rate: -0.1,
+                duration: Some(4.0),
+            },
+        )
+        .unwrap();
     let plan = planner.plan().unwrap();
     assert_eq!(plan.merge_times.len(), 2);
     check_steps(&cfg, plan, false);

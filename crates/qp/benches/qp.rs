@@ -11,7 +11,10 @@ use stride_qp::{ActiveSetSettings, ActiveSetSolver, Backend, QpSettings, QpSolve
 fn settings(backend: Backend, warm: bool) -> QpSettings {
     QpSettings {
         backend,
-        active_set: ActiveSetSettings { warm_start: warm, ..ActiveSetSettings::default() },
+        active_set: ActiveSetSettings {
+            warm_start: warm,
+            ..ActiveSetSettings::default()
+        },
         ..QpSettings::default()
     }
 }
@@ -25,7 +28,9 @@ fn bench_shape(c: &mut Criterion, label: &str, make: Make) {
         ("active_set_warm", Backend::ActiveSet, true),
         ("clarabel", Backend::Clarabel, false),
     ] {
-        let Ok(mut p) = make(1, settings(backend, warm)) else { return };
+        let Ok(mut p) = make(1, settings(backend, warm)) else {
+            return;
+        };
         let mut t = 0.0;
         group.bench_function(name, |b| {
             b.iter(|| {
@@ -36,10 +41,15 @@ fn bench_shape(c: &mut Criterion, label: &str, make: Make) {
         });
     }
     // backend only (no assembly), cold, on a fixed dense QP
-    let Ok(mut p) = make(1, settings(Backend::ActiveSet, false)) else { return };
+    let Ok(mut p) = make(1, settings(Backend::ActiveSet, false)) else {
+        return;
+    };
     let _ = p.problem.solve();
     let qp = p.problem.dense_qp().clone();
-    let mut solver = ActiveSetSolver::new(ActiveSetSettings { warm_start: false, ..ActiveSetSettings::default() });
+    let mut solver = ActiveSetSolver::new(ActiveSetSettings {
+        warm_start: false,
+        ..ActiveSetSettings::default()
+    });
     let mut out = SolverOutput::new(&qp);
     group.bench_function("active_set_cold_backend_only", |b| {
         b.iter(|| {

@@ -31,7 +31,10 @@ pub struct ClarabelSettings {
 
 impl Default for ClarabelSettings {
     fn default() -> Self {
-        Self { tolerance: 1e-10, max_iterations: 200 }
+        Self {
+            tolerance: 1e-10,
+            max_iterations: 200,
+        }
     }
 }
 
@@ -59,7 +62,9 @@ fn map_status(s: SolverStatus) -> QpStatus {
     match s {
         SolverStatus::Solved => QpStatus::Solved,
         SolverStatus::AlmostSolved => QpStatus::SolvedInaccurate,
-        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => QpStatus::Infeasible,
+        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
+            QpStatus::Infeasible
+        }
         SolverStatus::DualInfeasible | SolverStatus::AlmostDualInfeasible => QpStatus::Unbounded,
         SolverStatus::MaxIterations | SolverStatus::MaxTime => QpStatus::MaxIterations,
         _ => QpStatus::NumericalError,
@@ -245,7 +250,9 @@ impl ClarabelSolver {
 
     fn try_update(&mut self, qp: &DenseQp) -> bool {
         self.fill(qp, None);
-        let Some(solver) = self.solver.as_mut() else { return false };
+        let Some(solver) = self.solver.as_mut() else {
+            return false;
+        };
         solver.update_P(&self.p_vals).is_ok()
             && solver.update_A(&self.a_vals).is_ok()
             && solver.update_q(&self.q).is_ok()
@@ -269,7 +276,11 @@ impl QpSolver for ClarabelSolver {
         let same = self.solver.is_some() && self.n == qp.n() && new_layout == self.layout;
         std::mem::swap(&mut self.layout, &mut new_layout);
         self.new_layout = new_layout;
-        let ready = if same && self.try_update(qp) { true } else { self.rebuild(qp, n_zero).is_ok() };
+        let ready = if same && self.try_update(qp) {
+            true
+        } else {
+            self.rebuild(qp, n_zero).is_ok()
+        };
         let Some(solver) = self.solver.as_mut().filter(|_| ready) else {
             self.solver = None;
             out.status = QpStatus::NumericalError;
@@ -305,7 +316,7 @@ impl QpSolver for ClarabelSolver {
 
 /// Builds a CSC matrix from triplets, summing duplicates.
 fn csc_from_triplets(m: usize, n: usize, trips: &mut [(usize, usize, f64)]) -> CscMatrix<f64> {
-    trips.sort_by(|a, b| (a.1, a.0).cmp(&(b.1, b.0)));
+    trips.sort_by_key(|a| (a.1, a.0));
     let mut colptr = vec![0usize; n + 1];
     let mut rowval: Vec<usize> = Vec::with_capacity(trips.len());
     let mut nzval: Vec<f64> = Vec::with_capacity(trips.len());
@@ -398,7 +409,14 @@ impl ClarabelSparseSolver {
         let mut p_trips = qp.hessian.clone();
         let p = csc_from_triplets(n, n, &mut p_trips);
         let b: Vec<f64> = row_map.iter().map(|&(_, _, rhs)| rhs).collect();
-        let key = (n, p.colptr.clone(), p.rowval.clone(), a.colptr.clone(), a.rowval.clone(), n_zero);
+        let key = (
+            n,
+            p.colptr.clone(),
+            p.rowval.clone(),
+            a.colptr.clone(),
+            a.rowval.clone(),
+            n_zero,
+        );
         let reuse = self.solver.is_some() && key == self.key;
         let mut updated = false;
         if reuse {
@@ -443,7 +461,9 @@ impl ClarabelSparseSolver {
             }
             sol_out.objective = sol.obj_val;
         }
-        if !(sol_out.x.iter().all(|v| v.is_finite()) && sol_out.multipliers.iter().all(|v| v.is_finite())) {
+        if !(sol_out.x.iter().all(|v| v.is_finite())
+            && sol_out.multipliers.iter().all(|v| v.is_finite()))
+        {
             sol_out.x.iter_mut().for_each(|v| *v = 0.0);
             sol_out.multipliers.iter_mut().for_each(|v| *v = 0.0);
             sol_out.status = QpStatus::NumericalError;

@@ -84,7 +84,11 @@ impl DenseQp {
     /// Sets how many equality rows are in use (≤ capacity).
     pub fn set_n_eq(&mut self, n_eq: usize) -> Result<(), QpError> {
         if n_eq > self.e.nrows() {
-            return Err(QpError::Dimension { what: "equality rows", expected: self.e.nrows(), got: n_eq });
+            return Err(QpError::Dimension {
+                what: "equality rows",
+                expected: self.e.nrows(),
+                got: n_eq,
+            });
         }
         self.n_eq = n_eq;
         Ok(())
@@ -92,7 +96,11 @@ impl DenseQp {
     /// Sets how many inequality rows are in use (≤ capacity).
     pub fn set_n_ineq(&mut self, n_ineq: usize) -> Result<(), QpError> {
         if n_ineq > self.c.nrows() {
-            return Err(QpError::Dimension { what: "inequality rows", expected: self.c.nrows(), got: n_ineq });
+            return Err(QpError::Dimension {
+                what: "inequality rows",
+                expected: self.c.nrows(),
+                got: n_ineq,
+            });
         }
         self.n_ineq = n_ineq;
         Ok(())
@@ -206,7 +214,9 @@ impl DenseQp {
         if !finite(self.ineq_matrix().iter()) {
             return false;
         }
-        let sides_ok = |lo: f64, hi: f64| !lo.is_nan() && !hi.is_nan() && lo <= hi && lo < f64::INFINITY && hi > f64::NEG_INFINITY;
+        let sides_ok = |lo: f64, hi: f64| {
+            !lo.is_nan() && !hi.is_nan() && lo <= hi && lo < f64::INFINITY && hi > f64::NEG_INFINITY
+        };
         for i in 0..self.n_ineq {
             if !sides_ok(self.l[i], self.u[i]) {
                 return false;

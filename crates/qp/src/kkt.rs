@@ -31,7 +31,10 @@ pub struct KktReport {
 impl KktReport {
     /// Largest of the four residuals.
     pub fn max_residual(&self) -> f64 {
-        self.stationarity.max(self.primal).max(self.dual).max(self.complementarity)
+        self.stationarity
+            .max(self.primal)
+            .max(self.dual)
+            .max(self.complementarity)
     }
 
     /// Whether every residual is below `tol · scale`.
@@ -104,7 +107,20 @@ pub fn check_kkt(qp: &DenseQp, out: &SolverOutput) -> KktReport {
         side(cx, qp.l[i], qp.u[i], out.z[i], &mut primal, &mut scale);
     }
     for j in 0..n {
-        side(x[j], qp.lb[j], qp.ub[j], out.bound_multipliers[j], &mut primal, &mut scale);
+        side(
+            x[j],
+            qp.lb[j],
+            qp.ub[j],
+            out.bound_multipliers[j],
+            &mut primal,
+            &mut scale,
+        );
     }
-    KktReport { stationarity, primal: primal.max(0.0), dual, complementarity: comp, scale: 1.0 + scale }
+    KktReport {
+        stationarity,
+        primal: primal.max(0.0),
+        dual,
+        complementarity: comp,
+        scale: 1.0 + scale,
+    }
 }

@@ -220,22 +220,32 @@ pub struct Task {
 impl Task {
     fn new(spec: &TaskSpec, vars: &VariableSet) -> Result<Self, QpError> {
         if spec.rows == 0 || spec.variables.is_empty() {
-            return Err(QpError::EmptyTask { task: spec.name.clone() });
+            return Err(QpError::EmptyTask {
+                task: spec.name.clone(),
+            });
         }
         let mut blocks = Vec::new();
         let mut width = 0;
         for (k, &v) in spec.variables.iter().enumerate() {
             if !vars.contains(v) {
-                return Err(QpError::UnknownVariable { task: spec.name.clone(), id: v.index() });
+                return Err(QpError::UnknownVariable {
+                    task: spec.name.clone(),
+                    id: v.index(),
+                });
             }
             if spec.variables[..k].contains(&v) {
-                return Err(QpError::RepeatedVariable { task: spec.name.clone(), variable: vars.name(v).to_owned() });
+                return Err(QpError::RepeatedVariable {
+                    task: spec.name.clone(),
+                    variable: vars.name(v).to_owned(),
+                });
             }
             blocks.push((vars.range(v), width));
             width += vars.size(v);
         }
         if spec.kind == TaskKind::Inequality && !spec.hard {
-            return Err(QpError::SoftInequality { task: spec.name.clone() });
+            return Err(QpError::SoftInequality {
+                task: spec.name.clone(),
+            });
         }
         let rows = spec.rows;
         let mut task = Self {
@@ -332,7 +342,11 @@ impl Task {
     /// Sets the same weight on every row (finite, ≥ 0).
     pub fn set_weight(&mut self, weight: f64) -> Result<(), QpError> {
         if !(weight >= 0.0 && weight.is_finite()) {
-            return Err(QpError::InvalidWeight { task: self.name.clone(), row: 0, value: weight });
+            return Err(QpError::InvalidWeight {
+                task: self.name.clone(),
+                row: 0,
+                value: weight,
+            });
         }
         self.weight.fill(weight);
         Ok(())
@@ -341,11 +355,19 @@ impl Task {
     pub fn set_weights(&mut self, weights: &[f64]) -> Result<(), QpError> {
         let rows = self.rows();
         if weights.len() != 1 && weights.len() != rows {
-            return Err(QpError::WeightSize { task: self.name.clone(), expected: rows, got: weights.len() });
+            return Err(QpError::WeightSize {
+                task: self.name.clone(),
+                expected: rows,
+                got: weights.len(),
+            });
         }
         for (row, &w) in weights.iter().enumerate() {
             if !(w >= 0.0 && w.is_finite()) {
-                return Err(QpError::InvalidWeight { task: self.name.clone(), row, value: w });
+                return Err(QpError::InvalidWeight {
+                    task: self.name.clone(),
+                    row,
+                    value: w,
+                });
             }
         }
         if weights.len() == 1 {
@@ -359,7 +381,9 @@ impl Task {
     /// hard.
     pub fn set_hard(&mut self, hard: bool) -> Result<(), QpError> {
         if self.kind == TaskKind::Inequality && !hard {
-            return Err(QpError::SoftInequality { task: self.name.clone() });
+            return Err(QpError::SoftInequality {
+                task: self.name.clone(),
+            });
         }
         self.hard = hard;
         Ok(())
@@ -383,7 +407,9 @@ impl Task {
         for i in 0..self.rows() {
             let r = match self.kind {
                 TaskKind::Equality => (self.ax[i] - self.b[i]).abs(),
-                TaskKind::Inequality => (self.lower[i] - self.ax[i]).max(self.ax[i] - self.upper[i]).max(0.0),
+                TaskKind::Inequality => (self.lower[i] - self.ax[i])
+                    .max(self.ax[i] - self.upper[i])
+                    .max(0.0),
             };
             sq += r * r;
             inf = inf.max(r);
@@ -392,7 +418,12 @@ impl Task {
     }
 
     /// Adds `½‖W^{1/2}(A x − b)‖²` (with `weight_override` on every row if given) to `H`, `g`.
-    fn add_cost(&mut self, h: &mut DMatrix<f64>, g: &mut DVector<f64>, weight_override: Option<f64>) {
+    fn add_cost(
+        &mut self,
+        h: &mut DMatrix<f64>,
+        g: &mut DVector<f64>,
+        weight_override: Option<f64>,
+    ) {
         for i in 0..self.rows() {
             let w = weight_override.unwrap_or(self.weight[i]).sqrt();
             for c in 0..self.width {
@@ -517,7 +548,11 @@ pub struct QpProblem {
 
 impl QpProblem {
     /// Builds the problem structure with the backend named in `settings`.
-    pub fn new(vars: VariableSet, tasks: Vec<TaskSpec>, settings: QpSettings) -> Result<Self, QpError> {
+    pub fn new(
+        vars: VariableSet,
+        tasks: Vec<TaskSpec>,
+        settings: QpSettings,
+    ) -> Result<Self, QpError> {
         let solver = settings.backend.make(&settings);
         let relaxed_solver = settings.backend.make(&settings);
         Self::with_solvers(vars, tasks, settings, solver, relaxed_solver)
@@ -534,17 +569,31 @@ impl QpProblem {
         settings.validate()?;
         let n = vars.total_size();
         if n == 0 {
-            return Err(QpError::Dimension { what: "number of variables", expected: 1, got: 0 });
+            return Err(QpError::Dimension {
+                what: "number of variables",
+                expected: 1,
+                got: 0,
+            });
         }
         let mut tasks: Vec<Task> = Vec::with_capacity(specs.len());
         for spec in &specs {
             if tasks.iter().any(|t| t.name == spec.name) {
-                return Err(QpError::DuplicateTask { name: spec.name.clone() });
+                return Err(QpError::DuplicateTask {
+                    name: spec.name.clone(),
+                });
             }
             tasks.push(Task::new(spec, &vars)?);
         }
-        let cap_eq: usize = tasks.iter().filter(|t| t.kind == TaskKind::Equality).map(|t| t.rows()).sum();
-        let cap_in: usize = tasks.iter().filter(|t| t.kind == TaskKind::Inequality).map(|t| t.rows()).sum();
+        let cap_eq: usize = tasks
+            .iter()
+            .filter(|t| t.kind == TaskKind::Equality)
+            .map(|t| t.rows())
+            .sum();
+        let cap_in: usize = tasks
+            .iter()
+            .filter(|t| t.kind == TaskKind::Inequality)
+            .map(|t| t.rows())
+            .sum();
         let nominal = DenseQp::with_capacity(n, cap_eq, cap_in);
         let relaxed = DenseQp::with_capacity(n, 0, cap_in);
         let out = SolverOutput::new(&nominal);
@@ -592,7 +641,10 @@ impl QpProblem {
     /// Sets the Tikhonov regularisation ρ (≥ 0).
     pub fn set_regularization(&mut self, rho: f64) -> Result<(), QpError> {
         if !(rho >= 0.0 && rho.is_finite()) {
-            return Err(QpError::InvalidSetting { name: "regularization", reason: format!("{rho} must be >= 0") });
+            return Err(QpError::InvalidSetting {
+                name: "regularization",
+                reason: format!("{rho} must be >= 0"),
+            });
         }
         self.settings.regularization = rho;
         Ok(())
@@ -679,7 +731,11 @@ impl QpProblem {
     fn assemble(&mut self, relaxed: bool) {
         let rho = self.settings.regularization;
         let relax_w = self.settings.relaxation_weight;
-        let qp = if relaxed { &mut self.relaxed } else { &mut self.nominal };
+        let qp = if relaxed {
+            &mut self.relaxed
+        } else {
+            &mut self.nominal
+        };
         let n = qp.n();
         qp.h.fill(0.0);
         for i in 0..n {
@@ -730,7 +786,10 @@ impl QpProblem {
         let mut path = SolvePath::Nominal;
         let mut status = nominal_status;
         let mut iterations = self.out.iterations;
-        let has_hard_eq = self.tasks.iter().any(|t| t.kind == TaskKind::Equality && t.hard);
+        let has_hard_eq = self
+            .tasks
+            .iter()
+            .any(|t| t.kind == TaskKind::Equality && t.hard);
         let retry = matches!(
             nominal_status,
             QpStatus::Infeasible
@@ -741,7 +800,8 @@ impl QpProblem {
         let mut relaxed_status = None;
         if !nominal_status.is_success() && retry && self.settings.fallback && has_hard_eq {
             self.assemble(true);
-            self.relaxed_solver.solve(&self.relaxed, &mut self.out_relaxed);
+            self.relaxed_solver
+                .solve(&self.relaxed, &mut self.out_relaxed);
             status = self.out_relaxed.status;
             relaxed_status = Some(status);
             iterations += self.out_relaxed.iterations;
@@ -749,7 +809,11 @@ impl QpProblem {
         }
         let (x_src, objective, warm) = match path {
             SolvePath::Nominal => (&self.out.x, self.out.objective, self.out.warm_started),
-            SolvePath::Relaxed => (&self.out_relaxed.x, self.out_relaxed.objective, self.out_relaxed.warm_started),
+            SolvePath::Relaxed => (
+                &self.out_relaxed.x,
+                self.out_relaxed.objective,
+                self.out_relaxed.warm_started,
+            ),
         };
         let sol = &mut self.solution;
         if status.is_success() {
@@ -773,14 +837,19 @@ impl QpProblem {
             }
         }
         for j in 0..sol.x.len() {
-            hard_violation = hard_violation.max(self.lb[j] - sol.x[j]).max(sol.x[j] - self.ub[j]);
+            hard_violation = hard_violation
+                .max(self.lb[j] - sol.x[j])
+                .max(sol.x[j] - self.ub[j]);
         }
         sol.hard_violation = hard_violation;
         sol.solve_time = start.elapsed();
         if status.is_success() {
             Ok(&self.solution)
         } else {
-            Err(QpError::SolveFailed { nominal: nominal_status, relaxed: relaxed_status })
+            Err(QpError::SolveFailed {
+                nominal: nominal_status,
+                relaxed: relaxed_status,
+            })
         }
     }
 }

@@ -6,10 +6,11 @@ use serde::{Deserialize, Serialize};
 use crate::dense::DenseQp;
 
 /// Outcome of one backend solve.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum QpStatus {
     /// No solve has run yet.
+    #[default]
     NotSolved,
     /// Optimal to the backend's tolerances; `x` is a valid solution.
     Solved,

@@ -51,11 +51,6 @@ pub struct SparseSolution {
     pub solve_time: Duration,
 }
 
-impl Default for QpStatus {
-    fn default() -> Self {
-        QpStatus::NotSolved
-    }
-}
 
 impl SparseQp {
     /// An empty problem with `n` variables and `m` unconstrained rows (sides ±∞).
@@ -78,7 +73,11 @@ impl SparseQp {
     /// Checks sizes, index ranges, finiteness and `lower ≤ upper`.
     pub fn validate(&self) -> Result<(), QpError> {
         if self.gradient.len() != self.n {
-            return Err(QpError::Dimension { what: "sparse gradient", expected: self.n, got: self.gradient.len() });
+            return Err(QpError::Dimension {
+                what: "sparse gradient",
+                expected: self.n,
+                got: self.gradient.len(),
+            });
         }
         if self.upper.len() != self.lower.len() {
             return Err(QpError::Dimension {
@@ -89,16 +88,27 @@ impl SparseQp {
         }
         for &(r, c, v) in &self.hessian {
             if r > c || c >= self.n || !v.is_finite() {
-                return Err(QpError::BadTriplet { what: "hessian", row: r, col: c });
+                return Err(QpError::BadTriplet {
+                    what: "hessian",
+                    row: r,
+                    col: c,
+                });
             }
         }
         for &(r, c, v) in &self.constraints {
             if r >= self.lower.len() || c >= self.n || !v.is_finite() {
-                return Err(QpError::BadTriplet { what: "constraint", row: r, col: c });
+                return Err(QpError::BadTriplet {
+                    what: "constraint",
+                    row: r,
+                    col: c,
+                });
             }
         }
         if self.gradient.iter().any(|v| !v.is_finite()) {
-            return Err(QpError::InvalidSetting { name: "gradient", reason: "non-finite entry".into() });
+            return Err(QpError::InvalidSetting {
+                name: "gradient",
+                reason: "non-finite entry".into(),
+            });
         }
         for (i, (&l, &u)) in self.lower.iter().zip(&self.upper).enumerate() {
             if l.is_nan() || u.is_nan() || l > u || l == f64::INFINITY || u == f64::NEG_INFINITY {

@@ -97,13 +97,23 @@ impl RandomWbc {
         a1: DMatrix<f64>,
         side: Side,
     ) -> Result<(), QpError> {
-        let id = problem.task_id(name).ok_or_else(|| QpError::UnknownTask { name: name.to_owned() })?;
+        let id = problem.task_id(name).ok_or_else(|| QpError::UnknownTask {
+            name: name.to_owned(),
+        })?;
         let mut cols = Vec::new();
         for &v in vars {
             cols.extend(problem.variables().range(v));
         }
         let rows = a0.nrows();
-        tasks.push(TaskData { id, xk: DVector::zeros(cols.len()), tmp: DVector::zeros(rows), a0, a1, side, cols });
+        tasks.push(TaskData {
+            id,
+            xk: DVector::zeros(cols.len()),
+            tmp: DVector::zeros(rows),
+            a0,
+            a1,
+            side,
+            cols,
+        });
         Ok(())
     }
 
@@ -175,7 +185,15 @@ impl RandomWbc {
         // dynamics: dense 18 x 62
         let a0 = rng.matrix(18, 62, 1.0);
         let a1 = rng.matrix(18, 62, 0.05);
-        Self::add(&mut tasks, &problem, "dynamics", &[acc, forces], a0, a1, Side::EqualityThrough(xf.clone()))?;
+        Self::add(
+            &mut tasks,
+            &problem,
+            "dynamics",
+            &[acc, forces],
+            a0,
+            a1,
+            Side::EqualityThrough(xf.clone()),
+        )?;
         // friction pyramid (mu = 0.5) + unilateral fz >= 5
         let mu = 0.5;
         let mut fr = DMatrix::zeros(40, 24);
@@ -194,13 +212,29 @@ impl RandomWbc {
             upper[r + 4] = -5.0;
         }
         let lower = DVector::from_element(40, f64::NEG_INFINITY);
-        Self::add(&mut tasks, &problem, "friction", &[forces], fr, DMatrix::zeros(40, 24), Side::Fixed(lower, upper))?;
+        Self::add(
+            &mut tasks,
+            &problem,
+            "friction",
+            &[forces],
+            fr,
+            DMatrix::zeros(40, 24),
+            Side::Fixed(lower, upper),
+        )?;
         // torque limits: dense rows, margins 0.5..5 on both sides
         let t0 = rng.matrix(32, 62, 1.0);
         let t1 = rng.matrix(32, 62, 0.05);
         let mut margins = rng.vector(64, 0.5, 5.0);
         margins[0] = margins[0].max(0.5);
-        Self::add(&mut tasks, &problem, "torque_limits", &[acc, forces], t0, t1, Side::Around(xf.clone(), margins))?;
+        Self::add(
+            &mut tasks,
+            &problem,
+            "torque_limits",
+            &[acc, forces],
+            t0,
+            t1,
+            Side::Around(xf.clone(), margins),
+        )?;
         // soft tasks with targets away from x_f
         let mut target = xf.clone();
         for v in target.iter_mut() {
@@ -209,11 +243,27 @@ impl RandomWbc {
         let com0 = rng.matrix(3, 24, 1.0);
         let com1 = rng.matrix(3, 24, 0.05);
         let off = rng.vector(3, -5.0, 5.0);
-        Self::add(&mut tasks, &problem, "com", &[forces], com0, com1, Side::Target(target.clone(), off))?;
+        Self::add(
+            &mut tasks,
+            &problem,
+            "com",
+            &[forces],
+            com0,
+            com1,
+            Side::Target(target.clone(), off),
+        )?;
         let torso0 = rng.matrix(3, 38, 1.0);
         let torso1 = rng.matrix(3, 38, 0.05);
         let off = rng.vector(3, -2.0, 2.0);
-        Self::add(&mut tasks, &problem, "torso", &[acc], torso0, torso1, Side::Target(target.clone(), off))?;
+        Self::add(
+            &mut tasks,
+            &problem,
+            "torso",
+            &[acc],
+            torso0,
+            torso1,
+            Side::Target(target.clone(), off),
+        )?;
         let mut posture = DMatrix::zeros(32, 38);
         for i in 0..32 {
             posture[(i, 6 + i)] = 1.0;
@@ -238,7 +288,11 @@ impl RandomWbc {
             DMatrix::zeros(62, 62),
             Side::Target(xf.clone(), DVector::zeros(62)),
         )?;
-        let mut s = Self { problem, tasks, feasible_point: xf };
+        let mut s = Self {
+            problem,
+            tasks,
+            feasible_point: xf,
+        };
         s.write(0.0);
         Ok(s)
     }
@@ -267,7 +321,15 @@ impl RandomWbc {
         let mut tasks = Vec::new();
         let f0 = rng.matrix(12, 38, 1.0);
         let f1 = rng.matrix(12, 38, 0.05);
-        Self::add(&mut tasks, &problem, "feet", &[base, joints], f0, f1, Side::EqualityThrough(xf.clone()))?;
+        Self::add(
+            &mut tasks,
+            &problem,
+            "feet",
+            &[base, joints],
+            f0,
+            f1,
+            Side::EqualityThrough(xf.clone()),
+        )?;
         let mut target = xf.clone();
         for v in target.iter_mut() {
             *v += rng.uniform(-2.5, 2.5);
@@ -275,7 +337,15 @@ impl RandomWbc {
         let t0 = rng.matrix(3, 38, 1.0);
         let t1 = rng.matrix(3, 38, 0.05);
         let off = rng.vector(3, -1.0, 1.0);
-        Self::add(&mut tasks, &problem, "torso", &[base, joints], t0, t1, Side::Target(target.clone(), off))?;
+        Self::add(
+            &mut tasks,
+            &problem,
+            "torso",
+            &[base, joints],
+            t0,
+            t1,
+            Side::Target(target.clone(), off),
+        )?;
         let posture = DMatrix::identity(32, 32);
         let off = rng.vector(32, -1.0, 1.0);
         Self::add(
@@ -296,7 +366,11 @@ impl RandomWbc {
             DMatrix::zeros(38, 38),
             Side::Target(xf.clone(), DVector::zeros(38)),
         )?;
-        let mut s = Self { problem, tasks, feasible_point: xf };
+        let mut s = Self {
+            problem,
+            tasks,
+            feasible_point: xf,
+        };
         s.write(0.0);
         Ok(s)
     }

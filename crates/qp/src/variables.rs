@@ -45,10 +45,14 @@ impl VariableSet {
     /// Errors: [`QpError::DuplicateVariable`] if the name exists, [`QpError::EmptyVariable`] if `size == 0`.
     pub fn add(&mut self, name: &str, size: usize) -> Result<VarId, QpError> {
         if self.id(name).is_some() {
-            return Err(QpError::DuplicateVariable { name: name.to_owned() });
+            return Err(QpError::DuplicateVariable {
+                name: name.to_owned(),
+            });
         }
         if size == 0 {
-            return Err(QpError::EmptyVariable { name: name.to_owned() });
+            return Err(QpError::EmptyVariable {
+                name: name.to_owned(),
+            });
         }
         let id = VarId(self.names.len());
         self.names.push(name.to_owned());

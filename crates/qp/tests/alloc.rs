@@ -39,7 +39,11 @@ fn ticks_do_not_allocate() {
     for k in 1..100 {
         let t = 0.001 * k as f64;
         tsid.write(t);
-        warm += tsid.problem.solve().map(|s| s.warm_started as usize).unwrap_or(0);
+        warm += tsid
+            .problem
+            .solve()
+            .map(|s| s.warm_started as usize)
+            .unwrap_or(0);
         ik.write(t);
         ik.problem.solve().unwrap();
     }
@@ -50,7 +54,10 @@ fn ticks_do_not_allocate() {
     // fallback path: a hard equality alternately feasible and infeasible
     let mut vars = VariableSet::new();
     let f = vars.add("forces", 2).unwrap();
-    let specs = vec![TaskSpec::equality("com", &[f], 1), TaskSpec::equality("reg", &[f], 2).soft(1.0)];
+    let specs = vec![
+        TaskSpec::equality("com", &[f], 1),
+        TaskSpec::equality("reg", &[f], 2).soft(1.0),
+    ];
     let mut p = QpProblem::new(vars, specs, QpSettings::default()).unwrap();
     let com = p.task_id("com").unwrap();
     let reg = p.task_id("reg").unwrap();
@@ -66,7 +73,18 @@ fn ticks_do_not_allocate() {
         let target = if k % 2 == 0 { 50.0 } else { 300.0 };
         p.task_mut(com).b_mut()[0] = target;
         let path = p.solve().unwrap().path;
-        assert_eq!(path, if k % 2 == 0 { SolvePath::Nominal } else { SolvePath::Relaxed });
+        assert_eq!(
+            path,
+            if k % 2 == 0 {
+                SolvePath::Nominal
+            } else {
+                SolvePath::Relaxed
+            }
+        );
     }
-    assert_eq!(ALLOCS.load(Ordering::SeqCst) - before, 0, "allocations on the fallback path");
+    assert_eq!(
+        ALLOCS.load(Ordering::SeqCst) - before,
+        0,
+        "allocations on the fallback path"
+    );
 }

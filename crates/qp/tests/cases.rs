@@ -3,12 +3,16 @@
 use nalgebra::{DMatrix, DVector};
 use stride_qp::testing::SplitMix64;
 use stride_qp::{
-    check_kkt, ActiveSetSolver, Backend, ClarabelSolver, ClarabelSparseSolver, DenseQp, QpError, QpProblem,
-    QpSettings, QpSolver, QpStatus, SolvePath, SolverOutput, SparseQp, TaskSpec, VariableSet,
+    check_kkt, ActiveSetSolver, Backend, ClarabelSolver, ClarabelSparseSolver, DenseQp, QpError,
+    QpProblem, QpSettings, QpSolver, QpStatus, SolvePath, SolverOutput, SparseQp, TaskSpec,
+    VariableSet,
 };
 
 fn both() -> Vec<Box<dyn QpSolver>> {
-    vec![Box::new(ActiveSetSolver::new(Default::default())), Box::new(ClarabelSolver::new(Default::default()))]
+    vec![
+        Box::new(ActiveSetSolver::new(Default::default())),
+        Box::new(ClarabelSolver::new(Default::default())),
+    ]
 }
 
 fn spd(rng: &mut SplitMix64, n: usize) -> DMatrix<f64> {
@@ -60,7 +64,11 @@ fn equality_constrained_matches_kkt_system() {
         s.solve(&qp, &mut out);
         assert_eq!(out.status, QpStatus::Solved);
         assert!((&out.x - sol.rows(0, n)).amax() < 1e-7, "{}", s.name());
-        assert!((out.eq_multipliers() - sol.rows(n, m)).amax() < 1e-6, "{}", s.name());
+        assert!(
+            (out.eq_multipliers() - sol.rows(n, m)).amax() < 1e-6,
+            "{}",
+            s.name()
+        );
     }
 }
 
@@ -95,10 +103,20 @@ fn redundant_problem() -> DenseQp {
     let mut qp = DenseQp::new(3, 3, 3);
     qp.hessian_mut().fill_with_identity();
     qp.gradient_mut().fill(-2.0);
-    qp.eq_matrix_mut().copy_from(&DMatrix::from_row_slice(3, 3, &[1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 2.0, 2.0, 0.0]));
-    qp.eq_rhs_mut().copy_from(&DVector::from_row_slice(&[1.0, 1.0, 2.0]));
-    qp.ineq_matrix_mut().copy_from(&DMatrix::from_row_slice(3, 3, &[1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]));
-    qp.ineq_upper_mut().copy_from(&DVector::from_row_slice(&[0.2, 0.2, 0.5]));
+    qp.eq_matrix_mut().copy_from(&DMatrix::from_row_slice(
+        3,
+        3,
+        &[1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 2.0, 2.0, 0.0],
+    ));
+    qp.eq_rhs_mut()
+        .copy_from(&DVector::from_row_slice(&[1.0, 1.0, 2.0]));
+    qp.ineq_matrix_mut().copy_from(&DMatrix::from_row_slice(
+        3,
+        3,
+        &[1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+    ));
+    qp.ineq_upper_mut()
+        .copy_from(&DVector::from_row_slice(&[0.2, 0.2, 0.5]));
     qp.upper_bounds_mut()[2] = 0.5;
     qp
 }
@@ -111,9 +129,19 @@ fn redundant_constraints_solved_by_both() {
         let mut out = SolverOutput::new(&qp);
         s.solve(&qp, &mut out);
         assert_eq!(out.status, QpStatus::Solved, "{}", s.name());
-        assert!((&out.x - &expected).amax() < 1e-7, "{}: {}", s.name(), out.x);
+        assert!(
+            (&out.x - &expected).amax() < 1e-7,
+            "{}: {}",
+            s.name(),
+            out.x
+        );
         // multipliers are not unique here, but KKT must hold
-        assert!(check_kkt(&qp, &out).is_satisfied(1e-7), "{}: {:?}", s.name(), check_kkt(&qp, &out));
+        assert!(
+            check_kkt(&qp, &out).is_satisfied(1e-7),
+            "{}: {:?}",
+            s.name(),
+            check_kkt(&qp, &out)
+        );
     }
 }
 
@@ -162,8 +190,15 @@ fn rank_deficient_soft_tasks_same_answer() {
     for backend in [Backend::ActiveSet, Backend::Clarabel] {
         let mut vars = VariableSet::new();
         let v = vars.add("v", 2).unwrap();
-        let specs = vec![TaskSpec::equality("sum", &[v], 1).soft(1.0), TaskSpec::equality("sum2", &[v], 1).soft(1.0)];
-        let settings = QpSettings { backend, regularization: 1e-6, ..QpSettings::default() };
+        let specs = vec![
+            TaskSpec::equality("sum", &[v], 1).soft(1.0),
+            TaskSpec::equality("sum2", &[v], 1).soft(1.0),
+        ];
+        let settings = QpSettings {
+            backend,
+            regularization: 1e-6,
+            ..QpSettings::default()
+        };
         let mut p = QpProblem::new(vars, specs, settings).unwrap();
         for name in ["sum", "sum2"] {
             let id = p.task_id(name).unwrap();
@@ -174,7 +209,11 @@ fn rank_deficient_soft_tasks_same_answer() {
         assert_eq!(sol.status, QpStatus::Solved);
         // closed form: min (s − 2)² + ρ/2 (x0² + x1²) with s = x0 + x1 ⇒ x0 = x1 = 2/(2 + ρ/2)
         let expected = 2.0 / (2.0 + 0.5e-6);
-        assert!((sol.x[0] - expected).abs() < 1e-7 && (sol.x[1] - expected).abs() < 1e-7, "{backend:?} {}", sol.x);
+        assert!(
+            (sol.x[0] - expected).abs() < 1e-7 && (sol.x[1] - expected).abs() < 1e-7,
+            "{backend:?} {}",
+            sol.x
+        );
     }
     // Without regularisation the active-set solver refuses a singular Hessian explicitly.
     let mut qp = DenseQp::new(2, 0, 0);
@@ -193,7 +232,11 @@ fn com_problem(backend: Backend, fallback: bool) -> QpProblem {
         TaskSpec::equality("regularization", &[f], 2).soft(1.0),
         TaskSpec::inequality("unilateral", &[f], 2),
     ];
-    let settings = QpSettings { backend, fallback, ..QpSettings::default() };
+    let settings = QpSettings {
+        backend,
+        fallback,
+        ..QpSettings::default()
+    };
     let mut p = QpProblem::new(vars, specs, settings).unwrap();
     let com = p.task_id("com").unwrap();
     p.task_mut(com).a_mut().fill(1.0);
@@ -222,7 +265,11 @@ fn fallback_relaxes_hard_equalities() {
         assert_eq!(sol.nominal_status, QpStatus::Infeasible, "{backend:?}");
         assert_eq!(sol.path, SolvePath::Relaxed);
         assert_eq!(sol.status, QpStatus::Solved);
-        assert!((sol.x[0] - 100.0).abs() < 1e-6 && (sol.x[1] - 100.0).abs() < 1e-6, "{}", sol.x);
+        assert!(
+            (sol.x[0] - 100.0).abs() < 1e-6 && (sol.x[1] - 100.0).abs() < 1e-6,
+            "{}",
+            sol.x
+        );
         assert!((sol.task_residuals[com.0] - 100.0).abs() < 1e-6);
         assert!((sol.hard_violation - 100.0).abs() < 1e-6);
         // back to feasible: nominal again
@@ -243,7 +290,10 @@ fn fallback_failure_is_an_error() {
         let err = p.solve().unwrap_err();
         assert_eq!(
             err,
-            QpError::SolveFailed { nominal: QpStatus::Infeasible, relaxed: Some(QpStatus::Infeasible) },
+            QpError::SolveFailed {
+                nominal: QpStatus::Infeasible,
+                relaxed: Some(QpStatus::Infeasible)
+            },
             "{backend:?}"
         );
         let sol = p.solution();
@@ -252,7 +302,13 @@ fn fallback_failure_is_an_error() {
         // without fallback: only the nominal status
         let mut p = com_problem(backend, false);
         p.task_mut(com).b_mut()[0] = 300.0;
-        assert_eq!(p.solve().unwrap_err(), QpError::SolveFailed { nominal: QpStatus::Infeasible, relaxed: None });
+        assert_eq!(
+            p.solve().unwrap_err(),
+            QpError::SolveFailed {
+                nominal: QpStatus::Infeasible,
+                relaxed: None
+            }
+        );
     }
 }
 
@@ -263,7 +319,13 @@ fn nan_input_is_reported_never_returned() {
         let com = p.task_id("com").unwrap();
         p.task_mut(com).b_mut()[0] = f64::NAN;
         let err = p.solve().unwrap_err();
-        assert_eq!(err, QpError::SolveFailed { nominal: QpStatus::InvalidData, relaxed: None });
+        assert_eq!(
+            err,
+            QpError::SolveFailed {
+                nominal: QpStatus::InvalidData,
+                relaxed: None
+            }
+        );
         assert!(p.solution().x.iter().all(|v| v.is_finite()));
     }
 }
@@ -272,19 +334,55 @@ fn nan_input_is_reported_never_returned() {
 fn construction_errors_name_the_culprit() {
     let mut vars = VariableSet::new();
     let v = vars.add("v", 2).unwrap();
-    assert!(matches!(vars.add("v", 3), Err(QpError::DuplicateVariable { .. })));
-    assert!(matches!(vars.add("w", 0), Err(QpError::EmptyVariable { .. })));
-    let err = QpProblem::new(vars.clone(), vec![TaskSpec::inequality("lim", &[v], 1).soft(1.0)], QpSettings::default());
+    assert!(matches!(
+        vars.add("v", 3),
+        Err(QpError::DuplicateVariable { .. })
+    ));
+    assert!(matches!(
+        vars.add("w", 0),
+        Err(QpError::EmptyVariable { .. })
+    ));
+    let err = QpProblem::new(
+        vars.clone(),
+        vec![TaskSpec::inequality("lim", &[v], 1).soft(1.0)],
+        QpSettings::default(),
+    );
     assert!(matches!(err, Err(QpError::SoftInequality { task }) if task == "lim"));
-    let err = QpProblem::new(vars.clone(), vec![TaskSpec::equality("t", &[v, v], 1)], QpSettings::default());
+    let err = QpProblem::new(
+        vars.clone(),
+        vec![TaskSpec::equality("t", &[v, v], 1)],
+        QpSettings::default(),
+    );
     assert!(matches!(err, Err(QpError::RepeatedVariable { .. })));
-    let err = QpProblem::new(vars.clone(), vec![TaskSpec::equality("t", &[v], 2).soft_weights(&[1.0, 2.0, 3.0])], QpSettings::default());
-    assert!(matches!(err, Err(QpError::WeightSize { expected: 2, got: 3, .. })));
-    let mut p = QpProblem::new(vars, vec![TaskSpec::equality("t", &[v], 2).soft(1.0)], QpSettings::default()).unwrap();
+    let err = QpProblem::new(
+        vars.clone(),
+        vec![TaskSpec::equality("t", &[v], 2).soft_weights(&[1.0, 2.0, 3.0])],
+        QpSettings::default(),
+    );
+    assert!(matches!(
+        err,
+        Err(QpError::WeightSize {
+            expected: 2,
+            got: 3,
+            ..
+        })
+    ));
+    let mut p = QpProblem::new(
+        vars,
+        vec![TaskSpec::equality("t", &[v], 2).soft(1.0)],
+        QpSettings::default(),
+    )
+    .unwrap();
     let t = p.task_id("t").unwrap();
-    assert!(matches!(p.task_mut(t).set_weight(-1.0), Err(QpError::InvalidWeight { .. })));
+    assert!(matches!(
+        p.task_mut(t).set_weight(-1.0),
+        Err(QpError::InvalidWeight { .. })
+    ));
     assert!(p.task_mut(t).set_weights(&[1.0, 4.0]).is_ok());
-    let bad: QpSettings = QpSettings { regularization: -1.0, ..QpSettings::default() };
+    let bad: QpSettings = QpSettings {
+        regularization: -1.0,
+        ..QpSettings::default()
+    };
     assert!(bad.validate().is_err());
 }
 
@@ -294,7 +392,15 @@ fn vector_weights_and_runtime_priority_switch() {
     let mut vars = VariableSet::new();
     let v = vars.add("v", 1).unwrap();
     let specs = vec![TaskSpec::equality("two_targets", &[v], 2).soft_weights(&[1.0, 3.0])];
-    let mut p = QpProblem::new(vars, specs, QpSettings { regularization: 0.0, ..QpSettings::default() }).unwrap();
+    let mut p = QpProblem::new(
+        vars,
+        specs,
+        QpSettings {
+            regularization: 0.0,
+            ..QpSettings::default()
+        },
+    )
+    .unwrap();
     let t = p.task_id("two_targets").unwrap();
     p.task_mut(t).a_mut().fill(1.0);
     p.task_mut(t).b_mut().copy_from_slice(&[1.0, 3.0]);

@@ -2,15 +2,23 @@
 
 use stride_qp::testing::RandomWbc;
 use stride_qp::{
-    check_kkt, ActiveSetSettings, ClarabelSettings, ActiveSetSolver, Backend, ClarabelSolver, QpSettings, QpSolver, QpStatus,
-    SolverOutput,
+    check_kkt, ActiveSetSettings, ActiveSetSolver, Backend, ClarabelSettings, ClarabelSolver,
+    QpSettings, QpSolver, QpStatus, SolverOutput,
 };
 
 /// Clarabel as a *reference* runs at a tight tolerance: with the default 1e-10 its solution can differ by
 /// ~1e-4 along the weakly weighted directions (weight 1e-3) of these problems, see docs/qp.md.
 fn settings(backend: Backend) -> QpSettings {
-    let clarabel = ClarabelSettings { tolerance: 1e-12, ..ClarabelSettings::default() };
-    QpSettings { backend, fallback: false, clarabel, ..QpSettings::default() }
+    let clarabel = ClarabelSettings {
+        tolerance: 1e-12,
+        ..ClarabelSettings::default()
+    };
+    QpSettings {
+        backend,
+        fallback: false,
+        clarabel,
+        ..QpSettings::default()
+    }
 }
 
 fn compare(mut a: RandomWbc, mut c: RandomWbc, label: &str) {
@@ -23,15 +31,31 @@ fn compare(mut a: RandomWbc, mut c: RandomWbc, label: &str) {
         assert_eq!(sc.status, QpStatus::Solved, "{label} step {step}");
         let scale = 1.0 + sc.x.amax();
         let diff = (&sa.x - &sc.x).amax();
-        assert!(diff <= 1e-6 * scale, "{label} step {step}: |x_as - x_cl| = {diff:e}");
+        assert!(
+            diff <= 1e-6 * scale,
+            "{label} step {step}: |x_as - x_cl| = {diff:e}"
+        );
         let obj_scale = 1.0 + sc.objective.abs();
-        assert!((sa.objective - sc.objective).abs() <= 1e-7 * obj_scale, "{label}: objectives");
+        assert!(
+            (sa.objective - sc.objective).abs() <= 1e-7 * obj_scale,
+            "{label}: objectives"
+        );
         let ka = a.problem.check_kkt();
         let kc = c.problem.check_kkt();
         // active set: exact up to round-off; clarabel: to its 1e-9 tolerance
-        assert!(ka.is_satisfied(1e-10), "{label} step {step}: active-set KKT {ka:?}");
-        assert!(kc.is_satisfied(1e-6), "{label} step {step}: clarabel KKT {kc:?}");
-        assert!(sa.hard_violation <= 1e-8 * scale, "{label}: hard violation {}", sa.hard_violation);
+        assert!(
+            ka.is_satisfied(1e-10),
+            "{label} step {step}: active-set KKT {ka:?}"
+        );
+        assert!(
+            kc.is_satisfied(1e-6),
+            "{label} step {step}: clarabel KKT {kc:?}"
+        );
+        assert!(
+            sa.hard_violation <= 1e-8 * scale,
+            "{label}: hard violation {}",
+            sa.hard_violation
+        );
     }
 }
 
@@ -58,7 +82,10 @@ fn warm_start_gives_the_cold_answer() {
     for seed in 0..5 {
         let mut warm = RandomWbc::tsid_like(seed, settings(Backend::ActiveSet)).unwrap();
         let mut cold_settings = settings(Backend::ActiveSet);
-        cold_settings.active_set = ActiveSetSettings { warm_start: false, ..ActiveSetSettings::default() };
+        cold_settings.active_set = ActiveSetSettings {
+            warm_start: false,
+            ..ActiveSetSettings::default()
+        };
         let mut cold = RandomWbc::tsid_like(seed, cold_settings).unwrap();
         let mut warm_used = 0;
         for k in 0..30 {
@@ -70,10 +97,16 @@ fn warm_start_gives_the_cold_answer() {
             assert!(!sc.warm_started);
             warm_used += sw.warm_started as usize;
             let diff = (&sw.x - &sc.x).amax();
-            assert!(diff <= 1e-8 * (1.0 + sc.x.amax()), "seed {seed} tick {k}: {diff:e}");
+            assert!(
+                diff <= 1e-8 * (1.0 + sc.x.amax()),
+                "seed {seed} tick {k}: {diff:e}"
+            );
             assert!(warm.problem.check_kkt().is_satisfied(1e-10));
         }
-        assert!(warm_used >= 25, "warm start used in only {warm_used} of 30 ticks");
+        assert!(
+            warm_used >= 25,
+            "warm start used in only {warm_used} of 30 ticks"
+        );
     }
 }
 
@@ -93,7 +126,10 @@ fn raw_backends_on_dense_qp() {
     assert!((&oa.x - &oc.x).amax() < 1e-6);
     assert!(check_kkt(&qp, &oa).is_satisfied(1e-10));
     // multipliers agree too (unique here: LICQ holds for random data)
-    assert!((oa.bound_multipliers.clone() - oc.bound_multipliers.clone()).amax() < 1e-5 * (1.0 + oa.bound_multipliers.amax()));
+    assert!(
+        (oa.bound_multipliers.clone() - oc.bound_multipliers.clone()).amax()
+            < 1e-5 * (1.0 + oa.bound_multipliers.amax())
+    );
     // clarabel re-solve through update_* (same layout) gives the same answer without a rebuild
     c.solve(&qp, &mut oc);
     assert_eq!(c.rebuilds(), 1);

@@ -4,8 +4,8 @@ use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 use stride_qp::testing::SplitMix64;
 use stride_qp::{
-    check_kkt, ActiveSetSettings, ActiveSetSolver, ClarabelSettings, ClarabelSolver, DenseQp, QpSolver, QpStatus,
-    SolverOutput,
+    check_kkt, ActiveSetSettings, ActiveSetSolver, ClarabelSettings, ClarabelSolver, DenseQp,
+    QpSolver, QpStatus, SolverOutput,
 };
 
 /// A random strictly convex QP with a known feasible point (equalities through it, sides around it, some

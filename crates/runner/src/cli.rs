@@ -50,6 +50,15 @@ pub enum Representation {
     Inertial,
 }
 
+/// Plant override of `stride run`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PlantArg {
+    /// stride-sim.
+    Simulator,
+    /// The ideal kinematic plant.
+    Ideal,
+}
+
 /// A layer that `stride replay` can rebuild.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum LayerName {
@@ -102,6 +111,9 @@ pub enum Command {
         /// Do not draw the progress bar.
         #[arg(long)]
         no_progress: bool,
+        /// Override the scenario's plant (`ideal`: joint commands applied exactly, base from the stance foot).
+        #[arg(long, value_enum)]
+        plant: Option<PlantArg>,
     },
     /// Re-run one layer on the inputs recorded in a log.
     Replay {
@@ -205,7 +217,8 @@ pub fn run(cli: Cli) -> Result<ExitCode, CliError> {
             duration,
             realtime,
             no_progress,
-        } => crate::commands::run(&config, output, duration, realtime, no_progress),
+            plant,
+        } => crate::commands::run(&config, output, duration, realtime, no_progress, plant),
         Command::Replay {
             log,
             layer,

@@ -52,9 +52,66 @@ pub fn model(command: ModelCommand) -> Result<ExitCode, CliError> {
     crate::model_cmd::model(command)
 }
 
-/// `stride plan`.
-pub fn plan(_path: &Path, _json: bool, _dt: Option<f64>) -> Result<ExitCode, CliError> {
-    Err(CliError::msg("`stride plan`: the planner is not wired into the runner yet"))
+/// `stride plan`: the planner alone, from the robot standing at its initial posture.
+pub fn plan(path: &Path, json: bool, dt: Option<f64>) -> Result<ExitCode, CliError> {
+    let scenario = Scenario::load(path)?;
+    let c = &scenario.config;
+    let dt = dt.unwrap_or(1.0 / f64::from(c.rates.simplified_hz));
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(CliError::msg(format!("--dt {dt}: expected a positive number of seconds")));
+    }
+    let err = |e: &dyn std::error::Error| CliError::msg(crate::cli::one_paragraph(e));
+    let model = crate::run::load_model(&scenario).map_err(|e| err(&e))?;
+    let q0 = crate::run::initial_joint_positions(&scenario, &model).map_err(|e| err(&e))?;
+    let frame = |name: &str, key: &str| {
+        model
+            .frame_id(name)
+            .ok_or_else(|| CliError::from(scenario.invalid(key, format!("the model has no frame `{name}`"))))
+    };
+    let l = frame(&c.robot.left_sole, "robot.left_sole")?;
+    let r = frame(&c.robot.right_sole, "robot.right_sole")?;
+    let state = crate::robot::standing_state(&model, &q0, l, r).map_err(|e| err(&e))?;
+    let mut kd = stride_model::KinDyn::new(Arc::clone(&model));
+    kd.set_state(&state).map_err(|e| err(&e))?;
+    let (lp, rp) = (kd.frame_pose(l), kd.frame_pose(r));
+    let events = crate::stack::goal_events(&c.goal);
+    let mut planner = stride_planner::Planner::new(c.planner.clone()).map_err(|e| err(&e))?;
+    let first = events.first().map_or(stride_planner::Goal::Stand, |e| e.goal.clone());
+    planner.start(0.0, &lp, &rp, &first).map_err(|e| err(&e))?;
+    for e in events.iter().skip(1) {
+        planner.replan(e.time_ns as f64 * 1e-9, &e.goal).map_err(|e| err(&e))?;
+    }
+    let plan = planner
+        .plan()
+        .ok_or_else(|| CliError::msg("the planner produced no plan"))?;
+    let report = plan.report(dt).map_err(|e| err(&e))?;
+    if json {
+        println!("{}", serde_json::to_string(&report).map_err(|e| CliError::msg(e.to_string()))?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!(
+        "plan of {}: {} steps, ends at {:.2} s ({:.2} s of samples every {dt} s)",
+        c.scenario.name,
+        plan.step_count(),
+        plan.end_time,
+        plan.end_time - plan.start_time
+    );
+    println!("  {:<6} {:>9} {:>9} {:>9} {:>10} {:>10}", "foot", "x [m]", "y [m]", "yaw [°]", "on [s]", "off [s]");
+    for f in plan.footsteps() {
+        println!(
+            "  {:<6} {:>9.3} {:>9.3} {:>9.1} {:>10.2} {:>10}",
+            match f.foot {
+                stride_planner::Foot::Left => "left",
+                stride_planner::Foot::Right => "right",
+            },
+            f.pose.translation.x,
+            f.pose.translation.y,
+            f.pose.rotation.euler_angles().2.to_degrees(),
+            f.activation_time,
+            f.deactivation_time.map_or("-".to_string(), |t| format!("{t:.2}"))
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// `stride run`: Ctrl-C stops the loop at the next tick and the log is closed properly.
@@ -64,6 +121,7 @@ pub fn run(
     duration: Option<f64>,
     realtime: bool,
     no_progress: bool,
+    plant: Option<crate::cli::PlantArg>,
 ) -> Result<ExitCode, CliError> {
     let scenario = Scenario::load(path)?;
     if let Some(d) = duration {
@@ -83,6 +141,10 @@ pub fn run(
         realtime,
         progress: !no_progress,
         stop: Some(stop),
+        plant: plant.map(|p| match p {
+            crate::cli::PlantArg::Simulator => crate::config::PlantKind::Simulator,
+            crate::cli::PlantArg::Ideal => crate::config::PlantKind::Ideal,
+        }),
         ..RunOptions::default()
     };
     let summary = run_scenario(&scenario, &options).map_err(|e| CliError::msg(crate::cli::one_paragraph(&e)))?;
@@ -96,10 +158,32 @@ pub fn run(
 
 /// `stride replay`.
 pub fn replay(
-    _log: &Path,
-    _layer: LayerName,
-    _config: Option<PathBuf>,
-    _output: Option<PathBuf>,
+    log: &Path,
+    layer: LayerName,
+    config: Option<PathBuf>,
+    output: Option<PathBuf>,
 ) -> Result<ExitCode, CliError> {
-    Err(CliError::msg("`stride replay`: not wired yet"))
+    let report = crate::replay::replay(log, layer, config.as_deref(), output.as_ref())
+        .map_err(|e| CliError::msg(crate::cli::one_paragraph(&e)))?;
+    let d = &report.difference;
+    println!(
+        "replayed {} {:?} ticks from {}{}",
+        report.ticks,
+        layer,
+        log.display(),
+        config.as_ref().map(|c| format!(" with {}", c.display())).unwrap_or_default()
+    );
+    println!(
+        "largest difference from the logged outputs: {:e}{}; non-numeric differences: {}",
+        d.max_abs,
+        if d.at.is_empty() { String::new() } else { format!(" (at {})", d.at) },
+        d.mismatches
+    );
+    if report.layer_errors > 0 {
+        println!("layer errors during replay (output held): {}", report.layer_errors);
+    }
+    if let Some(o) = output {
+        println!("replayed outputs written to {}", o.display());
+    }
+    Ok(ExitCode::SUCCESS)
 }

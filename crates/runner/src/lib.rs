@@ -7,6 +7,7 @@ pub mod config;
 pub mod log;
 pub mod model_cmd;
 pub mod records;
+pub mod replay;
 pub mod robot;
 pub mod run;
 pub mod sim_plant;

@@ -218,6 +218,14 @@ impl LogWriter {
         Ok(TopicId(id))
     }
 
+    /// The id of an already registered topic, registering it (schema from the first message) if new.
+    pub fn topic_id(&mut self, topic: &str) -> Result<TopicId, LogError> {
+        match self.topics.iter().position(|t| t == topic) {
+            Some(i) => Ok(TopicId(i as u16)),
+            None => self.topic(topic, &format!("stride{}", topic.replace('/', ".")), None),
+        }
+    }
+
     /// Serializes `value` as JSON and queues it on `topic` at simulated time `time_ns`.
     pub fn write<T: Serialize + ?Sized>(
         &mut self,

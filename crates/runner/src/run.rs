@@ -637,10 +637,21 @@ pub fn goal_pose(goal: &Goal) -> Option<[f64; 3]> {
 /// Runs a scenario to its end. The log (if any) is finished whatever happens, panics in a layer
 /// included; the outcome says how the run ended.
 pub fn run_scenario(scenario: &Scenario, options: &RunOptions) -> Result<RunSummary, RunError> {
-    let c = &scenario.config;
     let model = load_model(scenario)?;
-    let plant = options.plant.unwrap_or(c.scenario.plant);
+    let plant = options.plant.unwrap_or(scenario.config.scenario.plant);
     let robot = build_robot(scenario, &model, plant)?;
+    run_with_robot(scenario, options, robot)
+}
+
+/// Runs a scenario against any [`Robot`] (a real robot interface, another simulator, a test double).
+/// The robot's model must be the scenario's and its period `1 / rates.sim_hz`.
+pub fn run_with_robot(
+    scenario: &Scenario,
+    options: &RunOptions,
+    robot: Box<dyn Robot>,
+) -> Result<RunSummary, RunError> {
+    let c = &scenario.config;
+    let model = Arc::clone(robot.model());
     let initial = robot.measurement().state.clone();
     let stack = Stack::new(scenario, Arc::clone(&model), &initial)?;
     let duration = options.duration.unwrap_or(c.scenario.duration);

@@ -1,4 +1,5 @@
 //! One step of the bundled humanoid standing on both feet, and the real-time factor of 10 s of standing.
+#![allow(clippy::field_reassign_with_default)]
 
 use std::sync::Arc;
 use std::time::Instant;

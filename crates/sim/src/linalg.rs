@@ -16,7 +16,7 @@ pub fn cholesky_in_place(a: &mut DMatrix<f64>) -> bool {
             let l = data[k * n + j];
             d -= l * l;
         }
-        if !(d > 0.0 && d.is_finite()) {
+        if d.is_nan() || d <= 0.0 || d.is_infinite() {
             return false;
         }
         let ljj = d.sqrt();

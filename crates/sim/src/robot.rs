@@ -1270,7 +1270,9 @@ impl SimRobot {
             });
         }
         for (i, p) in self.points.iter().enumerate() {
-            if !(p.penetration <= limits.max_penetration) || !p.force.iter().all(|x| x.is_finite())
+            if p.penetration.is_nan()
+                || p.penetration > limits.max_penetration
+                || !p.force.iter().all(|x| x.is_finite())
             {
                 let s = &self.surfaces[p.surface];
                 let name = format!(

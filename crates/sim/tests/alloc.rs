@@ -1,4 +1,5 @@
 //! `step` allocates nothing after start-up (counted with a global allocator).
+#![allow(clippy::field_reassign_with_default)]
 
 mod common;
 

@@ -1,4 +1,5 @@
 //! The bundled humanoid standing on its PD servos.
+#![allow(clippy::field_reassign_with_default)]
 
 mod common;
 

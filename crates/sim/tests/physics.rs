@@ -1,4 +1,5 @@
 //! Physics laws: free fall, conservation, resting contact, friction on an incline, Lemma 1, pushes.
+#![allow(clippy::field_reassign_with_default)]
 
 mod common;
 

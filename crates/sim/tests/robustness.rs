@@ -1,4 +1,5 @@
 //! Bad input, divergence, effort limits, determinism, sensors and configuration files.
+#![allow(clippy::field_reassign_with_default)]
 
 mod common;
 

@@ -172,6 +172,9 @@ pub(crate) struct BandedQp {
     ds_aff: Vec<f64>,
     dl_aff: Vec<f64>,
     rhs_rows: Vec<f64>,
+    transpose_product: Vec<f64>,
+    /// Scales of the terms of the last residuals: ‖Px‖∞, ‖Cᵀλ‖∞, ‖Cx‖∞.
+    term_scales: [f64; 3],
 }
 
 impl BandedQp {
@@ -194,6 +197,8 @@ impl BandedQp {
             ds_aff: vec![0.0; max_rows],
             dl_aff: vec![0.0; max_rows],
             rhs_rows: vec![0.0; max_rows],
+            transpose_product: vec![0.0; n],
+            term_scales: [0.0; 3],
         }
     }
 
@@ -212,19 +217,32 @@ impl BandedQp {
 
     fn compute_residuals(&mut self) {
         let m = self.row_count;
+        let inf_norm = |v: &[f64]| v.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
         self.hessian.mul_vec(&self.x, &mut self.residual_dual);
-        for (r, g) in self.residual_dual.iter_mut().zip(self.gradient.iter()) {
-            *r += g;
-        }
+        let hessian_term = inf_norm(&self.residual_dual);
+        self.transpose_product.iter_mut().for_each(|v| *v = 0.0);
         Self::add_transpose_product(
             &self.rows[..m],
             &self.multiplier[..m],
-            &mut self.residual_dual,
+            &mut self.transpose_product,
         );
+        let transpose_term = inf_norm(&self.transpose_product);
+        for ((r, g), t) in self
+            .residual_dual
+            .iter_mut()
+            .zip(self.gradient.iter())
+            .zip(self.transpose_product.iter())
+        {
+            *r += g + t;
+        }
+        let mut row_term: f64 = 0.0;
         for i in 0..m {
             let row = &self.rows[i];
-            self.residual_primal[i] = row.dot(&self.x) + self.slack[i] - row.bound;
+            let cx = row.dot(&self.x);
+            row_term = row_term.max(cx.abs());
+            self.residual_primal[i] = cx + self.slack[i] - row.bound;
         }
+        self.term_scales = [hessian_term, transpose_term, row_term];
     }
 
     /// Solves the Newton system for right-hand side `rc` (complementarity residual, in `rhs_rows`),
@@ -255,6 +273,45 @@ impl BandedQp {
             }
         }
         alpha
+    }
+
+    /// Factorises the Newton matrix assembled in `newton`; when round-off makes it numerically
+    /// indefinite (multipliers/slacks ratios near 1e16 at the end of a degenerate solve), retries with a
+    /// growing diagonal shift relative to its largest diagonal entry (a primal regularisation that only
+    /// damps the step). Returns false when even the largest shift fails.
+    fn factor_newton_regularized(&mut self) -> bool {
+        let n = self.n();
+        let stride = self.newton.bw + 1;
+        let largest = (0..n).fold(0.0_f64, |a, i| a.max(self.newton.data[i * stride].abs()));
+        for shift in [0.0, 1e-14, 1e-12, 1e-10, 1e-8] {
+            if shift > 0.0 {
+                // the failed factorization overwrote the band: reassemble, then shift the diagonal
+                self.assemble_newton();
+                for i in 0..n {
+                    self.newton.data[i * stride] += shift * largest;
+                }
+            }
+            if self.newton.cholesky_in_place() {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Newton matrix `K = P + Cᵀ diag(λ/s) C` into `newton`.
+    fn assemble_newton(&mut self) {
+        let m = self.row_count;
+        self.newton.data.copy_from_slice(&self.hessian.data);
+        for i in 0..m {
+            let w = self.multiplier[i] / self.slack[i];
+            let row = self.rows[i];
+            for a in 0..row.len {
+                for b in 0..=a {
+                    self.newton
+                        .add(row.columns[a], row.columns[b], w * row.values[a] * row.values[b]);
+                }
+            }
+        }
     }
 
     /// Solves the QP; on return `x`, `slack`, `multiplier` hold the solution. Returns the outcome and
@@ -310,14 +367,27 @@ impl BandedQp {
                 .map(|(s, l)| s * l)
                 .sum::<f64>()
                 / m as f64;
+            let largest_product = self.slack[..m]
+                .iter()
+                .zip(self.multiplier[..m].iter())
+                .fold(0.0_f64, |a, (s, l)| a.max((s * l).abs()));
+            let largest_multiplier = self.multiplier[..m].iter().fold(0.0_f64, |a, l| a.max(*l));
             let dual_inf = self.residual_dual.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
             let primal_inf = self.residual_primal[..m]
                 .iter()
                 .fold(0.0_f64, |a, v| a.max(v.abs()));
-            if !(mu.is_finite() && dual_inf.is_finite() && primal_inf.is_finite()) {
+            if !(mu.is_finite() && largest_product.is_finite() && dual_inf.is_finite() && primal_inf.is_finite()) {
                 return (IpmOutcome::NumericalError, iterations);
             }
-            if dual_inf <= tol * scale_gradient && primal_inf <= tol * scale_bound && mu <= tol * tol.sqrt()
+            // Scale-invariant stopping rules: residuals relative to the largest term of their
+            // equation; complementarity: no product above tol × 1 mm × the largest multiplier, i.e. a
+            // row either has a slack below ~tol mm or a multiplier below tol × 1e-3 of the largest.
+            let [hessian_term, transpose_term, row_term] = self.term_scales;
+            let dual_scale = scale_gradient.max(hessian_term).max(transpose_term);
+            let primal_scale = scale_bound.max(row_term);
+            if dual_inf <= tol * dual_scale
+                && primal_inf <= tol * primal_scale
+                && largest_product <= tol * 1e-3 * largest_multiplier.max(tol * dual_scale)
             {
                 return (IpmOutcome::Converged, iterations);
             }
@@ -325,19 +395,8 @@ impl BandedQp {
                 return (IpmOutcome::MaxIterations, iterations);
             }
             iterations += 1;
-            // Newton matrix K = P + Cᵀ diag(λ/s) C.
-            self.newton.data.copy_from_slice(&self.hessian.data);
-            for i in 0..m {
-                let w = self.multiplier[i] / self.slack[i];
-                let row = self.rows[i];
-                for a in 0..row.len {
-                    for b in 0..=a {
-                        self.newton
-                            .add(row.columns[a], row.columns[b], w * row.values[a] * row.values[b]);
-                    }
-                }
-            }
-            if !self.newton.cholesky_in_place() {
+            self.assemble_newton();
+            if !self.factor_newton_regularized() {
                 return (IpmOutcome::NumericalError, iterations);
             }
             // Predictor (affine scaling).

@@ -681,10 +681,10 @@ fn solve_with_clarabel(qp: &mut BandedQp, config: &DcmPredictiveConfig) -> (IpmO
         .verbose(false)
         .max_iter(config.max_iterations.max(50))
         // The QP is in DCM variables; the ZMP is a difference of them (×|1/G| ≈ 25 at 100 Hz), so
-        // clarabel is asked for two more digits than the configured tolerance.
-        .tol_gap_abs(1e-2 * config.tolerance)
-        .tol_gap_rel(1e-2 * config.tolerance)
-        .tol_feas(1e-2 * config.tolerance)
+        // clarabel is asked for three more digits than the configured tolerance.
+        .tol_gap_abs(1e-3 * config.tolerance)
+        .tol_gap_rel(1e-3 * config.tolerance)
+        .tol_feas(1e-3 * config.tolerance)
         .build()
     else {
         return (IpmOutcome::NumericalError, 0);

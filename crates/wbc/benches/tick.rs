@@ -1,1 +1,152 @@
-fn main() {}
+//! Full ticks (task update + QP build + solve) of the QP-IK and the TSID, both backends, on the bundled
+//! model and, when `STRIDE_ICUB_MODELS_DIR` points at a directory containing `iCubGazeboV2_7/model.urdf`,
+//! on iCub v2.7.
+//!
+//! `cargo bench -p stride-wbc --bench tick -- --warm-up-time 1 --measurement-time 2`
+
+use std::sync::Arc;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector2};
+use stride_block::Block;
+use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
+use stride_qp::Backend;
+use stride_wbc::{
+    bundled_posture, FootReference, IkConfig, JointRegularizationTaskConfig, QpIk, TaskConfig, Tsid,
+    TsidConfig, WbcInput,
+};
+
+struct Robot {
+    name: &'static str,
+    model: Arc<Model>,
+    left: &'static str,
+    right: &'static str,
+    torso: &'static str,
+    posture: DVector<f64>,
+}
+
+fn bundled() -> Robot {
+    let path = format!("{}/../../models/stride_humanoid.urdf", env!("CARGO_MANIFEST_DIR"));
+    let model = Arc::new(Model::from_urdf_file(path).expect("bundled model"));
+    let mut posture = DVector::zeros(model.dof());
+    for (name, v) in bundled_posture() {
+        if let Some(i) = model.joint_index(&name) {
+            posture[i] = v;
+        }
+    }
+    Robot { name: "stride_humanoid", model, left: "l_sole", right: "r_sole", torso: "chest", posture }
+}
+
+fn icub() -> Option<Robot> {
+    let dir = std::env::var("STRIDE_ICUB_MODELS_DIR").ok()?;
+    let path = format!("{dir}/iCubGazeboV2_7/model.urdf");
+    let model = Arc::new(Model::from_urdf_file(&path).ok()?);
+    // iCub v2.7 posture of the walking controller (degrees): legs 5.08, 0.41, −0.13, −45.25, −26.45, −0.35
+    let mut posture = DVector::zeros(model.dof());
+    let deg = std::f64::consts::PI / 180.0;
+    for side in ["l", "r"] {
+        for (j, v) in [
+            ("hip_pitch", 5.082),
+            ("hip_roll", 0.406),
+            ("hip_yaw", -0.131),
+            ("knee", -45.249),
+            ("ankle_pitch", -26.454),
+            ("ankle_roll", -0.351),
+            ("shoulder_pitch", -7.0),
+            ("shoulder_roll", 22.0),
+            ("shoulder_yaw", 11.0),
+            ("elbow", 30.0),
+        ] {
+            if let Some(i) = model.joint_index(&format!("{side}_{j}")) {
+                posture[i] = v * deg;
+            }
+        }
+    }
+    let torso = if model.frame_id("chest").is_some() { "chest" } else { "root_link" };
+    Some(Robot { name: "iCubGazeboV2_7", model, left: "l_sole", right: "r_sole", torso, posture })
+}
+
+fn posture_map(robot: &Robot) -> std::collections::BTreeMap<String, f64> {
+    robot
+        .model
+        .joints()
+        .iter()
+        .enumerate()
+        .map(|(i, j)| (j.name.clone(), robot.posture[i]))
+        .collect()
+}
+
+fn adapt<'a>(tasks: impl Iterator<Item = &'a mut TaskConfig>, robot: &Robot) {
+    for t in tasks {
+        match t {
+            TaskConfig::Se3(c) if c.frame == "l_sole" => c.frame = robot.left.into(),
+            TaskConfig::Se3(c) if c.frame == "r_sole" => c.frame = robot.right.into(),
+            TaskConfig::So3(c) => c.frame = robot.torso.into(),
+            TaskConfig::Contact(c) if c.frame == "l_sole" => c.frame = robot.left.into(),
+            TaskConfig::Contact(c) if c.frame == "r_sole" => c.frame = robot.right.into(),
+            TaskConfig::JointRegularization(JointRegularizationTaskConfig { posture, joint_weights, .. }) => {
+                *posture = posture_map(robot);
+                joint_weights.clear();
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Standing input at the robot's posture, CoM reference 1 cm off (the QPs do work every tick).
+fn input(robot: &Robot) -> WbcInput {
+    let model = &robot.model;
+    let mut state = RobotState::zero(model);
+    state.joint_positions.copy_from(&robot.posture);
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    kd.set_state(&state).unwrap();
+    let l = kd.frame_pose(model.frame_id(robot.left).unwrap());
+    state.base_pose = Isometry3::from_parts(Translation3::new(0.0, 0.0, -l.translation.z), UnitQuaternion::identity());
+    kd.set_state(&state).unwrap();
+    let mut input = WbcInput::new(model);
+    input.state = state;
+    input.com_position = kd.com_position();
+    input.com_position.x += 0.01;
+    input.left_foot = FootReference { pose: kd.frame_pose(model.frame_id(robot.left).unwrap()), ..Default::default() };
+    input.right_foot = FootReference { pose: kd.frame_pose(model.frame_id(robot.right).unwrap()), ..Default::default() };
+    input.torso.orientation = kd.frame_pose(model.frame_id(robot.torso).unwrap()).rotation;
+    input.desired_zmp = Some(Vector2::new(input.com_position.x, input.com_position.y));
+    input
+}
+
+fn bench(c: &mut Criterion) {
+    let mut robots = vec![bundled()];
+    robots.extend(icub());
+    for robot in &robots {
+        let input = input(robot);
+        for backend in [Backend::ActiveSet, Backend::Clarabel] {
+            let tag = match backend {
+                Backend::ActiveSet => "active_set",
+                Backend::Clarabel => "clarabel",
+            };
+            let mut config = IkConfig::default_for_bundled_model();
+            config.qp.backend = backend;
+            // measured feedback: every tick solves the same problem (warm-started), as a velocity-
+            // controlled robot standing still would
+            config.feedback = stride_wbc::IkFeedback::Measured;
+            adapt(config.tasks.iter_mut(), robot);
+            let mut ik = QpIk::new(Arc::clone(&robot.model), config).expect("IK builds");
+            ik.step(&input).unwrap();
+            c.bench_function(&format!("qp_ik/{}/{tag}", robot.name), |b| {
+                b.iter(|| ik.step(&input).unwrap().report.iterations)
+            });
+            let mut config = TsidConfig::default_for_bundled_model();
+            config.qp.backend = backend;
+            adapt(config.tasks.iter_mut(), robot);
+            let mut tsid = Tsid::new(Arc::clone(&robot.model), config).expect("TSID builds");
+            tsid.step(&input).unwrap();
+            c.bench_function(&format!("tsid/{}/{tag}", robot.name), |b| {
+                b.iter(|| tsid.step(&input).unwrap().report.iterations)
+            });
+        }
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

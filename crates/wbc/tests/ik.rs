@@ -95,6 +95,7 @@ fn converges_from_random_postures_to_random_reachable_targets() {
                 hard_errors(&model, ik.integrated_state(), &input)
             )
         });
+        eprintln!("trial {trial}: converged in {step} steps");
         assert!(step < max_steps);
     }
 }

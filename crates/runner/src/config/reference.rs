@@ -1,1 +1,234 @@
-//! Key reference (docs/configuration.md).
+//! The key reference of scenario files (docs/configuration.md), generated from the code.
+//!
+//! Every key of the default [`super::ScenarioConfig`] (serialized) is listed with its TOML type and
+//! default. Keys of the runner's own sections carry unit and meaning from [`RUNNER_KEYS`]; keys of the
+//! embedded layer configurations take their meaning from the layer crates' field documentation (looked
+//! up by the caller, see the `configuration_reference` test, which regenerates the file and fails when
+//! docs/configuration.md differs). A key in the code without a description, or a description without a
+//! key, fails the test too.
+
+use std::collections::BTreeMap;
+
+/// Unit and meaning of a runner-owned key.
+#[derive(Debug, Clone, Copy)]
+pub struct KeyDoc {
+    /// Dotted key.
+    pub key: &'static str,
+    /// Unit (`-` when none).
+    pub unit: &'static str,
+    /// Meaning, with allowed values or ranges.
+    pub meaning: &'static str,
+}
+
+/// Keys that may be absent from the default configuration (optional or alternative shapes).
+pub const OPTIONAL_KEYS: &[KeyDoc] = &[
+    KeyDoc { key: "include", unit: "-", meaning: "Files merged before this one (paths relative to this file), in order; later files and this file override earlier ones (tables merge key by key, other values are replaced)." },
+    KeyDoc { key: "goal.waypoints.points[].x", unit: "m", meaning: "`[goal.waypoints]`: waypoint x; `[[goal.waypoints.points]]` entries are visited in order, the robot stops at the last." },
+    KeyDoc { key: "goal.waypoints.points[].y", unit: "m", meaning: "Waypoint y." },
+    KeyDoc { key: "goal.waypoints.points[].heading_deg", unit: "deg", meaning: "Waypoint heading about world z." },
+    KeyDoc { key: "goal.velocity.segments[].start", unit: "s", meaning: "`[goal.velocity]`: start of a velocity-command segment (sorted); each segment replans at its start." },
+    KeyDoc { key: "goal.velocity.segments[].forward", unit: "m/s", meaning: "Forward speed of the segment." },
+    KeyDoc { key: "goal.velocity.segments[].lateral", unit: "m/s", meaning: "Lateral speed of the segment." },
+    KeyDoc { key: "goal.velocity.segments[].yaw_rate_deg", unit: "deg/s", meaning: "Yaw rate of the segment." },
+    KeyDoc { key: "goal.stand", unit: "-", meaning: "`[goal.stand]` (empty table): stand still (push scenarios)." },
+];
+
+/// Runner-owned keys present in the default configuration.
+pub const RUNNER_KEYS: &[KeyDoc] = &[
+    KeyDoc { key: "scenario.name", unit: "-", meaning: "Short name; the default log file is `<name>.mcap`." },
+    KeyDoc { key: "scenario.description", unit: "-", meaning: "One line saying what the scenario shows." },
+    KeyDoc { key: "scenario.duration", unit: "s", meaning: "Simulated duration, 0 < value ≤ 3600; the run ends here at the latest (`--duration` overrides)." },
+    KeyDoc { key: "scenario.control_mode", unit: "-", meaning: "`position` (QP-IK → joint position servos) or `torque` (TSID → joint torques)." },
+    KeyDoc { key: "scenario.plant", unit: "-", meaning: "`simulator` (stride-sim) or `ideal` (joint commands applied exactly, base from the fixed stance foot)." },
+    KeyDoc { key: "robot.urdf", unit: "-", meaning: "URDF of the robot, relative to the file that sets this key." },
+    KeyDoc { key: "robot.left_sole", unit: "-", meaning: "Frame at the centre of the left sole (a link or frame of the model)." },
+    KeyDoc { key: "robot.right_sole", unit: "-", meaning: "Frame at the centre of the right sole." },
+    KeyDoc { key: "robot.torso_frame", unit: "-", meaning: "Frame whose tilt from vertical is checked for falls." },
+    KeyDoc { key: "robot.initial_joint_positions", unit: "rad or m", meaning: "Table joint name → initial position; joints not listed start at 0. Unknown joint names are rejected." },
+    KeyDoc { key: "rates.base_hz", unit: "Hz", meaning: "Base clock rate; must divide 1 000 000 000 (integer-nanosecond period). Every other rate divides it." },
+    KeyDoc { key: "rates.planner_mode", unit: "-", meaning: "`event` (plan at start and on each new goal segment) or `periodic` (also at `planner_hz`)." },
+    KeyDoc { key: "rates.planner_hz", unit: "Hz", meaning: "Planner rate in `periodic` mode; divides `base_hz`." },
+    KeyDoc { key: "rates.simplified_hz", unit: "Hz", meaning: "Simplified-layer rate (about 100 Hz); divides `base_hz`, ≤ `wbc_hz`." },
+    KeyDoc { key: "rates.wbc_hz", unit: "Hz", meaning: "Whole-body layer rate (500–1000 Hz); divides `base_hz`, ≤ `sim_hz`. Sets `wbc.ik.period` and `wbc.tsid.period`." },
+    KeyDoc { key: "rates.sim_hz", unit: "Hz", meaning: "Plant rate (2–5 kHz for the simulator); divides `base_hz`. Sets `sim.rate_hz`." },
+    KeyDoc { key: "goal.pose.x", unit: "m", meaning: "`[goal.pose]`: goal x in the world frame (the start is the soles' mid-point at the origin, heading +x)." },
+    KeyDoc { key: "goal.pose.y", unit: "m", meaning: "Goal y." },
+    KeyDoc { key: "goal.pose.heading_deg", unit: "deg", meaning: "Goal heading about world z." },
+    KeyDoc { key: "log.enabled", unit: "-", meaning: "Write an MCAP log." },
+    KeyDoc { key: "log.path", unit: "-", meaning: "Log path (relative to the working directory); empty: `<scenario.name>.mcap`. `--output` overrides." },
+    KeyDoc { key: "log.state_hz", unit: "Hz", meaning: "Rate of `/sim/state`, `/sensors/*`, `/tf`, `/runner/timing`; divides `rates.sim_hz`." },
+    KeyDoc { key: "log.compression", unit: "-", meaning: "Chunk compression: `zstd`, `lz4` or `none`." },
+    KeyDoc { key: "log.chunk_size", unit: "bytes", meaning: "Target uncompressed chunk size." },
+    KeyDoc { key: "log.queue_capacity", unit: "messages", meaning: "Messages the loop may queue ahead of the writer thread (≥ 1); beyond it the loop waits (counted)." },
+    KeyDoc { key: "end.fall_height_fraction", unit: "-", meaning: "Fall when the base height drops below this fraction of its initial height; 0 < value < 1." },
+    KeyDoc { key: "end.fall_tilt_deg", unit: "deg", meaning: "Fall when `robot.torso_frame` tilts more than this from vertical; 1 ≤ value ≤ 90." },
+    KeyDoc { key: "end.stop_at_goal", unit: "-", meaning: "End the run when the plan is finished, the goal is reached within tolerance and the CoM stands still." },
+    KeyDoc { key: "end.goal_position_tolerance", unit: "m", meaning: "Goal reached: planar distance of the soles' mid-point from the goal (> 0)." },
+    KeyDoc { key: "end.goal_heading_tolerance_deg", unit: "deg", meaning: "Goal reached: heading error (> 0)." },
+    KeyDoc { key: "end.standstill_speed", unit: "m/s", meaning: "Standing still: planar CoM speed below this (> 0) ..." },
+    KeyDoc { key: "end.standstill_time", unit: "s", meaning: "... for this long (> 0)." },
+];
+
+/// Sections embedded from layer crates: (section prefix, crate, where its docs are).
+pub const LAYER_SECTIONS: &[(&str, &str)] = &[
+    ("planner", "stride_planner::PlannerConfig"),
+    ("simplified", "stride_simplified::SimplifiedConfig"),
+    ("wbc.ik", "stride_wbc::IkConfig"),
+    ("wbc.tsid", "stride_wbc::TsidConfig"),
+    ("sim", "stride_sim::SimConfig"),
+];
+
+/// One row of the reference.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    /// Dotted key (`[]` marks array-of-tables entries).
+    pub key: String,
+    /// TOML type.
+    pub ty: String,
+    /// Default (TOML literal), or `–`.
+    pub default: String,
+}
+
+fn type_of(v: &toml::Value) -> &'static str {
+    match v {
+        toml::Value::String(_) => "string",
+        toml::Value::Integer(_) => "integer",
+        toml::Value::Float(_) => "float",
+        toml::Value::Boolean(_) => "bool",
+        toml::Value::Datetime(_) => "datetime",
+        toml::Value::Array(_) => "array",
+        toml::Value::Table(_) => "table",
+    }
+}
+
+fn literal(v: &toml::Value) -> String {
+    let s = v.to_string();
+    if s.len() > 60 {
+        format!("{}…", &s[..s.char_indices().nth(57).map_or(s.len(), |(i, _)| i)])
+    } else {
+        s
+    }
+}
+
+/// Leaf keys of a serialized configuration with their types and defaults. Maps whose keys are data
+/// (joint names) are listed as one `table` key; arrays of tables list the union of their entries' keys.
+pub fn rows(root: &toml::Table) -> Vec<Row> {
+    let mut out = BTreeMap::new();
+    walk(root, "", &mut out);
+    out.into_values().collect()
+}
+
+/// Keys whose table holds data (names → values), not fields.
+const DATA_TABLES: &[&str] = &[
+    "robot.initial_joint_positions",
+];
+
+fn is_data_table(key: &str) -> bool {
+    DATA_TABLES.contains(&key)
+        || key.ends_with(".posture")
+        || key.ends_with(".joint_weights")
+}
+
+fn walk(t: &toml::Table, prefix: &str, out: &mut BTreeMap<String, Row>) {
+    for (k, v) in t {
+        let key = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+        match v {
+            toml::Value::Table(inner) if !is_data_table(&key) => walk(inner, &key, out),
+            toml::Value::Array(items) if !items.is_empty() && items.iter().all(|i| i.is_table()) => {
+                let key = format!("{key}[]");
+                for item in items {
+                    if let toml::Value::Table(inner) = item {
+                        let mut sub = BTreeMap::new();
+                        walk(inner, &key, &mut sub);
+                        for (sk, mut row) in sub {
+                            row.default = "per entry".into();
+                            out.entry(sk).or_insert(row);
+                        }
+                    }
+                }
+            }
+            _ => {
+                out.insert(
+                    key.clone(),
+                    Row {
+                        key,
+                        ty: type_of(v).into(),
+                        default: literal(v),
+                    },
+                );
+            }
+        }
+    }
+}
+
+/// Renders docs/configuration.md. `layer_doc(key)` gives the meaning of a layer key (from the layer's
+/// field docs); runner keys come from [`RUNNER_KEYS`]. Returns the text and the keys without a meaning.
+pub fn render(default: &toml::Table, layer_doc: &dyn Fn(&str) -> Option<String>) -> (String, Vec<String>) {
+    let rows = rows(default);
+    let mut missing = Vec::new();
+    let mut s = String::new();
+    s.push_str("# Scenario configuration reference\n\n");
+    s.push_str("<!-- Generated by `cargo test -p stride-runner --test configuration_reference` with\n");
+    s.push_str("     STRIDE_UPDATE_DOCS=1; the same test fails when this file and the code disagree. -->\n\n");
+    s.push_str(
+        "A scenario is one TOML file in `configs/`. It may start with `include = [\"robots/x.toml\", ...]`: the \
+         included files (paths relative to the including file) are merged first, in order, then the file itself \
+         on top; tables merge key by key, every other value (numbers, strings, arrays) is replaced whole by the \
+         later file. Every table rejects unknown keys. Errors name the file, line, column and key and say what \
+         is expected. `stride check <CONFIG>` validates a scenario without running it.\n\n\
+         Rates are in Hz and must divide `rates.base_hz` exactly; `base_hz` must divide 10⁹ so the base period \
+         is a whole number of nanoseconds. The layers' own period keys (`wbc.ik.period`, `wbc.tsid.period`, \
+         `sim.rate_hz`) are set by the runner from `[rates]`; writing a different value is an error.\n\n\
+         Keys marked `[]` belong to the entries of an array of tables (`[[...]]`); their default is per entry \
+         (see the defaults printed by the code, e.g. the tasks of `stride_wbc::IkConfig::default_for_bundled_model`).\n\n",
+    );
+    let mut section = String::new();
+    let emit_header = |s: &mut String, title: &str| {
+        s.push_str(&format!("\n## `[{title}]`\n\n| key | type | default | unit | meaning |\n|---|---|---|---|---|\n"));
+    };
+    let mut all: Vec<(String, String, String, String, String)> = Vec::new();
+    for r in &rows {
+        let (unit, meaning) = if let Some(d) = RUNNER_KEYS.iter().find(|d| d.key == r.key) {
+            (d.unit.to_string(), d.meaning.to_string())
+        } else if let Some(m) = layer_doc(&r.key) {
+            ("see meaning".to_string(), m)
+        } else {
+            missing.push(r.key.clone());
+            ("?".into(), "(undocumented)".into())
+        };
+        all.push((r.key.clone(), r.ty.clone(), format!("`{}`", r.default.replace('|', "\\|")), unit, meaning));
+    }
+    for d in OPTIONAL_KEYS {
+        all.push((d.key.to_string(), if d.key == "include" { "array".into() } else if d.key == "goal.stand" { "table".into() } else { "float".into() }, "–".into(), d.unit.into(), d.meaning.into()));
+    }
+    let top = |k: &str| -> String {
+        for (p, _) in LAYER_SECTIONS {
+            if k.starts_with(&format!("{p}.")) {
+                return p.to_string();
+            }
+        }
+        k.split(['.', '[']).next().unwrap_or("").to_string()
+    };
+    all.sort_by(|a, b| (top(&a.0) != "include", top(&a.0), a.0.clone()).cmp(&(top(&b.0) != "include", top(&b.0), b.0.clone())));
+    for (key, ty, default, unit, meaning) in all {
+        let sec = top(&key);
+        if sec != section {
+            section = sec.clone();
+            emit_header(&mut s, &sec);
+            if let Some((_, ty)) = LAYER_SECTIONS.iter().find(|(p, _)| *p == sec) {
+                s.insert_str(
+                    s.len() - "| key | type | default | unit | meaning |\n|---|---|---|---|---|\n".len(),
+                    &format!("Embedded `{ty}`: meanings come from that type's documentation (units in brackets).\n\n"),
+                );
+            }
+        }
+        s.push_str(&format!("| `{key}` | {ty} | {default} | {unit} | {} |\n", meaning.replace('|', "\\|").replace('\n', " ")));
+    }
+    // Runner descriptions that no longer match a key.
+    for d in RUNNER_KEYS {
+        if !rows.iter().any(|r| r.key == d.key) {
+            missing.push(format!("stale description: {}", d.key));
+        }
+    }
+    (s, missing)
+}

@@ -81,3 +81,18 @@ pub fn random_pose(rng: &mut ChaCha8Rng, t: f64, r: f64) -> Isometry3<f64> {
     let rot = Vector3::new(rng.random_range(-r..r), rng.random_range(-r..r), rng.random_range(-r..r));
     Isometry3::from_parts(Translation3::from(tr), UnitQuaternion::from_scaled_axis(rot))
 }
+
+/// Rotates and shifts the base so that `frame` (a sole) is flat on z = 0, keeping its x, y.
+pub fn flatten_on(model: &Arc<Model>, state: &mut RobotState, frame: &str) {
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    kd.set_state(state).unwrap();
+    let sole = kd.frame_pose(model.frame_id(frame).unwrap());
+    // keep the sole's yaw, remove its roll and pitch
+    let (_, _, yaw) = sole.rotation.euler_angles();
+    let flat = Isometry3::from_parts(
+        Translation3::new(sole.translation.x, sole.translation.y, 0.0),
+        UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+    );
+    state.base_pose = flat * sole.inverse() * state.base_pose;
+}

@@ -1,0 +1,93 @@
+//! `step` allocates nothing after construction: PI, ZMP-CoM, the whole block with either controller
+//! (MPC with the banded interior-point solver), counted with a global allocator.
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
+
+use nalgebra::Vector2;
+use stride_block::Block;
+use stride_simplified::*;
+
+struct Counting;
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+const OMEGA: f64 = 4.302_325_511_579_751;
+
+fn count<R>(f: impl FnOnce() -> R) -> (usize, R) {
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let r = f();
+    (ALLOCATIONS.load(Ordering::SeqCst) - before, r)
+}
+
+// One test function so that no other test thread allocates while counting.
+#[test]
+fn steps_do_not_allocate() {
+    let foot = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap();
+    let both = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.19).unwrap();
+
+    let mut pi = DcmInstantaneousController::new(DcmInstantaneousConfig { ki: 1.0, ..Default::default() }).unwrap();
+    let (n, _) = count(|| {
+        for i in 0..100 {
+            let e = 0.001 * i as f64;
+            pi.step(Vector2::zeros(), Vector2::new(0.1, 0.0), Vector2::new(e, -e), OMEGA, &foot, 0.01).unwrap();
+        }
+    });
+    assert_eq!(n, 0, "DCM PI step allocated");
+
+    let mut zc = ZmpComController::new(ZmpComConfig::default()).unwrap();
+    let (n, _) = count(|| {
+        for i in 0..100 {
+            let z = Vector2::new(0.001 * i as f64, 0.0);
+            zc.step(i % 30 < 15, OMEGA, z, -z, z, z, -z, 0.01).unwrap();
+        }
+    });
+    assert_eq!(n, 0, "ZMP-CoM step allocated");
+
+    for kind in [DcmControllerKind::Instantaneous, DcmControllerKind::Predictive] {
+        let config = SimplifiedConfig { dcm_controller: kind, ..Default::default() };
+        let mut block = SimplifiedController::new(&config, Duration::from_millis(10)).unwrap();
+        let samples = block.horizon_samples();
+        let mut input = SimplifiedInput::new(samples, foot);
+        input.omega = OMEGA;
+        let (n, _) = count(|| {
+            for tick in 0..40 {
+                input.horizon.clear();
+                for k in 0..samples {
+                    let support = if k + tick < 60 { foot } else { both };
+                    input
+                        .horizon
+                        .push(HorizonSample { dcm_position: Vector2::new(0.01, 0.0), zmp: Vector2::new(0.01, 0.0), support })
+                        .unwrap();
+                }
+                input.walking = tick % 20 < 10;
+                // pushes large enough to activate the polygon constraints on some ticks
+                input.measured_dcm = Vector2::new(0.01 + 0.0015 * tick as f64, 0.0);
+                input.measured_zmp = Vector2::new(0.01, 0.0);
+                let out = block.step(&input).unwrap();
+                assert!(out.valid);
+            }
+        });
+        assert_eq!(n, 0, "block step allocated with {kind:?}");
+        if kind == DcmControllerKind::Predictive {
+            // make sure the constrained (iterative) path ran
+            assert_eq!(block.output().diagnostics.mpc.status, MpcStatus::Solved);
+        }
+    }
+}

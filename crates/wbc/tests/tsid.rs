@@ -1,0 +1,385 @@
+//! TSID: equations of motion against stride-model's RNEA, wrench feasibility, torque limits, a standing
+//! robot integrated with forward dynamics, cross-solver agreement, infeasibility + fallback, contact
+//! ramps.
+
+mod common;
+
+use std::sync::Arc;
+
+use common::*;
+use nalgebra::{DVector, Vector2, Vector3, Vector6};
+use rand::Rng;
+use stride_block::Block;
+use stride_model::{ExternalWrench, KinDyn, Model, RobotState, VelocityRepresentation};
+use stride_qp::{Backend, QpStatus};
+use stride_wbc::{Priority, TaskConfig, Tsid, TsidConfig, TsidOutput, WbcInput};
+
+const FOOT_X: [f64; 2] = [-0.1, 0.1];
+const FOOT_Y: [f64; 2] = [-0.045, 0.045];
+const MU: f64 = 0.33;
+
+fn kd_at(model: &Arc<Model>, state: &RobotState) -> KinDyn {
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    kd.set_state(state).unwrap();
+    kd
+}
+
+/// Checks with stride-model's RNEA that `M ν̇ + h − Σ Jᵀ f = [0; τ]` and that every wrench is feasible.
+fn check_physics(model: &Arc<Model>, state: &RobotState, out: &TsidOutput, tol: f64, mu: f64) {
+    let mut kd = kd_at(model, state);
+    let frames = [model.frame_id("l_sole").unwrap(), model.frame_id("r_sole").unwrap()];
+    let wrenches: Vec<ExternalWrench> = frames
+        .iter()
+        .zip(out.contact_wrenches.iter())
+        .map(|(f, w)| ExternalWrench { frame: *f, wrench: *w })
+        .collect();
+    let mut gen = DVector::zeros(model.nv());
+    kd.inverse_dynamics(&out.accelerations, &wrenches, &mut gen).unwrap();
+    let base = gen.rows(0, 6).amax();
+    assert!(base < tol, "base rows of the dynamics violated by {base}");
+    let joints = (gen.rows(6, model.dof()) - &out.joint_torques).amax();
+    assert!(joints < tol, "torques differ from the RNEA ones by {joints}");
+    for (i, j) in model.joints().iter().enumerate() {
+        assert!(out.joint_torques[i].abs() <= j.effort_limit + 1e-9, "{}: {}", j.name, out.joint_torques[i]);
+    }
+    for (f, w) in frames.iter().zip(out.contact_wrenches.iter()) {
+        let rt = kd.frame_pose(*f).rotation.inverse();
+        let force = rt * Vector3::new(w[0], w[1], w[2]);
+        let torque = rt * Vector3::new(w[3], w[4], w[5]);
+        let fz = force.z;
+        assert!(fz >= -1e-9, "negative normal force {fz}");
+        // the inscribed 4-facet pyramid: |fx| + |fy| ≤ μ fz
+        assert!(force.x.abs() + force.y.abs() <= mu * fz + 1e-7, "friction: {force:?}");
+        if fz > 1e-6 {
+            let cop = Vector2::new(-torque.y / fz, torque.x / fz);
+            assert!(cop.x >= FOOT_X[0] - 1e-7 && cop.x <= FOOT_X[1] + 1e-7, "CoP x {}", cop.x);
+            assert!(cop.y >= FOOT_Y[0] - 1e-7 && cop.y <= FOOT_Y[1] + 1e-7, "CoP y {}", cop.y);
+        } else {
+            assert!(w.amax() < 1e-6, "unloaded foot carries {w:?}");
+        }
+    }
+}
+
+fn perturbed_state(model: &Arc<Model>, rng: &mut rand_chacha::ChaCha8Rng) -> RobotState {
+    let q = random_posture(model, rng, 0.15, 0.1);
+    let mut state = standing_state(model, &q);
+    for i in 0..model.dof() {
+        state.joint_velocities[i] = rng.random_range(-0.1..0.1);
+    }
+    state
+}
+
+#[test]
+fn solutions_satisfy_the_equations_of_motion_cones_cop_and_torque_limits() {
+    let model = bundled_model();
+    let mut rng = rng(21);
+    for trial in 0..12 {
+        let (l, r) = [(true, true), (true, false), (false, true)][trial % 3];
+        let mut state = perturbed_state(&model, &mut rng);
+        if !(l && r) {
+            // the stance sole flat on the ground (a tilted single support can exceed the friction cone)
+            flatten_on(&model, &mut state, if l { "l_sole" } else { "r_sole" });
+        }
+        let mut input = references_at(&model, &state);
+        input.com_position += Vector3::new(rng.random_range(-0.01..0.01), rng.random_range(-0.01..0.01), 0.0);
+        input.posture = Some(default_posture(&model));
+        input.left_in_contact = l;
+        input.right_in_contact = r;
+        if !(l && r) {
+            // single support: a LIPM-consistent CoM acceleration, ZMP at the stance sole point nearest
+            // to the CoM projection
+            let foot = if l { &input.left_foot } else { &input.right_foot };
+            let local = foot.pose.inverse_transform_point(&nalgebra::Point3::from(input.com_position));
+            let zmp = foot.pose.transform_point(&nalgebra::Point3::new(
+                local.x.clamp(FOOT_X[0], FOOT_X[1]),
+                local.y.clamp(FOOT_Y[0], FOOT_Y[1]),
+                0.0,
+            ));
+            let height = input.com_position.z - zmp.z;
+            let omega2 = 9.81 / height;
+            input.com_acceleration.x = omega2 * (input.com_position.x - zmp.x);
+            input.com_acceleration.y = omega2 * (input.com_position.y - zmp.y);
+        }
+        // rubber soles (μ = 1): a random single-support state can need more than μ = 0.33
+        let mut config = TsidConfig::default_for_bundled_model();
+        for t in &mut config.tasks {
+            if let TaskConfig::Contact(c) = t {
+                c.friction = 1.0;
+            }
+        }
+        let mut tsid = Tsid::new(Arc::clone(&model), config).unwrap();
+        let out = tsid.step(&input).unwrap().clone();
+        assert_eq!(out.report.status, QpStatus::Solved, "trial {trial}");
+        assert!(!out.report.fallback);
+        check_physics(&model, &state, &out, 1e-8, 1.0);
+        if !l {
+            assert_eq!(out.contact_wrenches[0], Vector6::zeros());
+        }
+        if !r {
+            assert_eq!(out.contact_wrenches[1], Vector6::zeros());
+        }
+        // hard task residuals are tiny; KKT holds
+        for res in out.residuals.iter().filter(|r| r.hard) {
+            assert!(res.residual < 1e-7, "trial {trial} {}: {}", res.name, res.residual);
+        }
+        let kkt = tsid.qp_problem().unwrap().check_kkt();
+        assert!(kkt.is_satisfied(1e-6), "{kkt:?}");
+    }
+}
+
+#[test]
+fn standing_still_needs_no_acceleration_and_carries_the_weight() {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let input = references_at(&model, &state);
+    // without torque regularization and with the angular momentum rate fixed (hard, zero) the feasible
+    // ν̇ satisfy M_b ν̇ = 0 and J_feet ν̇ = 0, and every ν̇ cost is minimal at ν̇ = 0: the unique optimum
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.tasks.retain(|t| !matches!(t, TaskConfig::TorqueRegularization(_)));
+    config.tasks.push(TaskConfig::AngularMomentum(stride_wbc::AngularMomentumTaskConfig {
+        name: "angular_momentum".into(),
+        kp: 0.0,
+        priority: Priority::Hard,
+        weight: stride_wbc::Weight::Scalar(1.0),
+    }));
+    let mut tsid = Tsid::new(Arc::clone(&model), config).unwrap();
+    let out = tsid.step(&input).unwrap();
+    assert_eq!(out.report.status, QpStatus::Solved);
+    let fz: f64 = out.contact_wrenches.iter().map(|w| w[2]).sum();
+    assert!((fz - model.total_mass() * 9.81).abs() < 1e-8, "Σ f_z = {fz}");
+    assert!(out.accelerations.amax() < 1e-9, "ν̇ = {}", out.accelerations.amax());
+    // default: the QP trades a tiny acceleration for lower torques and sole moments
+    let mut tsid = Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
+    let out = tsid.step(&input).unwrap();
+    let fz: f64 = out.contact_wrenches.iter().map(|w| w[2]).sum();
+    assert!((fz - model.total_mass() * 9.81).abs() < 1e-8, "Σ f_z = {fz}");
+    assert!(out.accelerations.amax() < 1e-3, "ν̇ = {}", out.accelerations.amax());
+}
+
+/// Integrates the closed loop TSID → forward dynamics with the planned wrenches as the contact
+/// wrenches (rigid contacts held by the contact constraint) with a semi-implicit Euler step.
+fn simulate(
+    model: &Arc<Model>,
+    tsid: &mut Tsid,
+    input: &mut WbcInput,
+    steps: usize,
+    dt: f64,
+    mut each: impl FnMut(usize, &TsidOutput, &RobotState, &RobotState),
+) {
+    let frames = [model.frame_id("l_sole").unwrap(), model.frame_id("r_sole").unwrap()];
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    let mut acc = DVector::zeros(model.nv());
+    for k in 0..steps {
+        let out = tsid.step(input).unwrap().clone();
+        assert!(out.report.status.is_success(), "step {k}: {:?}", out.report);
+        let wrenches = [
+            ExternalWrench { frame: frames[0], wrench: out.contact_wrenches[0] },
+            ExternalWrench { frame: frames[1], wrench: out.contact_wrenches[1] },
+        ];
+        let before = input.state.clone();
+        kd.set_state(&input.state).unwrap();
+        kd.forward_dynamics(&out.joint_torques, &wrenches, &mut acc).unwrap();
+        assert!((&acc - &out.accelerations).amax() < 1e-6, "forward dynamics disagrees with the TSID");
+        let s = &mut input.state;
+        s.base_velocity += acc.fixed_rows::<6>(0) * dt;
+        for i in 0..model.dof() {
+            s.joint_velocities[i] += acc[6 + i] * dt;
+        }
+        s.integrate(model, VelocityRepresentation::Mixed, dt).unwrap();
+        each(k, &out, &before, s);
+    }
+}
+
+#[test]
+fn a_standing_robot_under_tsid_keeps_its_com_still() {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    let com0 = input.com_position;
+    let feet0 = [input.left_foot.pose, input.right_foot.pose];
+    let mut tsid = Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
+    let frames = [model.frame_id("l_sole").unwrap(), model.frame_id("r_sole").unwrap()];
+    let mut worst_com: f64 = 0.0;
+    let mut worst_foot: f64 = 0.0;
+    simulate(&model, &mut tsid, &mut input, 2000, 1e-3, |_, _, _, s| {
+        let kd = kd_at(&model, s);
+        worst_com = worst_com.max((kd.com_position() - com0).norm());
+        for (f, p0) in frames.iter().zip(feet0.iter()) {
+            worst_foot = worst_foot.max((kd.frame_pose(*f).translation.vector - p0.translation.vector).norm());
+        }
+    });
+    assert!(worst_com < 1e-6, "CoM moved by {worst_com} m in 2 s");
+    assert!(worst_foot < 1e-6, "a foot moved by {worst_foot} m");
+}
+
+#[test]
+fn a_pushed_robot_returns_its_com_to_the_reference() {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    let com0 = input.com_position;
+    // the CoM reference steps 2.2 cm away (inside the support polygon)
+    input.com_position += Vector3::new(0.02, 0.01, 0.0);
+    let mut tsid = Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
+    let mut last = f64::INFINITY;
+    let target = input.com_position;
+    simulate(&model, &mut tsid, &mut input, 1500, 1e-3, |_, out, before, after| {
+        check_physics(&model, before, out, 1e-8, MU);
+        last = (kd_at(&model, after).com_position() - target).norm();
+    });
+    assert!(last < 1e-4, "CoM error after 1.5 s: {last} (started 0.022 from {com0:?})");
+}
+
+#[test]
+fn clarabel_and_active_set_agree_on_tsid_ticks() {
+    let model = bundled_model();
+    let mut rng = rng(5);
+    let mut worst: f64 = 0.0;
+    for trial in 0..6 {
+        let state = perturbed_state(&model, &mut rng);
+        let mut input = references_at(&model, &state);
+        input.com_position.x += 0.01;
+        input.desired_zmp = Some(Vector2::new(input.com_position.x, input.com_position.y));
+        input.right_in_contact = trial % 2 == 0;
+        let a = TsidConfig::default_for_bundled_model();
+        let mut c = a.clone();
+        c.qp.backend = Backend::Clarabel;
+        // the reference at its tightest tolerance (at the default 1e-10 clarabel's own error in the
+        // weakly penalized wrench-distribution directions reaches 1e-5 N; its KKT residual says so)
+        c.qp.clarabel.tolerance = 1e-12;
+        let mut ta = Tsid::new(Arc::clone(&model), a).unwrap();
+        let mut tc = Tsid::new(Arc::clone(&model), c).unwrap();
+        let oa = ta.step(&input).unwrap().clone();
+        let oc = tc.step(&input).unwrap().clone();
+        assert!(oa.report.status.is_success() && oc.report.status.is_success());
+        let d = (&oa.accelerations - &oc.accelerations)
+            .amax()
+            .max((&oa.joint_torques - &oc.joint_torques).amax())
+            .max((oa.contact_wrenches[0] - oc.contact_wrenches[0]).amax())
+            .max((oa.contact_wrenches[1] - oc.contact_wrenches[1]).amax());
+        worst = worst.max(d);
+    }
+    assert!(worst < 1e-6, "active set vs clarabel differ by {worst}");
+}
+
+fn hard_zmp_config() -> TsidConfig {
+    let mut c = TsidConfig::default_for_bundled_model();
+    for t in &mut c.tasks {
+        if let TaskConfig::Zmp(z) = t {
+            z.priority = Priority::Hard;
+        }
+    }
+    c
+}
+
+#[test]
+fn desired_zmp_outside_the_support_polygon_is_infeasible_and_falls_back() {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    // a hard ZMP 0.5 m in front of the feet: no wrench in the cones produces it
+    input.desired_zmp = Some(Vector2::new(0.5, 0.0));
+    let mut tsid = Tsid::new(Arc::clone(&model), hard_zmp_config()).unwrap();
+    let out = tsid.step(&input).unwrap().clone();
+    assert_eq!(out.report.status, QpStatus::Infeasible);
+    assert!(out.report.fallback && !out.report.held);
+    assert_eq!(out.report.relaxed_status, Some(QpStatus::Solved));
+    // documented fallback: hard equalities relaxed, inequalities (cones, CoP, torque limits) kept hard
+    let kd = kd_at(&model, &state);
+    for (frame, w) in ["l_sole", "r_sole"].iter().zip(out.contact_wrenches.iter()) {
+        let rt = kd.frame_pose(model.frame_id(frame).unwrap()).rotation.inverse();
+        let f = rt * Vector3::new(w[0], w[1], w[2]);
+        let t = rt * Vector3::new(w[3], w[4], w[5]);
+        assert!(f.z >= -1e-9 && f.x.abs() + f.y.abs() <= MU * f.z + 1e-7);
+        if f.z > 1e-6 {
+            assert!(-t.y / f.z <= FOOT_X[1] + 1e-7);
+        }
+    }
+    let zmp = out.residuals.iter().find(|r| r.name == "zmp").unwrap();
+    assert!(zmp.hard && zmp.residual > 1.0, "the violated hard ZMP shows in its residual: {zmp:?}");
+    assert!(out.joint_torques.iter().all(|v| v.is_finite()));
+
+    // same problem with the ZMP inside the feet: feasible, nominal path
+    input.desired_zmp = Some(Vector2::new(0.0, 0.0));
+    let out = tsid.step(&input).unwrap();
+    assert_eq!(out.report.status, QpStatus::Solved);
+    assert!(!out.report.fallback);
+}
+
+#[test]
+fn com_target_far_outside_the_support_polygon_with_hard_wrench_constraints_is_infeasible() {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    // K_p (x_ref − x) = 100 m/s² forward: needs |Σ f_x| = m·100 ≫ μ Σ f_z
+    input.com_position.x += 1.0;
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.qp.fallback = false;
+    let mut tsid = Tsid::new(Arc::clone(&model), config).unwrap();
+    let first = tsid.step(&references_at(&model, &state)).unwrap().joint_torques.clone();
+    let out = tsid.step(&input).unwrap();
+    assert_eq!(out.report.status, QpStatus::Infeasible);
+    assert!(out.report.held, "no fallback configured: the last valid torques are held");
+    assert_eq!(out.joint_torques, first);
+}
+
+/// Largest per-tick torque change while the right foot lifts off at t = 0.
+fn lift_off_torque_jump(ramp_time: f64) -> (f64, Vec<f64>) {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    let mut config = TsidConfig::default_for_bundled_model();
+    for t in &mut config.tasks {
+        if let TaskConfig::Contact(c) = t {
+            c.ramp_time = ramp_time;
+        }
+    }
+    let mut tsid = Tsid::new(Arc::clone(&model), config).unwrap();
+    let mut previous = tsid.step(&input).unwrap().joint_torques.clone();
+    input.right_in_contact = false;
+    let mut worst: f64 = 0.0;
+    let mut right_fz = Vec::new();
+    for _ in 0..80 {
+        let out = tsid.step(&input).unwrap();
+        assert!(out.report.status.is_success());
+        worst = worst.max((&out.joint_torques - &previous).amax());
+        previous.copy_from(&out.joint_torques);
+        right_fz.push(out.contact_wrenches[1][2]);
+    }
+    (worst, right_fz)
+}
+
+#[test]
+fn lift_off_ramps_the_wrench_instead_of_jumping() {
+    let (jump_ramped, fz) = lift_off_torque_jump(0.05);
+    let (jump_instant, fz_instant) = lift_off_torque_jump(0.0);
+    // instant: the foot is unloaded at the first tick
+    assert_eq!(fz_instant[0], 0.0);
+    // ramped: the normal force decreases to zero over 50 ticks, never increasing, then stays zero
+    assert!(fz[0] > 0.0);
+    for k in 1..fz.len() {
+        assert!(fz[k] <= fz[k - 1] + 1e-9, "tick {k}: {} > {}", fz[k], fz[k - 1]);
+    }
+    assert!(fz[49..].iter().all(|f| *f == 0.0), "{:?}", &fz[45..]);
+    assert!(
+        jump_ramped < 0.2 * jump_instant,
+        "ramped torque jump {jump_ramped} vs instant {jump_instant}"
+    );
+}
+
+#[test]
+fn config_parses_from_toml_and_requires_the_dynamics() {
+    let default = TsidConfig::default_for_bundled_model();
+    let text = toml::to_string(&default).unwrap();
+    let back: TsidConfig = toml::from_str(&text).unwrap();
+    assert_eq!(back, default);
+    let model = bundled_model();
+    let mut no_dynamics = default.clone();
+    no_dynamics.tasks.retain(|t| !matches!(t, TaskConfig::FloatingBaseDynamics(_)));
+    let err = Tsid::new(Arc::clone(&model), no_dynamics).err().unwrap();
+    assert!(err.to_string().contains("floating_base_dynamics"), "{err}");
+    let bad = text.replace("friction = 0.33", "friction = 0.33\nrestitution = 0.1");
+    assert!(toml::from_str::<TsidConfig>(&bad).is_err());
+}
