@@ -544,7 +544,7 @@ impl KinDyn {
         let nv = self.model.nv();
         check_shape("com_jacobian output", (3, nv), out.shape())?;
         let mass = self.model.total_mass;
-        out.fill(0.0);
+        out.as_mut_slice().fill(0.0);
         if mass <= 0.0 {
             return Ok(());
         }
@@ -617,7 +617,7 @@ impl KinDyn {
         let nv = self.model.nv();
         check_shape("mass_matrix output", (nv, nv), out.shape())?;
         self.composites();
-        out.fill(0.0);
+        out.as_mut_slice().fill(0.0);
         let t = self.base_t();
         let base = t.transpose() * self.composite[0].matrix() * t;
         out.fixed_view_mut::<6, 6>(0, 0).copy_from(&base);

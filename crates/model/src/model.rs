@@ -157,7 +157,6 @@ pub struct Model {
     pub(crate) parent: Vec<usize>,
     pub(crate) placement_rot: Vec<Matrix3<f64>>,
     pub(crate) placement_pos: Vec<Vector3<f64>>,
-    pub(crate) axis: Vec<Vector3<f64>>,
     /// Joint axis in the parent body frame (`placement_rot · axis`).
     pub(crate) axis_in_parent: Vec<Vector3<f64>>,
     /// `placement_rot · K` and `placement_rot · K²` with `K = skew(axis)` (Rodrigues).

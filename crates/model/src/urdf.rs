@@ -738,7 +738,6 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
         axis_in_parent,
         placement_k,
         placement_k2,
-        axis: axes,
         prismatic,
         body_com: body_inertia.iter().map(|i| i.com()).collect(),
         body_inertia_com: body_inertia.iter().map(|i| i.inertia_at_com()).collect(),

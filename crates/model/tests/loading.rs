@@ -238,3 +238,36 @@ fn top_level_sensor_declares_a_frame() {
         (f.placement.translation.vector - nalgebra::Vector3::new(0.0, 0.0, -0.09)).norm() < 1e-15
     );
 }
+
+#[test]
+fn massless_leaf_gives_an_error_not_nan() {
+    use nalgebra::DVector;
+    use std::sync::Arc;
+    use stride_model::{KinDyn, RobotState};
+    let model = Arc::new(Model::from_urdf_str(&two_links("revolute", "")).unwrap());
+    assert!(model
+        .warnings()
+        .iter()
+        .any(|w| w.contains("`b`") && w.contains("forward dynamics will fail")));
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    kd.set_state(&RobotState::zero(&model)).unwrap();
+    let mut out = DVector::zeros(model.nv());
+    let e = kd
+        .forward_dynamics(&DVector::zeros(1), &[], &mut out)
+        .unwrap_err();
+    assert!(
+        matches!(&e, ModelError::SingularInertia { what } if what.contains("`j`")),
+        "{e}"
+    );
+    // Wrong sizes and non-finite inputs are errors.
+    let e = kd
+        .forward_dynamics(&DVector::zeros(3), &[], &mut out)
+        .unwrap_err();
+    assert!(matches!(e, ModelError::DimensionMismatch { .. }), "{e}");
+    let mut state = RobotState::zero(&model);
+    state.joint_positions[0] = f64::NAN;
+    assert!(matches!(
+        kd.set_state(&state).unwrap_err(),
+        ModelError::NonFiniteInput { .. }
+    ));
+}

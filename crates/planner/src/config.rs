@@ -71,41 +71,41 @@ pub enum DcmInterpolation {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerConfig {
-    /// Constant CoM height above the ground [m].
+    /// Constant CoM height above the ground \[m\].
     pub com_height: f64,
-    /// Gravity magnitude [m/s²].
+    /// Gravity magnitude \[m/s²\].
     pub gravity: f64,
-    /// Minimum step duration (touch-down to touch-down) [s].
+    /// Minimum step duration (touch-down to touch-down) \[s\].
     pub step_duration_min: f64,
-    /// Duration of the closing steps placed after the unicycle stopped [s].
+    /// Duration of the closing steps placed after the unicycle stopped \[s\].
     pub step_duration_nominal: f64,
-    /// Maximum step duration [s].
+    /// Maximum step duration \[s\].
     pub step_duration_max: f64,
     /// Fraction of each step spent in double support, in (0, 1).
     pub double_support_fraction: f64,
-    /// Duration of the first double support when starting from standing [s].
+    /// Duration of the first double support when starting from standing \[s\].
     pub initial_double_support_duration: f64,
-    /// Duration of the final double support [s].
+    /// Duration of the final double support \[s\].
     pub final_double_support_duration: f64,
-    /// Minimum distance between the feet at touch-down [m].
+    /// Minimum distance between the feet at touch-down \[m\].
     pub step_length_min: f64,
-    /// Maximum distance between the feet at touch-down [m] (the width is included in this distance).
+    /// Maximum distance between the feet at touch-down \[m\] (the width is included in this distance).
     pub step_length_max: f64,
-    /// Nominal lateral distance between the feet [m].
+    /// Nominal lateral distance between the feet \[m\].
     pub nominal_width: f64,
-    /// Minimum lateral position of the left foot in the right-foot frame [m].
+    /// Minimum lateral position of the left foot in the right-foot frame \[m\].
     pub min_width: f64,
-    /// Maximum relative yaw between the feet [rad].
+    /// Maximum relative yaw between the feet \[rad\].
     pub max_yaw_per_step: f64,
-    /// Swing apex height above the higher foothold [m].
+    /// Swing apex height above the higher foothold \[m\].
     pub swing_height: f64,
     /// Apex time as a fraction of the swing duration, in (0, 1).
     pub swing_apex_fraction: f64,
-    /// Vertical velocity of the swing foot at touch-down [m/s], ≤ 0.
+    /// Vertical velocity of the swing foot at touch-down \[m/s\], ≤ 0.
     pub landing_velocity: f64,
-    /// Sole length [m].
+    /// Sole length \[m\].
     pub foot_length: f64,
-    /// Sole width [m].
+    /// Sole width \[m\].
     pub foot_width: f64,
     /// Backward speed limit as a fraction of the forward speed limit, in (0, 1].
     pub backward_speed_factor: f64,
@@ -117,21 +117,21 @@ pub struct PlannerConfig {
     pub angular_saturation_factor: f64,
     /// Reference-point speed along a path as a fraction of the limits, in (0, 1].
     pub reference_speed_fraction: f64,
-    /// Unicycle feedback gain K [1/s].
+    /// Unicycle feedback gain K \[1/s\].
     pub unicycle_gain: f64,
-    /// Controlled point F in the unicycle frame [m] (x > 0).
+    /// Controlled point F in the unicycle frame \[m\] (x > 0).
     pub reference_point: [f64; 2],
-    /// K_t of the footstep cost [s²].
+    /// K_t of the footstep cost \[s²\].
     pub time_weight: f64,
-    /// K_x of the footstep cost [1/m²].
+    /// K_x of the footstep cost \[1/m²\].
     pub position_weight: f64,
-    /// Unicycle integration period [s].
+    /// Unicycle integration period \[s\].
     pub unicycle_dt: f64,
-    /// Planning horizon of the unicycle [s].
+    /// Planning horizon of the unicycle \[s\].
     pub horizon: f64,
-    /// Heading error above which the robot turns in place before walking to a waypoint [rad].
+    /// Heading error above which the robot turns in place before walking to a waypoint \[rad\].
     pub turn_in_place_threshold: f64,
-    /// Waypoints behind the robot closer than this are reached walking backwards [m].
+    /// Waypoints behind the robot closer than this are reached walking backwards \[m\].
     pub backward_max_distance: f64,
     /// Merge point position inside a double support, in [0, 1).
     pub merge_point_fraction: f64,
@@ -409,31 +409,31 @@ impl PlannerConfig {
         Ok(())
     }
 
-    /// LIPM natural frequency ω = √(g/h) [1/s].
+    /// LIPM natural frequency ω = √(g/h) \[1/s\].
     pub fn omega(&self) -> f64 {
         (self.gravity / self.com_height).sqrt()
     }
 
-    /// Forward speed limit of the unicycle [m/s]: factor · √(l_max² − w²)/t_min.
+    /// Forward speed limit of the unicycle \[m/s\]: factor · √(l_max² − w²)/t_min.
     pub fn max_forward_speed(&self) -> f64 {
         let l = self.step_length_max;
         let w = self.nominal_width;
         self.linear_saturation_factor * (l * l - w * w).sqrt() / self.step_duration_min
     }
 
-    /// Backward speed limit [m/s] (positive number).
+    /// Backward speed limit \[m/s\] (positive number).
     pub fn max_backward_speed(&self) -> f64 {
         self.backward_speed_factor * self.max_forward_speed()
     }
 
-    /// Lateral speed limit [m/s]: the smaller of the configured fraction of the forward limit and the
+    /// Lateral speed limit \[m/s\]: the smaller of the configured fraction of the forward limit and the
     /// geometric limit 0.9·(nominal_width − min_width)/t_min (the trailing foot must keep `min_width`).
     pub fn max_lateral_speed(&self) -> f64 {
         let geometric = 0.9 * (self.nominal_width - self.min_width) / self.step_duration_min;
         (self.sideways_speed_factor * self.max_forward_speed()).min(geometric)
     }
 
-    /// Yaw-rate limit [rad/s]: factor · max_yaw_per_step / t_min.
+    /// Yaw-rate limit \[rad/s\]: factor · max_yaw_per_step / t_min.
     pub fn max_yaw_rate(&self) -> f64 {
         self.angular_saturation_factor * self.max_yaw_per_step / self.step_duration_min
     }

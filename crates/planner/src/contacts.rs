@@ -47,9 +47,9 @@ pub struct PlannedContact {
     pub foot: Foot,
     /// Sole pose in the world.
     pub pose: Isometry3<f64>,
-    /// Touch-down time [s].
+    /// Touch-down time \[s\].
     pub activation_time: f64,
-    /// Lift-off time [s]; `None` = stays until the end of the plan (and after).
+    /// Lift-off time \[s\]; `None` = stays until the end of the plan (and after).
     pub deactivation_time: Option<f64>,
 }
 
@@ -115,8 +115,8 @@ pub enum PhaseKind {
 pub struct Phase {
     /// Which phase.
     pub kind: PhaseKind,
-    /// Start [s].
+    /// Start \[s\].
     pub start: f64,
-    /// End [s].
+    /// End \[s\].
     pub end: f64,
 }

@@ -51,9 +51,9 @@ pub(crate) fn com_particular(z: &Cubic2, omega: f64) -> Cubic2 {
 /// One closed-form segment of the DCM plan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DcmSegment {
-    /// Start time [s].
+    /// Start time \[s\].
     pub start: f64,
-    /// Duration [s]; `None` for the final (standing) segment.
+    /// Duration \[s\]; `None` for the final (standing) segment.
     pub duration: Option<f64>,
     /// ZMP cubic Z(τ).
     pub zmp: Cubic2,
@@ -85,7 +85,7 @@ pub struct PlanarState {
 }
 
 impl DcmSegment {
-    /// A segment starting at `start` [s] with ZMP cubic `zmp` (coefficients in local time); `growth` and
+    /// A segment starting at `start` \[s\] with ZMP cubic `zmp` (coefficients in local time); `growth` and
     /// `decay` start at zero and are set by the backward (DCM) and forward (CoM) passes.
     pub fn new(start: f64, duration: Option<f64>, zmp: Cubic2, omega: f64) -> Self {
         Self {
@@ -104,11 +104,13 @@ impl DcmSegment {
         self.duration.map_or(f64::INFINITY, |d| self.start + d)
     }
 
-    /// Evaluates at local time τ (clamped to [0, duration]).
+    /// Evaluates at local time τ (clamped to \[0, duration\]; NaN is read as 0).
     pub fn evaluate_local(&self, tau: f64, omega: f64) -> PlanarState {
+        let tau = if tau.is_nan() { 0.0 } else { tau };
         let tau = match self.duration {
             Some(d) => tau.clamp(0.0, d),
-            None => tau.max(0.0),
+            // (the unbounded segment is constant after a few 1/ω; clamping keeps 0·∞ out of the polynomials)
+            None => tau.clamp(0.0, 1.0e9),
         };
         let [z, _, _] = eval_cubic(&self.zmp, tau);
         let [p, dp, _] = eval_cubic(&self.dcm_poly, tau);

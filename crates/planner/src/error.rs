@@ -40,7 +40,7 @@ pub enum PlannerError {
         step: usize,
         /// `left` or `right`.
         foot: &'static str,
-        /// Plan time [s] of the previous touch-down.
+        /// Plan time \[s\] of the previous touch-down.
         time: f64,
         /// The constraint(s) that could not be met.
         reason: String,
@@ -49,9 +49,9 @@ pub enum PlannerError {
     /// support of a plan, whose shape depends on the initial DCM state).
     #[error("planned ZMP leaves the support polygon at t = {time:.3} s (by {distance:.4} m)")]
     ZmpOutsideSupport {
-        /// Plan time [s].
+        /// Plan time \[s\].
         time: f64,
-        /// Distance outside the polygon [m].
+        /// Distance outside the polygon \[m\].
         distance: f64,
     },
     /// A time argument is not finite or out of range.
@@ -70,7 +70,7 @@ pub enum PlannerError {
     /// The plan has no double-support phase left to merge a new plan into.
     #[error("no merge point available after t = {time:.3} s")]
     NoMergePoint {
-        /// Requested replanning time [s].
+        /// Requested replanning time \[s\].
         time: f64,
     },
     /// The footstep search exceeded its step budget (should not happen with valid parameters).

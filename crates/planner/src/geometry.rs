@@ -21,14 +21,14 @@ pub fn yaw_of(rotation: &UnitQuaternion<f64>) -> f64 {
     x.y.atan2(x.x)
 }
 
-/// A pose on the ground plane: position [m] and yaw [rad].
+/// A pose on the ground plane: position \[m\] and yaw \[rad\].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Pose2 {
-    /// x [m].
+    /// x \[m\].
     pub x: f64,
-    /// y [m].
+    /// y \[m\].
     pub y: f64,
-    /// Yaw [rad].
+    /// Yaw \[rad\].
     pub yaw: f64,
 }
 
@@ -187,7 +187,7 @@ impl SupportPolygon {
         d
     }
 
-    /// Whether `p` is inside (or within `tolerance` [m] of) the polygon.
+    /// Whether `p` is inside (or within `tolerance` \[m\] of) the polygon.
     pub fn contains(&self, p: Vector2<f64>, tolerance: f64) -> bool {
         self.signed_distance(p) >= -tolerance
     }

@@ -29,12 +29,12 @@ use crate::error::PlannerError;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Waypoint {
-    /// x [m].
+    /// x \[m\].
     pub x: f64,
-    /// y [m].
+    /// y \[m\].
     pub y: f64,
-    /// Heading to reach at this waypoint [rad]; `None` = whatever the approach gives (only the last
-    /// waypoint's yaw is enforced by turning in place).
+    /// Heading \[rad\]. Only the last waypoint's heading is enforced (by turning in place at the end); the robot
+    /// passes intermediate waypoints with its approach heading. `None` = keep the approach heading.
     #[serde(default)]
     pub yaw: Option<f64>,
 }
@@ -47,11 +47,11 @@ pub enum Goal {
     Stand,
     /// Walk so that the feet mid-point ends at (x, y) with heading `yaw` (world frame, m and rad).
     Pose {
-        /// x [m].
+        /// x \[m\].
         x: f64,
-        /// y [m].
+        /// y \[m\].
         y: f64,
-        /// Final heading [rad].
+        /// Final heading \[rad\].
         yaw: f64,
     },
     /// Walk through the waypoints in order (world frame).
@@ -61,13 +61,13 @@ pub enum Goal {
     },
     /// Walk with a constant velocity command of the unicycle (robot frame), then stop.
     Velocity {
-        /// Forward speed [m/s] (negative = backwards); saturated to the configured limits.
+        /// Forward speed \[m/s\] (negative = backwards); saturated to the configured limits.
         forward: f64,
-        /// Lateral speed [m/s] (positive = left); saturated to the configured limits.
+        /// Lateral speed \[m/s\] (positive = left); saturated to the configured limits.
         lateral: f64,
-        /// Yaw rate [rad/s]; saturated to the configured limit.
+        /// Yaw rate \[rad/s\]; saturated to the configured limit.
         yaw_rate: f64,
-        /// How long to walk [s]; `None` = the planning horizon.
+        /// How long to walk \[s\]; `None` = the planning horizon.
         #[serde(default)]
         duration: Option<f64>,
     },

@@ -6,9 +6,11 @@
 //!
 //! # Public API (what the runner uses)
 //!
-//! * [`PlannerConfig`] (serde, `deny_unknown_fields`, iCub-v2.7-like [`Default`], [`PlannerConfig::validate`]).
+//! * [`PlannerConfig`] (serde, `deny_unknown_fields`, iCub-v2.7-like [`Default`], [`PlannerConfig::validate`];
+//!   the field table with units is on the type). [`DcmInterpolation`] selects the double-support method.
 //! * [`Goal`]: `Stand`, `Pose { x, y, yaw }`, `Waypoints { points }`, `Velocity { forward, lateral, yaw_rate,
-//!   duration }`; internally tagged (`type = "pose"` etc.) so it can be written in TOML.
+//!   duration }`; internally tagged (`type = "pose"` etc.) so it can be written in TOML. Only the last
+//!   waypoint's heading is enforced.
 //! * [`plan_from_standing`]`(config, t0, &left_sole, &right_sole, &goal) -> Result<Plan, PlannerError>`: a whole
 //!   plan from standing (initial double support of `initial_double_support_duration`, ends standing with
 //!   parallel feet, DCM on the feet mid-point).
@@ -40,12 +42,13 @@
 //! * DCM: the ZMP is planned first — constant on the stance foot in single support (so the DCM is the thesis
 //!   exponential (10.1.16)), a smooth cubic move between the two stance points in double support — and the
 //!   DCM/CoM are the exact closed-form solutions of ξ̇ = ω(ξ − ZMP) and ẋ = −ω(x − ξ) (see [`dcm`]). The
-//!   thesis instead interpolates the DCM by a cubic in double support (10.1.23); that does not keep the ZMP in
-//!   the support polygon by construction, planning the ZMP does (it moves on the segment joining two points
+//!   thesis instead interpolates the DCM by a cubic in double support (10.1.23) (available as
+//!   [`DcmInterpolation::DcmCubic`], with the last-step α of (10.2.3) and a support-polygon check); that does not
+//!   keep the ZMP in the support polygon by construction, planning the ZMP does (it moves on the segment joining two points
 //!   inside the two soles). The DCM is C¹ (ZMP continuous), ends exactly on the final ZMP, and the initial
 //!   double support carries a ZMP bump u(1−u)² that makes the DCM start exactly at the measured/merged state
-//!   (the role of (10.2.1)); that ZMP is checked against the support polygon. The last-step α of (10.2.3) is
-//!   implied by the final double support rather than set.
+//!   (the role of (10.2.1)); that ZMP is checked against the support polygon. In this default mode the last-step
+//!   α of (10.2.3) is implied by the final double support rather than set.
 //! * Swing feet: minimum-jerk quintics (D.3.6) with an apex knot for the height, minimum-jerk geodesic on SO(3).
 
 pub mod config;

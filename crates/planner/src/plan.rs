@@ -17,9 +17,9 @@ pub enum PlanOutcome {
     Complete,
     /// The planning horizon cut the motion: the plan is the feasible prefix, ending standing.
     HorizonReached {
-        /// Distance [m] from the final mid-feet point to the goal.
+        /// Distance \[m\] from the final mid-feet point to the goal.
         remaining_distance: f64,
-        /// Yaw difference [rad] between the final heading and the goal heading.
+        /// Yaw difference \[rad\] between the final heading and the goal heading.
         remaining_yaw: f64,
     },
 }
@@ -29,9 +29,9 @@ pub enum PlanOutcome {
 pub struct FootSample {
     /// Sole pose.
     pub pose: Isometry3<f64>,
-    /// [linear velocity of the sole origin; angular velocity] [m/s; rad/s].
+    /// [linear velocity of the sole origin; angular velocity] \[m/s; rad/s\].
     pub twist: Vector6<f64>,
-    /// [linear acceleration; angular acceleration] [m/s²; rad/s²].
+    /// [linear acceleration; angular acceleration] \[m/s²; rad/s²\].
     pub acceleration: Vector6<f64>,
     /// Whether the foot is planned to be on the ground.
     pub in_contact: bool,
@@ -51,21 +51,21 @@ impl Default for FootSample {
 /// All references at one instant. Filled in place by [`Plan::sample`] without allocation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlanSample {
-    /// Plan time [s] the sample was taken at (after clamping to the plan start).
+    /// Plan time \[s\] the sample was taken at (after clamping to the plan start).
     pub time: f64,
-    /// LIPM natural frequency ω [1/s].
+    /// LIPM natural frequency ω \[1/s\].
     pub omega: f64,
-    /// DCM position (z = CoM height above ground) [m].
+    /// DCM position (z = CoM height above ground) \[m\].
     pub dcm_position: Vector3<f64>,
-    /// DCM velocity [m/s].
+    /// DCM velocity \[m/s\].
     pub dcm_velocity: Vector3<f64>,
-    /// ZMP (z = ground height) [m].
+    /// ZMP (z = ground height) \[m\].
     pub zmp: Vector3<f64>,
-    /// CoM position [m].
+    /// CoM position \[m\].
     pub com_position: Vector3<f64>,
-    /// CoM velocity [m/s].
+    /// CoM velocity \[m/s\].
     pub com_velocity: Vector3<f64>,
-    /// CoM acceleration [m/s²].
+    /// CoM acceleration \[m/s²\].
     pub com_acceleration: Vector3<f64>,
     /// Left foot.
     pub left: FootSample,
@@ -110,19 +110,19 @@ impl PlanSample {
 /// (both feet in contact, DCM at the feet mid-point, CoM converging to it).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
-    /// LIPM natural frequency ω = √(g/h) [1/s].
+    /// LIPM natural frequency ω = √(g/h) \[1/s\].
     pub omega: f64,
-    /// CoM height above the ground [m].
+    /// CoM height above the ground \[m\].
     pub com_height: f64,
-    /// Ground height (world z of the footsteps) [m].
+    /// Ground height (world z of the footsteps) \[m\].
     pub ground_height: f64,
-    /// Sole length [m].
+    /// Sole length \[m\].
     pub foot_length: f64,
-    /// Sole width [m].
+    /// Sole width \[m\].
     pub foot_width: f64,
-    /// First instant of the plan [s].
+    /// First instant of the plan \[s\].
     pub start_time: f64,
-    /// End of the final double support [s].
+    /// End of the final double support \[s\].
     pub end_time: f64,
     /// Closed-form DCM/ZMP/CoM segments, contiguous, the last one unbounded.
     pub segments: Vec<DcmSegment>,
@@ -233,7 +233,7 @@ impl Plan {
         }
     }
 
-    /// Writes all references at time `t` [s] into `out`. Times before `start_time` (and NaN) are clamped to
+    /// Writes all references at time `t` \[s\] into `out`. Times before `start_time` (and NaN) are clamped to
     /// `start_time`; after `end_time` the robot stands. O(log n), no allocation.
     pub fn sample(&self, t: f64, out: &mut PlanSample) {
         let t = t.max(self.start_time);
@@ -326,26 +326,26 @@ fn xyzw(h: &Isometry3<f64>) -> [f64; 4] {
 pub struct FootstepReport {
     /// `"left"` or `"right"`.
     pub foot: Foot,
-    /// Sole position [m].
+    /// Sole position \[m\].
     pub position: [f64; 3],
-    /// Sole orientation, quaternion [x, y, z, w].
+    /// Sole orientation, quaternion \[x, y, z, w\].
     pub orientation_xyzw: [f64; 4],
-    /// Touch-down time [s] (the plan start for the initial stance).
+    /// Touch-down time \[s\] (the plan start for the initial stance).
     pub activation_time: f64,
-    /// Lift-off time [s]; `null` for the final stance.
+    /// Lift-off time \[s\]; `null` for the final stance.
     pub deactivation_time: Option<f64>,
 }
 
 /// A foot in a `stride plan --json` sample.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FootReport {
-    /// Sole position [m].
+    /// Sole position \[m\].
     pub position: [f64; 3],
-    /// Sole orientation [x, y, z, w].
+    /// Sole orientation \[x, y, z, w\].
     pub orientation_xyzw: [f64; 4],
-    /// Linear velocity of the sole origin [m/s] (world).
+    /// Linear velocity of the sole origin \[m/s\] (world).
     pub linear_velocity: [f64; 3],
-    /// Angular velocity [rad/s] (world).
+    /// Angular velocity \[rad/s\] (world).
     pub angular_velocity: [f64; 3],
     /// Planned contact.
     pub in_contact: bool,
@@ -366,19 +366,19 @@ impl FootReport {
 /// One sample of `stride plan --json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SampleReport {
-    /// Time [s].
+    /// Time \[s\].
     pub time: f64,
-    /// DCM position [m].
+    /// DCM position \[m\].
     pub dcm_position: [f64; 3],
-    /// DCM velocity [m/s].
+    /// DCM velocity \[m/s\].
     pub dcm_velocity: [f64; 3],
-    /// ZMP [m].
+    /// ZMP \[m\].
     pub zmp: [f64; 3],
-    /// CoM position [m].
+    /// CoM position \[m\].
     pub com_position: [f64; 3],
-    /// CoM velocity [m/s].
+    /// CoM velocity \[m/s\].
     pub com_velocity: [f64; 3],
-    /// ω [1/s].
+    /// ω \[1/s\].
     pub omega: f64,
     /// Left foot.
     pub left_foot: FootReport,
@@ -406,9 +406,9 @@ impl SampleReport {
 /// Sole size in `stride plan --json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FootSizeReport {
-    /// Length [m].
+    /// Length \[m\].
     pub length: f64,
-    /// Width [m].
+    /// Width \[m\].
     pub width: f64,
 }
 

@@ -26,7 +26,7 @@ struct StartState {
     anchor_time: f64,
     /// Unicycle pose at unicycle time 0.
     anchor: Pose2,
-    /// Minimum duration of the first double support [s].
+    /// Minimum duration of the first double support \[s\].
     min_initial_ds: f64,
     left: Isometry3<f64>,
     right: Isometry3<f64>,
@@ -56,7 +56,7 @@ fn check_time(name: &'static str, t: f64) -> Result<(), PlannerError> {
 }
 
 /// Plans from standing: both feet on the ground at `left`/`right` (sole frames, world), CoM at rest above
-/// their mid-point, at time `t0` [s]. The plan starts with `initial_double_support_duration` of weight
+/// their mid-point, at time `t0` \[s\]. The plan starts with `initial_double_support_duration` of weight
 /// shifting and ends standing with parallel feet and the DCM on their mid-point.
 pub fn plan_from_standing(
     config: &PlannerConfig,

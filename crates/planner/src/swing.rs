@@ -100,11 +100,11 @@ pub struct FootState {
 /// Shape parameters of a swing.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SwingShape {
-    /// Apex height above the higher foothold [m].
+    /// Apex height above the higher foothold \[m\].
     pub height: f64,
     /// Apex time as a fraction of the swing duration, in (0, 1).
     pub apex_fraction: f64,
-    /// Vertical velocity at touch-down [m/s].
+    /// Vertical velocity at touch-down \[m/s\].
     pub landing_velocity: f64,
 }
 
@@ -123,15 +123,15 @@ pub struct SwingTrajectory {
     pub start: Isometry3<f64>,
     /// Pose at touch-down.
     pub end: Isometry3<f64>,
-    /// Lift-off time [s].
+    /// Lift-off time \[s\].
     pub lift_time: f64,
-    /// Apex time [s].
+    /// Apex time \[s\].
     pub apex_time: f64,
-    /// Touch-down time [s].
+    /// Touch-down time \[s\].
     pub land_time: f64,
-    /// Apex height (world z) [m].
+    /// Apex height (world z) \[m\].
     pub apex_height: f64,
-    /// Vertical velocity at touch-down [m/s].
+    /// Vertical velocity at touch-down \[m/s\].
     pub landing_velocity: f64,
     x: Quintic,
     y: Quintic,
@@ -220,10 +220,11 @@ impl SwingTrajectory {
         }
     }
 
-    /// Pose, twist and acceleration at time `t` (clamped to [lift_time, land_time]).
+    /// Pose, twist and acceleration at time `t` (clamped to \[lift_time, land_time\]; NaN reads as lift-off).
     pub fn evaluate(&self, t: f64) -> FootState {
         let duration = self.land_time - self.lift_time;
         let tau = (t - self.lift_time).clamp(0.0, duration);
+        let tau = if tau.is_nan() { 0.0 } else { tau };
         let x = eval_quintic(&self.x, tau);
         let y = eval_quintic(&self.y, tau);
         let d1 = self.apex_time - self.lift_time;

@@ -89,7 +89,8 @@ impl Reference {
                 });
             }
         };
-        for &(wp, wp_yaw) in points {
+        for (i, &(wp, wp_yaw)) in points.iter().enumerate() {
+            let is_last = i + 1 == points.len();
             let delta = wp - p;
             let dist = delta.norm();
             if dist > 1e-6 {
@@ -116,7 +117,9 @@ impl Reference {
                 p = wp;
                 yaw = new_yaw;
             }
-            if let Some(y) = wp_yaw {
+            // only the final heading is enforced; the robot passes intermediate waypoints with its approach
+            // heading (no stop-and-turn on the way)
+            if let (true, Some(y)) = (is_last, wp_yaw) {
                 turn(&mut specs, &mut yaw, y);
             }
         }
@@ -317,12 +320,9 @@ pub(crate) fn unicycle_path(
                 p = integrate(p, v, vl, w, dt);
                 samples.push(p);
             }
+            // constant commands integrate exactly over any duration
             let goal_pose = if truncated {
-                let mut g = p;
-                for _ in n..((wanted / dt).round() as usize).min(100_000_000) {
-                    g = integrate(g, v, vl, w, dt);
-                }
-                g
+                integrate(p, v, vl, w, wanted - n as f64 * dt)
             } else {
                 p
             };
@@ -442,27 +442,64 @@ pub(crate) struct StepPlan {
 }
 
 /// Whether a pair of feet satisfies the step constraints (10.1.12)–(10.1.13) plus the width constraint.
-pub(crate) fn feet_feasible(cfg: &PlannerConfig, left: Pose2, right: Pose2) -> Result<(), String> {
+/// Which step constraints a pair of feet violates (no allocation; formatted only for error messages).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Violation {
+    length: f64,
+    lateral: f64,
+    yaw: f64,
+    too_long: bool,
+    too_short: bool,
+    too_narrow: bool,
+    too_twisted: bool,
+}
+
+impl Violation {
+    fn describe(&self) -> String {
+        let mut why = Vec::new();
+        if self.too_long {
+            why.push(format!(
+                "feet distance {:.4} > step_length_max",
+                self.length
+            ));
+        }
+        if self.too_short {
+            why.push(format!(
+                "feet distance {:.4} < step_length_min",
+                self.length
+            ));
+        }
+        if self.too_narrow {
+            why.push(format!("lateral distance {:.4} < min_width", self.lateral));
+        }
+        if self.too_twisted {
+            why.push(format!("relative yaw {:.4} > max_yaw_per_step", self.yaw));
+        }
+        why.join(", ")
+    }
+}
+
+pub(crate) fn feet_feasible(
+    cfg: &PlannerConfig,
+    left: Pose2,
+    right: Pose2,
+) -> Result<(), Violation> {
     let rel = right.inverse_transform_point(left.position());
     let len = rel.norm();
     let dyaw = wrap_angle(left.yaw - right.yaw);
-    let mut why = Vec::new();
-    if len > cfg.step_length_max {
-        why.push(format!("feet distance {len:.4} > step_length_max"));
-    }
-    if len < cfg.step_length_min {
-        why.push(format!("feet distance {len:.4} < step_length_min"));
-    }
-    if rel.y < cfg.min_width {
-        why.push(format!("lateral distance {:.4} < min_width", rel.y));
-    }
-    if dyaw.abs() > cfg.max_yaw_per_step {
-        why.push(format!("relative yaw {dyaw:.4} > max_yaw_per_step"));
-    }
-    if why.is_empty() {
-        Ok(())
+    let v = Violation {
+        length: len,
+        lateral: rel.y,
+        yaw: dyaw,
+        too_long: len > cfg.step_length_max,
+        too_short: len < cfg.step_length_min,
+        too_narrow: rel.y < cfg.min_width,
+        too_twisted: dyaw.abs() > cfg.max_yaw_per_step,
+    };
+    if v.too_long || v.too_short || v.too_narrow || v.too_twisted {
+        Err(v)
     } else {
-        Err(why.join(", "))
+        Ok(())
     }
 }
 
@@ -542,7 +579,7 @@ pub(crate) fn search_footsteps(
         skipped = false;
         let stance = feet[idx(swing.other())];
         let mut best: Option<(f64, usize, Pose2)> = None;
-        let mut last_reason = String::new();
+        let mut last_reason = Violation::default();
         for n in n_min..=n_max {
             let cand = foot_on(samples[(prev + n).min(last)], swing, cfg.nominal_width);
             let (l, r) = match swing {
@@ -609,7 +646,7 @@ pub(crate) fn search_footsteps(
                 step: steps.len(),
                 foot: swing.name(),
                 time: prev as f64 * dt,
-                reason: last_reason,
+                reason: last_reason.describe(),
             });
         };
         steps.push(StepPlan {

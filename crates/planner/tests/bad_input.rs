@@ -279,3 +279,79 @@ proptest! {
         }
     }
 }
+
+/// Goals far beyond the horizon (pose or very long velocity command) give a prefix quickly, never hang.
+#[test]
+fn far_goals_give_prefixes() {
+    let cfg = PlannerConfig {
+        horizon: 20.0,
+        ..PlannerConfig::default()
+    };
+    let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+    let start = std::time::Instant::now();
+    for goal in [
+        Goal::Pose {
+            x: 1e12,
+            y: -1e12,
+            yaw: 0.0,
+        },
+        Goal::Velocity {
+            forward: 0.1,
+            lateral: 0.0,
+            yaw_rate: 0.1,
+            duration: Some(1e12),
+        },
+        Goal::Waypoints {
+            points: vec![Waypoint {
+                x: 1e9,
+                y: 0.0,
+                yaw: None,
+            }],
+        },
+    ] {
+        let plan = plan_from_standing(&cfg, 0.0, &l, &r, &goal).unwrap();
+        assert!(
+            matches!(plan.outcome, PlanOutcome::HorizonReached { .. }),
+            "{:?}",
+            plan.outcome
+        );
+        check_steps(&cfg, &plan, true);
+        check_dynamics(&cfg, &plan, 0.02);
+    }
+    assert!(start.elapsed().as_secs_f64() < 30.0);
+}
+
+/// Sampling at NaN/±∞ never yields NaN: before the start clamps to the start, after the end stands.
+#[test]
+fn sampling_at_extreme_times_is_finite() {
+    let cfg = PlannerConfig::default();
+    let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+    let plan = plan_from_standing(
+        &cfg,
+        2.0,
+        &l,
+        &r,
+        &Goal::Pose {
+            x: 0.5,
+            y: 0.0,
+            yaw: 0.0,
+        },
+    )
+    .unwrap();
+    for t in [f64::NAN, f64::NEG_INFINITY, -1e300, 1e300, f64::INFINITY] {
+        let s = sample(&plan, t);
+        for v in [
+            s.dcm_position,
+            s.dcm_velocity,
+            s.zmp,
+            s.com_position,
+            s.com_velocity,
+            s.com_acceleration,
+        ] {
+            assert!(v.iter().all(|x| x.is_finite()), "t = {t}: {v:?}");
+        }
+        assert!(s.left.pose.translation.vector.iter().all(|x| x.is_finite()));
+        assert!(s.left.in_contact && s.right.in_contact);
+    }
+    assert_eq!(sample(&plan, f64::NAN), sample(&plan, 2.0));
+}

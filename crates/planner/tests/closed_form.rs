@@ -6,7 +6,7 @@ use common::*;
 use nalgebra::{Vector2, Vector3};
 use stride_planner::dcm::DcmSegment;
 use stride_planner::swing::{eval_quintic, min_jerk_blend, quintic};
-use stride_planner::{plan_from_standing, Foot, Goal, PhaseKind, PlannerConfig};
+use stride_planner::{plan_from_standing, Foot, Goal, PhaseKind, PlannerConfig, PlannerError};
 
 #[test]
 fn omega_and_doubling_time() {
@@ -212,8 +212,17 @@ fn thesis_dcm_cubic_option() {
                 y: 0.0,
                 yaw: 0.0,
             },
-        )
-        .unwrap();
+        );
+        if alpha == 1.0 {
+            // Englsberger's end condition overshoots in the frontal plane (the thesis' reason for α = 0.2):
+            // the ZMP of the last double support would leave the feet, and the planner refuses.
+            assert!(
+                matches!(plan, Err(PlannerError::ZmpOutsideSupport { .. })),
+                "{plan:?}"
+            );
+            continue;
+        }
+        let plan = plan.unwrap();
         check_all(&cfg, &plan, true);
         let last_ss = plan
             .phases

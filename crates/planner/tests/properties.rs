@@ -111,9 +111,8 @@ proptest! {
     }
 
     #[test]
-    fn replanning_keeps_the_past_and_is_continuous(goal1 in goal_strategy(), goal2 in goal_strategy(),
-                                                    frac in 0.0f64..1.0) {
-        let cfg = PlannerConfig { horizon: 40.0, ..PlannerConfig::default() };
+    fn replanning_keeps_the_past_and_is_continuous(cfg in config_strategy(), goal1 in goal_strategy(),
+                                                    goal2 in goal_strategy(), frac in 0.0f64..1.0) {
         let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
         let mut planner = Planner::new(cfg.clone()).unwrap();
         let old = planner.start(0.0, &l, &r, &goal1).unwrap().clone();
@@ -165,5 +164,32 @@ proptest! {
             Err(PlannerError::ZmpOutsideSupport { .. }) => {}
             Err(e) => panic!("planning failed: {e}"),
         }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases() / 2 + 1, .. ProptestConfig::default() })]
+
+    /// A chain of replans at random increasing times (as a joystick would send) keeps every invariant.
+    #[test]
+    fn chained_replanning(goals in proptest::collection::vec(goal_strategy(), 2..6),
+                          gaps in proptest::collection::vec(0.05f64..3.0, 6)) {
+        let cfg = PlannerConfig { horizon: 30.0, ..PlannerConfig::default() };
+        let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+        let mut planner = Planner::new(cfg.clone()).unwrap();
+        planner.start(0.0, &l, &r, &goals[0]).unwrap();
+        let mut t = 0.0;
+        for (g, gap) in goals.iter().skip(1).zip(gaps.iter()) {
+            t += gap;
+            match planner.replan(t, g) {
+                Ok(m) => prop_assert!(m >= t),
+                Err(PlannerError::NoMergePoint { .. }) => {}
+                Err(e) => panic!("replanning failed: {e}"),
+            }
+        }
+        let plan = planner.plan().unwrap();
+        check_steps(&cfg, plan, false);
+        check_dynamics(&cfg, plan, 0.01);
+        check_swings(&cfg, plan);
     }
 }

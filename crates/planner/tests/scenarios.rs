@@ -187,3 +187,69 @@ fn replanning_to_a_new_goal() {
     check_dynamics(&cfg, plan, 0.01);
     check_swings(&cfg, plan);
 }
+
+/// The `Block` interface: the first tick starts from the measured soles, a tick with a goal replans, the
+/// output follows the plan; `reset` forgets the plan.
+#[test]
+fn block_interface() {
+    use std::time::Duration;
+    use stride_block::Block;
+    use stride_planner::{Planner, PlannerInput};
+    let cfg = PlannerConfig::default();
+    let (l, r) = standing(1.0, 2.0, 0.5, cfg.nominal_width);
+    let mut block = Planner::new(cfg.clone()).unwrap();
+    let mut input = PlannerInput {
+        time: Duration::from_secs(3),
+        goal: None,
+        left_sole: l,
+        right_sole: r,
+    };
+    let out = *block.step(&input).unwrap();
+    // no goal: standing on the measured feet, DCM and CoM at the mid-point
+    assert!((out.dcm_position.x - 1.0).abs() < 1e-12 && (out.dcm_position.y - 2.0).abs() < 1e-12);
+    assert!((out.com_position.z - cfg.com_height).abs() < 1e-12);
+    assert_eq!(out.left.pose, l);
+    input.time = Duration::from_millis(3500);
+    input.goal = Some(Goal::Pose {
+        x: 1.5,
+        y: 2.3,
+        yaw: 0.5,
+    });
+    block.step(&input).unwrap();
+    let plan = block.plan().unwrap();
+    assert_eq!(plan.merge_times.len(), 1);
+    assert!(plan.step_count() > 2);
+    check_steps(&cfg, plan, false);
+    check_dynamics(&cfg, plan, 0.01);
+    let end = plan.end_time;
+    input.goal = None;
+    input.time = Duration::from_secs_f64(end + 3.0);
+    let out = *block.step(&input).unwrap();
+    let (x, y, _) = final_mid(block.plan().unwrap());
+    assert!((out.dcm_position.x - x).abs() < 1e-9 && (out.dcm_position.y - y).abs() < 1e-9);
+    block.reset();
+    assert!(block.plan().is_none());
+}
+
+/// The runner's `walk_curve` scenario: waypoints with headings; only the last heading is enforced.
+#[test]
+fn runner_walk_curve_scenario() {
+    let plan = run(Goal::Waypoints {
+        points: vec![
+            Waypoint {
+                x: 0.6,
+                y: 0.15,
+                yaw: Some(30f64.to_radians()),
+            },
+            Waypoint {
+                x: 1.0,
+                y: 1.0,
+                yaw: Some(90f64.to_radians()),
+            },
+        ],
+    });
+    let (x, y, yaw) = final_mid(&plan);
+    assert!((x - 1.0).abs() < 0.02 && (y - 1.0).abs() < 0.02, "{x} {y}");
+    assert!((yaw - std::f64::consts::FRAC_PI_2).abs() < 0.01, "{yaw}");
+    assert!(plan.end_time < 30.0, "{}", plan.end_time);
+}

@@ -50,6 +50,18 @@ impl Default for ActiveSetSettings {
     }
 }
 
+/// How the last solve of an [`ActiveSetSolver`] started.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StartKind {
+    /// From the unconstrained minimum.
+    Cold,
+    /// The previous active set was optimal as it stood (QR guess accepted, no iteration).
+    Guess,
+    /// The previous active set was re-imposed (Givens), corrected, and the dual iterations continued.
+    Reimposed,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Active {
     slot: usize,
@@ -65,12 +77,20 @@ enum Run {
 
 /// The dense Goldfarb–Idnani dual active-set backend (the default for the whole-body QPs).
 ///
-/// Needs a positive definite Hessian. Per solve: one Cholesky factorisation and one triangular inverse
-/// (`O(n³)`), then `O(n²)` per active-set change. Warm start: the active set of the previous solve (same
-/// problem dimensions) is re-imposed as equalities, multipliers are computed in closed form, constraints with
-/// negative multipliers are dropped, and the ordinary dual iterations continue from this dual-feasible point;
-/// if anything fails the solve restarts cold. All workspace is allocated on the first solve of a given size:
-/// later solves allocate nothing.
+/// Needs a positive definite Hessian (use the problem's Tikhonov term for rank-deficient costs). Per solve:
+/// one Cholesky factorisation of `H` (`O(n³/3)`); a cold solve then forms `J₀ = L⁻ᵀ` and costs `O(n²)` per
+/// active-set change (constraint addition or drop with Givens rotations, as in the paper).
+///
+/// Warm start (when the previous solve had the same dimensions), in two stages:
+/// 1. *guess*: the previous active set plus all equalities is taken as the optimal active set; the
+///    equality-constrained QP is solved with a Householder QR of `L⁻¹ N_A`, and the result is accepted if every
+///    inequality multiplier is ≥ 0 and no other constraint is violated (then the KKT conditions hold). This
+///    is the common case at 1 kHz and costs about a third of a cold solve.
+/// 2. otherwise the previous active set is re-imposed with Givens additions, multipliers are computed in
+///    closed form, constraints with negative multipliers are dropped, and the dual iterations continue from
+///    that dual-feasible point; if that fails too (e.g. the problem became infeasible) the solve restarts cold.
+///
+/// All workspace is allocated on the first solve of a given size: later solves allocate nothing.
 pub struct ActiveSetSolver {
     settings: ActiveSetSettings,
     n: usize,
@@ -99,7 +119,10 @@ pub struct ActiveSetSolver {
     rdiag: Vec<f64>,
     colnorm: Vec<f64>,
     y: Vec<f64>,
+    hff: Vec<f64>,
+    free: Vec<usize>,
     j0_ready: bool,
+    last_start: StartKind,
 }
 
 impl ActiveSetSolver {
@@ -133,8 +156,16 @@ impl ActiveSetSolver {
             rdiag: Vec::new(),
             colnorm: Vec::new(),
             y: Vec::new(),
+            hff: Vec::new(),
+            free: Vec::new(),
             j0_ready: false,
+            last_start: StartKind::Cold,
         }
+    }
+
+    /// How the last solve started (cold, accepted guess, or re-imposed active set).
+    pub fn last_start(&self) -> StartKind {
+        self.last_start
     }
 
     /// Settings in use.
@@ -166,7 +197,7 @@ impl ActiveSetSolver {
         grow(&mut self.norms, me + mi);
         grow(&mut self.x, n);
         grow(&mut self.d, n);
-        grow(&mut self.z, n);
+        grow(&mut self.z, n.max(me + mi));
         grow(&mut self.rv, n);
         grow(&mut self.tmp, n.max(me + mi + n));
         grow(&mut self.u, n);
@@ -175,6 +206,10 @@ impl ActiveSetSolver {
         grow(&mut self.rdiag, n);
         grow(&mut self.colnorm, n);
         grow(&mut self.y, n);
+        grow(&mut self.hff, n * n);
+        if self.free.capacity() < n {
+            self.free.reserve(n - self.free.len());
+        }
         if self.is_active.len() < me + mi + n {
             self.is_active.resize(me + mi + n, false);
         }
@@ -255,7 +290,10 @@ impl ActiveSetSolver {
             let v = y[jj] / l[jj + jj * n];
             y[jj] = v;
             if v != 0.0 {
-                for (a, b) in y[jj + 1..n].iter_mut().zip(&l[jj * n + jj + 1..(jj + 1) * n]) {
+                for (a, b) in y[jj + 1..n]
+                    .iter_mut()
+                    .zip(&l[jj * n + jj + 1..(jj + 1) * n])
+                {
                     *a -= v * b;
                 }
             }
@@ -265,16 +303,22 @@ impl ActiveSetSolver {
     /// `y ← L⁻ᵀ y` (back substitution on `Lᵀ`).
     fn backward_lt(l: &[f64], n: usize, y: &mut [f64]) {
         for i in (0..n).rev() {
-            let s: f64 = l[i * n + i + 1..(i + 1) * n].iter().zip(&y[i + 1..n]).map(|(a, b)| a * b).sum();
+            let s: f64 = l[i * n + i + 1..(i + 1) * n]
+                .iter()
+                .zip(&y[i + 1..n])
+                .map(|(a, b)| a * b)
+                .sum();
             y[i] = (y[i] - s) / l[i + i * n];
         }
     }
 
-    /// Fast warm path: take the previous active set (plus all equalities) as a guess, solve the
-    /// equality-constrained QP with a Householder QR of `M = L⁻¹ N_A` (`x = x₀ + L⁻ᵀ Q v`, `Rᵀ v = b_A − N_Aᵀx₀`,
-    /// `u = R⁻¹ v`) and accept it when every inequality multiplier is non-negative and no inactive constraint
-    /// is violated — then it is optimal (KKT) and no J/R factors are needed. Costs one `O(n q²)` QR instead of
-    /// `q` Givens additions on the n × n matrix J.
+    /// Fast warm path: take the previous active set (plus all equalities) as a guess and solve the
+    /// equality-constrained QP it defines. Active bounds fix their variables, so the QP is reduced to the free
+    /// variables `F` (Cholesky of `H_FF`, or the full factor when no bound is active); the remaining active
+    /// rows are handled with a Householder QR of `M = L_F⁻¹ N_F`: `x_F = x₀ + L_F⁻ᵀ Q v`, `Rᵀ v = b − N_Fᵀx₀`,
+    /// `u = R⁻¹ v`; bound multipliers follow from stationarity. The guess is accepted when every inequality
+    /// multiplier is ≥ 0 and no inactive constraint is violated — the KKT conditions then hold — and no
+    /// J/R factors are needed.
     fn try_guess(&mut self, qp: &DenseQp) -> bool {
         let n = self.n;
         let nrow = self.me + self.mi;
@@ -301,32 +345,103 @@ impl ActiveSetSolver {
             self.active.push(Active { slot, sign });
             self.is_active[slot] = true;
         }
-        let q = self.active.len();
-        let l = &self.chol[..n * n];
-        // M = L^{-1} N_A, column by column
-        for k in 0..q {
-            let Active { slot, sign } = self.active[k];
-            let col = &mut self.qr[k * n..(k + 1) * n];
-            let first = if slot < nrow {
-                for (c, v) in col.iter_mut().zip(&self.nt[slot * n..(slot + 1) * n]) {
-                    *c = sign * v;
-                }
-                0
+        // x starts with the fixed (bound) values; free variables are listed in `free`
+        self.free.clear();
+        for jdx in 0..n {
+            if self.is_active[nrow + jdx] {
+                let sign = self.active.iter().find(|a| a.slot == nrow + jdx).map_or(1.0, |a| a.sign);
+                self.x[jdx] = if sign > 0.0 { qp.lb[jdx] } else { qp.ub[jdx] };
             } else {
-                col.fill(0.0);
-                col[slot - nrow] = sign;
-                slot - nrow
-            };
-            Self::forward_l(l, n, col, first);
-            self.colnorm[k] = col.iter().map(|v| v * v).sum::<f64>().sqrt();
+                self.x[jdx] = 0.0;
+                self.free.push(jdx);
+            }
         }
-        // Householder QR in place
+        let nf = self.free.len();
+        let reduced = nf < n;
+        if reduced {
+            // Cholesky of H_FF (right-looking, column-major nf × nf in `hff`)
+            let max_diag = (0..n).fold(0.0f64, |m, j| m.max(qp.h[(j, j)].abs()));
+            let pivot_min = 1e-14 * max_diag.max(f64::MIN_POSITIVE);
+            for (c, &jc) in self.free.iter().enumerate() {
+                for (r, &jr) in self.free.iter().enumerate() {
+                    self.hff[r + c * nf] = 0.5 * (qp.h[(jr, jc)] + qp.h[(jc, jr)]);
+                }
+            }
+            let l = &mut self.hff[..nf * nf];
+            for c in 0..nf {
+                let piv = l[c + c * nf];
+                if piv.is_nan() || piv <= pivot_min {
+                    return false;
+                }
+                let s = piv.sqrt();
+                for v in &mut l[c + c * nf..(c + 1) * nf] {
+                    *v /= s;
+                }
+                for k in c + 1..nf {
+                    let f = l[k + c * nf];
+                    if f != 0.0 {
+                        let (left, right) = l.split_at_mut(k * nf);
+                        for (a, b) in right[k..nf].iter_mut().zip(&left[c * nf + k..c * nf + nf]) {
+                            *a -= f * b;
+                        }
+                    }
+                }
+            }
+        }
+        let l: &[f64] = if reduced { &self.hff[..nf * nf] } else { &self.chol[..n * n] };
+        // reduced gradient g_F + H_FB x_B (into y), then x0_F = -H_FF^{-1} (.) into tmp
+        for (r, &jr) in self.free.iter().enumerate() {
+            let mut s = qp.g[jr];
+            if reduced {
+                for jdx in 0..n {
+                    if self.is_active[nrow + jdx] {
+                        s += qp.h[(jr, jdx)] * self.x[jdx];
+                    }
+                }
+            }
+            self.tmp[r] = -s;
+        }
+        Self::forward_l(l, nf, &mut self.tmp[..nf], 0);
+        Self::backward_lt(l, nf, &mut self.tmp[..nf]);
+        // active rows (not bounds): M = L_F^{-1} N_F, column by column; rhs w = b' - n_F·x0_F
+        let mut qr_cols = 0;
+        for k in 0..self.active.len() {
+            let Active { slot, sign } = self.active[k];
+            if slot >= nrow {
+                continue;
+            }
+            let rhs = self.signed_rhs(qp, slot, sign);
+            let normal = &self.nt[slot * n..(slot + 1) * n];
+            let col = &mut self.qr[qr_cols * nf..(qr_cols + 1) * nf];
+            let mut fixed_part = 0.0;
+            if reduced {
+                for jdx in 0..n {
+                    if self.is_active[nrow + jdx] {
+                        fixed_part += normal[jdx] * self.x[jdx];
+                    }
+                }
+            }
+            let mut dot_x0 = 0.0;
+            for (r, &jr) in self.free.iter().enumerate() {
+                col[r] = sign * normal[jr];
+                dot_x0 += col[r] * self.tmp[r];
+            }
+            self.rv[qr_cols] = rhs - sign * fixed_part - dot_x0;
+            Self::forward_l(l, nf, col, 0);
+            self.colnorm[qr_cols] = col.iter().map(|v| v * v).sum::<f64>().sqrt();
+            qr_cols += 1;
+        }
+        let q = qr_cols;
+        if q > nf {
+            return false;
+        }
+        // Householder QR in place (nf × q)
         let dep = self.settings.dependence_tolerance;
         for k in 0..q {
-            let (head, tail) = self.qr.split_at_mut((k + 1) * n);
-            let vk = &mut head[k * n + k..(k + 1) * n];
+            let (head, tail) = self.qr.split_at_mut((k + 1) * nf);
+            let vk = &mut head[k * nf + k..(k + 1) * nf];
             let normx = vk.iter().map(|v| v * v).sum::<f64>().sqrt();
-            if normx.is_nan() || normx <= dep * self.colnorm[k] || normx == 0.0 {
+            if normx.is_nan() || normx == 0.0 || normx <= dep * self.colnorm[k] {
                 return false;
             }
             let alpha = if vk[0] > 0.0 { -normx } else { normx };
@@ -336,7 +451,7 @@ impl ActiveSetSolver {
             self.tau[k] = beta;
             self.rdiag[k] = alpha;
             for jcol in 0..q - k - 1 {
-                let cj = &mut tail[jcol * n + k..(jcol + 1) * n];
+                let cj = &mut tail[jcol * nf + k..(jcol + 1) * nf];
                 let s: f64 = vk.iter().zip(cj.iter()).map(|(a, b)| a * b).sum();
                 let f = beta * s;
                 for (c, v) in cj.iter_mut().zip(vk.iter()) {
@@ -344,52 +459,69 @@ impl ActiveSetSolver {
                 }
             }
         }
-        // x0 = -H^{-1} g
-        let l = &self.chol[..n * n];
-        for (xv, gv) in self.x[..n].iter_mut().zip(qp.g.iter()) {
-            *xv = -gv;
-        }
-        Self::forward_l(l, n, &mut self.x[..n], 0);
-        Self::backward_lt(l, n, &mut self.x[..n]);
-        // Rᵀ v = w
+        // Rᵀ v = w (in place in rv), then u_rows = R^{-1} v (into z scratch)
         for k in 0..q {
-            let Active { slot, sign } = self.active[k];
-            let w = self.signed_rhs(qp, slot, sign) - sign * self.normal_dot(slot, &self.x);
-            let s: f64 = self.qr[k * n..k * n + k].iter().zip(&self.rv[..k]).map(|(a, b)| a * b).sum();
-            self.rv[k] = (w - s) / self.rdiag[k];
+            let s: f64 = self.qr[k * nf..k * nf + k].iter().zip(&self.rv[..k]).map(|(a, b)| a * b).sum();
+            self.rv[k] = (self.rv[k] - s) / self.rdiag[k];
         }
-        // u = R^{-1} v
         for i in (0..q).rev() {
             let mut s = self.rv[i];
             for k in i + 1..q {
-                s -= self.qr[i + k * n] * self.u[k];
+                s -= self.qr[i + k * nf] * self.z[k];
             }
-            self.u[i] = s / self.rdiag[i];
+            self.z[i] = s / self.rdiag[i];
         }
-        let umax = self.u[..q].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for k in 0..q {
-            if self.active[k].slot >= self.me && (self.u[k] < -1e-10 * (1.0 + umax) || self.u[k].is_nan()) {
-                return false;
-            }
-        }
-        // y = Q [v; 0]; x = x0 + L^{-T} y
-        self.y[..n].fill(0.0);
+        // y = Q [v; 0]; x_F = x0_F + L_F^{-T} y
+        self.y[..nf].fill(0.0);
         self.y[..q].copy_from_slice(&self.rv[..q]);
         for k in (0..q).rev() {
-            let vk = &self.qr[k * n + k..(k + 1) * n];
-            let yk = &mut self.y[k..n];
+            let vk = &self.qr[k * nf + k..(k + 1) * nf];
+            let yk = &mut self.y[k..nf];
             let s: f64 = vk.iter().zip(yk.iter()).map(|(a, b)| a * b).sum();
             let f = self.tau[k] * s;
             for (yv, v) in yk.iter_mut().zip(vk) {
                 *yv -= f * v;
             }
         }
-        Self::backward_lt(l, n, &mut self.y[..n]);
-        for (xv, yv) in self.x[..n].iter_mut().zip(&self.y[..n]) {
-            *xv += yv;
+        Self::backward_lt(l, nf, &mut self.y[..nf]);
+        for (r, &jr) in self.free.iter().enumerate() {
+            self.x[jr] = self.tmp[r] + self.y[r];
         }
         if !self.x[..n].iter().all(|v| v.is_finite()) {
             return false;
+        }
+        // multipliers in active order: rows from z, bounds from stationarity
+        // (H x + g − Σ_rows u_k n⁺_k)_j = u_j · sign_j
+        let mut row_k = 0;
+        for k in 0..self.active.len() {
+            if self.active[k].slot < nrow {
+                self.u[k] = self.z[row_k];
+                row_k += 1;
+            }
+        }
+        for k in 0..self.active.len() {
+            let Active { slot, sign } = self.active[k];
+            if slot < nrow {
+                continue;
+            }
+            let jdx = slot - nrow;
+            let mut s = qp.g[jdx];
+            for c in 0..n {
+                s += qp.h[(jdx, c)] * self.x[c];
+            }
+            for kk in 0..self.active.len() {
+                let a = self.active[kk];
+                if a.slot < nrow {
+                    s -= self.u[kk] * a.sign * self.nt[a.slot * n + jdx];
+                }
+            }
+            self.u[k] = sign * s;
+        }
+        let umax = self.u[..self.active.len()].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for k in 0..self.active.len() {
+            if self.active[k].slot >= self.me && (self.u[k] < -1e-10 * (1.0 + umax) || self.u[k].is_nan()) {
+                return false;
+            }
         }
         self.most_violated(qp).is_none()
     }
@@ -497,7 +629,7 @@ impl ActiveSetSolver {
             if b == 0.0 {
                 continue;
             }
-            let h = a.hypot(b);
+            let h = (a * a + b * b).sqrt();
             let (c, s) = (a / h, b / h);
             self.d[i - 1] = h;
             self.d[i] = 0.0;
@@ -532,7 +664,7 @@ impl ActiveSetSolver {
             let a = self.r[jcol + jcol * n];
             let b = self.r[jcol + 1 + jcol * n];
             if b != 0.0 {
-                let h = a.hypot(b);
+                let h = (a * a + b * b).sqrt();
                 let (c, s) = (a / h, b / h);
                 self.r[jcol + jcol * n] = h;
                 self.r[jcol + 1 + jcol * n] = 0.0;
@@ -907,12 +1039,15 @@ impl QpSolver for ActiveSetSolver {
         let can_warm =
             self.settings.warm_start && self.prev_dims == (n, me, mi) && !self.prev.is_empty();
         let mut status = None;
+        self.last_start = StartKind::Cold;
         if can_warm {
             if self.try_guess(qp) {
                 self.warm_used = true;
+                self.last_start = StartKind::Guess;
                 status = Some(QpStatus::Solved);
             } else if let Run::Done(s) = self.run_warm(qp) {
                 self.warm_used = true;
+                self.last_start = StartKind::Reimposed;
                 status = Some(s);
             } else {
                 self.iterations = 0;

@@ -26,7 +26,7 @@ mod sparse;
 pub mod testing;
 mod variables;
 
-pub use active_set::{ActiveSetSettings, ActiveSetSolver};
+pub use active_set::{ActiveSetSettings, ActiveSetSolver, StartKind};
 pub use clarabel_backend::{ClarabelSettings, ClarabelSolver, ClarabelSparseSolver};
 pub use dense::DenseQp;
 pub use error::QpError;

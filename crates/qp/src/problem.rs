@@ -215,6 +215,7 @@ pub struct Task {
     gk: DVector<f64>,
     xk: DVector<f64>,
     ax: DVector<f64>,
+    nz: Vec<usize>,
 }
 
 impl Task {
@@ -266,6 +267,7 @@ impl Task {
             gk: DVector::zeros(width),
             xk: DVector::zeros(width),
             ax: DVector::zeros(rows),
+            nz: Vec::with_capacity(width),
         };
         task.set_weights(&spec.weight)?;
         Ok(task)
@@ -431,7 +433,32 @@ impl Task {
             }
             self.bw[i] = w * self.b[i];
         }
-        self.hk.gemm_tr(1.0, &self.aw, &self.aw, 0.0);
+        // AᵀWA: dense product, or a row-by-row sum over the nonzeros when A is sparse (selection matrices,
+        // identities, contact blocks), which is much cheaper for posture / regularisation tasks.
+        let nnz = self.aw.iter().filter(|v| **v != 0.0).count();
+        if 4 * nnz >= self.aw.len() {
+            self.hk.gemm_tr(1.0, &self.aw, &self.aw, 0.0);
+        } else {
+            self.hk.fill(0.0);
+            for i in 0..self.rows() {
+                self.nz.clear();
+                for c in 0..self.width {
+                    if self.aw[(i, c)] != 0.0 {
+                        self.nz.push(c);
+                    }
+                }
+                for (k, &c1) in self.nz.iter().enumerate() {
+                    let v1 = self.aw[(i, c1)];
+                    for &c2 in &self.nz[k..] {
+                        let v = v1 * self.aw[(i, c2)];
+                        self.hk[(c1, c2)] += v;
+                        if c1 != c2 {
+                            self.hk[(c2, c1)] += v;
+                        }
+                    }
+                }
+            }
+        }
         self.gk.gemv_tr(-1.0, &self.aw, &self.bw, 0.0);
         for (ra, oa) in &self.blocks {
             for (rb, ob) in &self.blocks {

@@ -51,7 +51,6 @@ pub struct SparseSolution {
     pub solve_time: Duration,
 }
 
-
 impl SparseQp {
     /// An empty problem with `n` variables and `m` unconstrained rows (sides ±∞).
     pub fn new(n: usize, m: usize) -> Self {

@@ -1,6 +1,7 @@
 //! Cross-checks of the two backends on WBC-shaped random problems, and KKT conditions.
 
 use stride_qp::testing::RandomWbc;
+use stride_qp::StartKind;
 use stride_qp::{
     check_kkt, ActiveSetSettings, ActiveSetSolver, Backend, ClarabelSettings, ClarabelSolver,
     QpSettings, QpSolver, QpStatus, SolverOutput,
@@ -108,6 +109,44 @@ fn warm_start_gives_the_cold_answer() {
             "warm start used in only {warm_used} of 30 ticks"
         );
     }
+}
+
+#[test]
+fn warm_start_stages_are_all_exercised_and_exact() {
+    // Large jumps in t change the active set: the guess fails and the re-imposed path must take over.
+    let mut p = RandomWbc::tsid_like(3, settings(Backend::ActiveSet)).unwrap();
+    p.problem.solve().unwrap();
+    let mut solver = ActiveSetSolver::new(ActiveSetSettings::default());
+    let mut cold = ActiveSetSolver::new(ActiveSetSettings { warm_start: false, ..ActiveSetSettings::default() });
+    let mut seen = std::collections::HashSet::new();
+    for k in 0..40 {
+        let t = if k % 4 == 0 { 0.7 * k as f64 } else { 0.7 * (k - k % 4) as f64 + 1e-3 * (k % 4) as f64 };
+        p.write(t);
+        p.problem.solve().unwrap();
+        let qp = p.problem.dense_qp().clone();
+        let mut ow = SolverOutput::new(&qp);
+        let mut oc = SolverOutput::new(&qp);
+        solver.solve(&qp, &mut ow);
+        cold.solve(&qp, &mut oc);
+        assert_eq!(ow.status, QpStatus::Solved);
+        seen.insert(format!("{:?}", solver.last_start()));
+        assert!((&ow.x - &oc.x).amax() < 1e-8 * (1.0 + oc.x.amax()), "tick {k}");
+        assert!(check_kkt(&qp, &ow).is_satisfied(1e-10));
+    }
+    for kind in [StartKind::Cold, StartKind::Guess, StartKind::Reimposed] {
+        assert!(seen.contains(&format!("{kind:?}")), "{kind:?} never used: {seen:?}");
+    }
+}
+
+#[test]
+fn iteration_limit_is_reported() {
+    let mut s = settings(Backend::ActiveSet);
+    s.active_set.max_iterations = 3;
+    s.active_set.warm_start = false;
+    let mut p = RandomWbc::tsid_like(0, s).unwrap();
+    let err = p.problem.solve().unwrap_err();
+    assert_eq!(err, stride_qp::QpError::SolveFailed { nominal: QpStatus::MaxIterations, relaxed: None });
+    assert!(p.problem.solution().x.iter().all(|v| *v == 0.0));
 }
 
 #[test]

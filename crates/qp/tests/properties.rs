@@ -92,6 +92,42 @@ proptest! {
         prop_assert!(check_kkt(&qp2, &ow).is_satisfied(1e-10));
     }
 
+    /// Duplicated (and scaled) equality and inequality rows: both backends still solve and agree.
+    #[test]
+    fn redundant_rows_do_not_change_the_answer(seed in any::<u64>(), n in 2usize..9, mi in 1usize..8, scale in 0.5f64..3.0) {
+        let base = random_qp(seed, n, 1, mi);
+        let mut dup = DenseQp::new(n, 2, 2 * mi);
+        *dup.hessian_mut() = base.hessian().clone();
+        *dup.gradient_mut() = base.gradient().clone();
+        for r in 0..2 {
+            let f = if r == 0 { 1.0 } else { scale };
+            dup.eq_matrix_mut().row_mut(r).copy_from(&(base.eq_matrix().row(0) * f));
+            dup.eq_rhs_mut()[r] = base.eq_rhs()[0] * f;
+        }
+        for i in 0..mi {
+            for r in [i, mi + i] {
+                dup.ineq_matrix_mut().row_mut(r).copy_from(&base.ineq_matrix().row(i));
+                dup.ineq_lower_mut()[r] = base.ineq_lower()[i];
+                dup.ineq_upper_mut()[r] = base.ineq_upper()[i];
+            }
+        }
+        *dup.lower_bounds_mut() = base.lower_bounds().clone();
+        *dup.upper_bounds_mut() = base.upper_bounds().clone();
+        let mut ob = SolverOutput::new(&base);
+        ActiveSetSolver::new(ActiveSetSettings::default()).solve(&base, &mut ob);
+        prop_assert_eq!(ob.status, QpStatus::Solved);
+        let mut c = ClarabelSolver::new(ClarabelSettings { tolerance: 1e-12, ..ClarabelSettings::default() });
+        for s in [&mut ActiveSetSolver::new(ActiveSetSettings::default()) as &mut dyn QpSolver, &mut c] {
+            let mut od = SolverOutput::new(&dup);
+            s.solve(&dup, &mut od);
+            prop_assert!(od.status.is_success(), "{} {:?}", s.name(), od.status);
+            let diff = (&od.x - &ob.x).amax();
+            prop_assert!(diff < 1e-6 * (1.0 + ob.x.amax()), "{}: diff {:e}", s.name(), diff);
+            let k = check_kkt(&dup, &od);
+            prop_assert!(k.is_satisfied(1e-7), "{}: {:?}", s.name(), k);
+        }
+    }
+
     #[test]
     fn never_nan(seed in any::<u64>(), n in 1usize..6, poison in 0usize..4) {
         let mut qp = random_qp(seed, n, 0, 3);

@@ -60,9 +60,8 @@ pub fn plan(path: &Path, json: bool, dt: Option<f64>) -> Result<ExitCode, CliErr
     if !(dt.is_finite() && dt > 0.0) {
         return Err(CliError::msg(format!("--dt {dt}: expected a positive number of seconds")));
     }
-    let err = |e: &dyn std::error::Error| CliError::msg(crate::cli::one_paragraph(e));
-    let model = crate::run::load_model(&scenario).map_err(|e| err(&e))?;
-    let q0 = crate::run::initial_joint_positions(&scenario, &model).map_err(|e| err(&e))?;
+    let model = crate::run::load_model(&scenario).map_err(|e| err(e))?;
+    let q0 = crate::run::initial_joint_positions(&scenario, &model).map_err(|e| err(e))?;
     let frame = |name: &str, key: &str| {
         model
             .frame_id(name)
@@ -70,21 +69,21 @@ pub fn plan(path: &Path, json: bool, dt: Option<f64>) -> Result<ExitCode, CliErr
     };
     let l = frame(&c.robot.left_sole, "robot.left_sole")?;
     let r = frame(&c.robot.right_sole, "robot.right_sole")?;
-    let state = crate::robot::standing_state(&model, &q0, l, r).map_err(|e| err(&e))?;
+    let state = crate::robot::standing_state(&model, &q0, l, r).map_err(|e| err(e))?;
     let mut kd = stride_model::KinDyn::new(Arc::clone(&model));
-    kd.set_state(&state).map_err(|e| err(&e))?;
+    kd.set_state(&state).map_err(|e| err(e))?;
     let (lp, rp) = (kd.frame_pose(l), kd.frame_pose(r));
     let events = crate::stack::goal_events(&c.goal);
-    let mut planner = stride_planner::Planner::new(c.planner.clone()).map_err(|e| err(&e))?;
+    let mut planner = stride_planner::Planner::new(c.planner.clone()).map_err(|e| err(e))?;
     let first = events.first().map_or(stride_planner::Goal::Stand, |e| e.goal.clone());
-    planner.start(0.0, &lp, &rp, &first).map_err(|e| err(&e))?;
+    planner.start(0.0, &lp, &rp, &first).map_err(|e| err(e))?;
     for e in events.iter().skip(1) {
-        planner.replan(e.time_ns as f64 * 1e-9, &e.goal).map_err(|e| err(&e))?;
+        planner.replan(e.time_ns as f64 * 1e-9, &e.goal).map_err(|e| err(e))?;
     }
     let plan = planner
         .plan()
         .ok_or_else(|| CliError::msg("the planner produced no plan"))?;
-    let report = plan.report(dt).map_err(|e| err(&e))?;
+    let report = plan.report(dt).map_err(|e| err(e))?;
     if json {
         println!("{}", serde_json::to_string(&report).map_err(|e| CliError::msg(e.to_string()))?);
         return Ok(ExitCode::SUCCESS);
@@ -186,4 +185,8 @@ pub fn replay(
         println!("replayed outputs written to {}", o.display());
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn err<E: std::error::Error + 'static>(e: E) -> CliError {
+    CliError::msg(crate::cli::one_paragraph(&e))
 }

@@ -1,7 +1,7 @@
 //! Drops the bundled humanoid (PD servos holding a knee-bent posture) on the ground and prints the trajectory
 //! as JSON on stdout (used by `tools/sim/mujoco_compare.py`).
 //!
-//! `cargo run --release -p stride-sim --example dump_trajectory -- [DROP_HEIGHT_M] [DURATION_S] [BEND_RAD]`
+//! `cargo run --release -p stride-sim --example dump_trajectory -- [DROP_HEIGHT_M] [DURATION_S] [BEND_RAD] [CONFIG.toml]`
 
 use std::sync::Arc;
 
@@ -22,7 +22,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let drop = arg(1, 0.02)?;
     let duration = arg(2, 2.0)?;
     let bend = arg(3, 0.2)?;
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/stride_humanoid.urdf");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/stride_humanoid.urdf"
+    );
     let model = Arc::new(Model::from_urdf_file(path)?);
     let mut q = DVector::zeros(model.dof());
     for (name, v) in [
@@ -35,7 +38,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ] {
         q[model.joint_index(name).ok_or("missing joint")?] = v;
     }
-    let config = SimConfig::default();
+    let mut config = SimConfig::default();
+    if let Some(path) = args.get(4) {
+        // Optional TOML file with SimConfig overrides.
+        config = toml::from_str(&std::fs::read_to_string(path)?)?;
+    }
     let mut sim = SimRobot::new(Arc::clone(&model), config.clone())?;
     let mut state = sim.set_standing_on_ground(&q)?;
     // Lift so that the soles start `drop` above the ground (undo the static sink too).
@@ -49,7 +56,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut samples = Vec::new();
     let names: Vec<String> = model.joints().iter().map(|j| j.name.clone()).collect();
     for k in 0..=steps {
-        let out = if k == 0 { sim.output().clone() } else { sim.step(&input)?.clone() };
+        let out = if k == 0 {
+            sim.output().clone()
+        } else {
+            sim.step(&input)?.clone()
+        };
         if k % every != 0 {
             continue;
         }
@@ -64,8 +75,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                        "force": [s.wrench[0], s.wrench[1], s.wrench[2]]})
             })
             .collect();
-        let joints: serde_json::Map<String, serde_json::Value> =
-            names.iter().zip(out.state.joint_positions.iter()).map(|(n, v)| (n.clone(), json!(v))).collect();
+        let joints: serde_json::Map<String, serde_json::Value> = names
+            .iter()
+            .zip(out.state.joint_positions.iter())
+            .map(|(n, v)| (n.clone(), json!(v)))
+            .collect();
         let com = kd.com_position();
         samples.push(json!({
             "time": out.time.as_secs_f64(),

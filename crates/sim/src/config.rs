@@ -119,10 +119,10 @@ impl Default for GroundConfig {
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
-/// | `normal_stiffness` | N/m³ | 1e7 | `k` (rigid floor: 0.9 mm static sink for the 32.8 kg humanoid on both feet) |
-/// | `normal_damping` | N·s/m³ | 2e5 | `b` (about critical for the humanoid bouncing on both feet) |
-/// | `tangential_stiffness` | N/m³ | 1e7 | stiffness density of the stick spring |
-/// | `tangential_damping` | N·s/m³ | 2e5 | damping density of the stick spring |
+/// | `normal_stiffness` | N/m³ | 3e7 | `k` (rigid floor: 0.3 mm static sink for the 32.8 kg humanoid on both feet; each 0.20 × 0.09 m sole resists pitching with 2.7 kN·m/rad) |
+/// | `normal_damping` | N·s/m³ | 3e5 | `b` (about critical for the humanoid bouncing on both feet) |
+/// | `tangential_stiffness` | N/m³ | 3e7 | stiffness density of the stick spring |
+/// | `tangential_damping` | N·s/m³ | 3e5 | damping density of the stick spring |
 /// | `friction_coefficient` | – | 0.8 | Coulomb μ (static = kinetic) |
 /// | `surfaces` | – | `l_sole`, `r_sole` | [`ContactSurfaceConfig`] list |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -145,10 +145,10 @@ pub struct ContactConfig {
 impl Default for ContactConfig {
     fn default() -> Self {
         Self {
-            normal_stiffness: 1.0e7,
-            normal_damping: 2.0e5,
-            tangential_stiffness: 1.0e7,
-            tangential_damping: 2.0e5,
+            normal_stiffness: 3.0e7,
+            normal_damping: 3.0e5,
+            tangential_stiffness: 3.0e7,
+            tangential_damping: 3.0e5,
             friction_coefficient: 0.8,
             surfaces: vec![
                 ContactSurfaceConfig::foot("left", "l_sole", "l_foot_ft_sensor"),

@@ -21,6 +21,8 @@
 //!
 //! See `docs/sim.md` for the choices, the checks and the measured numbers.
 
+#![warn(missing_docs)]
+
 mod config;
 mod contact;
 mod error;
@@ -35,7 +37,7 @@ pub use config::{
 };
 pub use contact::{surface_points, trapezoid_nodes, ContactMode, GroundPlane, PointLaw, PointSpec};
 pub use error::SimError;
-pub use linalg::{cholesky_in_place, cholesky_solve_in_place};
+pub use linalg::{cholesky_in_place, cholesky_solve_in_place, TreeCholesky};
 pub use noise::GaussianNoise;
 pub use robot::{
     ContactPointState, ImuMeasurement, SimInput, SimOutput, SimRobot, SurfaceMeasurement,

@@ -12,7 +12,7 @@ use crate::config::{
 };
 use crate::contact::{surface_points, ContactMode, GroundPlane, PointLaw};
 use crate::error::SimError;
-use crate::linalg::{cholesky_in_place, cholesky_solve_in_place};
+use crate::linalg::TreeCholesky;
 use crate::noise::GaussianNoise;
 
 /// Largest number of re-solves of one implicit step while contact modes and saturations settle.
@@ -232,6 +232,7 @@ pub struct SimRobot {
     next_state: RobotState,
     initial_state: RobotState,
     mass: DMatrix<f64>,
+    factorization: TreeCholesky,
     system: DMatrix<f64>,
     bias: DVector<f64>,
     rhs: DVector<f64>,
@@ -397,6 +398,11 @@ impl SimRobot {
             None => find_frame("sensors.imu_frame", model.root_link())?,
         };
 
+        let factorization =
+            TreeCholesky::floating_base(&model).ok_or_else(|| SimError::InvalidConfig {
+                parameter: "model".into(),
+                message: "the model's bodies are not in depth-first order".into(),
+            })?;
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_representation(VelocityRepresentation::Mixed);
         let gravity = Vector3::from(config.gravity);
@@ -462,6 +468,7 @@ impl SimRobot {
             initial_state: state.clone(),
             state,
             mass: DMatrix::zeros(nv, nv),
+            factorization,
             system: DMatrix::zeros(nv, nv),
             bias: DVector::zeros(nv),
             rhs: DVector::zeros(nv),
@@ -866,13 +873,14 @@ impl SimRobot {
         let mut solves = 0;
         loop {
             self.assemble_implicit(input);
-            if !cholesky_in_place(&mut self.system) {
+            if !self.factorization.factor(&mut self.system) {
                 return Err(SimError::NotPositiveDefinite {
                     time: self.time_ns as f64 * 1e-9,
                 });
             }
             self.acceleration.copy_from(&self.rhs);
-            cholesky_solve_in_place(&self.system, &mut self.acceleration);
+            self.factorization
+                .solve(&self.system, &mut self.acceleration);
             solves += 1;
             let changed = self.update_modes(input);
             if !changed || solves >= MAX_MODE_ITERATIONS {

@@ -185,11 +185,11 @@ fn slide_on_incline(theta: f64, mu: f64, duration: f64) -> (f64, f64) {
     let mut config = common::box_config(lx, ly, [3, 3]);
     config.ground.inclination = [0.0, theta];
     config.contact.friction_coefficient = mu;
-    let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
+    let mut sim = SimRobot::new(Arc::clone(&model), config.clone()).unwrap();
     // Box aligned with the slope, resting on it with the static sink.
     let rotation = UnitQuaternion::from_euler_angles(0.0, theta, 0.0);
     let normal = rotation * Vector3::z();
-    let sink = m * 9.81 * theta.cos() / (1e7 * lx * ly);
+    let sink = m * 9.81 * theta.cos() / (config.contact.normal_stiffness * lx * ly);
     let mut state = RobotState::zero(&model);
     state.base_pose =
         Isometry3::from_parts(Translation3::from(normal * (lz / 2.0 - sink)), rotation);

@@ -348,3 +348,30 @@ fn torque_mode_joint_is_limp() {
     );
     assert_eq!(sim.output().joint_torques[elbow], 2.0);
 }
+
+#[test]
+fn velocity_servo_tracks_the_commanded_velocity() {
+    let mut config = SimConfig::default();
+    config.contact.surfaces.clear();
+    config.gravity = [0.0; 3];
+    config.fall.min_base_height = -1e9;
+    config.actuation.default.mode = ActuationMode::Velocity;
+    config.actuation.default.kd = 50.0;
+    let model = common::humanoid();
+    let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
+    let elbow = model.joint_index("l_elbow").unwrap();
+    let mut input = SimInput::zeros(model.dof());
+    input.joint_velocities[elbow] = 0.5;
+    input.joint_positions[elbow] = -3.0; // ignored in velocity mode
+    for _ in 0..400 {
+        sim.step(&input).unwrap();
+    }
+    let v = sim.state().joint_velocities[elbow];
+    assert!((v - 0.5).abs() < 1e-3, "elbow velocity {v}");
+    // The other joints are held at zero velocity.
+    for (j, v) in sim.state().joint_velocities.iter().enumerate() {
+        if j != elbow {
+            assert!(v.abs() < 1e-2, "joint {j}: {v}");
+        }
+    }
+}

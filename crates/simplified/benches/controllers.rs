@@ -2,7 +2,7 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, Criterion};
 use nalgebra::Vector2;
 use stride_block::Block;
 use stride_simplified::*;
@@ -25,14 +25,24 @@ fn horizon(samples: usize, transfer: bool) -> DcmHorizon {
             let s = ((k - 30) as f64 / 20.0).min(1.0);
             (both, center + Vector2::new(0.0, 0.08 * s))
         };
-        horizon.push(HorizonSample { dcm_position: zmp, zmp, support }).unwrap();
+        horizon
+            .push(HorizonSample {
+                dcm_position: zmp,
+                zmp,
+                support,
+            })
+            .unwrap();
     }
     horizon
 }
 
 fn benches(c: &mut Criterion) {
     let support = foot();
-    let mut pi = DcmInstantaneousController::new(DcmInstantaneousConfig { ki: 0.5, ..Default::default() }).unwrap();
+    let mut pi = DcmInstantaneousController::new(DcmInstantaneousConfig {
+        ki: 0.5,
+        ..Default::default()
+    })
+    .unwrap();
     c.bench_function("dcm_pi_step", |b| {
         b.iter(|| {
             pi.step(
@@ -68,17 +78,26 @@ fn benches(c: &mut Criterion) {
     input.omega = OMEGA;
     input.walking = true;
     input.measured_dcm = Vector2::new(0.003, 0.0);
-    c.bench_function("block_step_instantaneous", |b| b.iter(|| *block.step(black_box(&input)).unwrap()));
+    c.bench_function("block_step_instantaneous", |b| {
+        b.iter(|| *block.step(black_box(&input)).unwrap())
+    });
 
     for (name, transfer, push) in [
         ("dcm_mpc_2s_100hz_nominal", false, Vector2::new(0.003, 0.0)),
-        ("dcm_mpc_2s_100hz_constrained", true, Vector2::new(0.05, 0.0)),
+        (
+            "dcm_mpc_2s_100hz_constrained",
+            true,
+            Vector2::new(0.05, 0.0),
+        ),
     ] {
         let mut mpc = DcmPredictiveController::new(DcmPredictiveConfig::default(), 0.01).unwrap();
         let h = horizon(mpc.horizon_samples(), transfer);
         let dcm = Vector2::new(0.01, 0.0) + push;
         let out = mpc.step(OMEGA, dcm, &h, &support).unwrap();
-        eprintln!("{name}: status {:?}, iterations {}", out.diagnostics.status, out.diagnostics.iterations);
+        eprintln!(
+            "{name}: status {:?}, iterations {}",
+            out.diagnostics.status, out.diagnostics.iterations
+        );
         c.bench_function(name, |b| {
             b.iter(|| {
                 mpc.reset();
@@ -87,7 +106,10 @@ fn benches(c: &mut Criterion) {
         });
     }
     let mut mpc = DcmPredictiveController::new(
-        DcmPredictiveConfig { solver: MpcSolverKind::Clarabel, ..Default::default() },
+        DcmPredictiveConfig {
+            solver: MpcSolverKind::Clarabel,
+            ..Default::default()
+        },
         0.01,
     )
     .unwrap();
@@ -101,5 +123,49 @@ fn benches(c: &mut Criterion) {
     });
 }
 
+/// CPU time of this thread [s] from /proc (user + system, clock ticks of 10 ms): unlike wall time it
+/// excludes the time the thread waits for a core on a loaded machine.
+fn thread_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
+    let after = stat.rsplit_once(')')?.1;
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    let utime: f64 = fields.get(11)?.parse().ok()?;
+    let stime: f64 = fields.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
+}
+
+fn cpu_time_report() {
+    let support = foot();
+    for (name, transfer, push) in [
+        ("dcm_mpc_2s_100hz_nominal", false, Vector2::new(0.003, 0.0)),
+        ("dcm_mpc_2s_100hz_constrained", true, Vector2::new(0.05, 0.0)),
+    ] {
+        let mut mpc = DcmPredictiveController::new(DcmPredictiveConfig::default(), 0.01).unwrap();
+        let h = horizon(mpc.horizon_samples(), transfer);
+        let dcm = Vector2::new(0.01, 0.0) + push;
+        let count = if transfer { 2000 } else { 20000 };
+        let (Some(t0), w0) = (thread_cpu_seconds(), std::time::Instant::now()) else {
+            return;
+        };
+        for _ in 0..count {
+            mpc.reset();
+            black_box(mpc.step(OMEGA, black_box(dcm), &h, &support).unwrap());
+        }
+        let wall = w0.elapsed().as_secs_f64() / count as f64;
+        if let Some(t1) = thread_cpu_seconds() {
+            eprintln!(
+                "{name}: thread CPU time {:.1} µs per solve (wall {:.1} µs)",
+                (t1 - t0) / count as f64 * 1e6,
+                wall * 1e6
+            );
+        }
+    }
+}
+
 criterion_group!(group, benches);
-criterion_main!(group);
+
+fn main() {
+    cpu_time_report();
+    group();
+    Criterion::default().configure_from_args().final_summary();
+}

@@ -6,6 +6,9 @@
 //! Each Newton system `(P + Cᵀ diag(λ/s) C) Δx = r` stays banded and is solved by a banded Cholesky in
 //! `O(n b²)`. All memory is allocated in `new`; `solve` allocates nothing.
 
+// Band algorithms index several arrays with the same loop counter; ranges read like the maths.
+#![allow(clippy::needless_range_loop)]
+
 /// A sparse constraint row with at most [`MAX_ROW_ENTRIES`] non-zeros.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct SparseRow {
@@ -20,7 +23,9 @@ pub(crate) const MAX_ROW_ENTRIES: usize = 4;
 
 impl SparseRow {
     fn dot(&self, x: &[f64]) -> f64 {
-        (0..self.len).map(|e| self.values[e] * x[self.columns[e]]).sum()
+        (0..self.len)
+            .map(|e| self.values[e] * x[self.columns[e]])
+            .sum()
     }
 }
 
@@ -37,7 +42,9 @@ pub(crate) enum IpmOutcome {
     NumericalError,
 }
 
-/// Banded symmetric matrix storage (lower band): entry `(i, j)`, `i − bw ≤ j ≤ i`, at `i (bw+1) + (i − j)`.
+/// Banded symmetric matrix storage (lower band, row-major): entry `(i, j)`, `i − bw ≤ j ≤ i`, at
+/// `i (bw+1) + (j + bw − i)`, so that each row's band is contiguous in increasing column order (the first
+/// `bw − i` slots of the first rows are unused zeros).
 #[derive(Debug, Clone)]
 pub(crate) struct BandMatrix {
     pub(crate) n: usize,
@@ -57,7 +64,7 @@ impl BandMatrix {
     #[inline]
     fn index(&self, i: usize, j: usize) -> usize {
         debug_assert!(j <= i && i - j <= self.bw);
-        i * (self.bw + 1) + (i - j)
+        i * (self.bw + 1) + (j + self.bw - i)
     }
 
     /// Adds `v` to the symmetric entry `(i, j)` (stored once, in the lower band).
@@ -103,10 +110,13 @@ impl BandMatrix {
         for i in 0..n {
             let lo = i.saturating_sub(bw);
             for j in lo..=i {
-                let mut sum = self.data[self.index(i, j)];
-                for k in lo..j {
-                    sum -= self.data[self.index(i, k)] * self.data[self.index(j, k)];
-                }
+                // Σ_{k=lo}^{j−1} L(i,k) L(j,k): two contiguous row pieces of equal length.
+                let dot: f64 = {
+                    let row_i = &self.data[self.index(i, lo)..self.index(i, j)];
+                    let row_j = &self.data[self.index(j, lo)..self.index(j, j)];
+                    row_i.iter().zip(row_j).map(|(a, b)| a * b).sum()
+                };
+                let sum = self.data[self.index(i, j)] - dot;
                 if i == j {
                     if !(sum > 0.0 && sum.is_finite()) {
                         return false;
@@ -125,21 +135,22 @@ impl BandMatrix {
     /// Solves `L Lᵀ x = b` in place (after `cholesky_in_place`).
     pub(crate) fn cholesky_solve(&self, b: &mut [f64]) {
         let (n, bw) = (self.n, self.bw);
+        // L y = b, row-oriented.
         for i in 0..n {
             let lo = i.saturating_sub(bw);
-            let mut sum = b[i];
-            for k in lo..i {
-                sum -= self.data[self.index(i, k)] * b[k];
-            }
-            b[i] = sum / self.data[self.index(i, i)];
+            let row = &self.data[self.index(i, lo)..self.index(i, i)];
+            let dot: f64 = row.iter().zip(&b[lo..i]).map(|(l, y)| l * y).sum();
+            b[i] = (b[i] - dot) / self.data[self.index(i, i)];
         }
+        // Lᵀ x = y, column-oriented (row i of L is column i of Lᵀ).
         for i in (0..n).rev() {
-            let hi = (i + bw).min(n - 1);
-            let mut sum = b[i];
-            for k in i + 1..=hi {
-                sum -= self.data[self.index(k, i)] * b[k];
+            let xi = b[i] / self.data[self.index(i, i)];
+            b[i] = xi;
+            let lo = i.saturating_sub(bw);
+            let row = &self.data[self.index(i, lo)..self.index(i, i)];
+            for (bk, l) in b[lo..i].iter_mut().zip(row) {
+                *bk -= l * xi;
             }
-            b[i] = sum / self.data[self.index(i, i)];
         }
     }
 }
@@ -251,7 +262,8 @@ impl BandedQp {
         let m = self.row_count;
         // KΔx = −rd + Cᵀ((rc − λ∘rp)/s)
         for i in 0..m {
-            self.ds[i] = (self.rhs_rows[i] - self.multiplier[i] * self.residual_primal[i]) / self.slack[i];
+            self.ds[i] =
+                (self.rhs_rows[i] - self.multiplier[i] * self.residual_primal[i]) / self.slack[i];
         }
         for (d, r) in self.dx.iter_mut().zip(self.residual_dual.iter()) {
             *d = -r;
@@ -307,8 +319,11 @@ impl BandedQp {
             let row = self.rows[i];
             for a in 0..row.len {
                 for b in 0..=a {
-                    self.newton
-                        .add(row.columns[a], row.columns[b], w * row.values[a] * row.values[b]);
+                    self.newton.add(
+                        row.columns[a],
+                        row.columns[b],
+                        w * row.values[a] * row.values[b],
+                    );
                 }
             }
         }
@@ -372,11 +387,18 @@ impl BandedQp {
                 .zip(self.multiplier[..m].iter())
                 .fold(0.0_f64, |a, (s, l)| a.max((s * l).abs()));
             let largest_multiplier = self.multiplier[..m].iter().fold(0.0_f64, |a, l| a.max(*l));
-            let dual_inf = self.residual_dual.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            let dual_inf = self
+                .residual_dual
+                .iter()
+                .fold(0.0_f64, |a, v| a.max(v.abs()));
             let primal_inf = self.residual_primal[..m]
                 .iter()
                 .fold(0.0_f64, |a, v| a.max(v.abs()));
-            if !(mu.is_finite() && largest_product.is_finite() && dual_inf.is_finite() && primal_inf.is_finite()) {
+            if !(mu.is_finite()
+                && largest_product.is_finite()
+                && dual_inf.is_finite()
+                && primal_inf.is_finite())
+            {
                 return (IpmOutcome::NumericalError, iterations);
             }
             // Scale-invariant stopping rules: residuals relative to the largest term of their
@@ -408,7 +430,8 @@ impl BandedQp {
                 .min(Self::max_step(&self.multiplier[..m], &self.dl[..m]));
             let mut mu_aff = 0.0;
             for i in 0..m {
-                mu_aff += (self.slack[i] + alpha_aff * self.ds[i]) * (self.multiplier[i] + alpha_aff * self.dl[i]);
+                mu_aff += (self.slack[i] + alpha_aff * self.ds[i])
+                    * (self.multiplier[i] + alpha_aff * self.dl[i]);
             }
             mu_aff /= m as f64;
             let sigma = (mu_aff / mu).clamp(0.0, 1.0).powi(3);
@@ -416,7 +439,8 @@ impl BandedQp {
             self.dl_aff[..m].copy_from_slice(&self.dl[..m]);
             // Corrector.
             for i in 0..m {
-                self.rhs_rows[i] = self.slack[i] * self.multiplier[i] + self.ds_aff[i] * self.dl_aff[i]
+                self.rhs_rows[i] = self.slack[i] * self.multiplier[i]
+                    + self.ds_aff[i] * self.dl_aff[i]
                     - sigma * mu;
             }
             self.newton_direction();

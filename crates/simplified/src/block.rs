@@ -7,7 +7,9 @@ use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
 use crate::dcm_instantaneous::{DcmInstantaneousConfig, DcmInstantaneousController};
-use crate::dcm_predictive::{DcmHorizon, DcmPredictiveConfig, DcmPredictiveController, MpcDiagnostics};
+use crate::dcm_predictive::{
+    DcmHorizon, DcmPredictiveConfig, DcmPredictiveController, MpcDiagnostics,
+};
 use crate::error::{check_finite, Result, SimplifiedError};
 use crate::lipm::{check_omega, check_point};
 use crate::polygon::SupportPolygon;
@@ -194,7 +196,9 @@ impl SimplifiedController {
             });
         }
         let predictive = match config.dcm_controller {
-            DcmControllerKind::Predictive => Some(DcmPredictiveController::new(config.predictive, period_s)?),
+            DcmControllerKind::Predictive => {
+                Some(DcmPredictiveController::new(config.predictive, period_s)?)
+            }
             DcmControllerKind::Instantaneous => None,
         };
         Ok(Self {

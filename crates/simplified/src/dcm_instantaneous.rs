@@ -68,7 +68,9 @@ pub fn dcm_instantaneous_law(
     ki: f64,
     omega: f64,
 ) -> Vector2<f64> {
-    planned_dcm - planned_dcm_velocity / omega + (measured_dcm - planned_dcm) * kp + error_integral * ki
+    planned_dcm - planned_dcm_velocity / omega
+        + (measured_dcm - planned_dcm) * kp
+        + error_integral * ki
 }
 
 /// What one tick of the DCM instantaneous controller produces.

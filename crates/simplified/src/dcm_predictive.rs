@@ -74,6 +74,7 @@ pub enum MpcSolverKind {
 /// | `solver` | – | `"banded_interior_point"` | or `"clarabel"` |
 /// | `tolerance` | – | 1e-9 | interior-point tolerance on scaled residuals and complementarity |
 /// | `max_iterations` | – | 50 | interior-point iteration limit |
+/// | `fallback` | – | true | on a failed solve (in practice only once the DCM has left the support polygon, where the predicted DCM grows as `e^{ωNT}` and the QP becomes ill-conditioned), use `p* = proj(ẑ_0 + 2 (ξ − ξ_ref,0))` and report it (`fallback`, solver status); false: return `SolverFailed` |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DcmPredictiveConfig {
@@ -91,6 +92,8 @@ pub struct DcmPredictiveConfig {
     pub tolerance: f64,
     /// Solver iteration limit.
     pub max_iterations: u32,
+    /// On a failed solve, produce the fallback law's ZMP (true) or return an error (false).
+    pub fallback: bool,
 }
 
 impl Default for DcmPredictiveConfig {
@@ -103,6 +106,7 @@ impl Default for DcmPredictiveConfig {
             solver: MpcSolverKind::BandedInteriorPoint,
             tolerance: 1e-9,
             max_iterations: 50,
+            fallback: true,
         }
     }
 }
@@ -242,8 +246,10 @@ pub struct MpcDiagnostics {
     pub held_samples: usize,
     /// Constraint rows with a multiplier above 1e-6 × the largest one (active set estimate).
     pub active_constraints: usize,
-    /// Optimal cost (in the units of the weights).
+    /// Optimal cost (in the units of the weights); 0 when the fallback was used.
     pub cost: f64,
+    /// True when the QP failed and the fallback law produced the desired ZMP.
+    pub fallback: bool,
 }
 
 /// What one tick of the DCM predictive controller produces.
@@ -260,6 +266,9 @@ pub struct DcmPredictiveOutput {
     /// Solver diagnostics.
     pub diagnostics: MpcDiagnostics,
 }
+
+/// Proportional gain of the fallback law used when the QP fails.
+const FALLBACK_GAIN: f64 = 2.0;
 
 /// Half-bandwidth of the Newton matrices (interleaved x/y ordering, rate rows span 3 stages).
 const BANDWIDTH: usize = 5;
@@ -464,7 +473,33 @@ impl DcmPredictiveController {
         if !matches!(status, MpcStatus::Unconstrained | MpcStatus::Solved)
             || self.qp.x.iter().any(|v| !v.is_finite())
         {
-            return Err(SimplifiedError::SolverFailed { status, iterations });
+            if !self.config.fallback {
+                return Err(SimplifiedError::SolverFailed { status, iterations });
+            }
+            // Documented safe behaviour: the DCM-feedback law (10.2.17) with kp = 2 about the
+            // current plan sample, projected onto the current support polygon.
+            let planned_dcm = samples[0].dcm_position;
+            let law = planned_zmp_now + (measured_dcm - planned_dcm) * FALLBACK_GAIN;
+            let (desired, projection_active) = support.project(law);
+            self.previous_desired_zmp = Some(desired);
+            self.previous_planned_zmp = Some(planned_zmp_now);
+            self.last_problem = None;
+            return Ok(DcmPredictiveOutput {
+                desired_zmp: desired,
+                unprojected_zmp: law,
+                dcm_error: measured_dcm - planned_dcm,
+                projection_active,
+                diagnostics: MpcDiagnostics {
+                    status,
+                    iterations,
+                    solve_time: start.elapsed().as_secs_f64(),
+                    stages: n,
+                    held_samples,
+                    active_constraints: 0,
+                    cost: 0.0,
+                    fallback: true,
+                },
+            });
         }
         // Unpack the solution.
         self.solution_dcm[0] = measured_dcm;
@@ -508,6 +543,7 @@ impl DcmPredictiveController {
                 held_samples,
                 active_constraints,
                 cost,
+                fallback: false,
             },
         })
     }
@@ -638,7 +674,8 @@ impl DcmPredictiveController {
 fn solve_with_clarabel(qp: &mut BandedQp, config: &DcmPredictiveConfig) -> (IpmOutcome, u32) {
     use clarabel::algebra::CscMatrix;
     use clarabel::solver::{
-        DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT,
+        DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
+        SupportedConeT,
     };
     let n = qp.x.len();
     let m = qp.row_count;

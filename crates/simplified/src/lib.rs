@@ -56,11 +56,12 @@ mod wrench;
 mod zmp_com;
 
 pub use block::{
-    DcmControllerKind, SimplifiedConfig, SimplifiedController, SimplifiedDiagnostics, SimplifiedInput,
-    SimplifiedOutput,
+    DcmControllerKind, SimplifiedConfig, SimplifiedController, SimplifiedDiagnostics,
+    SimplifiedInput, SimplifiedOutput,
 };
 pub use dcm_instantaneous::{
-    dcm_instantaneous_law, DcmInstantaneousConfig, DcmInstantaneousController, DcmInstantaneousOutput,
+    dcm_instantaneous_law, DcmInstantaneousConfig, DcmInstantaneousController,
+    DcmInstantaneousOutput,
 };
 pub use dcm_predictive::{
     DcmHorizon, DcmPredictiveConfig, DcmPredictiveController, DcmPredictiveOutput, HorizonSample,
@@ -68,7 +69,8 @@ pub use dcm_predictive::{
 };
 pub use error::{Result, SimplifiedError};
 pub use lipm::{
-    dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization, STANDARD_GRAVITY,
+    dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization,
+    STANDARD_GRAVITY,
 };
 pub use polygon::{
     feet_support_polygon, FootRectangle, SupportPolygon, MAX_HULL_POINTS, MAX_POLYGON_VERTICES,

@@ -30,7 +30,11 @@ pub fn natural_frequency(com_height: f64, gravity: f64) -> Result<f64> {
 }
 
 /// DCM `ξ = x + ẋ / ω` [m] from the planar CoM position [m] and velocity [m/s].
-pub fn dcm_from_com(com_position: Vector2<f64>, com_velocity: Vector2<f64>, omega: f64) -> Vector2<f64> {
+pub fn dcm_from_com(
+    com_position: Vector2<f64>,
+    com_velocity: Vector2<f64>,
+    omega: f64,
+) -> Vector2<f64> {
     com_position + com_velocity / omega
 }
 

@@ -29,14 +29,20 @@ pub struct FootWrench {
 /// Errors: `NonFiniteInput` for a NaN/infinite wrench, point or height; `InvalidParameter` when
 /// `min_normal_force` is not finite and > 0; `InsufficientNormalForce` when `F_z < min_normal_force`
 /// (feet unloaded or in the air: the ZMP is undefined; callers usually hold the previous value).
-pub fn measured_zmp(feet: &[FootWrench], ground_height: f64, min_normal_force: f64) -> Result<Vector2<f64>> {
+pub fn measured_zmp(
+    feet: &[FootWrench],
+    ground_height: f64,
+    min_normal_force: f64,
+) -> Result<Vector2<f64>> {
     crate::error::check_positive("min_normal_force", min_normal_force)?;
     crate::error::check_finite("ground_height", ground_height)?;
     let mut force = Vector3::zeros();
     let mut torque = Vector3::zeros();
     for foot in feet {
         if foot.wrench.iter().any(|v| !v.is_finite()) {
-            return Err(SimplifiedError::NonFiniteInput { name: "foot wrench" });
+            return Err(SimplifiedError::NonFiniteInput {
+                name: "foot wrench",
+            });
         }
         if foot.point.iter().any(|v| !v.is_finite()) {
             return Err(SimplifiedError::NonFiniteInput {

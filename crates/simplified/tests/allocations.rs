@@ -11,16 +11,28 @@ use stride_simplified::*;
 struct Counting;
 static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
 
+thread_local! {
+    /// Only allocations of the thread under test are counted (the test harness's own threads may
+    /// allocate at any time).
+    static COUNTING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+fn record() {
+    if COUNTING.with(|c| c.get()) {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+    }
+}
+
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        record();
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        record();
         unsafe { System.realloc(ptr, layout, new_size) }
     }
 }
@@ -32,21 +44,34 @@ const OMEGA: f64 = 4.302_325_511_579_751;
 
 fn count<R>(f: impl FnOnce() -> R) -> (usize, R) {
     let before = ALLOCATIONS.load(Ordering::SeqCst);
+    COUNTING.with(|c| c.set(true));
     let r = f();
+    COUNTING.with(|c| c.set(false));
     (ALLOCATIONS.load(Ordering::SeqCst) - before, r)
 }
 
-// One test function so that no other test thread allocates while counting.
 #[test]
 fn steps_do_not_allocate() {
     let foot = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap();
     let both = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.19).unwrap();
 
-    let mut pi = DcmInstantaneousController::new(DcmInstantaneousConfig { ki: 1.0, ..Default::default() }).unwrap();
+    let mut pi = DcmInstantaneousController::new(DcmInstantaneousConfig {
+        ki: 1.0,
+        ..Default::default()
+    })
+    .unwrap();
     let (n, _) = count(|| {
         for i in 0..100 {
             let e = 0.001 * i as f64;
-            pi.step(Vector2::zeros(), Vector2::new(0.1, 0.0), Vector2::new(e, -e), OMEGA, &foot, 0.01).unwrap();
+            pi.step(
+                Vector2::zeros(),
+                Vector2::new(0.1, 0.0),
+                Vector2::new(e, -e),
+                OMEGA,
+                &foot,
+                0.01,
+            )
+            .unwrap();
         }
     });
     assert_eq!(n, 0, "DCM PI step allocated");
@@ -60,8 +85,14 @@ fn steps_do_not_allocate() {
     });
     assert_eq!(n, 0, "ZMP-CoM step allocated");
 
-    for kind in [DcmControllerKind::Instantaneous, DcmControllerKind::Predictive] {
-        let config = SimplifiedConfig { dcm_controller: kind, ..Default::default() };
+    for kind in [
+        DcmControllerKind::Instantaneous,
+        DcmControllerKind::Predictive,
+    ] {
+        let config = SimplifiedConfig {
+            dcm_controller: kind,
+            ..Default::default()
+        };
         let mut block = SimplifiedController::new(&config, Duration::from_millis(10)).unwrap();
         let samples = block.horizon_samples();
         let mut input = SimplifiedInput::new(samples, foot);
@@ -73,7 +104,11 @@ fn steps_do_not_allocate() {
                     let support = if k + tick < 60 { foot } else { both };
                     input
                         .horizon
-                        .push(HorizonSample { dcm_position: Vector2::new(0.01, 0.0), zmp: Vector2::new(0.01, 0.0), support })
+                        .push(HorizonSample {
+                            dcm_position: Vector2::new(0.01, 0.0),
+                            zmp: Vector2::new(0.01, 0.0),
+                            support,
+                        })
                         .unwrap();
                 }
                 input.walking = tick % 20 < 10;

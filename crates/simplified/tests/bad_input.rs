@@ -7,12 +7,21 @@ use stride_simplified::*;
 
 const OMEGA: f64 = 4.302_325_511_579_751;
 
+type Setter = Box<dyn Fn(&mut SimplifiedInput)>;
+
 fn good_input(block: &SimplifiedController) -> SimplifiedInput {
     let foot = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap();
     let mut input = SimplifiedInput::new(block.horizon_samples(), foot);
     input.omega = OMEGA;
     for _ in 0..block.horizon_samples() {
-        input.horizon.push(HorizonSample { dcm_position: Vector2::zeros(), zmp: Vector2::zeros(), support: foot }).unwrap();
+        input
+            .horizon
+            .push(HorizonSample {
+                dcm_position: Vector2::zeros(),
+                zmp: Vector2::zeros(),
+                support: foot,
+            })
+            .unwrap();
     }
     input.measured_dcm = Vector2::new(0.005, 0.0);
     input
@@ -20,26 +29,53 @@ fn good_input(block: &SimplifiedController) -> SimplifiedInput {
 
 #[test]
 fn non_finite_inputs_are_rejected_and_the_last_output_is_held() {
-    for kind in [DcmControllerKind::Instantaneous, DcmControllerKind::Predictive] {
-        let config = SimplifiedConfig { dcm_controller: kind, ..Default::default() };
+    for kind in [
+        DcmControllerKind::Instantaneous,
+        DcmControllerKind::Predictive,
+    ] {
+        let config = SimplifiedConfig {
+            dcm_controller: kind,
+            ..Default::default()
+        };
         let mut block = SimplifiedController::new(&config, Duration::from_millis(10)).unwrap();
         assert!(!block.output().valid);
         let input = good_input(&block);
         let held = *block.step(&input).unwrap();
         assert!(held.valid);
-        let setters: Vec<(&str, Box<dyn Fn(&mut SimplifiedInput)>)> = vec![
+        let setters: Vec<(&str, Setter)> = vec![
             ("omega", Box::new(|i| i.omega = f64::NAN)),
             ("omega", Box::new(|i| i.omega = -1.0)),
             ("omega", Box::new(|i| i.omega = f64::INFINITY)),
-            ("planned_dcm_position", Box::new(|i| i.planned_dcm_position.x = f64::NAN)),
-            ("planned_dcm_velocity", Box::new(|i| i.planned_dcm_velocity.y = f64::INFINITY)),
+            (
+                "planned_dcm_position",
+                Box::new(|i| i.planned_dcm_position.x = f64::NAN),
+            ),
+            (
+                "planned_dcm_velocity",
+                Box::new(|i| i.planned_dcm_velocity.y = f64::INFINITY),
+            ),
             ("planned_zmp", Box::new(|i| i.planned_zmp.x = f64::NAN)),
-            ("planned_com_position", Box::new(|i| i.planned_com_position.x = f64::NAN)),
-            ("planned_com_velocity", Box::new(|i| i.planned_com_velocity.x = f64::NEG_INFINITY)),
-            ("measured_com_position", Box::new(|i| i.measured_com_position.y = f64::NAN)),
-            ("measured_com_velocity", Box::new(|i| i.measured_com_velocity.y = f64::NAN)),
+            (
+                "planned_com_position",
+                Box::new(|i| i.planned_com_position.x = f64::NAN),
+            ),
+            (
+                "planned_com_velocity",
+                Box::new(|i| i.planned_com_velocity.x = f64::NEG_INFINITY),
+            ),
+            (
+                "measured_com_position",
+                Box::new(|i| i.measured_com_position.y = f64::NAN),
+            ),
+            (
+                "measured_com_velocity",
+                Box::new(|i| i.measured_com_velocity.y = f64::NAN),
+            ),
             ("measured_dcm", Box::new(|i| i.measured_dcm.x = f64::NAN)),
-            ("measured_zmp", Box::new(|i| i.measured_zmp.x = f64::INFINITY)),
+            (
+                "measured_zmp",
+                Box::new(|i| i.measured_zmp.x = f64::INFINITY),
+            ),
         ];
         for (name, set) in setters {
             let mut bad = input.clone();
@@ -66,11 +102,17 @@ fn non_finite_inputs_are_rejected_and_the_last_output_is_held() {
 
 #[test]
 fn horizon_errors_and_short_horizons() {
-    let config = SimplifiedConfig { dcm_controller: DcmControllerKind::Predictive, ..Default::default() };
+    let config = SimplifiedConfig {
+        dcm_controller: DcmControllerKind::Predictive,
+        ..Default::default()
+    };
     let mut block = SimplifiedController::new(&config, Duration::from_millis(10)).unwrap();
     let mut input = good_input(&block);
     let sample = input.horizon.samples()[0];
-    assert_eq!(input.horizon.push(sample), Err(SimplifiedError::HorizonFull { capacity: 201 }));
+    assert_eq!(
+        input.horizon.push(sample),
+        Err(SimplifiedError::HorizonFull { capacity: 201 })
+    );
     // A horizon longer than the plan: the plan's last sample is held.
     input.horizon.clear();
     for _ in 0..17 {
@@ -82,11 +124,25 @@ fn horizon_errors_and_short_horizons() {
     // An empty one is an error and holds the output.
     let held = *block.output();
     input.horizon.clear();
-    assert_eq!(block.step(&input).unwrap_err(), SimplifiedError::EmptyHorizon);
+    assert_eq!(
+        block.step(&input).unwrap_err(),
+        SimplifiedError::EmptyHorizon
+    );
     assert_eq!(*block.output(), held);
     // Non-finite horizon data.
-    input.horizon.push(HorizonSample { dcm_position: Vector2::new(f64::NAN, 0.0), ..sample }).unwrap();
-    assert!(matches!(block.step(&input), Err(SimplifiedError::NonFiniteInput { name: "horizon.dcm_position" })));
+    input
+        .horizon
+        .push(HorizonSample {
+            dcm_position: Vector2::new(f64::NAN, 0.0),
+            ..sample
+        })
+        .unwrap();
+    assert!(matches!(
+        block.step(&input),
+        Err(SimplifiedError::NonFiniteInput {
+            name: "horizon.dcm_position"
+        })
+    ));
 }
 
 #[test]
@@ -108,15 +164,36 @@ fn empty_or_degenerate_polygons_are_rejected() {
 
 #[test]
 fn measured_zmp_needs_a_loaded_foot() {
-    let loaded = FootWrench { wrench: Vector6::new(0.0, 0.0, 100.0, 0.0, 0.0, 0.0), point: Vector3::zeros() };
-    let light = FootWrench { wrench: Vector6::new(0.0, 0.0, 0.5, 0.0, 0.0, 0.0), point: Vector3::zeros() };
+    let loaded = FootWrench {
+        wrench: Vector6::new(0.0, 0.0, 100.0, 0.0, 0.0, 0.0),
+        point: Vector3::zeros(),
+    };
+    let light = FootWrench {
+        wrench: Vector6::new(0.0, 0.0, 0.5, 0.0, 0.0, 0.0),
+        point: Vector3::zeros(),
+    };
     assert!(measured_zmp(&[loaded], 0.0, 10.0).is_ok());
-    assert!(matches!(measured_zmp(&[light], 0.0, 10.0), Err(SimplifiedError::InsufficientNormalForce { .. })));
-    assert!(matches!(measured_zmp(&[], 0.0, 10.0), Err(SimplifiedError::InsufficientNormalForce { .. })));
-    let pulling = FootWrench { wrench: Vector6::new(0.0, 0.0, -100.0, 0.0, 0.0, 0.0), point: Vector3::zeros() };
+    assert!(matches!(
+        measured_zmp(&[light], 0.0, 10.0),
+        Err(SimplifiedError::InsufficientNormalForce { .. })
+    ));
+    assert!(matches!(
+        measured_zmp(&[], 0.0, 10.0),
+        Err(SimplifiedError::InsufficientNormalForce { .. })
+    ));
+    let pulling = FootWrench {
+        wrench: Vector6::new(0.0, 0.0, -100.0, 0.0, 0.0, 0.0),
+        point: Vector3::zeros(),
+    };
     assert!(measured_zmp(&[pulling], 0.0, 10.0).is_err());
-    let nan = FootWrench { wrench: Vector6::new(f64::NAN, 0.0, 100.0, 0.0, 0.0, 0.0), point: Vector3::zeros() };
-    assert!(matches!(measured_zmp(&[nan], 0.0, 10.0), Err(SimplifiedError::NonFiniteInput { .. })));
+    let nan = FootWrench {
+        wrench: Vector6::new(f64::NAN, 0.0, 100.0, 0.0, 0.0, 0.0),
+        point: Vector3::zeros(),
+    };
+    assert!(matches!(
+        measured_zmp(&[nan], 0.0, 10.0),
+        Err(SimplifiedError::NonFiniteInput { .. })
+    ));
     assert!(measured_zmp(&[loaded], f64::NAN, 10.0).is_err());
     assert!(measured_zmp(&[loaded], 0.0, 0.0).is_err());
 }

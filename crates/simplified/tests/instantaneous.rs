@@ -64,13 +64,20 @@ fn plan_is_consistent_with_the_lipm() {
 fn perfect_measurements_reproduce_the_plan_exactly() {
     let plan = Plan::default_walk();
     for ki in [0.0, 2.0] {
-        let mut block = SimplifiedController::new(&instantaneous(1.2, ki), Duration::from_millis(10)).unwrap();
+        let mut block =
+            SimplifiedController::new(&instantaneous(1.2, ki), Duration::from_millis(10)).unwrap();
         for k in 0..plan.len() {
             let input = input_from_plan(&plan, k, 0);
             let out = block.step(&input).unwrap();
             assert!((out.desired_zmp - plan.zmp[k]).norm() <= 1e-9, "zmp at {k}");
-            assert!((out.com_position - plan.com[k]).norm() <= 1e-9, "com at {k}");
-            assert!((out.com_velocity - plan.com_velocity[k]).norm() <= 1e-9, "com vel at {k}");
+            assert!(
+                (out.com_position - plan.com[k]).norm() <= 1e-9,
+                "com at {k}"
+            );
+            assert!(
+                (out.com_velocity - plan.com_velocity[k]).norm() <= 1e-9,
+                "com vel at {k}"
+            );
             let acc = (plan.com[k] - plan.zmp[k]) * OMEGA * OMEGA;
             assert!((out.com_acceleration - acc).norm() <= 1e-7);
             assert!(!out.diagnostics.projection_active);
@@ -83,7 +90,8 @@ fn closed_loop_lipm_follows_the_plan_exactly() {
     // The robot is an exact LIPM whose ZMP is the desired ZMP; measured = true state.
     let plan = Plan::default_walk();
     let d = LipmDiscretization::new(plan.omega, plan.period).unwrap();
-    let mut block = SimplifiedController::new(&instantaneous(1.2, 1.0), Duration::from_millis(10)).unwrap();
+    let mut block =
+        SimplifiedController::new(&instantaneous(1.2, 1.0), Duration::from_millis(10)).unwrap();
     let (mut x, mut v) = (plan.com[0], plan.com_velocity[0]);
     let mut worst: f64 = 0.0;
     for k in 0..plan.len() {
@@ -135,9 +143,15 @@ fn proportional_error_decays_at_the_predicted_rate() {
         let continuous = -OMEGA * (kp - 1.0);
         // Exact for the ZOH loop: e⁺ = (F + G kp) e.
         let discrete = ((OMEGA * dt).exp() + (1.0 - (OMEGA * dt).exp()) * kp).ln() / dt;
-        assert!((fitted - discrete).abs() <= 1e-9 * discrete.abs(), "kp {kp}: {fitted} vs {discrete}");
+        assert!(
+            (fitted - discrete).abs() <= 1e-9 * discrete.abs(),
+            "kp {kp}: {fitted} vs {discrete}"
+        );
         // The ZOH rate approaches the continuous one: relative difference kp ω dt / 2 to first order.
-        assert!((fitted - continuous).abs() <= kp * OMEGA * dt * continuous.abs(), "kp {kp}");
+        assert!(
+            (fitted - continuous).abs() <= kp * OMEGA * dt * continuous.abs(),
+            "kp {kp}"
+        );
         assert!(errors.iter().all(|e| *e > 0.0));
     }
 }
@@ -150,13 +164,29 @@ fn proportional_gain_at_or_below_one_diverges() {
     for kp in [0.9, 1.0] {
         let mut dcm = Vector2::new(0.01, 0.0);
         for _ in 0..2000 {
-            let z = dcm_instantaneous_law(Vector2::zeros(), Vector2::zeros(), dcm, Vector2::zeros(), kp, 0.0, OMEGA);
+            let z = dcm_instantaneous_law(
+                Vector2::zeros(),
+                Vector2::zeros(),
+                dcm,
+                Vector2::zeros(),
+                kp,
+                0.0,
+                OMEGA,
+            );
             dcm = d.step_dcm(dcm, z);
         }
         let expected = 0.01 * (OMEGA * (1.0 - kp) * 2.0).exp();
-        assert!(dcm.x >= 0.01 * 0.999 && (dcm.x - expected).abs() < 0.01 * expected, "kp {kp}: {}", dcm.x);
+        assert!(
+            dcm.x >= 0.01 * 0.999 && (dcm.x - expected).abs() < 0.01 * expected,
+            "kp {kp}: {}",
+            dcm.x
+        );
     }
-    assert!(DcmInstantaneousController::new(DcmInstantaneousConfig { kp: 1.0, ..Default::default() }).is_err());
+    assert!(DcmInstantaneousController::new(DcmInstantaneousConfig {
+        kp: 1.0,
+        ..Default::default()
+    })
+    .is_err());
 }
 
 #[test]
@@ -180,7 +210,11 @@ fn integral_removes_a_constant_zmp_bias() {
     // P only: steady error −bias/(kp − 1) (from ė = ω(1 − kp)e − ω bias).
     let p_only = simulate_error(kp, 0.0, dt, 0.0, 10.0, bias);
     let steady = -bias / (kp - 1.0);
-    assert!((p_only.last().unwrap() - steady).abs() < 1e-3 * bias, "{}", p_only.last().unwrap());
+    assert!(
+        (p_only.last().unwrap() - steady).abs() < 1e-3 * bias,
+        "{}",
+        p_only.last().unwrap()
+    );
     // PI: the error goes to zero.
     let pi = simulate_error(kp, 1.0, dt, 0.0, 30.0, bias);
     assert!(pi.last().unwrap().abs() < 1e-6, "{}", pi.last().unwrap());
@@ -198,28 +232,54 @@ fn anti_windup_bounds_the_integral_term() {
     for _ in 0..1000 {
         // a persistent small error keeps the output inside the polygon: the clamp is what bounds it
         let out = controller
-            .step(Vector2::zeros(), Vector2::zeros(), Vector2::new(0.001, -0.001), OMEGA, &support, 0.01)
+            .step(
+                Vector2::zeros(),
+                Vector2::zeros(),
+                Vector2::new(0.001, -0.001),
+                OMEGA,
+                &support,
+                0.01,
+            )
             .unwrap();
         assert!(out.integral_term.x <= 0.02 + 1e-15 && out.integral_term.y >= -0.02 - 1e-15);
     }
     let out = controller
-        .step(Vector2::zeros(), Vector2::zeros(), Vector2::new(0.001, -0.001), OMEGA, &support, 0.01)
+        .step(
+            Vector2::zeros(),
+            Vector2::zeros(),
+            Vector2::new(0.001, -0.001),
+            OMEGA,
+            &support,
+            0.01,
+        )
         .unwrap();
     assert!((out.integral_term.x - 0.02).abs() < 1e-12);
     // A large error saturates the projection: the integral is frozen.
     let before = controller.error_integral();
     let out = controller
-        .step(Vector2::zeros(), Vector2::zeros(), Vector2::new(-0.5, 0.0), OMEGA, &support, 0.01)
+        .step(
+            Vector2::zeros(),
+            Vector2::zeros(),
+            Vector2::new(-0.5, 0.0),
+            OMEGA,
+            &support,
+            0.01,
+        )
         .unwrap();
     assert!(out.projection_active);
     assert_eq!(controller.error_integral(), before);
 }
 
 fn arbitrary_polygon() -> impl Strategy<Value = SupportPolygon> {
-    prop::collection::vec((-0.3f64..0.3, -0.3f64..0.3), 3..12).prop_filter_map("degenerate", |pts| {
-        let pts: Vec<Vector2<f64>> = pts.into_iter().map(|(x, y)| Vector2::new(x, y)).collect();
-        SupportPolygon::convex_hull(&pts).ok().filter(|p| p.area() > 1e-4)
-    })
+    prop::collection::vec((-0.3f64..0.3, -0.3f64..0.3), 3..12).prop_filter_map(
+        "degenerate",
+        |pts| {
+            let pts: Vec<Vector2<f64>> = pts.into_iter().map(|(x, y)| Vector2::new(x, y)).collect();
+            SupportPolygon::convex_hull(&pts)
+                .ok()
+                .filter(|p| p.area() > 1e-4)
+        },
+    )
 }
 
 proptest! {

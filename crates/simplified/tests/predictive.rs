@@ -6,7 +6,9 @@ mod common;
 use std::time::Duration;
 
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus};
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
+};
 use common::{Plan, OMEGA};
 use nalgebra::{DMatrix, DVector, Vector2};
 use stride_block::Block;
@@ -66,8 +68,14 @@ fn closed_loop_lipm_follows_the_plan_exactly() {
         worst = worst.max((out.desired_zmp - plan.zmp[k]).norm());
         worst = worst.max((out.com_position - plan.com[k]).norm());
         worst = worst.max((out.com_velocity - plan.com_velocity[k]).norm());
-        assert!(matches!(out.diagnostics.mpc.status, MpcStatus::Unconstrained | MpcStatus::Solved));
-        assert_eq!(out.diagnostics.mpc.held_samples, (k + samples).saturating_sub(plan.len()));
+        assert!(matches!(
+            out.diagnostics.mpc.status,
+            MpcStatus::Unconstrained | MpcStatus::Solved
+        ));
+        assert_eq!(
+            out.diagnostics.mpc.held_samples,
+            (k + samples).saturating_sub(plan.len())
+        );
         (x, v) = d.step_com(x, v, out.desired_zmp);
     }
     assert!(worst <= 1e-9, "worst deviation {worst}");
@@ -113,7 +121,11 @@ fn dense_problem(view: &MpcProblemView) -> Dense {
         let r = DVector::from_iterator(n, (1..=n).map(|k| view.reference_dcm[k][axis]));
         let mut rate_target = DVector::zeros(n);
         for k in 0..n {
-            let zhat_prev = if k == 0 { view.previous_planned_zmp[axis] } else { view.reference_zmp[k - 1][axis] };
+            let zhat_prev = if k == 0 {
+                view.previous_planned_zmp[axis]
+            } else {
+                view.reference_zmp[k - 1][axis]
+            };
             let planned_rate = match view.config.zmp_rate_reference {
                 ZmpRateReference::Plan => view.reference_zmp[k][axis] - zhat_prev,
                 ZmpRateReference::Zero => 0.0,
@@ -142,7 +154,16 @@ fn dense_problem(view: &MpcProblemView) -> Dense {
 
 fn solution_vector(view: &MpcProblemView) -> DVector<f64> {
     let n = view.zmp.len();
-    DVector::from_iterator(2 * n, (0..2 * n).map(|i| if i < n { view.zmp[i].x } else { view.zmp[i - n].y }))
+    DVector::from_iterator(
+        2 * n,
+        (0..2 * n).map(|i| {
+            if i < n {
+                view.zmp[i].x
+            } else {
+                view.zmp[i - n].y
+            }
+        }),
+    )
 }
 
 fn multipliers_in_dense_order(view: &MpcProblemView) -> DVector<f64> {
@@ -164,29 +185,62 @@ fn check_kkt(view: &MpcProblemView, dense: &Dense, label: &str) {
     let lambda = multipliers_in_dense_order(view);
     // primal feasibility
     let slack = &dense.b - &dense.a * &w;
-    assert!(slack.min() >= -1e-6, "constraint violation {}", -slack.min());
+    assert!(
+        slack.min() >= -1e-6,
+        "constraint violation {}",
+        -slack.min()
+    );
     // dual feasibility
-    assert!(lambda.min() >= -1e-9 * lambda.amax().max(1.0), "negative multiplier {}", lambda.min());
+    assert!(
+        lambda.min() >= -1e-9 * lambda.amax().max(1.0),
+        "negative multiplier {}",
+        lambda.min()
+    );
     // stationarity, relative to the size of the terms
     let hw = &dense.h * &w;
     let at_l = dense.a.transpose() * &lambda;
     let stationarity = &hw + &dense.g + &at_l;
     let scale = hw.amax().max(dense.g.amax()).max(at_l.amax()).max(1.0);
-    assert!(stationarity.amax() <= 1e-6 * scale, "stationarity {} (scale {scale})", stationarity.amax());
+    assert!(
+        stationarity.amax() <= 1e-6 * scale,
+        "stationarity {} (scale {scale})",
+        stationarity.amax()
+    );
     // complementarity: every row is active (slack ≤ 1e-6 m) or has a vanishing multiplier
     // (≤ 1e-6 of the largest), and no product exceeds the largest multiplier × 1 nm.
     let lambda_max = lambda.amax().max(1e-300);
     for i in 0..lambda.len() {
-        assert!(slack[i] <= 1e-6 || lambda[i] <= 1e-6 * lambda_max, "{label}: row {i}: slack {} multiplier {} (max {lambda_max})", slack[i], lambda[i]);
+        assert!(
+            slack[i] <= 1e-6 || lambda[i] <= 1e-6 * lambda_max,
+            "{label}: row {i}: slack {} multiplier {} (max {lambda_max})",
+            slack[i],
+            lambda[i]
+        );
     }
     let comp = slack.component_mul(&lambda).amax();
-    assert!(comp <= lambda_max * 1e-9, "complementarity {comp} (max multiplier {lambda_max})");
+    assert!(
+        comp <= lambda_max * 1e-9,
+        "complementarity {comp} (max multiplier {lambda_max})"
+    );
 }
 
 fn solve_dense_with_clarabel(dense: &Dense) -> DVector<f64> {
     let n = 2 * dense.n;
-    let p = CscMatrix::from(&dense.h.upper_triangle().row_iter().map(|r| r.iter().copied().collect::<Vec<_>>()).collect::<Vec<_>>());
-    let a = CscMatrix::from(&dense.a.row_iter().map(|r| r.iter().copied().collect::<Vec<_>>()).collect::<Vec<_>>());
+    let p = CscMatrix::from(
+        &dense
+            .h
+            .upper_triangle()
+            .row_iter()
+            .map(|r| r.iter().copied().collect::<Vec<_>>())
+            .collect::<Vec<_>>(),
+    );
+    let a = CscMatrix::from(
+        &dense
+            .a
+            .row_iter()
+            .map(|r| r.iter().copied().collect::<Vec<_>>())
+            .collect::<Vec<_>>(),
+    );
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
         .tol_gap_abs(1e-12)
@@ -197,16 +251,28 @@ fn solve_dense_with_clarabel(dense: &Dense) -> DVector<f64> {
         .unwrap();
     let q: Vec<f64> = dense.g.iter().copied().collect();
     let b: Vec<f64> = dense.b.iter().copied().collect();
-    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &[NonnegativeConeT(dense.b.len())], settings).unwrap();
+    let mut solver =
+        DefaultSolver::new(&p, &q, &a, &b, &[NonnegativeConeT(dense.b.len())], settings).unwrap();
     solver.solve();
-    assert!(matches!(solver.solution.status, SolverStatus::Solved | SolverStatus::AlmostSolved), "{:?}", solver.solution.status);
+    assert!(
+        matches!(
+            solver.solution.status,
+            SolverStatus::Solved | SolverStatus::AlmostSolved
+        ),
+        "{:?}",
+        solver.solution.status
+    );
     assert_eq!(solver.solution.x.len(), n);
     DVector::from_vec(solver.solution.x.clone())
 }
 
 /// A standing-on-one-foot plan with a pushed DCM: the MPC must put the ZMP on the foot's edge.
 /// With `transfer = false` the plan stays on the foot for the whole horizon.
-fn pushed_problem(controller: &mut DcmPredictiveController, push: Vector2<f64>, transfer: bool) -> DcmPredictiveOutput {
+fn pushed_problem(
+    controller: &mut DcmPredictiveController,
+    push: Vector2<f64>,
+    transfer: bool,
+) -> DcmPredictiveOutput {
     let foot = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap();
     let both = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.19).unwrap();
     let mut horizon = DcmHorizon::with_capacity(controller.horizon_samples());
@@ -219,9 +285,17 @@ fn pushed_problem(controller: &mut DcmPredictiveController, push: Vector2<f64>, 
             let s = ((k - 30) as f64 / 20.0).min(1.0);
             (both, center + Vector2::new(0.0, 0.08 * s))
         };
-        horizon.push(HorizonSample { dcm_position: zmp, zmp, support }).unwrap();
+        horizon
+            .push(HorizonSample {
+                dcm_position: zmp,
+                zmp,
+                support,
+            })
+            .unwrap();
     }
-    controller.step(OMEGA, center + push, &horizon, &foot).unwrap()
+    controller
+        .step(OMEGA, center + push, &horizon, &foot)
+        .unwrap()
 }
 
 #[test]
@@ -233,10 +307,19 @@ fn solutions_satisfy_constraints_and_kkt_and_agree_with_clarabel() {
         (2.0, Vector2::new(0.055, 0.0), ZmpRateReference::Plan),
     ] {
         for solver in [MpcSolverKind::BandedInteriorPoint, MpcSolverKind::Clarabel] {
-            let config = DcmPredictiveConfig { horizon, zmp_rate_reference: rate, solver, ..Default::default() };
+            let config = DcmPredictiveConfig {
+                horizon,
+                zmp_rate_reference: rate,
+                solver,
+                ..Default::default()
+            };
             let mut controller = DcmPredictiveController::new(config, 0.01).unwrap();
             let out = pushed_problem(&mut controller, push, true);
-            assert_eq!(out.diagnostics.status, MpcStatus::Solved, "{horizon} {push:?} {solver:?}");
+            assert_eq!(
+                out.diagnostics.status,
+                MpcStatus::Solved,
+                "{horizon} {push:?} {solver:?}"
+            );
             assert!(out.diagnostics.active_constraints > 0);
             let view = controller.last_problem().unwrap();
             let dense = dense_problem(&view);
@@ -252,7 +335,10 @@ fn solutions_satisfy_constraints_and_kkt_and_agree_with_clarabel() {
             let w = solution_vector(&view);
             let reference = solve_dense_with_clarabel(&dense);
             let difference = (&w - &reference).amax();
-            assert!(difference <= 1e-6, "{horizon} {push:?} {solver:?}: differs from dense clarabel by {difference}");
+            assert!(
+                difference <= 1e-6,
+                "{horizon} {push:?} {solver:?}: differs from dense clarabel by {difference}"
+            );
             // the predicted DCM follows the prediction model from the measured DCM
             let d = LipmDiscretization::new(view.omega, view.period).unwrap();
             for k in 0..view.zmp.len() {
@@ -268,7 +354,11 @@ fn solutions_satisfy_constraints_and_kkt_and_agree_with_clarabel() {
 fn unconstrained_solution_matches_the_closed_form() {
     // A small push: no constraint is active, the optimum is −H⁻¹g of the dense condensed problem.
     for rate in [ZmpRateReference::Plan, ZmpRateReference::Zero] {
-        let config = DcmPredictiveConfig { horizon: 0.5, zmp_rate_reference: rate, ..Default::default() };
+        let config = DcmPredictiveConfig {
+            horizon: 0.5,
+            zmp_rate_reference: rate,
+            ..Default::default()
+        };
         let mut controller = DcmPredictiveController::new(config, 0.01).unwrap();
         let out = pushed_problem(&mut controller, Vector2::new(0.004, -0.003), false);
         assert_eq!(out.diagnostics.status, MpcStatus::Unconstrained);
@@ -276,7 +366,11 @@ fn unconstrained_solution_matches_the_closed_form() {
         let dense = dense_problem(&view);
         let closed_form = -dense.h.clone().cholesky().unwrap().solve(&dense.g);
         let w = solution_vector(&view);
-        assert!((&w - &closed_form).amax() <= 1e-8, "{}", (&w - &closed_form).amax());
+        assert!(
+            (&w - &closed_form).amax() <= 1e-8,
+            "{}",
+            (&w - &closed_form).amax()
+        );
         check_kkt(&view, &dense, "unconstrained");
     }
 }
@@ -285,17 +379,36 @@ fn unconstrained_solution_matches_the_closed_form() {
 fn plan_is_a_fixed_point_and_constant_reference_gives_constant_zmp() {
     // 17.4 #24: a constant DCM reference inside the support yields x_ZMP ≡ ξ_ref.
     let foot = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap();
-    let mut controller = DcmPredictiveController::new(DcmPredictiveConfig::default(), 0.01).unwrap();
+    let mut controller =
+        DcmPredictiveController::new(DcmPredictiveConfig::default(), 0.01).unwrap();
     let mut horizon = DcmHorizon::with_capacity(controller.horizon_samples());
     let reference = Vector2::new(0.02, -0.01);
     for _ in 0..controller.horizon_samples() {
-        horizon.push(HorizonSample { dcm_position: reference, zmp: reference, support: foot }).unwrap();
+        horizon
+            .push(HorizonSample {
+                dcm_position: reference,
+                zmp: reference,
+                support: foot,
+            })
+            .unwrap();
     }
     for config_rate in [ZmpRateReference::Plan, ZmpRateReference::Zero] {
-        let mut c = DcmPredictiveController::new(DcmPredictiveConfig { zmp_rate_reference: config_rate, ..Default::default() }, 0.01).unwrap();
+        let mut c = DcmPredictiveController::new(
+            DcmPredictiveConfig {
+                zmp_rate_reference: config_rate,
+                ..Default::default()
+            },
+            0.01,
+        )
+        .unwrap();
         let out = c.step(OMEGA, reference, &horizon, &foot).unwrap();
         assert!((out.desired_zmp - reference).norm() < 1e-12);
-        assert!(c.last_problem().unwrap().zmp.iter().all(|z| (z - reference).norm() < 1e-10));
+        assert!(c
+            .last_problem()
+            .unwrap()
+            .zmp
+            .iter()
+            .all(|z| (z - reference).norm() < 1e-10));
     }
     let out = controller.step(OMEGA, reference, &horizon, &foot).unwrap();
     assert_eq!(out.diagnostics.status, MpcStatus::Unconstrained);

@@ -11,19 +11,26 @@ const PERIOD: f64 = 0.01;
 
 enum Controller {
     Instantaneous(DcmInstantaneousController),
-    Predictive(DcmPredictiveController, DcmHorizon),
+    Predictive(Box<(DcmPredictiveController, DcmHorizon)>),
 }
 
 fn make(kind: usize) -> Controller {
     match kind {
-        0 => Controller::Instantaneous(DcmInstantaneousController::new(DcmInstantaneousConfig::default()).unwrap()),
+        0 => Controller::Instantaneous(
+            DcmInstantaneousController::new(DcmInstantaneousConfig::default()).unwrap(),
+        ),
         1 => Controller::Instantaneous(
-            DcmInstantaneousController::new(DcmInstantaneousConfig { kp: 2.0, ki: 1.0, integral_limit: 0.03 }).unwrap(),
+            DcmInstantaneousController::new(DcmInstantaneousConfig {
+                kp: 2.0,
+                ki: 1.0,
+                integral_limit: 0.03,
+            })
+            .unwrap(),
         ),
         _ => {
             let c = DcmPredictiveController::new(DcmPredictiveConfig::default(), PERIOD).unwrap();
             let h = DcmHorizon::with_capacity(c.horizon_samples());
-            Controller::Predictive(c, h)
+            Controller::Predictive(Box::new((c, h)))
         }
     }
 }
@@ -44,14 +51,30 @@ fn recovers(kind: usize, direction: Vector2<f64>, offset: f64) -> bool {
         }
         let zmp = match &mut controller {
             Controller::Instantaneous(c) => {
-                c.step(reference, Vector2::zeros(), dcm, OMEGA, &foot, PERIOD).unwrap().desired_zmp
+                c.step(reference, Vector2::zeros(), dcm, OMEGA, &foot, PERIOD)
+                    .unwrap()
+                    .desired_zmp
             }
-            Controller::Predictive(c, h) => {
+            Controller::Predictive(boxed) => {
+                let (c, h) = &mut **boxed;
                 h.clear();
                 for _ in 0..c.horizon_samples() {
-                    h.push(HorizonSample { dcm_position: reference, zmp: reference, support: foot }).unwrap();
+                    h.push(HorizonSample {
+                        dcm_position: reference,
+                        zmp: reference,
+                        support: foot,
+                    })
+                    .unwrap();
                 }
-                c.step(OMEGA, dcm, h, &foot).unwrap().desired_zmp
+                let out = c.step(OMEGA, dcm, h, &foot).unwrap();
+                // The QP only fails (fallback law) once the DCM has left the foot (no capture possible).
+                if foot.contains(dcm, 0.0) {
+                    assert!(
+                        !out.diagnostics.fallback,
+                        "fallback with the DCM inside the foot: {dcm:?}"
+                    );
+                }
+                out.desired_zmp
             }
         };
         assert!(foot.contains(zmp, 1e-9));
@@ -77,9 +100,17 @@ fn largest_recoverable(kind: usize, direction: Vector2<f64>) -> f64 {
 
 #[test]
 fn largest_recoverable_push_reaches_the_capture_bound() {
-    let names = ["instantaneous kp=1.2", "instantaneous kp=2 ki=1", "predictive (2 s)"];
+    let names = [
+        "instantaneous kp=1.2",
+        "instantaneous kp=2 ki=1",
+        "predictive (2 s)",
+    ];
     // (direction, distance from the reference DCM to the foot edge)
-    let cases = [(Vector2::new(1.0, 0.0), 0.06), (Vector2::new(-1.0, 0.0), 0.06), (Vector2::new(0.0, 1.0), 0.03)];
+    let cases = [
+        (Vector2::new(1.0, 0.0), 0.06),
+        (Vector2::new(-1.0, 0.0), 0.06),
+        (Vector2::new(0.0, 1.0), 0.03),
+    ];
     for (kind, name) in names.iter().enumerate() {
         for (direction, bound) in cases {
             let largest = largest_recoverable(kind, direction);

@@ -21,9 +21,19 @@ fn natural_frequency_and_closed_form_dcm() {
     assert!((xi_closed - 0.157201).abs() < 1e-6);
     assert!((xi_exp - 0.157201).abs() < 1e-6);
     let d = LipmDiscretization::new(omega, t).unwrap();
-    let (xd, vd) = d.step_com(Vector2::new(x0, 0.0), Vector2::new(v0, 0.0), Vector2::zeros());
+    let (xd, vd) = d.step_com(
+        Vector2::new(x0, 0.0),
+        Vector2::new(v0, 0.0),
+        Vector2::zeros(),
+    );
     assert!((xd.x - x).abs() < 1e-14 && (vd.x - v).abs() < 1e-14);
-    assert!((d.step_dcm(Vector2::new(x0 + v0 / omega, 0.0), Vector2::zeros()).x - xi_exp).abs() < 1e-14);
+    assert!(
+        (d.step_dcm(Vector2::new(x0 + v0 / omega, 0.0), Vector2::zeros())
+            .x
+            - xi_exp)
+            .abs()
+            < 1e-14
+    );
 }
 
 #[test]
@@ -49,10 +59,18 @@ fn discretization_matches_the_matrix_exponential_for_any_dt() {
     for dt in [0.0, 1e-4, 0.002, 0.01, 0.1, 1.0, -0.05] {
         let d = LipmDiscretization::new(omega, dt).unwrap();
         let expected = (a * dt).exp();
-        assert!((d.state_matrix() - expected).amax() <= 1e-10 * expected.amax(), "dt {dt}");
+        assert!(
+            (d.state_matrix() - expected).amax() <= 1e-10 * expected.amax(),
+            "dt {dt}"
+        );
         // B = ∫₀^dt e^{Aτ} dτ [0; −ω²] = (e^{A dt} − I) A⁻¹ [0; −ω²]
-        let b = (expected - Matrix2::identity()) * a.try_inverse().unwrap() * Vector2::new(0.0, -omega * omega);
-        assert!((d.input_vector() - b).amax() <= 1e-10 * (1.0 + b.amax()), "dt {dt}");
+        let b = (expected - Matrix2::identity())
+            * a.try_inverse().unwrap()
+            * Vector2::new(0.0, -omega * omega);
+        assert!(
+            (d.input_vector() - b).amax() <= 1e-10 * (1.0 + b.amax()),
+            "dt {dt}"
+        );
         // DCM transition from the CoM one: ξ = x + ẋ/ω
         assert!((d.dcm_transition() - (omega * dt).exp()).abs() < 1e-12);
         assert!((d.dcm_transition() + d.dcm_input() - 1.0).abs() < 1e-15);
@@ -63,7 +81,10 @@ fn discretization_matches_the_matrix_exponential_for_any_dt() {
     let p = Vector2::new(0.01, 0.02);
     let (x, v) = f.step_com(Vector2::new(0.1, 0.0), Vector2::new(0.2, 0.1), p);
     let (x0, v0) = bwd.step_com(x, v, p);
-    assert!((x0 - Vector2::new(0.1, 0.0)).norm() < 1e-14 && (v0 - Vector2::new(0.2, 0.1)).norm() < 1e-13);
+    assert!(
+        (x0 - Vector2::new(0.1, 0.0)).norm() < 1e-14
+            && (v0 - Vector2::new(0.2, 0.1)).norm() < 1e-13
+    );
     assert!(LipmDiscretization::new(omega, f64::NAN).is_err());
     assert!(LipmDiscretization::new(0.0, 0.01).is_err());
 }
@@ -72,20 +93,35 @@ fn discretization_matches_the_matrix_exponential_for_any_dt() {
 fn measured_zmp_matches_the_single_foot_formula_and_the_cop() {
     // 17.2 #14: vertical force f at surface point (a, b, 0) → μ = (b f, −a f, 0) about the origin → ZMP (a, b).
     let (a, b, f) = (0.03, -0.01, 250.0);
-    let w = FootWrench { wrench: Vector6::new(0.0, 0.0, f, b * f, -a * f, 0.0), point: Vector3::zeros() };
+    let w = FootWrench {
+        wrench: Vector6::new(0.0, 0.0, f, b * f, -a * f, 0.0),
+        point: Vector3::zeros(),
+    };
     let z = measured_zmp(&[w], 0.0, 1.0).unwrap();
     assert!((z - Vector2::new(a, b)).norm() < 1e-15);
     // Two feet each with pure vertical point forces: the ZMP is the force-weighted mean of the points
     // (centre of pressure), wherever the torques are expressed.
-    let points = [Vector3::new(0.1, 0.08, 0.02), Vector3::new(-0.05, -0.08, 0.02)];
-    let forces = [Vector3::new(3.0, -2.0, 180.0), Vector3::new(-1.0, 4.0, 120.0)];
+    let points = [
+        Vector3::new(0.1, 0.08, 0.02),
+        Vector3::new(-0.05, -0.08, 0.02),
+    ];
+    let forces = [
+        Vector3::new(3.0, -2.0, 180.0),
+        Vector3::new(-1.0, 4.0, 120.0),
+    ];
     let ground = 0.02;
-    let sensor = [Vector3::new(0.12, 0.1, 0.1), Vector3::new(-0.02, -0.07, 0.09)];
+    let sensor = [
+        Vector3::new(0.12, 0.1, 0.1),
+        Vector3::new(-0.02, -0.07, 0.09),
+    ];
     let feet: Vec<FootWrench> = (0..2)
         .map(|i| {
             // torque about the sensor point of a force applied at points[i]
             let tau = (points[i] - sensor[i]).cross(&forces[i]);
-            FootWrench { wrench: Vector6::new(forces[i].x, forces[i].y, forces[i].z, tau.x, tau.y, tau.z), point: sensor[i] }
+            FootWrench {
+                wrench: Vector6::new(forces[i].x, forces[i].y, forces[i].z, tau.x, tau.y, tau.z),
+                point: sensor[i],
+            }
         })
         .collect();
     let z = measured_zmp(&feet, ground, 1.0).unwrap();
@@ -95,23 +131,37 @@ fn measured_zmp_matches_the_single_foot_formula_and_the_cop() {
     for i in 0..2 {
         torque += (points[i] - zmp3).cross(&forces[i]);
     }
-    assert!(torque.x.abs() < 1e-12 && torque.y.abs() < 1e-12, "{torque:?}");
+    assert!(
+        torque.x.abs() < 1e-12 && torque.y.abs() < 1e-12,
+        "{torque:?}"
+    );
     // with only vertical forces it is the centre of pressure
     let vertical: Vec<FootWrench> = (0..2)
         .map(|i| {
             let fz = Vector3::new(0.0, 0.0, forces[i].z);
             let tau = (points[i] - sensor[i]).cross(&fz);
-            FootWrench { wrench: Vector6::new(0.0, 0.0, fz.z, tau.x, tau.y, tau.z), point: sensor[i] }
+            FootWrench {
+                wrench: Vector6::new(0.0, 0.0, fz.z, tau.x, tau.y, tau.z),
+                point: sensor[i],
+            }
         })
         .collect();
     let z = measured_zmp(&vertical, ground, 1.0).unwrap();
-    let cop = (points[0].xy() * forces[0].z + points[1].xy() * forces[1].z) / (forces[0].z + forces[1].z);
+    let cop =
+        (points[0].xy() * forces[0].z + points[1].xy() * forces[1].z) / (forces[0].z + forces[1].z);
     assert!((z - cop).norm() < 1e-14);
 }
 
 #[test]
 fn feet_hull_of_two_rectangles() {
-    let foot = |x: f64, y: f64, yaw: f64| FootRectangle { position: Vector2::new(x, y), yaw, x_min: -0.05, x_max: 0.07, y_min: -0.03, y_max: 0.03 };
+    let foot = |x: f64, y: f64, yaw: f64| FootRectangle {
+        position: Vector2::new(x, y),
+        yaw,
+        x_min: -0.05,
+        x_max: 0.07,
+        y_min: -0.03,
+        y_max: 0.03,
+    };
     let hull = feet_support_polygon(&[foot(0.0, 0.08, 0.0), foot(0.0, -0.08, 0.0)]).unwrap();
     assert_eq!(hull.len(), 4);
     assert!((hull.area() - 0.12 * 0.22).abs() < 1e-14);
@@ -131,7 +181,8 @@ fn feet_hull_of_two_rectangles() {
 }
 
 fn arbitrary_points() -> impl Strategy<Value = Vec<Vector2<f64>>> {
-    prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 3..20).prop_map(|v| v.into_iter().map(|(x, y)| Vector2::new(x, y)).collect())
+    prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 3..20)
+        .prop_map(|v| v.into_iter().map(|(x, y)| Vector2::new(x, y)).collect())
 }
 
 proptest! {

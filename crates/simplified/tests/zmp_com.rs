@@ -12,7 +12,15 @@ use stride_simplified::*;
 /// evaluated with the controller itself. Reference: standing at the origin.
 fn simulate_law(gains: ZmpComGains, e0: f64, dt: f64, seconds: f64) -> Vec<f64> {
     let law = |zmp: f64, x: f64| {
-        zmp_com_law(&gains, Vector2::zeros(), Vector2::zeros(), Vector2::new(zmp, 0.0), Vector2::zeros(), Vector2::new(x, 0.0)).x
+        zmp_com_law(
+            &gains,
+            Vector2::zeros(),
+            Vector2::zeros(),
+            Vector2::new(zmp, 0.0),
+            Vector2::zeros(),
+            Vector2::new(x, 0.0),
+        )
+        .x
     };
     let mut x = -e0; // e = x_ref − x
     let mut v_prev = 0.0;
@@ -72,7 +80,10 @@ fn converges_with_the_predicted_dynamics() {
         }
         assert!(worst < 2e-3 * e0, "({k_com}, {k_zmp}): worst {worst}");
         let final_error = errors.last().unwrap().abs();
-        assert!(final_error < e0 * (slowest_root(gains) * 2.5).exp() * 3.0, "({k_com}, {k_zmp})");
+        assert!(
+            final_error < e0 * (slowest_root(gains) * 2.5).exp() * 3.0,
+            "({k_com}, {k_zmp})"
+        );
     }
 }
 
@@ -89,16 +100,28 @@ fn violating_the_gain_bound_diverges() {
         let errors = simulate_law(gains, e0, dt, seconds);
         let t = seconds - dt;
         let expected = analytic(gains, e0, t);
-        assert!(errors.last().unwrap().abs() > 1.5 * e0, "({k_com}, {k_zmp})");
-        assert!((errors.last().unwrap() - expected).abs() < 5e-3 * expected.abs(), "({k_com}, {k_zmp})");
+        assert!(
+            errors.last().unwrap().abs() > 1.5 * e0,
+            "({k_com}, {k_zmp})"
+        );
+        assert!(
+            (errors.last().unwrap() - expected).abs() < 5e-3 * expected.abs(),
+            "({k_com}, {k_zmp})"
+        );
     }
     // Just inside the bound converges.
-    let gains = ZmpComGains { k_zmp: 3.9, k_com: 4.0 };
+    let gains = ZmpComGains {
+        k_zmp: 3.9,
+        k_com: 4.0,
+    };
     gains.validate("test").unwrap();
     let errors = simulate_law(gains, e0, dt, 30.0);
     assert!(errors.last().unwrap().abs() < 0.1 * e0);
     // A negative K_ZMP makes the leading coefficient negative: divergent too.
-    let gains = ZmpComGains { k_zmp: -0.5, k_com: 5.0 };
+    let gains = ZmpComGains {
+        k_zmp: -0.5,
+        k_com: 5.0,
+    };
     assert!(gains.validate("test").is_err());
 }
 
@@ -129,7 +152,9 @@ fn gains_blend_smoothly_between_standing_and_walking() {
     let mut controller = ZmpComController::new(config).unwrap();
     let dt = 0.001;
     let z = Vector2::zeros();
-    let step = |c: &mut ZmpComController, walking: bool| c.step(walking, OMEGA, z, z, z, z, z, dt).unwrap();
+    let step = |c: &mut ZmpComController, walking: bool| {
+        c.step(walking, OMEGA, z, z, z, z, z, dt).unwrap()
+    };
     let first = step(&mut controller, false);
     assert_eq!(first.gains, config.standing);
     let mut previous = first.gains;
@@ -139,8 +164,14 @@ fn gains_blend_smoothly_between_standing_and_walking() {
         let out = step(&mut controller, true);
         let dz = (out.gains.k_zmp - previous.k_zmp).abs();
         let dc = (out.gains.k_com - previous.k_com).abs();
-        assert!(dz <= max_rate * dt * (config.walking.k_zmp - config.standing.k_zmp).abs() + 1e-12, "tick {i}");
-        assert!(dc <= max_rate * dt * (config.walking.k_com - config.standing.k_com).abs() + 1e-12, "tick {i}");
+        assert!(
+            dz <= max_rate * dt * (config.walking.k_zmp - config.standing.k_zmp).abs() + 1e-12,
+            "tick {i}"
+        );
+        assert!(
+            dc <= max_rate * dt * (config.walking.k_com - config.standing.k_com).abs() + 1e-12,
+            "tick {i}"
+        );
         assert!(out.gains.k_com > out.gains.k_zmp);
         previous = out.gains;
         if (i as f64) * dt >= config.transition_time {
@@ -161,14 +192,29 @@ fn gains_blend_smoothly_between_standing_and_walking() {
 
 #[test]
 fn position_reference_integrates_the_velocity_correction() {
-    let mut controller = ZmpComController::new(ZmpComConfig { transition_time: 0.0, ..Default::default() }).unwrap();
+    let mut controller = ZmpComController::new(ZmpComConfig {
+        transition_time: 0.0,
+        ..Default::default()
+    })
+    .unwrap();
     let dt = 0.01;
     let planned_v = Vector2::new(0.1, 0.0);
     let mut planned_x = Vector2::zeros();
     let measured = Vector2::new(-0.01, 0.005);
     let mut integral = Vector2::zeros();
     for _ in 0..50 {
-        let out = controller.step(true, OMEGA, Vector2::zeros(), Vector2::zeros(), planned_x, planned_v, measured, dt).unwrap();
+        let out = controller
+            .step(
+                true,
+                OMEGA,
+                Vector2::zeros(),
+                Vector2::zeros(),
+                planned_x,
+                planned_v,
+                measured,
+                dt,
+            )
+            .unwrap();
         assert!((out.com_position - (planned_x + integral)).norm() < 1e-14);
         integral += (out.com_velocity - planned_v) * dt;
         planned_x += planned_v * dt;

@@ -65,8 +65,21 @@ impl QpBridge {
             };
             specs.push(spec);
         }
-        let problem = QpProblem::new(layout.set.clone(), specs, settings.clone())?;
-        let tasks = (0..blocks.len()).map(TaskId).collect();
+        let mut problem = QpProblem::new(layout.set.clone(), specs, settings.clone())?;
+        let tasks: Vec<TaskId> = (0..blocks.len()).map(TaskId).collect();
+        // Prime the backends: their workspaces are sized at the first solve, so solve once here, with an
+        // inconsistent hard row `0 = 1` so that the relaxed (fallback) backend is sized too; then forget
+        // everything. After this no tick allocates, whichever path it takes.
+        if let Some(k) = blocks
+            .iter()
+            .position(|b| b.kind == RowKind::Equality && b.hard)
+        {
+            problem.task_mut(tasks[k]).b_mut()[0] = 1.0;
+            let _ = problem.solve();
+            problem.task_mut(tasks[k]).b_mut()[0] = 0.0;
+        }
+        let _ = problem.solve();
+        problem.reset_warm_start();
         Ok(QpBridge {
             problem,
             tasks,

@@ -360,10 +360,19 @@ pub fn check_swings(cfg: &PlannerConfig, plan: &Plan) {
                 let z = sw.evaluate(t).pose.translation.z;
                 assert!(z <= want + 1e-9, "swing above apex at {t}: {z}");
                 assert!(z >= zlow - 1e-9, "swing below ground at {t}: {z}");
-                // sampling the plan in flight gives the swing, out of contact
+                // sampling the plan in flight gives the swing, out of contact, never over the stance sole
                 if t > sw.lift_time && t < sw.land_time {
                     let s = sample(plan, t);
                     assert!(!s.foot(foot).in_contact);
+                    let stance = s.foot(foot.other());
+                    assert!(stance.in_contact);
+                    assert!(
+                        !rectangles_overlap(
+                            &corners(&s.foot(foot).pose, cfg),
+                            &corners(&stance.pose, cfg)
+                        ),
+                        "swing foot passes over the stance sole at {t}"
+                    );
                 }
             }
         }

@@ -45,7 +45,14 @@ impl Plan {
 
     /// Straight walk: `steps` steps of `step_length`, DS transfers of `ds` s, SS of `ss` s, standing
     /// 1 s at the start and `final_stand` s at the end. `feet_y` is half the feet distance.
-    pub fn walk(period: f64, steps: usize, step_length: f64, ss: f64, ds: f64, final_stand: f64) -> Plan {
+    pub fn walk(
+        period: f64,
+        steps: usize,
+        step_length: f64,
+        ss: f64,
+        ds: f64,
+        final_stand: f64,
+    ) -> Plan {
         let omega = OMEGA;
         let feet_y = 0.08;
         let mut left = foot(0.0, feet_y);

@@ -1,0 +1,158 @@
+//! Scenario files: include/overlay, error locations, rate checks, the shipped scenarios.
+mod common;
+
+use common::Scratch;
+use stride_runner::config::{ConfigError, ControlMode, Goal, Scenario};
+
+fn invalid(e: ConfigError) -> (String, usize, usize, String, String) {
+    match e {
+        ConfigError::Invalid { location, key, message } => {
+            let l = location.expect("a location");
+            (l.path.display().to_string(), l.line, l.column, key, message)
+        }
+        other => panic!("expected an Invalid error, got {other}"),
+    }
+}
+
+#[test]
+fn typo_in_included_file_names_that_file_line_column_and_key() {
+    let s = Scratch::new("typo");
+    s.write(
+        "robots/r.toml",
+        "[robot]\nleft_sole = \"l_sole\"\nright_sol = \"r_sole\"\n",
+    );
+    let top = s.write("scenario.toml", "include = [\"robots/r.toml\"]\n[scenario]\nname = \"x\"\n");
+    let err = Scenario::load(&top).unwrap_err();
+    let text = err.to_string();
+    let (path, line, column, key, message) = invalid(err);
+    assert!(path.ends_with("robots/r.toml"), "{path}");
+    assert_eq!((line, column), (3, 1), "{text}");
+    assert_eq!(key, "robot.right_sol");
+    assert!(message.contains("unknown field `right_sol`"), "{message}");
+    assert!(message.contains("right_sole"), "the allowed keys are listed: {message}");
+    assert!(text.contains("r.toml:3:1") && text.contains("robot.right_sol"), "{text}");
+}
+
+#[test]
+fn wrong_type_names_key_and_expected_type() {
+    let s = Scratch::new("type");
+    let top = s.write("scenario.toml", "[scenario]\nname = \"x\"\n\nduration = \"long\"\n");
+    let (path, line, column, key, message) = invalid(Scenario::load(&top).unwrap_err());
+    assert!(path.ends_with("scenario.toml"));
+    assert_eq!((line, column), (4, 12));
+    assert_eq!(key, "scenario.duration");
+    assert!(message.contains("expected") && message.contains("f64"), "{message}");
+}
+
+#[test]
+fn unknown_enum_value_lists_allowed_values() {
+    let s = Scratch::new("enum");
+    let top = s.write("scenario.toml", "[scenario]\ncontrol_mode = \"velocity\"\n");
+    let (_, line, _, key, message) = invalid(Scenario::load(&top).unwrap_err());
+    assert_eq!(line, 2);
+    assert_eq!(key, "scenario.control_mode");
+    assert!(message.contains("position") && message.contains("torque"), "{message}");
+}
+
+#[test]
+fn rates_must_divide_the_base_rate() {
+    let s = Scratch::new("rates");
+    let text = format!("{}\n[rates]\nbase_hz = 2000\nsim_hz = 2000\nwbc_hz = 300\n", common::robot_section());
+    let top = s.write("scenario.toml", &text);
+    let err = Scenario::load(&top).unwrap_err();
+    let (path, line, _, key, message) = invalid(err);
+    assert!(path.ends_with("scenario.toml"));
+    assert_eq!(key, "rates.wbc_hz");
+    let expected_line = text.lines().position(|l| l.starts_with("wbc_hz")).unwrap() + 1;
+    assert_eq!(line, expected_line);
+    assert!(message.contains("does not divide") && message.contains("500"), "{message}");
+
+    // A base rate whose period is not a whole number of nanoseconds.
+    let top = s.write("b.toml", "[rates]\nbase_hz = 3000\nsim_hz = 3000\nwbc_hz = 500\n");
+    let (_, _, _, key, message) = invalid(Scenario::load(&top).unwrap_err());
+    assert_eq!(key, "rates.base_hz");
+    assert!(message.contains("1 000 000 000"), "{message}");
+
+    // Exact divisors are accepted.
+    let top = s.write(
+        "c.toml",
+        &format!("{}\n[rates]\nbase_hz = 4000\nsim_hz = 4000\nwbc_hz = 1000\nsimplified_hz = 100\n", common::robot_section()),
+    );
+    Scenario::load(&top).unwrap();
+}
+
+#[test]
+fn include_overlay_deep_merges_and_later_wins() {
+    let s = Scratch::new("overlay");
+    s.write("layers/a.toml", "[rates]\nwbc_hz = 1000\nsimplified_hz = 50\n[scenario]\nduration = 10.0\n");
+    s.write("layers/b.toml", "[rates]\nsimplified_hz = 100\n");
+    let robot = common::robot_section();
+    s.write("robots/r.toml", &robot);
+    let top = s.write(
+        "scenario.toml",
+        "include = [\"robots/r.toml\", \"layers/a.toml\", \"layers/b.toml\"]\n[scenario]\nname = \"o\"\n\
+         control_mode = \"torque\"\n[rates]\nbase_hz = 4000\nsim_hz = 4000\n",
+    );
+    let sc = Scenario::load(&top).unwrap();
+    let c = &sc.config;
+    assert_eq!(c.rates.wbc_hz, 1000, "from a.toml, not overridden");
+    assert_eq!(c.rates.simplified_hz, 100, "b.toml overrides a.toml");
+    assert_eq!(c.rates.base_hz, 4000, "the scenario file overrides its includes");
+    assert_eq!(c.scenario.duration, 10.0, "sibling keys of merged tables survive");
+    assert_eq!(c.scenario.control_mode, ControlMode::Torque);
+    assert_eq!(c.robot.left_sole, "l_sole");
+    assert_eq!(sc.sources.files.len(), 4);
+    // The merged document stored in logs parses back to the same configuration.
+    let again = Scenario::from_texts(vec![(s.path("merged.toml"), sc.merged_toml())]).unwrap();
+    assert_eq!(again.config, sc.config);
+    // Locations point to the file that wrote the winning value.
+    let loc = sc.sources.value_location("rates.simplified_hz").unwrap();
+    assert!(loc.path.ends_with("layers/b.toml"));
+    assert_eq!(loc.line, 2);
+}
+
+#[test]
+fn include_cycles_are_rejected() {
+    let s = Scratch::new("cycle");
+    s.write("a.toml", "include = [\"b.toml\"]\n");
+    let b = s.write("b.toml", "include = [\"a.toml\"]\n");
+    assert!(matches!(Scenario::load(&b), Err(ConfigError::IncludeCycle { .. })));
+}
+
+#[test]
+fn urdf_path_is_relative_to_the_file_that_sets_it() {
+    let s = Scratch::new("urdf");
+    s.write("robots/r.toml", "[robot]\nurdf = \"../models/x.urdf\"\n");
+    let top = s.write("sub/scenario.toml", "include = [\"../robots/r.toml\"]\n");
+    let sc = Scenario::load(&top).unwrap();
+    assert!(sc.urdf_path.ends_with("robots/../models/x.urdf"), "{}", sc.urdf_path.display());
+}
+
+#[test]
+fn explicit_layer_period_contradicting_rates_is_rejected() {
+    let s = Scratch::new("period");
+    s.write("r.toml", &common::robot_section());
+    let top = s.write("s.toml", "include = [\"r.toml\"]\n[sim]\nrate_hz = 1000\n");
+    let (_, _, _, key, message) = invalid(Scenario::load(&top).unwrap_err());
+    assert_eq!(key, "sim.rate_hz");
+    assert!(message.contains("rates.sim_hz"), "{message}");
+}
+
+#[test]
+fn every_shipped_scenario_is_valid() {
+    let dir = common::root().join("configs");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let p = entry.unwrap().path();
+        if p.extension().is_some_and(|e| e == "toml") {
+            let sc = Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            assert!(sc.urdf_path.exists(), "{}", sc.urdf_path.display());
+            let torque = p.file_name().unwrap().to_string_lossy().contains("torque");
+            assert_eq!(sc.config.scenario.control_mode == ControlMode::Torque, torque, "{}", p.display());
+            n += 1;
+        }
+    }
+    assert!(n >= 6, "expected at least six scenarios, found {n}");
+    let default = Scenario::load(&dir.join("walk_straight.toml")).unwrap();
+    assert!(matches!(default.config.goal, Goal::Pose(ref p) if p.x == 2.0));
+}
