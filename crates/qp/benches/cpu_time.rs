@@ -11,6 +11,7 @@ use stride_qp::{
     ActiveSetSettings, ActiveSetSolver, Backend, ClarabelSettings, QpError, QpSettings, QpSolver,
     SolverOutput,
 };
+use stride_qp::{ClarabelSparseSolver, SparseQp};
 
 fn cpu_ns() -> u64 {
     std::fs::read_to_string("/proc/thread-self/schedstat")
@@ -96,6 +97,76 @@ fn run(label: &str, make: Make, backend: Backend, warm: bool, ticks: usize, seed
     );
 }
 
+/// DCM-MPC-like sparse QP: N steps of a 2D DCM `ξ_{k+1} = F ξ_k + G z_k` (states and ZMPs as variables,
+/// 4N variables), DCM tracking + ZMP-rate costs, dynamics equalities and ZMP boxes.
+fn mpc_like(steps: usize, shift: f64) -> SparseQp {
+    let n = 4 * steps;
+    let mut qp = SparseQp::new(n, 0);
+    let omega: f64 = (9.81f64 / 0.53).sqrt();
+    let dt = 0.01;
+    let f = (omega * dt).exp();
+    let xi = |k: usize, a: usize| 4 * k + a; // state index
+    let zmp = |k: usize, a: usize| 4 * k + 2 + a;
+    for k in 0..steps {
+        for a in 0..2 {
+            // DCM tracking 7500 ‖ξ − ξ_ref‖², ZMP rate 9e4 ‖z_k − z_{k−1}‖²
+            let reference = 0.05 * ((k as f64) * 0.02 + shift + a as f64).sin();
+            qp.hessian.push((xi(k, a), xi(k, a), 7500.0));
+            qp.gradient[xi(k, a)] = -7500.0 * reference;
+            qp.hessian.push((
+                zmp(k, a),
+                zmp(k, a),
+                if k + 1 < steps { 2.0 * 9e4 } else { 9e4 },
+            ));
+            if k + 1 < steps {
+                qp.hessian.push((zmp(k, a), zmp(k + 1, a), -9e4));
+            }
+            // dynamics ξ_{k+1} − F ξ_k − (1 − F) z_k = 0 (ξ_0 fixed by the first row)
+            let r = qp.lower.len();
+            if k == 0 {
+                qp.constraints.push((r, xi(0, a), 1.0));
+                qp.lower.push(0.01);
+                qp.upper.push(0.01);
+            } else {
+                qp.constraints.push((r, xi(k, a), 1.0));
+                qp.constraints.push((r, xi(k - 1, a), -f));
+                qp.constraints.push((r, zmp(k - 1, a), f - 1.0));
+                qp.lower.push(0.0);
+                qp.upper.push(0.0);
+            }
+            // ZMP box (foot: x ∈ [−0.02, 0.05], y ∈ [−0.045, 0.05])
+            let r = qp.lower.len();
+            qp.constraints.push((r, zmp(k, a), 1.0));
+            qp.lower.push(if a == 0 { -0.02 } else { -0.045 });
+            qp.upper.push(0.05);
+        }
+    }
+    qp
+}
+
+fn run_sparse(steps: usize) {
+    let mut solver = ClarabelSparseSolver::new(ClarabelSettings::default());
+    let mut qp = mpc_like(steps, 0.0);
+    let _ = solver.solve(&qp);
+    let reps = 10;
+    let c0 = cpu_ns();
+    let mut iters = 0;
+    let mut ok = 0;
+    for r in 0..reps {
+        qp = mpc_like(steps, 0.01 * r as f64);
+        if let Ok(sol) = solver.solve(&qp) {
+            iters += sol.iterations;
+            ok += sol.status.is_success() as usize;
+        }
+    }
+    let cpu = (cpu_ns() - c0) as f64 / reps as f64 / 1e3;
+    println!(
+        "{:<28} solve cpu {cpu:8.1} µs (incl. problem build)  iters {:5.1}  solved {ok}/{reps}",
+        format!("mpc_like_{}vars/clarabel_sparse", 4 * steps),
+        iters as f64 / reps as f64
+    );
+}
+
 fn main() {
     let ticks = 200;
     let seeds = 5;
@@ -127,5 +198,9 @@ fn main() {
             ticks / 10,
             seeds,
         );
+    }
+    if std::env::var("STRIDE_QP_BENCH").map_or(true, |f| f.contains("mpc")) {
+        run_sparse(100);
+        run_sparse(200);
     }
 }

@@ -349,7 +349,11 @@ impl ActiveSetSolver {
         self.free.clear();
         for jdx in 0..n {
             if self.is_active[nrow + jdx] {
-                let sign = self.active.iter().find(|a| a.slot == nrow + jdx).map_or(1.0, |a| a.sign);
+                let sign = self
+                    .active
+                    .iter()
+                    .find(|a| a.slot == nrow + jdx)
+                    .map_or(1.0, |a| a.sign);
                 self.x[jdx] = if sign > 0.0 { qp.lb[jdx] } else { qp.ub[jdx] };
             } else {
                 self.x[jdx] = 0.0;
@@ -388,7 +392,11 @@ impl ActiveSetSolver {
                 }
             }
         }
-        let l: &[f64] = if reduced { &self.hff[..nf * nf] } else { &self.chol[..n * n] };
+        let l: &[f64] = if reduced {
+            &self.hff[..nf * nf]
+        } else {
+            &self.chol[..n * n]
+        };
         // reduced gradient g_F + H_FB x_B (into y), then x0_F = -H_FF^{-1} (.) into tmp
         for (r, &jr) in self.free.iter().enumerate() {
             let mut s = qp.g[jr];
@@ -461,7 +469,11 @@ impl ActiveSetSolver {
         }
         // Rᵀ v = w (in place in rv), then u_rows = R^{-1} v (into z scratch)
         for k in 0..q {
-            let s: f64 = self.qr[k * nf..k * nf + k].iter().zip(&self.rv[..k]).map(|(a, b)| a * b).sum();
+            let s: f64 = self.qr[k * nf..k * nf + k]
+                .iter()
+                .zip(&self.rv[..k])
+                .map(|(a, b)| a * b)
+                .sum();
             self.rv[k] = (self.rv[k] - s) / self.rdiag[k];
         }
         for i in (0..q).rev() {
@@ -517,9 +529,13 @@ impl ActiveSetSolver {
             }
             self.u[k] = sign * s;
         }
-        let umax = self.u[..self.active.len()].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let umax = self.u[..self.active.len()]
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
         for k in 0..self.active.len() {
-            if self.active[k].slot >= self.me && (self.u[k] < -1e-10 * (1.0 + umax) || self.u[k].is_nan()) {
+            if self.active[k].slot >= self.me
+                && (self.u[k] < -1e-10 * (1.0 + umax) || self.u[k].is_nan())
+            {
                 return false;
             }
         }
@@ -1091,5 +1107,9 @@ impl QpSolver for ActiveSetSolver {
 
     fn reset(&mut self) {
         self.prev.clear();
+    }
+
+    fn reserve(&mut self, n: usize, n_eq: usize, n_ineq: usize) {
+        self.ensure_workspace(n, n_eq, n_ineq);
     }
 }

@@ -574,7 +574,8 @@ pub struct QpProblem {
 }
 
 impl QpProblem {
-    /// Builds the problem structure with the backend named in `settings`.
+    /// Builds the problem structure with the backend named in `settings`. All buffers, including the
+    /// active-set backend's workspace, are allocated here: even the first `solve` allocates nothing.
     pub fn new(
         vars: VariableSet,
         tasks: Vec<TaskSpec>,
@@ -621,6 +622,10 @@ impl QpProblem {
             .filter(|t| t.kind == TaskKind::Inequality)
             .map(|t| t.rows())
             .sum();
+        let mut solver = solver;
+        let mut relaxed_solver = relaxed_solver;
+        solver.reserve(n, cap_eq, cap_in);
+        relaxed_solver.reserve(n, 0, cap_in);
         let nominal = DenseQp::with_capacity(n, cap_eq, cap_in);
         let relaxed = DenseQp::with_capacity(n, 0, cap_in);
         let out = SolverOutput::new(&nominal);

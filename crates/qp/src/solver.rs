@@ -152,4 +152,11 @@ pub trait QpSolver: Send {
 
     /// Forgets any warm-start information.
     fn reset(&mut self) {}
+
+    /// Allocates workspace for problems with up to `n` variables, `n_eq` equality and `n_ineq` inequality
+    /// rows, so that even the first solve allocates nothing (where the backend can guarantee it). Default:
+    /// no-op.
+    fn reserve(&mut self, n: usize, n_eq: usize, n_ineq: usize) {
+        let _ = (n, n_eq, n_ineq);
+    }
 }

@@ -117,10 +117,17 @@ fn warm_start_stages_are_all_exercised_and_exact() {
     let mut p = RandomWbc::tsid_like(3, settings(Backend::ActiveSet)).unwrap();
     p.problem.solve().unwrap();
     let mut solver = ActiveSetSolver::new(ActiveSetSettings::default());
-    let mut cold = ActiveSetSolver::new(ActiveSetSettings { warm_start: false, ..ActiveSetSettings::default() });
+    let mut cold = ActiveSetSolver::new(ActiveSetSettings {
+        warm_start: false,
+        ..ActiveSetSettings::default()
+    });
     let mut seen = std::collections::HashSet::new();
     for k in 0..40 {
-        let t = if k % 4 == 0 { 0.7 * k as f64 } else { 0.7 * (k - k % 4) as f64 + 1e-3 * (k % 4) as f64 };
+        let t = if k % 4 == 0 {
+            0.7 * k as f64
+        } else {
+            0.7 * (k - k % 4) as f64 + 1e-3 * (k % 4) as f64
+        };
         p.write(t);
         p.problem.solve().unwrap();
         let qp = p.problem.dense_qp().clone();
@@ -130,12 +137,55 @@ fn warm_start_stages_are_all_exercised_and_exact() {
         cold.solve(&qp, &mut oc);
         assert_eq!(ow.status, QpStatus::Solved);
         seen.insert(format!("{:?}", solver.last_start()));
-        assert!((&ow.x - &oc.x).amax() < 1e-8 * (1.0 + oc.x.amax()), "tick {k}");
+        assert!(
+            (&ow.x - &oc.x).amax() < 1e-8 * (1.0 + oc.x.amax()),
+            "tick {k}"
+        );
         assert!(check_kkt(&qp, &ow).is_satisfied(1e-10));
     }
     for kind in [StartKind::Cold, StartKind::Guess, StartKind::Reimposed] {
-        assert!(seen.contains(&format!("{kind:?}")), "{kind:?} never used: {seen:?}");
+        assert!(
+            seen.contains(&format!("{kind:?}")),
+            "{kind:?} never used: {seen:?}"
+        );
     }
+}
+
+#[test]
+fn bound_heavy_ik_guess_path_is_exact() {
+    // IK-like: ~20 active bounds, so the guess path eliminates the fixed variables.
+    let mut p = RandomWbc::ik_like(9, settings(Backend::ActiveSet)).unwrap();
+    let mut warm = ActiveSetSolver::new(ActiveSetSettings::default());
+    let mut cold = ActiveSetSolver::new(ActiveSetSettings {
+        warm_start: false,
+        ..ActiveSetSettings::default()
+    });
+    let mut guesses = 0;
+    for k in 0..50 {
+        p.write(1e-3 * k as f64);
+        p.problem.solve().unwrap();
+        let qp = p.problem.dense_qp().clone();
+        let mut ow = SolverOutput::new(&qp);
+        let mut oc = SolverOutput::new(&qp);
+        warm.solve(&qp, &mut ow);
+        cold.solve(&qp, &mut oc);
+        assert_eq!(ow.status, QpStatus::Solved);
+        guesses += (warm.last_start() == StartKind::Guess) as usize;
+        assert!(
+            (&ow.x - &oc.x).amax() < 1e-9 * (1.0 + oc.x.amax()),
+            "tick {k}"
+        );
+        let kkt = check_kkt(&qp, &ow);
+        assert!(kkt.is_satisfied(1e-10), "tick {k}: {kkt:?}");
+        // multipliers of the bounds agree with the cold solve (unique under LICQ)
+        let dw = (&ow.bound_multipliers - &oc.bound_multipliers).amax();
+        assert!(
+            dw < 1e-7 * (1.0 + oc.bound_multipliers.amax()),
+            "tick {k}: {dw:e}"
+        );
+    }
+    assert!(warm.active_set_size() > 12, "bounds should be active");
+    assert!(guesses >= 45, "guess accepted on {guesses} of 50 ticks");
 }
 
 #[test]
@@ -145,7 +195,13 @@ fn iteration_limit_is_reported() {
     s.active_set.warm_start = false;
     let mut p = RandomWbc::tsid_like(0, s).unwrap();
     let err = p.problem.solve().unwrap_err();
-    assert_eq!(err, stride_qp::QpError::SolveFailed { nominal: QpStatus::MaxIterations, relaxed: None });
+    assert_eq!(
+        err,
+        stride_qp::QpError::SolveFailed {
+            nominal: QpStatus::MaxIterations,
+            relaxed: None
+        }
+    );
     assert!(p.problem.solution().x.iter().all(|v| *v == 0.0));
 }
 
@@ -173,4 +229,29 @@ fn raw_backends_on_dense_qp() {
     c.solve(&qp, &mut oc);
     assert_eq!(c.rebuilds(), 1);
     assert!((&oa.x - &oc.x).amax() < 1e-6);
+}
+
+/// Without the regularisation task the TSID-like Hessian is positive definite only through the default
+/// Tikhonov term ρ = 1e-8 (3 base directions plus the null space of the posture/torso tasks): the active-set
+/// solver must still agree with clarabel and satisfy KKT.
+#[test]
+fn weakly_regularised_tsid_still_agrees() {
+    for weight in [1e-5, 0.0] {
+        for seed in 0..4 {
+            let make = |backend| {
+                let mut r = RandomWbc::tsid_like(seed, settings(backend)).unwrap();
+                let id = r.problem.task_id("regularization").unwrap();
+                r.problem.task_mut(id).set_weight(weight).unwrap();
+                r
+            };
+            let mut a = make(Backend::ActiveSet);
+            let mut c = make(Backend::Clarabel);
+            let sa = a.problem.solve().unwrap().clone();
+            let sc = c.problem.solve().unwrap().clone();
+            let diff = (&sa.x - &sc.x).amax();
+            assert!(diff <= 1e-6 * (1.0 + sc.x.amax()), "weight {weight} seed {seed}: {diff:e}");
+            let k = a.problem.check_kkt();
+            assert!(k.is_satisfied(1e-10), "weight {weight} seed {seed}: {k:?}");
+        }
+    }
 }

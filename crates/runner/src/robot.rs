@@ -268,7 +268,9 @@ impl Robot for IdealPlant {
         self.kd.set_state(state).map_err(|e| RobotError(e.to_string()))?;
         // base_H_anchor with the new joints; world_H_base = world_H_anchor · anchor_H_base.
         let base_to_anchor = self.kd.relative_transform_from_base(self.feet[self.anchor]);
-        let base = self.anchor_pose * base_to_anchor.inverse();
+        let mut base = self.anchor_pose * base_to_anchor.inverse();
+        // Frame poses come from rotation matrices; renormalize so rounding errors cannot compound.
+        base.rotation = UnitQuaternion::new_normalize(base.rotation.into_inner());
         let state = &mut self.meas.state;
         state.base_pose = base;
         // Finite-difference velocities (mixed).

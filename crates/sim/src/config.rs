@@ -15,6 +15,7 @@ use crate::error::SimError;
 /// | `rate_hz` | Hz | 2000 | simulation rate; one [`crate::SimRobot`] step advances `1/rate_hz`. `1e9 / rate_hz` must be an integer number of nanoseconds |
 /// | `gravity` | m/s² | `[0, 0, -9.81]` | gravity acceleration in the world frame |
 /// | `integrator` | – | `implicit` | [`IntegratorKind`] |
+/// | `momentum_projection` | – | `false` | correct the base velocity so that the centroidal momentum balance holds exactly each step |
 /// | `ground` | – | flat floor at z = 0 | [`GroundConfig`] |
 /// | `contact` | – | rigid floor, the humanoid's two soles | [`ContactConfig`] |
 /// | `actuation` | – | position servos on every joint | [`ActuationConfig`] |
@@ -31,6 +32,10 @@ pub struct SimConfig {
     pub gravity: [f64; 3],
     /// Time-stepping scheme. Default [`IntegratorKind::Implicit`].
     pub integrator: IntegratorKind,
+    /// After each step, correct the base velocity so that the centroidal momentum changes by exactly
+    /// `dt ×` the step's external wrench (gravity, contacts, pushes; torque about the CoM at the start of the
+    /// step). Makes free-flight momentum exact at any rate. Default `false`.
+    pub momentum_projection: bool,
     /// The ground plane.
     pub ground: GroundConfig,
     /// Contact surfaces and the contact law.
@@ -53,6 +58,7 @@ impl Default for SimConfig {
             rate_hz: 2000,
             gravity: [0.0, 0.0, -9.81],
             integrator: IntegratorKind::Implicit,
+            momentum_projection: false,
             ground: GroundConfig::default(),
             contact: ContactConfig::default(),
             actuation: ActuationConfig::default(),

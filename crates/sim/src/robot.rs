@@ -232,6 +232,7 @@ pub struct SimRobot {
     next_state: RobotState,
     initial_state: RobotState,
     mass: DMatrix<f64>,
+    momentum_matrix: DMatrix<f64>,
     factorization: TreeCholesky,
     system: DMatrix<f64>,
     bias: DVector<f64>,
@@ -468,6 +469,7 @@ impl SimRobot {
             initial_state: state.clone(),
             state,
             mass: DMatrix::zeros(nv, nv),
+            momentum_matrix: DMatrix::zeros(6, nv),
             factorization,
             system: DMatrix::zeros(nv, nv),
             bias: DVector::zeros(nv),
@@ -1308,6 +1310,11 @@ impl SimRobot {
         for (b, p) in self.anchor_backup.iter_mut().zip(&self.points) {
             *b = p.anchor;
         }
+        let momentum_start = if self.config.momentum_projection {
+            Some((self.kd.centroidal_momentum(), self.kd.com_position()))
+        } else {
+            None
+        };
         let solves = match self.config.integrator {
             IntegratorKind::Implicit => self.solve_implicit(input),
             IntegratorKind::Explicit => self.solve_explicit(input),
@@ -1328,11 +1335,16 @@ impl SimRobot {
         for j in 0..self.model.dof() {
             self.next_state.joint_velocities[j] += dt * self.acceleration[6 + j];
         }
+        let momentum_target = momentum_start.map(|(h, c)| h + dt * self.external_wrench_about(&c));
         let integrated = self
             .next_state
             .integrate(&self.model, VelocityRepresentation::Mixed, dt);
         if let Err(e) = integrated
             .map_err(SimError::from)
+            .and_then(|_| match momentum_target {
+                Some(h) => self.project_momentum(&h),
+                None => Ok(()),
+            })
             .and_then(|_| self.check_divergence())
         {
             self.restore_after_failure();
@@ -1361,6 +1373,46 @@ impl SimRobot {
         let imu_acceleration = (imu_velocity - self.imu_velocity) / dt;
         self.imu_velocity = imu_velocity;
         self.update_output(Some(imu_acceleration), forces_and_modes)
+    }
+
+    /// Total external wrench of the step (gravity, contact forces, active pushes) about the point `c`, world
+    /// orientation, with the geometry at the start of the step (the dynamics workspace must still hold it).
+    fn external_wrench_about(&self, c: &Vector3<f64>) -> Vector6<f64> {
+        let mut force = self.gravity * self.model.total_mass();
+        let mut torque = Vector3::zeros();
+        for p in &self.points {
+            force += p.force;
+            torque += (p.position - c).cross(&p.force);
+        }
+        let t = self.time_ns;
+        for p in &self.pushes {
+            if t >= p.start_ns && t < p.end_ns {
+                let f = lin(&p.wrench);
+                let o = self.kd.frame_pose(p.frame).translation.vector;
+                force += f;
+                torque += ang(&p.wrench) + (o - c).cross(&f);
+            }
+        }
+        join(&force, &torque)
+    }
+
+    /// Sets the base velocity of `next_state` so that its centroidal momentum equals `target` (the joint
+    /// velocities are kept). Leaves the dynamics workspace at `next_state`.
+    fn project_momentum(&mut self, target: &Vector6<f64>) -> Result<(), SimError> {
+        self.kd.set_state(&self.next_state)?;
+        self.kd
+            .centroidal_momentum_matrix(&mut self.momentum_matrix)?;
+        let mut rhs = *target;
+        for (j, v) in self.next_state.joint_velocities.iter().enumerate() {
+            rhs -= self.momentum_matrix.fixed_view::<6, 1>(0, 6 + j) * *v;
+        }
+        let base: Matrix6<f64> = self.momentum_matrix.fixed_view::<6, 6>(0, 0).into_owned();
+        if let Some(v) = base.lu().solve(&rhs) {
+            if v.iter().all(|x| x.is_finite()) {
+                self.next_state.base_velocity = v;
+            }
+        }
+        Ok(())
     }
 
     /// Undo the partial effects of a failed step (contact anchors set during the step are harmless; the

@@ -12,9 +12,20 @@ use stride_sim::{SimConfig, SimInput, SimRobot};
 
 #[test]
 fn humanoid_stands_for_ten_seconds_with_still_feet_and_zmp_under_the_com() {
+    stand(SimConfig::default());
+}
+
+#[test]
+fn humanoid_stands_with_momentum_projection() {
+    let mut config = SimConfig::default();
+    config.momentum_projection = true;
+    stand(config);
+}
+
+fn stand(config: SimConfig) {
     let model = common::humanoid();
     let q = common::bent_knees(&model, 0.2);
-    let mut sim = SimRobot::new(Arc::clone(&model), SimConfig::default()).unwrap();
+    let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
     sim.set_standing_on_ground(&q).unwrap();
     let input = SimInput::hold(&q);
     let feet_start: Vec<Vector3<f64>> = sim.contact_points().iter().map(|p| p.position).collect();

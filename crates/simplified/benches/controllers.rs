@@ -138,7 +138,11 @@ fn cpu_time_report() {
     let support = foot();
     for (name, transfer, push) in [
         ("dcm_mpc_2s_100hz_nominal", false, Vector2::new(0.003, 0.0)),
-        ("dcm_mpc_2s_100hz_constrained", true, Vector2::new(0.05, 0.0)),
+        (
+            "dcm_mpc_2s_100hz_constrained",
+            true,
+            Vector2::new(0.05, 0.0),
+        ),
     ] {
         let mut mpc = DcmPredictiveController::new(DcmPredictiveConfig::default(), 0.01).unwrap();
         let h = horizon(mpc.horizon_samples(), transfer);

@@ -50,6 +50,8 @@ pub(crate) struct BandMatrix {
     pub(crate) n: usize,
     pub(crate) bw: usize,
     pub(crate) data: Vec<f64>,
+    /// `1 / L(i,i)` after `cholesky_in_place` (divisions are the slow operation here).
+    inverse_diagonal: Vec<f64>,
 }
 
 impl BandMatrix {
@@ -58,6 +60,7 @@ impl BandMatrix {
             n,
             bw,
             data: vec![0.0; n * (bw + 1)],
+            inverse_diagonal: vec![0.0; n],
         }
     }
 
@@ -122,10 +125,12 @@ impl BandMatrix {
                         return false;
                     }
                     let idx = self.index(i, i);
-                    self.data[idx] = sum.sqrt();
+                    let root = sum.sqrt();
+                    self.data[idx] = root;
+                    self.inverse_diagonal[i] = 1.0 / root;
                 } else {
                     let idx = self.index(i, j);
-                    self.data[idx] = sum / self.data[self.index(j, j)];
+                    self.data[idx] = sum * self.inverse_diagonal[j];
                 }
             }
         }
@@ -140,11 +145,11 @@ impl BandMatrix {
             let lo = i.saturating_sub(bw);
             let row = &self.data[self.index(i, lo)..self.index(i, i)];
             let dot: f64 = row.iter().zip(&b[lo..i]).map(|(l, y)| l * y).sum();
-            b[i] = (b[i] - dot) / self.data[self.index(i, i)];
+            b[i] = (b[i] - dot) * self.inverse_diagonal[i];
         }
         // Lᵀ x = y, column-oriented (row i of L is column i of Lᵀ).
         for i in (0..n).rev() {
-            let xi = b[i] / self.data[self.index(i, i)];
+            let xi = b[i] * self.inverse_diagonal[i];
             b[i] = xi;
             let lo = i.saturating_sub(bw);
             let row = &self.data[self.index(i, lo)..self.index(i, i)];
@@ -184,6 +189,7 @@ pub(crate) struct BandedQp {
     dl_aff: Vec<f64>,
     rhs_rows: Vec<f64>,
     transpose_product: Vec<f64>,
+    inverse_slack: Vec<f64>,
     /// Scales of the terms of the last residuals: ‖Px‖∞, ‖Cᵀλ‖∞, ‖Cx‖∞.
     term_scales: [f64; 3],
 }
@@ -209,6 +215,7 @@ impl BandedQp {
             dl_aff: vec![0.0; max_rows],
             rhs_rows: vec![0.0; max_rows],
             transpose_product: vec![0.0; n],
+            inverse_slack: vec![0.0; max_rows],
             term_scales: [0.0; 3],
         }
     }
@@ -262,8 +269,8 @@ impl BandedQp {
         let m = self.row_count;
         // KΔx = −rd + Cᵀ((rc − λ∘rp)/s)
         for i in 0..m {
-            self.ds[i] =
-                (self.rhs_rows[i] - self.multiplier[i] * self.residual_primal[i]) / self.slack[i];
+            self.ds[i] = (self.rhs_rows[i] - self.multiplier[i] * self.residual_primal[i])
+                * self.inverse_slack[i];
         }
         for (d, r) in self.dx.iter_mut().zip(self.residual_dual.iter()) {
             *d = -r;
@@ -273,15 +280,17 @@ impl BandedQp {
         for i in 0..m {
             let c_dx = self.rows[i].dot(&self.dx);
             self.ds[i] = -self.residual_primal[i] - c_dx;
-            self.dl[i] = (-self.rhs_rows[i] - self.multiplier[i] * self.ds[i]) / self.slack[i];
+            self.dl[i] =
+                (-self.rhs_rows[i] - self.multiplier[i] * self.ds[i]) * self.inverse_slack[i];
         }
     }
 
     fn max_step(values: &[f64], steps: &[f64]) -> f64 {
         let mut alpha: f64 = 1.0;
         for (&v, &d) in values.iter().zip(steps.iter()) {
-            if d < 0.0 {
-                alpha = alpha.min(-v / d);
+            // divide only when this entry limits the step further
+            if d < 0.0 && v < alpha * -d {
+                alpha = -v / d;
             }
         }
         alpha
@@ -315,7 +324,8 @@ impl BandedQp {
         let m = self.row_count;
         self.newton.data.copy_from_slice(&self.hessian.data);
         for i in 0..m {
-            let w = self.multiplier[i] / self.slack[i];
+            self.inverse_slack[i] = 1.0 / self.slack[i];
+            let w = self.multiplier[i] * self.inverse_slack[i];
             let row = self.rows[i];
             for a in 0..row.len {
                 for b in 0..=a {

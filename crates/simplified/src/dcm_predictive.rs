@@ -225,9 +225,9 @@ pub enum MpcStatus {
     Unconstrained,
     /// Solved to tolerance.
     Solved,
-    /// Iteration limit reached (solution not returned).
+    /// Iteration limit reached: the fallback law produced the ZMP (or `SolverFailed` without fallback).
     MaxIterations,
-    /// Numerical failure (solution not returned).
+    /// Numerical failure: the fallback law produced the ZMP (or `SolverFailed` without fallback).
     NumericalError,
 }
 
@@ -411,8 +411,10 @@ impl DcmPredictiveController {
     /// One tick: solves the MPC from the measured DCM [m] over the plan `horizon`, with natural frequency
     /// `omega` [s⁻¹]; the result is finally projected onto `support` (the current support polygon).
     ///
-    /// Errors: `NonFiniteInput`, `EmptyHorizon`, `SolverFailed` (status `MaxIterations` or
-    /// `NumericalError`). On error the controller keeps its previous `z_{−1}`.
+    /// Errors: `NonFiniteInput`, `EmptyHorizon`, and `SolverFailed` (status `MaxIterations` or
+    /// `NumericalError`) only when `fallback = false`; with the default `fallback = true` a failed solve
+    /// yields the fallback law's ZMP, flagged in the diagnostics. On error the controller keeps its
+    /// previous `z_{−1}`.
     pub fn step(
         &mut self,
         omega: f64,

@@ -28,11 +28,13 @@
 //!   * `Output` = [`SimplifiedOutput`]: desired ZMP (always inside the support polygon), CoM position,
 //!     velocity and acceleration references, and [`SimplifiedDiagnostics`] (DCM error, integral term,
 //!     projection flag, gains, MPC status/iterations/solve time).
-//! * **Bad input**: a non-finite input, an empty horizon or an MPC failure returns an error and changes
-//!   nothing; [`SimplifiedController::output`] keeps the last valid references (hold them). Support
+//! * **Bad input**: a non-finite input or an empty horizon returns an error and changes nothing; [`SimplifiedController::output`] keeps the last valid references (hold them). Support
 //!   polygons are validated when built ([`SupportPolygon::convex_hull`] rejects empty/degenerate sets),
 //!   so an invalid polygon cannot reach `step`. A horizon shorter than `N + 1` samples (plan ending) is
-//!   padded by holding its last sample (reported as `held_samples`). No output is ever NaN.
+//!   padded by holding its last sample (reported as `held_samples`). If the MPC's QP fails (seen only
+//!   once the DCM has left the support polygon, i.e. the robot cannot be captured any more) the desired
+//!   ZMP comes from a documented fallback law and `diagnostics.mpc.fallback` is set (or, with
+//!   `predictive.fallback = false`, `SolverFailed` is returned). No output is ever NaN.
 //!
 //! # Helpers
 //!
