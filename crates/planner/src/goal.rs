@@ -43,7 +43,8 @@ pub struct Waypoint {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Goal {
-    /// Stay standing where the feet are (the feet are aligned to the nominal width if needed).
+    /// Stand on the current feet: no step; the ZMP/DCM/CoM move to the feet mid-point and stay. Mid-walk this
+    /// stops in the current stance; to stop with the feet closed parallel, send a zero velocity command.
     Stand,
     /// Walk so that the feet mid-point ends at (x, y) with heading `yaw` (world frame, m and rad).
     Pose {

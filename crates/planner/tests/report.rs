@@ -116,3 +116,20 @@ fn plans_round_trip_through_json_bit_identically() {
         t += 0.037;
     }
 }
+
+#[test]
+fn config_round_trips_through_toml() {
+    let cfg = PlannerConfig {
+        dcm_interpolation: stride_planner::DcmInterpolation::DcmCubic,
+        first_swing_foot: stride_planner::FirstSwingFoot::Right,
+        ..PlannerConfig::default()
+    };
+    let text = toml::to_string(&cfg).unwrap();
+    assert!(
+        text.contains("dcm_interpolation = \"dcm_cubic\"")
+            && text.contains("first_swing_foot = \"right\"")
+    );
+    let back: PlannerConfig = toml::from_str(&text).unwrap();
+    assert_eq!(back, cfg);
+    back.validate().unwrap();
+}

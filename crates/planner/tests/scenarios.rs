@@ -253,3 +253,54 @@ fn runner_walk_curve_scenario() {
     assert!((yaw - std::f64::consts::FRAC_PI_2).abs() < 0.01, "{yaw}");
     assert!(plan.end_time < 30.0, "{}", plan.end_time);
 }
+
+/// Stopping mid-walk: `Stand` holds the current feet (no step), a zero velocity command closes the stance
+/// with parallel feet. Both end with the DCM at rest on the feet mid-point.
+#[test]
+fn stopping_mid_walk() {
+    let cfg = PlannerConfig::default();
+    let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+    for (stop, parallel) in [
+        (Goal::Stand, false),
+        (
+            Goal::Velocity {
+                forward: 0.0,
+                lateral: 0.0,
+                yaw_rate: 0.0,
+                duration: None,
+            },
+            true,
+        ),
+    ] {
+        for t in [2.0, 3.3, 4.1, 5.0, 6.7] {
+            let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
+            planner
+                .start(
+                    0.0,
+                    &l,
+                    &r,
+                    &Goal::Pose {
+                        x: 3.0,
+                        y: 0.0,
+                        yaw: 0.0,
+                    },
+                )
+                .unwrap();
+            let m = planner.replan(t, &stop).unwrap();
+            let plan = planner.plan().unwrap();
+            assert!(m >= t);
+            check_dynamics(&cfg, plan, 0.01);
+            check_swings(&cfg, plan);
+            if parallel {
+                check_steps(&cfg, plan, false);
+            } else {
+                // no step after the merge point
+                assert!(plan
+                    .left_swings
+                    .iter()
+                    .chain(plan.right_swings.iter())
+                    .all(|s| s.lift_time < m));
+            }
+        }
+    }
+}

@@ -423,9 +423,9 @@ impl ActiveSetSolver {
             let col = &mut self.qr[qr_cols * nf..(qr_cols + 1) * nf];
             let mut fixed_part = 0.0;
             if reduced {
-                for jdx in 0..n {
+                for (jdx, nv) in normal.iter().enumerate() {
                     if self.is_active[nrow + jdx] {
-                        fixed_part += normal[jdx] * self.x[jdx];
+                        fixed_part += nv * self.x[jdx];
                     }
                 }
             }

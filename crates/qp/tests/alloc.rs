@@ -36,7 +36,11 @@ fn ticks_do_not_allocate() {
     let before = ALLOCS.load(Ordering::SeqCst);
     tsid.problem.solve().unwrap();
     ik.problem.solve().unwrap();
-    assert_eq!(ALLOCS.load(Ordering::SeqCst) - before, 0, "allocations in the first solve");
+    assert_eq!(
+        ALLOCS.load(Ordering::SeqCst) - before,
+        0,
+        "allocations in the first solve"
+    );
     let before = ALLOCS.load(Ordering::SeqCst);
     let mut warm = 0;
     for k in 1..100 {

@@ -249,7 +249,10 @@ fn weakly_regularised_tsid_still_agrees() {
             let sa = a.problem.solve().unwrap().clone();
             let sc = c.problem.solve().unwrap().clone();
             let diff = (&sa.x - &sc.x).amax();
-            assert!(diff <= 1e-6 * (1.0 + sc.x.amax()), "weight {weight} seed {seed}: {diff:e}");
+            assert!(
+                diff <= 1e-6 * (1.0 + sc.x.amax()),
+                "weight {weight} seed {seed}: {diff:e}"
+            );
             let k = a.problem.check_kkt();
             assert!(k.is_satisfied(1e-10), "weight {weight} seed {seed}: {k:?}");
         }

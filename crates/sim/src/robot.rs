@@ -16,7 +16,7 @@ use crate::linalg::TreeCholesky;
 use crate::noise::GaussianNoise;
 
 /// Largest number of re-solves of one implicit step while contact modes and saturations settle.
-const MAX_MODE_ITERATIONS: usize = 12;
+const MAX_MODE_ITERATIONS: usize = 20;
 
 /// Commands for one step. All vectors have the model's `dof()` entries in model order; which ones a joint uses
 /// depends on its [`ActuationMode`].

@@ -35,9 +35,14 @@ static GLOBAL: Counting = Counting;
 fn stepping_does_not_allocate() {
     let model = common::humanoid();
     let q = common::bent_knees(&model, 0.2);
-    for integrator in [IntegratorKind::Implicit, IntegratorKind::Explicit] {
+    for (integrator, projection) in [
+        (IntegratorKind::Implicit, false),
+        (IntegratorKind::Explicit, false),
+        (IntegratorKind::Implicit, true),
+    ] {
         let mut config = SimConfig::default();
         config.integrator = integrator;
+        config.momentum_projection = projection;
         if integrator == IntegratorKind::Explicit {
             config.rate_hz = 10_000;
             config.actuation.default.kp = 300.0;

@@ -322,3 +322,43 @@ fn a_push_changes_the_momentum_by_its_impulse() {
     assert!((v.fixed_rows::<3>(0) - expected).norm() < 1e-9, "{v}");
     assert!(v.fixed_rows::<3>(3).norm() < 1e-12);
 }
+
+#[test]
+fn a_tumbling_sliding_box_comes_to_rest_flat_carrying_its_weight() {
+    // Lands on an edge while sliding: every contact mode and transition is exercised.
+    let (m, lx, ly, lz) = (4.0, 0.3, 0.2, 0.1);
+    let model = common::box_model(m, lx, ly, lz);
+    let mut config = common::box_config(lx, ly, [3, 3]);
+    config.contact.friction_coefficient = 0.5;
+    let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
+    let mut state = RobotState::zero(&model);
+    state.base_pose = Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, 0.15),
+        UnitQuaternion::from_euler_angles(0.2, 0.3, 0.1),
+    );
+    state.base_velocity = Vector6::new(1.0, 0.3, 0.0, 0.0, 0.0, 2.0);
+    sim.set_initial_state(&state).unwrap();
+    let input = SimInput::zeros(0);
+    let mut max_solves = 0;
+    let mut slid = false;
+    for _ in 0..8000 {
+        let out = sim.step(&input).unwrap();
+        max_solves = max_solves.max(out.solves);
+        slid |= out
+            .contact_points
+            .iter()
+            .any(|p| p.mode == stride_sim::ContactMode::Sliding);
+    }
+    let out = sim.output();
+    let v = out.state.base_velocity;
+    let tilt = (out.state.base_pose.rotation * Vector3::z()).z.acos();
+    println!(
+        "max solves {max_solves}, v {:.2e}, tilt {tilt:.2e}",
+        v.norm()
+    );
+    assert!(slid, "the box should have slid");
+    assert!(v.norm() < 1e-4, "still moving: {v}");
+    assert!(tilt < 1e-6, "not flat: {tilt}");
+    assert!((out.total_contact_wrench[2] - m * 9.81).abs() < 1e-3 * m * 9.81);
+    assert!(max_solves < 20, "mode iterations hit the cap");
+}
