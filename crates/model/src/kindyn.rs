@@ -32,6 +32,10 @@ pub struct ExternalWrench {
 
 /// Reusable computation workspace bound to one [`Model`]. `new` allocates everything; after that, no method
 /// allocates (errors aside).
+///
+/// `FrameId`s must come from [`Model::frame_id`] of the same model: the getters that return a value directly
+/// (`frame_pose`, `frame_velocity`, ...) panic on a `FrameId` of another, smaller model; the methods that
+/// return a `Result` report [`ModelError::FrameOutOfRange`].
 #[derive(Clone, Debug)]
 pub struct KinDyn {
     model: Arc<Model>,

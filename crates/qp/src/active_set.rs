@@ -1005,9 +1005,10 @@ impl ActiveSetSolver {
                 self.u[kdrop] = 0.0;
                 self.drop_constraint(kdrop, q);
                 slack = sign * self.normal_dot(slot, &self.x) - self.signed_rhs(qp, slot, sign);
-                if slack >= 0.0 {
-                    // The partial step already satisfied p (possible only through round-off): move on.
-                    break;
+                if slack > 0.0 {
+                    // Round-off made p (just) satisfied by the partial steps. It still carries the multiplier
+                    // u_new in stationarity, so it must become active: continue with a zero full step.
+                    slack = 0.0;
                 }
                 self.compute_d(slot, sign);
             }

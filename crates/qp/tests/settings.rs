@@ -1,7 +1,8 @@
 //! Settings are data: TOML in, defaults documented, unknown keys rejected; clarabel rebuild logic.
 
 use stride_qp::{
-    ActiveSetSettings, Backend, ClarabelSolver, DenseQp, QpSettings, QpSolver, QpStatus, SolverOutput,
+    ActiveSetSettings, Backend, ClarabelSolver, DenseQp, QpSettings, QpSolver, QpStatus,
+    SolverOutput,
 };
 
 #[test]
@@ -13,7 +14,10 @@ fn settings_from_toml() {
     assert_eq!(s.backend, Backend::Clarabel);
     assert_eq!(s.regularization, 1e-6);
     assert!(!s.active_set.warm_start);
-    assert_eq!(s.active_set.feasibility_tolerance, ActiveSetSettings::default().feasibility_tolerance);
+    assert_eq!(
+        s.active_set.feasibility_tolerance,
+        ActiveSetSettings::default().feasibility_tolerance
+    );
     assert_eq!(s.clarabel.tolerance, 1e-9);
     assert!(s.fallback);
     assert_eq!(s.relaxation_weight, 1e4);

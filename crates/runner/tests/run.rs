@@ -71,7 +71,7 @@ fn two_runs_give_identical_logs_and_replay_is_exact() {
     // With another configuration the outputs move, and the new log holds them.
     let other = s.write(
         "other.toml",
-        "include = [\"walk.toml\"]\n[simplified.zmp_com.walking]\nk_com = 2.0\n",
+        "include = [\"walk.toml\"]\n[simplified.instantaneous]\nkp = 2.0\n",
     );
     let out = s.path("replayed.mcap");
     let r = stride_runner::replay::replay(&s.path("a.mcap"), LayerName::Simplified, Some(&other), Some(&out)).unwrap();

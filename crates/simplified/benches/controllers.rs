@@ -105,22 +105,33 @@ fn benches(c: &mut Criterion) {
             })
         });
     }
-    let mut mpc = DcmPredictiveController::new(
-        DcmPredictiveConfig {
-            solver: MpcSolverKind::Clarabel,
-            ..Default::default()
-        },
-        0.01,
-    )
-    .unwrap();
-    let h = horizon(mpc.horizon_samples(), true);
-    let dcm = Vector2::new(0.06, 0.0);
-    c.bench_function("dcm_mpc_2s_100hz_constrained_clarabel", |b| {
-        b.iter(|| {
-            mpc.reset();
-            mpc.step(OMEGA, black_box(dcm), &h, &support).unwrap()
-        })
-    });
+    for (name, solver) in [
+        (
+            "dcm_mpc_2s_100hz_constrained_clarabel",
+            MpcSolverKind::Clarabel,
+        ),
+        (
+            "dcm_mpc_2s_100hz_constrained_stride_qp",
+            MpcSolverKind::StrideQp,
+        ),
+    ] {
+        let mut mpc = DcmPredictiveController::new(
+            DcmPredictiveConfig {
+                solver,
+                ..Default::default()
+            },
+            0.01,
+        )
+        .unwrap();
+        let h = horizon(mpc.horizon_samples(), true);
+        let dcm = Vector2::new(0.06, 0.0);
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                mpc.reset();
+                mpc.step(OMEGA, black_box(dcm), &h, &support).unwrap()
+            })
+        });
+    }
 }
 
 /// CPU time of this thread [s] from /proc (user + system, clock ticks of 10 ms): unlike wall time it

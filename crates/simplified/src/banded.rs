@@ -42,95 +42,111 @@ pub(crate) enum IpmOutcome {
     NumericalError,
 }
 
-/// Banded symmetric matrix storage (lower band, row-major): entry `(i, j)`, `i − bw ≤ j ≤ i`, at
-/// `i (bw+1) + (j + bw − i)`, so that each row's band is contiguous in increasing column order (the first
-/// `bw − i` slots of the first rows are unused zeros).
+/// Half-bandwidth of every band matrix here (the DCM MPC's Newton matrices, x/y interleaved).
+pub(crate) const BAND: usize = 5;
+
+/// Banded symmetric matrix (lower band, row-major, fixed half-bandwidth [`BAND`]): row `i` is an array
+/// `R_i` with `R_i[c] = A(i, i − BAND + c)`, `c = 0..=BAND` (so `R_i[BAND]` is the diagonal). Entries
+/// with a negative column stay zero, which lets the kernels run fixed-length loops.
 #[derive(Debug, Clone)]
 pub(crate) struct BandMatrix {
     pub(crate) n: usize,
-    pub(crate) bw: usize,
-    pub(crate) data: Vec<f64>,
+    rows: Vec<[f64; BAND + 1]>,
     /// `1 / L(i,i)` after `cholesky_in_place` (divisions are the slow operation here).
     inverse_diagonal: Vec<f64>,
 }
 
 impl BandMatrix {
-    pub(crate) fn new(n: usize, bw: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         Self {
             n,
-            bw,
-            data: vec![0.0; n * (bw + 1)],
+            rows: vec![[0.0; BAND + 1]; n],
             inverse_diagonal: vec![0.0; n],
         }
     }
 
-    #[inline]
-    fn index(&self, i: usize, j: usize) -> usize {
-        debug_assert!(j <= i && i - j <= self.bw);
-        i * (self.bw + 1) + (j + self.bw - i)
+    /// Half-bandwidth.
+    pub(crate) fn bandwidth(&self) -> usize {
+        BAND
     }
 
-    /// Adds `v` to the symmetric entry `(i, j)` (stored once, in the lower band).
+    /// Adds `v` to the symmetric entry `(i, j)`, `|i − j| ≤ BAND` (stored once, in the lower band).
     #[inline]
     pub(crate) fn add(&mut self, i: usize, j: usize, v: f64) {
         let (r, c) = if i >= j { (i, j) } else { (j, i) };
-        let k = self.index(r, c);
-        self.data[k] += v;
+        debug_assert!(r - c <= BAND);
+        self.rows[r][BAND + c - r] += v;
     }
 
+    /// Entry `(i, j)` of the symmetric matrix (zero outside the band).
     #[inline]
     pub(crate) fn get(&self, i: usize, j: usize) -> f64 {
         let (r, c) = if i >= j { (i, j) } else { (j, i) };
-        if r - c > self.bw {
+        if r - c > BAND {
             0.0
         } else {
-            self.data[self.index(r, c)]
+            self.rows[r][BAND + c - r]
         }
     }
 
+    /// Diagonal entry `(i, i)`.
+    #[inline]
+    pub(crate) fn diagonal(&self, i: usize) -> f64 {
+        self.rows[i][BAND]
+    }
+
+    /// Adds `v` to the diagonal entry `(i, i)`.
+    #[inline]
+    pub(crate) fn add_diagonal(&mut self, i: usize, v: f64) {
+        self.rows[i][BAND] += v;
+    }
+
     pub(crate) fn fill_zero(&mut self) {
-        self.data.iter_mut().for_each(|v| *v = 0.0);
+        self.rows.iter_mut().for_each(|r| *r = [0.0; BAND + 1]);
+    }
+
+    pub(crate) fn copy_from(&mut self, other: &BandMatrix) {
+        self.rows.copy_from_slice(&other.rows);
     }
 
     /// `y = A x` for the symmetric matrix.
     pub(crate) fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
         y.iter_mut().for_each(|v| *v = 0.0);
         for i in 0..self.n {
-            let lo = i.saturating_sub(self.bw);
-            for j in lo..=i {
-                let a = self.data[self.index(i, j)];
+            let row = &self.rows[i];
+            let lo = i.saturating_sub(BAND);
+            for j in lo..i {
+                let a = row[BAND + j - i];
                 y[i] += a * x[j];
-                if j != i {
-                    y[j] += a * x[i];
-                }
+                y[j] += a * x[i];
             }
+            y[i] += row[BAND] * x[i];
         }
     }
 
     /// In-place Cholesky `A = L Lᵀ` (L kept in the band). Returns false if not positive definite.
     pub(crate) fn cholesky_in_place(&mut self) -> bool {
-        let (n, bw) = (self.n, self.bw);
-        for i in 0..n {
-            let lo = i.saturating_sub(bw);
+        for i in 0..self.n {
+            let lo = i.saturating_sub(BAND);
             for j in lo..=i {
-                // Σ_{k=lo}^{j−1} L(i,k) L(j,k): two contiguous row pieces of equal length.
-                let dot: f64 = {
-                    let row_i = &self.data[self.index(i, lo)..self.index(i, j)];
-                    let row_j = &self.data[self.index(j, lo)..self.index(j, j)];
-                    row_i.iter().zip(row_j).map(|(a, b)| a * b).sum()
-                };
-                let sum = self.data[self.index(i, j)] - dot;
-                if i == j {
+                let d = i - j;
+                // Σ_{k=i−BAND}^{j−1} L(i,k) L(j,k) = Σ_{c=0}^{BAND−d−1} R_i[c] R_j[c+d] (zero padding)
+                let row_i = &self.rows[i];
+                let row_j = &self.rows[j];
+                let mut dot = 0.0;
+                for c in 0..BAND - d {
+                    dot += row_i[c] * row_j[c + d];
+                }
+                let sum = row_i[BAND - d] - dot;
+                if d == 0 {
                     if !(sum > 0.0 && sum.is_finite()) {
                         return false;
                     }
-                    let idx = self.index(i, i);
                     let root = sum.sqrt();
-                    self.data[idx] = root;
+                    self.rows[i][BAND] = root;
                     self.inverse_diagonal[i] = 1.0 / root;
                 } else {
-                    let idx = self.index(i, j);
-                    self.data[idx] = sum * self.inverse_diagonal[j];
+                    self.rows[i][BAND - d] = sum * self.inverse_diagonal[j];
                 }
             }
         }
@@ -139,22 +155,25 @@ impl BandMatrix {
 
     /// Solves `L Lᵀ x = b` in place (after `cholesky_in_place`).
     pub(crate) fn cholesky_solve(&self, b: &mut [f64]) {
-        let (n, bw) = (self.n, self.bw);
+        let n = self.n;
         // L y = b, row-oriented.
         for i in 0..n {
-            let lo = i.saturating_sub(bw);
-            let row = &self.data[self.index(i, lo)..self.index(i, i)];
-            let dot: f64 = row.iter().zip(&b[lo..i]).map(|(l, y)| l * y).sum();
+            let row = &self.rows[i];
+            let first = BAND.saturating_sub(i);
+            let mut dot = 0.0;
+            for c in first..BAND {
+                dot += row[c] * b[i + c - BAND];
+            }
             b[i] = (b[i] - dot) * self.inverse_diagonal[i];
         }
         // Lᵀ x = y, column-oriented (row i of L is column i of Lᵀ).
         for i in (0..n).rev() {
             let xi = b[i] * self.inverse_diagonal[i];
             b[i] = xi;
-            let lo = i.saturating_sub(bw);
-            let row = &self.data[self.index(i, lo)..self.index(i, i)];
-            for (bk, l) in b[lo..i].iter_mut().zip(row) {
-                *bk -= l * xi;
+            let row = &self.rows[i];
+            let first = BAND.saturating_sub(i);
+            for c in first..BAND {
+                b[i + c - BAND] -= row[c] * xi;
             }
         }
     }
@@ -195,17 +214,17 @@ pub(crate) struct BandedQp {
 }
 
 impl BandedQp {
-    /// Workspace for `n` variables, half-bandwidth `bw` and at most `max_rows` constraint rows.
-    pub(crate) fn new(n: usize, bw: usize, max_rows: usize) -> Self {
+    /// Workspace for `n` variables (half-bandwidth [`BAND`]) and at most `max_rows` constraint rows.
+    pub(crate) fn new(n: usize, max_rows: usize) -> Self {
         Self {
-            hessian: BandMatrix::new(n, bw),
+            hessian: BandMatrix::new(n),
             gradient: vec![0.0; n],
             rows: vec![SparseRow::default(); max_rows],
             row_count: 0,
             x: vec![0.0; n],
             slack: vec![0.0; max_rows],
             multiplier: vec![0.0; max_rows],
-            newton: BandMatrix::new(n, bw),
+            newton: BandMatrix::new(n),
             residual_dual: vec![0.0; n],
             residual_primal: vec![0.0; max_rows],
             dx: vec![0.0; n],
@@ -302,14 +321,13 @@ impl BandedQp {
     /// damps the step). Returns false when even the largest shift fails.
     fn factor_newton_regularized(&mut self) -> bool {
         let n = self.n();
-        let stride = self.newton.bw + 1;
-        let largest = (0..n).fold(0.0_f64, |a, i| a.max(self.newton.data[i * stride].abs()));
+        let largest = (0..n).fold(0.0_f64, |a, i| a.max(self.newton.diagonal(i).abs()));
         for shift in [0.0, 1e-14, 1e-12, 1e-10, 1e-8] {
             if shift > 0.0 {
                 // the failed factorization overwrote the band: reassemble, then shift the diagonal
                 self.assemble_newton();
                 for i in 0..n {
-                    self.newton.data[i * stride] += shift * largest;
+                    self.newton.add_diagonal(i, shift * largest);
                 }
             }
             if self.newton.cholesky_in_place() {
@@ -322,7 +340,7 @@ impl BandedQp {
     /// Newton matrix `K = P + Cᵀ diag(λ/s) C` into `newton`.
     fn assemble_newton(&mut self) {
         let m = self.row_count;
-        self.newton.data.copy_from_slice(&self.hessian.data);
+        self.newton.copy_from(&self.hessian);
         for i in 0..m {
             self.inverse_slack[i] = 1.0 / self.slack[i];
             let w = self.multiplier[i] * self.inverse_slack[i];
@@ -345,7 +363,7 @@ impl BandedQp {
         let n = self.n();
         let m = self.row_count;
         // Unconstrained minimiser.
-        self.newton.data.copy_from_slice(&self.hessian.data);
+        self.newton.copy_from(&self.hessian);
         if !self.newton.cholesky_in_place() {
             return (IpmOutcome::NumericalError, 0);
         }
@@ -465,5 +483,62 @@ impl BandedQp {
                 self.multiplier[i] += alpha * self.dl[i];
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, DVector};
+
+    /// Deterministic pseudo-random numbers in [−1, 1).
+    fn numbers(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+    }
+
+    #[test]
+    fn band_kernels_match_dense_linear_algebra() {
+        for n in [1, 3, 6, 7, 40] {
+            let mut next = numbers(n as u64);
+            let mut band = BandMatrix::new(n);
+            let mut dense = DMatrix::zeros(n, n);
+            for i in 0..n {
+                for j in i.saturating_sub(BAND)..=i {
+                    let v = if i == j { 10.0 + next().abs() } else { next() };
+                    band.add(i, j, v);
+                    dense[(i, j)] = v;
+                    dense[(j, i)] = v;
+                }
+            }
+            let x = DVector::from_fn(n, |_, _| next());
+            let mut y = vec![0.0; n];
+            band.mul_vec(x.as_slice(), &mut y);
+            assert!((DVector::from_vec(y) - &dense * &x).amax() < 1e-12);
+            for i in 0..n {
+                for j in 0..n {
+                    assert_eq!(band.get(i, j), dense[(i, j)]);
+                }
+            }
+            let b = DVector::from_fn(n, |_, _| next());
+            assert!(band.cholesky_in_place());
+            let mut solution = b.as_slice().to_vec();
+            band.cholesky_solve(&mut solution);
+            let expected = dense.cholesky().unwrap().solve(&b);
+            assert!(
+                (DVector::from_vec(solution) - expected).amax() < 1e-12,
+                "n {n}"
+            );
+        }
+        let mut indefinite = BandMatrix::new(3);
+        indefinite.add(0, 0, 1.0);
+        indefinite.add(1, 1, -1.0);
+        indefinite.add(2, 2, 1.0);
+        assert!(!indefinite.cholesky_in_place());
     }
 }

@@ -37,9 +37,9 @@ pub enum DcmControllerKind {
 ///
 /// ```toml
 /// dcm_controller = "predictive"
-/// [predictive]
+/// \[predictive\]
 /// horizon = 2.0
-/// [zmp_com]
+/// \[zmp_com\]
 /// walking = { k_zmp = 1.5, k_com = 5.0 }
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
@@ -72,27 +72,27 @@ impl SimplifiedConfig {
 pub struct SimplifiedInput {
     /// Current time (copied to the output).
     pub time: Duration,
-    /// LIPM natural frequency `ω = sqrt(g/h)` [s⁻¹] of the plan.
+    /// LIPM natural frequency `ω = sqrt(g/h)` \[s⁻¹\] of the plan.
     pub omega: f64,
     /// True while walking (walking ZMP-CoM gains), false while standing.
     pub walking: bool,
-    /// Planned DCM at the current time [m].
+    /// Planned DCM at the current time \[m\].
     pub planned_dcm_position: Vector2<f64>,
-    /// Planned DCM velocity at the current time [m/s].
+    /// Planned DCM velocity at the current time \[m/s\].
     pub planned_dcm_velocity: Vector2<f64>,
-    /// Planned ZMP at the current time [m].
+    /// Planned ZMP at the current time \[m\].
     pub planned_zmp: Vector2<f64>,
-    /// Planned CoM position at the current time [m].
+    /// Planned CoM position at the current time \[m\].
     pub planned_com_position: Vector2<f64>,
-    /// Planned CoM velocity at the current time [m/s].
+    /// Planned CoM velocity at the current time \[m/s\].
     pub planned_com_velocity: Vector2<f64>,
-    /// Measured (estimated) CoM position [m].
+    /// Measured (estimated) CoM position \[m\].
     pub measured_com_position: Vector2<f64>,
-    /// Measured CoM velocity [m/s] (diagnostics only; the laws use the measured DCM).
+    /// Measured CoM velocity \[m/s\] (diagnostics only; the laws use the measured DCM).
     pub measured_com_velocity: Vector2<f64>,
-    /// Measured DCM [m] (e.g. [`crate::dcm_from_com`] of the measured CoM).
+    /// Measured DCM \[m\] (e.g. [`crate::dcm_from_com`] of the measured CoM).
     pub measured_dcm: Vector2<f64>,
-    /// Measured ZMP [m] (e.g. [`crate::measured_zmp`] of the feet wrenches).
+    /// Measured ZMP \[m\] (e.g. [`crate::measured_zmp`] of the feet wrenches).
     pub measured_zmp: Vector2<f64>,
     /// Current support polygon (hull of the feet in contact, [`crate::feet_support_polygon`]).
     pub support_polygon: SupportPolygon,
@@ -128,23 +128,23 @@ impl SimplifiedInput {
 pub struct SimplifiedDiagnostics {
     /// DCM controller that produced the tick.
     pub controller: DcmControllerKind,
-    /// DCM error `ξ − ξ_ref` [m].
+    /// DCM error `ξ − ξ_ref` \[m\].
     pub dcm_error: Vector2<f64>,
-    /// Integral term `K_i ∫e dt` [m] (instantaneous controller; zero for the predictive one).
+    /// Integral term `K_i ∫e dt` \[m\] (instantaneous controller; zero for the predictive one).
     pub integral_term: Vector2<f64>,
-    /// The DCM controller's ZMP before projection onto the support polygon [m].
+    /// The DCM controller's ZMP before projection onto the support polygon \[m\].
     pub unprojected_zmp: Vector2<f64>,
     /// True when the projection onto the support polygon changed the ZMP.
     pub projection_active: bool,
-    /// ZMP tracking error `p* − p` (desired minus measured) [m].
+    /// ZMP tracking error `p* − p` (desired minus measured) \[m\].
     pub zmp_error: Vector2<f64>,
-    /// CoM error `x_ref − x` (planned minus measured) [m].
+    /// CoM error `x_ref − x` (planned minus measured) \[m\].
     pub com_error: Vector2<f64>,
-    /// CoM velocity error `ẋ_ref − ẋ` [m/s].
+    /// CoM velocity error `ẋ_ref − ẋ` \[m/s\].
     pub com_velocity_error: Vector2<f64>,
     /// ZMP-CoM gains applied.
     pub zmp_com_gains: Option<ZmpComGains>,
-    /// Progress of the ZMP-CoM gain blend in [0, 1].
+    /// Progress of the ZMP-CoM gain blend in \[0, 1\].
     pub gain_blend_progress: f64,
     /// True when `K_CoM > ω > K_ZMP > 0` (the thesis' conditions) held.
     pub thesis_gain_conditions_met: bool,
@@ -159,13 +159,13 @@ pub struct SimplifiedOutput {
     pub time: Duration,
     /// False until the first successful tick (then all fields below are meaningful).
     pub valid: bool,
-    /// Desired ZMP [m], always inside the support polygon of the tick.
+    /// Desired ZMP \[m\], always inside the support polygon of the tick.
     pub desired_zmp: Vector2<f64>,
-    /// CoM position reference [m].
+    /// CoM position reference \[m\].
     pub com_position: Vector2<f64>,
-    /// CoM velocity reference [m/s].
+    /// CoM velocity reference \[m/s\].
     pub com_velocity: Vector2<f64>,
-    /// LIPM-consistent CoM acceleration reference `ω² (x* − p*)` [m/s²].
+    /// LIPM-consistent CoM acceleration reference `ω² (x* − p*)` \[m/s²\].
     pub com_acceleration: Vector2<f64>,
     /// Diagnostics.
     pub diagnostics: SimplifiedDiagnostics,
@@ -216,7 +216,7 @@ impl SimplifiedController {
         &self.config
     }
 
-    /// Tick period [s].
+    /// Tick period \[s\].
     pub fn period(&self) -> f64 {
         self.period
     }

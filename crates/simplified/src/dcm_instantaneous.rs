@@ -23,9 +23,9 @@ use crate::polygon::SupportPolygon;
 pub struct DcmInstantaneousConfig {
     /// Proportional gain (> 1).
     pub kp: f64,
-    /// Integral gain [s⁻¹] (≥ 0).
+    /// Integral gain \[s⁻¹\] (≥ 0).
     pub ki: f64,
-    /// Bound on each component of the integral term [m] (≥ 0).
+    /// Bound on each component of the integral term \[m\] (≥ 0).
     pub integral_limit: f64,
 }
 
@@ -57,7 +57,7 @@ impl DcmInstantaneousConfig {
 /// The control law (10.2.17) without projection:
 /// `p* = ξ_ref − ξ̇_ref/ω + kp (ξ − ξ_ref) + ki ∫(ξ − ξ_ref) dt`.
 ///
-/// `error_integral` is `∫(ξ − ξ_ref) dt` [m·s]. Exposed so that tests can exercise gains the
+/// `error_integral` is `∫(ξ − ξ_ref) dt` \[m·s\]. Exposed so that tests can exercise gains the
 /// controller's configuration rejects (e.g. `kp ≤ 1`, which diverges).
 pub fn dcm_instantaneous_law(
     planned_dcm: Vector2<f64>,
@@ -76,13 +76,13 @@ pub fn dcm_instantaneous_law(
 /// What one tick of the DCM instantaneous controller produces.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct DcmInstantaneousOutput {
-    /// Desired ZMP [m], inside the support polygon.
+    /// Desired ZMP \[m\], inside the support polygon.
     pub desired_zmp: Vector2<f64>,
-    /// The law's ZMP before the projection [m].
+    /// The law's ZMP before the projection \[m\].
     pub unprojected_zmp: Vector2<f64>,
-    /// DCM error `ξ − ξ_ref` [m].
+    /// DCM error `ξ − ξ_ref` \[m\].
     pub dcm_error: Vector2<f64>,
-    /// Integral term `K_i ∫e dt` [m] used this tick.
+    /// Integral term `K_i ∫e dt` \[m\] used this tick.
     pub integral_term: Vector2<f64>,
     /// True when the law's ZMP was outside the polygon and was projected onto it.
     pub projection_active: bool,
@@ -114,7 +114,7 @@ impl DcmInstantaneousController {
         &self.config
     }
 
-    /// Current `∫(ξ − ξ_ref) dt` [m·s].
+    /// Current `∫(ξ − ξ_ref) dt` \[m·s\].
     pub fn error_integral(&self) -> Vector2<f64> {
         self.error_integral
     }
@@ -124,8 +124,8 @@ impl DcmInstantaneousController {
         self.error_integral = Vector2::zeros();
     }
 
-    /// One tick of length `dt` [s]: planned DCM [m] and DCM velocity [m/s], measured DCM [m], natural
-    /// frequency `omega` [s⁻¹], current support polygon.
+    /// One tick of length `dt` \[s\]: planned DCM \[m\] and DCM velocity \[m/s\], measured DCM \[m\], natural
+    /// frequency `omega` \[s⁻¹\], current support polygon.
     ///
     /// Errors (`NonFiniteInput`, `InvalidParameter`) leave the state unchanged.
     pub fn step(

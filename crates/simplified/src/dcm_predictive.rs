@@ -61,6 +61,9 @@ pub enum MpcSolverKind {
     BandedInteriorPoint,
     /// clarabel on the same (sparse) QP; allocates every tick.
     Clarabel,
+    /// The same sparse QP through stride-qp (`SparseQp` + `ClarabelSparseSolver`, which reuses the
+    /// clarabel object when the sparsity pattern repeats); allocates every tick.
+    StrideQp,
 }
 
 /// Parameters of the DCM predictive controller.
@@ -71,14 +74,14 @@ pub enum MpcSolverKind {
 /// | `dcm_weight` | m⁻² | 7500 | `Λ_ξ`, DCM tracking weight (walking-controllers value) |
 /// | `zmp_rate_weight` | m⁻² | 90000 | `Λ_z`, weight of the per-stage ZMP change (walking-controllers value) |
 /// | `zmp_rate_reference` | – | `"plan"` | `"plan"` or `"zero"`, see the module docs |
-/// | `solver` | – | `"banded_interior_point"` | or `"clarabel"` |
+/// | `solver` | – | `"banded_interior_point"` | or `"clarabel"` (clarabel called directly) or `"stride_qp"` (stride-qp's sparse clarabel backend) |
 /// | `tolerance` | – | 1e-9 | interior-point tolerance on scaled residuals and complementarity |
 /// | `max_iterations` | – | 50 | interior-point iteration limit |
 /// | `fallback` | – | true | on a failed solve (in practice only once the DCM has left the support polygon, where the predicted DCM grows as `e^{ωNT}` and the QP becomes ill-conditioned), use `p* = proj(ẑ_0 + 2 (ξ − ξ_ref,0))` and report it (`fallback`, solver status); false: return `SolverFailed` |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DcmPredictiveConfig {
-    /// Prediction horizon [s].
+    /// Prediction horizon \[s\].
     pub horizon: f64,
     /// DCM tracking weight `Λ_ξ`.
     pub dcm_weight: f64,
@@ -128,7 +131,7 @@ impl DcmPredictiveConfig {
         Ok(())
     }
 
-    /// Number of stages `N = round(horizon / period)` (at least 1) for a layer period [s].
+    /// Number of stages `N = round(horizon / period)` (at least 1) for a layer period \[s\].
     pub fn stages(&self, period: f64) -> Result<usize> {
         check_positive("period", period)?;
         let n = (self.horizon / period).round();
@@ -146,9 +149,9 @@ impl DcmPredictiveConfig {
 /// One sample of the plan over the MPC horizon, at time `t + k T` (k = 0 is the current time).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HorizonSample {
-    /// Planned DCM [m].
+    /// Planned DCM \[m\].
     pub dcm_position: Vector2<f64>,
-    /// Planned ZMP [m] (held over the stage that starts at this sample).
+    /// Planned ZMP \[m\] (held over the stage that starts at this sample).
     pub zmp: Vector2<f64>,
     /// Support polygon of the planned contacts at this sample.
     pub support: SupportPolygon,
@@ -238,7 +241,7 @@ pub struct MpcDiagnostics {
     pub status: MpcStatus,
     /// Interior-point iterations (0 when unconstrained).
     pub iterations: u32,
-    /// Wall-clock time of the QP assembly and solve [s].
+    /// Wall-clock time of the QP assembly and solve \[s\].
     pub solve_time: f64,
     /// Number of stages `N`.
     pub stages: usize,
@@ -255,11 +258,11 @@ pub struct MpcDiagnostics {
 /// What one tick of the DCM predictive controller produces.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct DcmPredictiveOutput {
-    /// Desired ZMP [m]: the first ZMP of the optimal sequence, inside the current support polygon.
+    /// Desired ZMP \[m\]: the first ZMP of the optimal sequence, inside the current support polygon.
     pub desired_zmp: Vector2<f64>,
-    /// The first ZMP of the optimal sequence before the final safety projection [m].
+    /// The first ZMP of the optimal sequence before the final safety projection \[m\].
     pub unprojected_zmp: Vector2<f64>,
-    /// DCM error `ξ − ξ_ref` at the current time [m].
+    /// DCM error `ξ − ξ_ref` at the current time \[m\].
     pub dcm_error: Vector2<f64>,
     /// True when the solver's ZMP was outside the current support polygon by more than 1e-9 m.
     pub projection_active: bool,
@@ -269,9 +272,6 @@ pub struct DcmPredictiveOutput {
 
 /// Proportional gain of the fallback law used when the QP fails.
 const FALLBACK_GAIN: f64 = 2.0;
-
-/// Half-bandwidth of the Newton matrices (interleaved x/y ordering, rate rows span 3 stages).
-const BANDWIDTH: usize = 5;
 
 /// The DCM predictive controller. Built for a fixed layer period; every buffer is allocated in `new`.
 /// A failed step (error returned) leaves the controller's memory of the previous desired ZMP unchanged.
@@ -291,6 +291,28 @@ pub struct DcmPredictiveController {
     previous_desired_zmp: Option<Vector2<f64>>,
     previous_planned_zmp: Option<Vector2<f64>>,
     last_problem: Option<ProblemConstants>,
+    stride_qp: StrideQpBackend,
+}
+
+/// Lazily built stride-qp backend. Cloning gives a fresh (unbuilt) backend: the cached clarabel object
+/// is only a speed-up.
+#[derive(Default)]
+struct StrideQpBackend(Option<stride_qp::ClarabelSparseSolver>);
+
+impl Clone for StrideQpBackend {
+    fn clone(&self) -> Self {
+        Self(None)
+    }
+}
+
+impl std::fmt::Debug for StrideQpBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.is_some() {
+            "StrideQpBackend(built)"
+        } else {
+            "StrideQpBackend(empty)"
+        })
+    }
 }
 
 /// The constants of the last solved problem (used to report its data).
@@ -305,25 +327,25 @@ struct ProblemConstants {
 /// The data of the last MPC problem and its solution, for inspection and testing.
 #[derive(Debug, Clone, Copy)]
 pub struct MpcProblemView<'a> {
-    /// Natural frequency used [s⁻¹].
+    /// Natural frequency used \[s⁻¹\].
     pub omega: f64,
-    /// Stage length `T` [s].
+    /// Stage length `T` \[s\].
     pub period: f64,
-    /// Measured DCM `ξ̄` the prediction starts from [m].
+    /// Measured DCM `ξ̄` the prediction starts from \[m\].
     pub initial_dcm: Vector2<f64>,
-    /// `z_{−1}`: previous desired ZMP [m].
+    /// `z_{−1}`: previous desired ZMP \[m\].
     pub previous_zmp: Vector2<f64>,
-    /// `ẑ_{−1}`: previous planned ZMP [m] (used when the rate is referenced to the plan).
+    /// `ẑ_{−1}`: previous planned ZMP \[m\] (used when the rate is referenced to the plan).
     pub previous_planned_zmp: Vector2<f64>,
-    /// Reference DCM `ξ_ref,k`, k = 0..=N (after holding) [m].
+    /// Reference DCM `ξ_ref,k`, k = 0..=N (after holding) \[m\].
     pub reference_dcm: &'a [Vector2<f64>],
-    /// Planned ZMP `ẑ_k`, k = 0..N−1 [m].
+    /// Planned ZMP `ẑ_k`, k = 0..N−1 \[m\].
     pub reference_zmp: &'a [Vector2<f64>],
     /// Support polygon of stage k, k = 0..N−1.
     pub supports: &'a [SupportPolygon],
-    /// Optimal ZMP sequence `z_k`, k = 0..N−1 [m].
+    /// Optimal ZMP sequence `z_k`, k = 0..N−1 \[m\].
     pub zmp: &'a [Vector2<f64>],
-    /// Predicted DCM `ξ_k`, k = 0..=N [m].
+    /// Predicted DCM `ξ_k`, k = 0..=N \[m\].
     pub dcm: &'a [Vector2<f64>],
     /// Multipliers of the polygon constraints (cost units per metre), in the order of
     /// `constraint_rows`.
@@ -336,7 +358,7 @@ pub struct MpcProblemView<'a> {
 }
 
 impl DcmPredictiveController {
-    /// Builds the controller for a layer period [s] (= the MPC stage length).
+    /// Builds the controller for a layer period \[s\] (= the MPC stage length).
     pub fn new(config: DcmPredictiveConfig, period: f64) -> Result<Self> {
         config.validate()?;
         let stages = config.stages(period)?;
@@ -346,7 +368,7 @@ impl DcmPredictiveController {
             config,
             period,
             stages,
-            qp: BandedQp::new(2 * stages, BANDWIDTH, max_rows),
+            qp: BandedQp::new(2 * stages, max_rows),
             reference_dcm: vec![Vector2::zeros(); stages + 1],
             reference_zmp: vec![Vector2::zeros(); stages],
             supports: vec![placeholder; stages],
@@ -357,6 +379,7 @@ impl DcmPredictiveController {
             previous_desired_zmp: None,
             previous_planned_zmp: None,
             last_problem: None,
+            stride_qp: StrideQpBackend::default(),
         })
     }
 
@@ -408,8 +431,8 @@ impl DcmPredictiveController {
         })
     }
 
-    /// One tick: solves the MPC from the measured DCM [m] over the plan `horizon`, with natural frequency
-    /// `omega` [s⁻¹]; the result is finally projected onto `support` (the current support polygon).
+    /// One tick: solves the MPC from the measured DCM \[m\] over the plan `horizon`, with natural frequency
+    /// `omega` \[s⁻¹\]; the result is finally projected onto `support` (the current support polygon).
     ///
     /// Errors: `NonFiniteInput`, `EmptyHorizon`, and `SolverFailed` (status `MaxIterations` or
     /// `NumericalError`) only when `fallback = false`; with the default `fallback = true` a failed solve
@@ -465,6 +488,9 @@ impl DcmPredictiveController {
                 max_iterations: self.config.max_iterations,
             }),
             MpcSolverKind::Clarabel => solve_with_clarabel(&mut self.qp, &self.config),
+            MpcSolverKind::StrideQp => {
+                solve_with_stride_qp(&mut self.qp, &mut self.stride_qp.0, &self.config)
+            }
         };
         let status = match outcome {
             IpmOutcome::Unconstrained => MpcStatus::Unconstrained,
@@ -687,7 +713,7 @@ fn solve_with_clarabel(qp: &mut BandedQp, config: &DcmPredictiveConfig) -> (IpmO
     let mut nzval = Vec::new();
     colptr.push(0);
     for j in 0..n {
-        for i in j.saturating_sub(qp.hessian.bw)..=j {
+        for i in j.saturating_sub(qp.hessian.bandwidth())..=j {
             let v = qp.hessian.get(j, i);
             if v != 0.0 {
                 rowval.push(i);
@@ -741,5 +767,55 @@ fn solve_with_clarabel(qp: &mut BandedQp, config: &DcmPredictiveConfig) -> (IpmO
     qp.x.copy_from_slice(&solver.solution.x);
     qp.multiplier[..m].copy_from_slice(&solver.solution.z);
     qp.slack[..m].copy_from_slice(&solver.solution.s);
+    (outcome, iterations)
+}
+
+/// Solves the banded QP through stride-qp's sparse clarabel backend (allocates).
+fn solve_with_stride_qp(
+    qp: &mut BandedQp,
+    solver: &mut Option<stride_qp::ClarabelSparseSolver>,
+    config: &DcmPredictiveConfig,
+) -> (IpmOutcome, u32) {
+    use stride_qp::{ClarabelSettings, ClarabelSparseSolver, QpStatus, SparseQp};
+    let n = qp.x.len();
+    let m = qp.row_count;
+    let solver = solver.get_or_insert_with(|| {
+        ClarabelSparseSolver::new(ClarabelSettings {
+            // see solve_with_clarabel for the extra digits
+            tolerance: (1e-3 * config.tolerance).min(1e-3),
+            max_iterations: config.max_iterations.max(50),
+        })
+    });
+    let mut sparse = SparseQp::new(n, 0);
+    for j in 0..n {
+        for i in j.saturating_sub(qp.hessian.bandwidth())..=j {
+            let v = qp.hessian.get(j, i);
+            if v != 0.0 {
+                sparse.hessian.push((i, j, v));
+            }
+        }
+    }
+    sparse.gradient.copy_from_slice(&qp.gradient);
+    let mut entries = [(0usize, 0.0f64); crate::banded::MAX_ROW_ENTRIES];
+    for row in &qp.rows[..m] {
+        for (slot, (&c, &v)) in entries.iter_mut().zip(row.columns.iter().zip(row.values.iter())) {
+            *slot = (c, v);
+        }
+        sparse.add_row(&entries[..row.len], f64::NEG_INFINITY, row.bound);
+    }
+    let Ok(solution) = solver.solve(&sparse) else {
+        return (IpmOutcome::NumericalError, 0);
+    };
+    let iterations = u32::try_from(solution.iterations).unwrap_or(u32::MAX);
+    let outcome = match solution.status {
+        QpStatus::Solved | QpStatus::SolvedInaccurate => IpmOutcome::Converged,
+        QpStatus::MaxIterations => IpmOutcome::MaxIterations,
+        _ => IpmOutcome::NumericalError,
+    };
+    if solution.x.len() != n || solution.multipliers.len() != m {
+        return (IpmOutcome::NumericalError, iterations);
+    }
+    qp.x.copy_from_slice(&solution.x);
+    qp.multiplier[..m].copy_from_slice(&solution.multipliers);
     (outcome, iterations)
 }

@@ -31,9 +31,9 @@ pub enum SimplifiedError {
     /// The feet do not push on the ground hard enough for the ZMP to be defined.
     #[error("total normal force {normal_force} N is below the minimum {minimum} N: the ZMP is undefined")]
     InsufficientNormalForce {
-        /// Sum of the vertical components of the feet forces [N].
+        /// Sum of the vertical components of the feet forces \[N\].
         normal_force: f64,
-        /// The threshold that was asked for [N].
+        /// The threshold that was asked for \[N\].
         minimum: f64,
     },
     /// The fixed-capacity MPC horizon buffer is full.

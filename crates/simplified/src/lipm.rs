@@ -12,10 +12,10 @@ use nalgebra::{Matrix2, Vector2};
 
 use crate::error::{check_finite, check_finite2, check_positive, Result, SimplifiedError};
 
-/// Standard gravity [m/s²], the default magnitude used by the configs of this crate.
+/// Standard gravity \[m/s²\], the default magnitude used by the configs of this crate.
 pub const STANDARD_GRAVITY: f64 = 9.81;
 
-/// Natural frequency `ω = sqrt(g / h)` [s⁻¹] of the LIPM.
+/// Natural frequency `ω = sqrt(g / h)` \[s⁻¹\] of the LIPM.
 ///
 /// | parameter | unit | meaning |
 /// |---|---|---|
@@ -29,7 +29,7 @@ pub fn natural_frequency(com_height: f64, gravity: f64) -> Result<f64> {
     Ok((gravity / com_height).sqrt())
 }
 
-/// DCM `ξ = x + ẋ / ω` [m] from the planar CoM position [m] and velocity [m/s].
+/// DCM `ξ = x + ẋ / ω` \[m\] from the planar CoM position \[m\] and velocity \[m/s\].
 pub fn dcm_from_com(
     com_position: Vector2<f64>,
     com_velocity: Vector2<f64>,
@@ -38,12 +38,12 @@ pub fn dcm_from_com(
     com_position + com_velocity / omega
 }
 
-/// ZMP `p = ξ − ξ̇ / ω` [m] that realises the DCM velocity `ξ̇` [m/s] at DCM `ξ` [m] (from (4.4.14b)).
+/// ZMP `p = ξ − ξ̇ / ω` \[m\] that realises the DCM velocity `ξ̇` \[m/s\] at DCM `ξ` \[m\] (from (4.4.14b)).
 pub fn zmp_from_dcm(dcm: Vector2<f64>, dcm_velocity: Vector2<f64>, omega: f64) -> Vector2<f64> {
     dcm - dcm_velocity / omega
 }
 
-/// DCM velocity `ξ̇ = ω (ξ − p)` [m/s] produced by the ZMP `p` (4.4.14b).
+/// DCM velocity `ξ̇ = ω (ξ − p)` \[m/s\] produced by the ZMP `p` (4.4.14b).
 pub fn dcm_velocity(dcm: Vector2<f64>, zmp: Vector2<f64>, omega: f64) -> Vector2<f64> {
     omega * (dcm - zmp)
 }
@@ -64,7 +64,7 @@ pub struct LipmDiscretization {
 }
 
 impl LipmDiscretization {
-    /// Builds the discretization for natural frequency `omega` [s⁻¹] (> 0) and step `dt` [s] (finite).
+    /// Builds the discretization for natural frequency `omega` \[s⁻¹\] (> 0) and step `dt` \[s\] (finite).
     pub fn new(omega: f64, dt: f64) -> Result<Self> {
         check_positive("omega", omega)?;
         if !dt.is_finite() {
@@ -84,12 +84,12 @@ impl LipmDiscretization {
         })
     }
 
-    /// Natural frequency [s⁻¹].
+    /// Natural frequency \[s⁻¹\].
     pub fn omega(&self) -> f64 {
         self.omega
     }
 
-    /// Step length [s].
+    /// Step length \[s\].
     pub fn dt(&self) -> f64 {
         self.dt
     }

@@ -14,7 +14,7 @@ pub const MAX_POLYGON_VERTICES: usize = 8;
 /// Largest number of points [`SupportPolygon::convex_hull`] accepts.
 pub const MAX_HULL_POINTS: usize = 32;
 
-/// Polygons with a smaller area [m²] are rejected as degenerate.
+/// Polygons with a smaller area \[m²\] are rejected as degenerate.
 pub const MIN_POLYGON_AREA: f64 = 1e-10;
 
 /// A convex polygon in the ground plane (world x, y), vertices counter-clockwise, no collinear vertices,
@@ -135,7 +135,7 @@ impl SupportPolygon {
         Ok(polygon)
     }
 
-    /// Axis-aligned rectangle `[x_min, x_max] × [y_min, y_max]` [m].
+    /// Axis-aligned rectangle `[x_min, x_max] × [y_min, y_max]` \[m\].
     pub fn rectangle(x_min: f64, x_max: f64, y_min: f64, y_max: f64) -> Result<Self> {
         Self::convex_hull(&[
             Vector2::new(x_min, y_min),
@@ -160,7 +160,7 @@ impl SupportPolygon {
         self.len == 0
     }
 
-    /// Area [m²] (shoelace formula).
+    /// Area \[m²\] (shoelace formula).
     pub fn area(&self) -> f64 {
         let v = self.vertices();
         let mut twice = 0.0;
@@ -170,7 +170,7 @@ impl SupportPolygon {
         0.5 * twice
     }
 
-    /// Mean of the vertices [m] (inside the polygon because it is convex).
+    /// Mean of the vertices \[m\] (inside the polygon because it is convex).
     pub fn vertex_mean(&self) -> Vector2<f64> {
         self.vertices().iter().sum::<Vector2<f64>>() / self.len as f64
     }
@@ -185,7 +185,7 @@ impl SupportPolygon {
         (n, n.dot(&a))
     }
 
-    /// Signed distance [m] from `p` to the polygon's boundary lines taken as half-planes: the largest
+    /// Signed distance \[m\] from `p` to the polygon's boundary lines taken as half-planes: the largest
     /// `nᵀp − b` over the edges. ≤ 0 inside (minus the distance to the nearest edge line), > 0 outside
     /// (a lower bound of the Euclidean distance to the polygon).
     pub fn max_violation(&self, p: Vector2<f64>) -> f64 {
@@ -197,7 +197,7 @@ impl SupportPolygon {
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
-    /// True when `p` is inside the polygon or within `tolerance` [m] of it (half-plane test).
+    /// True when `p` is inside the polygon or within `tolerance` \[m\] of it (half-plane test).
     pub fn contains(&self, p: Vector2<f64>, tolerance: f64) -> bool {
         self.max_violation(p) <= tolerance
     }
@@ -238,17 +238,17 @@ impl SupportPolygon {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FootRectangle {
-    /// World x, y of the sole frame [m].
+    /// World x, y of the sole frame \[m\].
     pub position: Vector2<f64>,
-    /// Sole yaw about world z [rad].
+    /// Sole yaw about world z \[rad\].
     pub yaw: f64,
-    /// Back edge along the sole x axis [m].
+    /// Back edge along the sole x axis \[m\].
     pub x_min: f64,
-    /// Front edge along the sole x axis [m].
+    /// Front edge along the sole x axis \[m\].
     pub x_max: f64,
-    /// Right edge along the sole y axis [m].
+    /// Right edge along the sole y axis \[m\].
     pub y_min: f64,
-    /// Left edge along the sole y axis [m].
+    /// Left edge along the sole y axis \[m\].
     pub y_max: f64,
 }
 

@@ -14,13 +14,13 @@ use crate::error::{Result, SimplifiedError};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FootWrench {
-    /// `[force; torque]` [N; N·m], world orientation, torque about `point`.
+    /// `[force; torque]` \[N; N·m\], world orientation, torque about `point`.
     pub wrench: Vector6<f64>,
-    /// World position [m] the torque is taken about.
+    /// World position \[m\] the torque is taken about.
     pub point: Vector3<f64>,
 }
 
-/// Global ZMP [m] on the plane `z = ground_height` from the wrenches of the feet in contact.
+/// Global ZMP \[m\] on the plane `z = ground_height` from the wrenches of the feet in contact.
 ///
 /// The total wrench about the world origin is `F = Σ fᵢ`, `T = Σ (τᵢ + rᵢ × fᵢ)`. The ZMP is the point
 /// `p = (pₓ, p_y, h)` about which the horizontal torque vanishes: `pₓ = (h Fₓ − T_y) / F_z`,

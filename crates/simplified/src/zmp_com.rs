@@ -28,9 +28,9 @@ use crate::lipm::{check_omega, check_point};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ZmpComGains {
-    /// ZMP gain `K_ZMP` [s⁻¹].
+    /// ZMP gain `K_ZMP` \[s⁻¹\].
     pub k_zmp: f64,
-    /// CoM gain `K_CoM` [s⁻¹].
+    /// CoM gain `K_CoM` \[s⁻¹\].
     pub k_com: f64,
 }
 
@@ -76,7 +76,7 @@ pub struct ZmpComConfig {
     pub walking: ZmpComGains,
     /// Gains used while standing.
     pub standing: ZmpComGains,
-    /// Duration of the gain blend [s].
+    /// Duration of the gain blend \[s\].
     pub transition_time: f64,
 }
 
@@ -105,7 +105,7 @@ impl ZmpComConfig {
     }
 }
 
-/// The law (10.2.25): `ẋ* = ẋ_ref − K_ZMP (p* − p) + K_CoM (x_ref − x)` [m/s].
+/// The law (10.2.25): `ẋ* = ẋ_ref − K_ZMP (p* − p) + K_CoM (x_ref − x)` \[m/s\].
 ///
 /// Exposed (without gain checks) so that tests can show that violating the gain bound diverges.
 pub fn zmp_com_law(
@@ -120,7 +120,7 @@ pub fn zmp_com_law(
         + (planned_com_position - measured_com_position) * gains.k_com
 }
 
-/// Minimum-jerk blend `s(τ) = 10τ³ − 15τ⁴ + 6τ⁵`, τ clamped to [0, 1]: zero velocity and acceleration
+/// Minimum-jerk blend `s(τ) = 10τ³ − 15τ⁴ + 6τ⁵`, τ clamped to \[0, 1\]: zero velocity and acceleration
 /// at both ends.
 pub fn minimum_jerk_blend(tau: f64) -> f64 {
     let t = tau.clamp(0.0, 1.0);
@@ -130,15 +130,15 @@ pub fn minimum_jerk_blend(tau: f64) -> f64 {
 /// What one tick of the ZMP-CoM controller produces.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ZmpComOutput {
-    /// CoM position reference `x* = x_ref + δ` [m].
+    /// CoM position reference `x* = x_ref + δ` \[m\].
     pub com_position: Vector2<f64>,
-    /// CoM velocity reference `ẋ*` [m/s].
+    /// CoM velocity reference `ẋ*` \[m/s\].
     pub com_velocity: Vector2<f64>,
-    /// LIPM-consistent CoM acceleration reference `ω² (x* − p*)` [m/s²].
+    /// LIPM-consistent CoM acceleration reference `ω² (x* − p*)` \[m/s²\].
     pub com_acceleration: Vector2<f64>,
     /// Gains used this tick.
     pub gains: ZmpComGains,
-    /// Progress of the gain blend in [0, 1] (1 = settled on the target gains).
+    /// Progress of the gain blend in \[0, 1\] (1 = settled on the target gains).
     pub blend_progress: f64,
     /// True when the thesis' conditions `K_CoM > ω > K_ZMP > 0` hold for this tick's gains.
     pub thesis_conditions_met: bool,
@@ -182,7 +182,7 @@ impl ZmpComController {
         self.correction = Vector2::zeros();
     }
 
-    /// Integrated correction `δ = x* − x_ref` [m].
+    /// Integrated correction `δ = x* − x_ref` \[m\].
     pub fn correction(&self) -> Vector2<f64> {
         self.correction
     }
@@ -216,7 +216,7 @@ impl ZmpComController {
         }
     }
 
-    /// One tick of length `dt` [s].
+    /// One tick of length `dt` \[s\].
     ///
     /// | argument | unit | meaning |
     /// |---|---|---|

@@ -306,7 +306,11 @@ fn solutions_satisfy_constraints_and_kkt_and_agree_with_clarabel() {
         (0.3, Vector2::new(0.0, -0.025), ZmpRateReference::Plan),
         (2.0, Vector2::new(0.055, 0.0), ZmpRateReference::Plan),
     ] {
-        for solver in [MpcSolverKind::BandedInteriorPoint, MpcSolverKind::Clarabel] {
+        for solver in [
+            MpcSolverKind::BandedInteriorPoint,
+            MpcSolverKind::Clarabel,
+            MpcSolverKind::StrideQp,
+        ] {
             let config = DcmPredictiveConfig {
                 horizon,
                 zmp_rate_reference: rate,
@@ -326,7 +330,7 @@ fn solutions_satisfy_constraints_and_kkt_and_agree_with_clarabel() {
             if solver == MpcSolverKind::BandedInteriorPoint {
                 check_kkt(&view, &dense, &format!("{horizon} {push:?} {solver:?}"));
             } else {
-                // clarabel (reference backend) stops with complementarity ~1e-5 relative on weakly
+                // clarabel (reference backends) stops with complementarity ~1e-5 relative on weakly
                 // active rows; its primal solution is checked for feasibility and against the dense
                 // reference below.
                 let slack = &dense.b - &dense.a * solution_vector(&view);

@@ -36,14 +36,10 @@ fn make(kind: usize) -> Controller {
 }
 
 /// Standing on one foot with the DCM at the foot centre; the push moves the DCM by `offset` along
-/// `direction`. Returns true when the DCM is back within 1 mm after 10 s, the ZMP having stayed in the foot.
-fn recovers(kind: usize, direction: Vector2<f64>, offset: f64) -> bool {
-    recovers_with_lag(kind, direction, offset, 0.0)
-}
-
-/// As `recovers`, with the realised ZMP following the desired one through a first-order lag of time
-/// constant `lag` [s] (0: perfect ZMP tracking), a crude model of the whole-body layer's ZMP tracking.
-fn recovers_with_lag(kind: usize, direction: Vector2<f64>, offset: f64, lag: f64) -> bool {
+/// `direction`. Returns true when the DCM is back within 1 mm after 10 s, the ZMP having stayed in the
+/// foot. The realised ZMP follows the desired one through a first-order lag of time constant `lag` [s]
+/// (0: perfect ZMP tracking), a crude model of the whole-body layer's ZMP tracking.
+fn recovers(kind: usize, direction: Vector2<f64>, offset: f64, lag: f64) -> bool {
     let foot = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap();
     let reference = Vector2::new(0.01, 0.0);
     let d = LipmDiscretization::new(OMEGA, PERIOD).unwrap();
@@ -98,11 +94,11 @@ fn recovers_with_lag(kind: usize, direction: Vector2<f64>, offset: f64, lag: f64
 
 fn largest_recoverable(kind: usize, direction: Vector2<f64>, lag: f64) -> f64 {
     let (mut lo, mut hi) = (0.0, 0.2);
-    assert!(recovers_with_lag(kind, direction, lo, lag));
-    assert!(!recovers_with_lag(kind, direction, hi, lag));
+    assert!(recovers(kind, direction, lo, lag));
+    assert!(!recovers(kind, direction, hi, lag));
     while hi - lo > 1e-4 {
         let mid = 0.5 * (lo + hi);
-        if recovers_with_lag(kind, direction, mid, lag) {
+        if recovers(kind, direction, mid, lag) {
             lo = mid;
         } else {
             hi = mid;
@@ -147,10 +143,7 @@ fn largest_recoverable_push_with_zmp_tracking_lag() {
     let direction = Vector2::new(1.0, 0.0);
     let bound = 0.06;
     for (kind, name) in names.iter().enumerate() {
-        assert!(
-            recovers_with_lag(kind, direction, 0.1 * bound, 0.05),
-            "{name}"
-        );
+        assert!(recovers(kind, direction, 0.1 * bound, 0.05), "{name}");
         let largest = largest_recoverable(kind, direction, 0.05);
         eprintln!("{name}: 50 ms ZMP lag: largest recoverable forward DCM offset {largest:.4} m (bound {bound} m)");
         assert!(largest <= bound + 1e-4, "{name}");

@@ -12,8 +12,8 @@ use stride_block::Block;
 use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_qp::Backend;
 use stride_wbc::{
-    bundled_posture, FootReference, IkConfig, JointRegularizationTaskConfig, QpIk, TaskConfig, Tsid,
-    TsidConfig, WbcInput,
+    bundled_posture, FootReference, IkConfig, JointRegularizationTaskConfig, QpIk, TaskConfig,
+    Tsid, TsidConfig, WbcInput,
 };
 
 struct Robot {
@@ -26,7 +26,10 @@ struct Robot {
 }
 
 fn bundled() -> Robot {
-    let path = format!("{}/../../models/stride_humanoid.urdf", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/../../models/stride_humanoid.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
     let model = Arc::new(Model::from_urdf_file(path).expect("bundled model"));
     let mut posture = DVector::zeros(model.dof());
     for (name, v) in bundled_posture() {
@@ -34,7 +37,14 @@ fn bundled() -> Robot {
             posture[i] = v;
         }
     }
-    Robot { name: "stride_humanoid", model, left: "l_sole", right: "r_sole", torso: "chest", posture }
+    Robot {
+        name: "stride_humanoid",
+        model,
+        left: "l_sole",
+        right: "r_sole",
+        torso: "chest",
+        posture,
+    }
 }
 
 fn icub() -> Option<Robot> {
@@ -62,8 +72,19 @@ fn icub() -> Option<Robot> {
             }
         }
     }
-    let torso = if model.frame_id("chest").is_some() { "chest" } else { "root_link" };
-    Some(Robot { name: "iCubGazeboV2_7", model, left: "l_sole", right: "r_sole", torso, posture })
+    let torso = if model.frame_id("chest").is_some() {
+        "chest"
+    } else {
+        "root_link"
+    };
+    Some(Robot {
+        name: "iCubGazeboV2_7",
+        model,
+        left: "l_sole",
+        right: "r_sole",
+        torso,
+        posture,
+    })
 }
 
 fn posture_map(robot: &Robot) -> std::collections::BTreeMap<String, f64> {
@@ -84,7 +105,11 @@ fn adapt<'a>(tasks: impl Iterator<Item = &'a mut TaskConfig>, robot: &Robot) {
             TaskConfig::So3(c) => c.frame = robot.torso.into(),
             TaskConfig::Contact(c) if c.frame == "l_sole" => c.frame = robot.left.into(),
             TaskConfig::Contact(c) if c.frame == "r_sole" => c.frame = robot.right.into(),
-            TaskConfig::JointRegularization(JointRegularizationTaskConfig { posture, joint_weights, .. }) => {
+            TaskConfig::JointRegularization(JointRegularizationTaskConfig {
+                posture,
+                joint_weights,
+                ..
+            }) => {
                 *posture = posture_map(robot);
                 joint_weights.clear();
             }
@@ -102,14 +127,23 @@ fn input(robot: &Robot) -> WbcInput {
     kd.set_representation(VelocityRepresentation::Mixed);
     kd.set_state(&state).unwrap();
     let l = kd.frame_pose(model.frame_id(robot.left).unwrap());
-    state.base_pose = Isometry3::from_parts(Translation3::new(0.0, 0.0, -l.translation.z), UnitQuaternion::identity());
+    state.base_pose = Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, -l.translation.z),
+        UnitQuaternion::identity(),
+    );
     kd.set_state(&state).unwrap();
     let mut input = WbcInput::new(model);
     input.state = state;
     input.com_position = kd.com_position();
     input.com_position.x += 0.01;
-    input.left_foot = FootReference { pose: kd.frame_pose(model.frame_id(robot.left).unwrap()), ..Default::default() };
-    input.right_foot = FootReference { pose: kd.frame_pose(model.frame_id(robot.right).unwrap()), ..Default::default() };
+    input.left_foot = FootReference {
+        pose: kd.frame_pose(model.frame_id(robot.left).unwrap()),
+        ..Default::default()
+    };
+    input.right_foot = FootReference {
+        pose: kd.frame_pose(model.frame_id(robot.right).unwrap()),
+        ..Default::default()
+    };
     input.torso.orientation = kd.frame_pose(model.frame_id(robot.torso).unwrap()).rotation;
     input.desired_zmp = Some(Vector2::new(input.com_position.x, input.com_position.y));
     input

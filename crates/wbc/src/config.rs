@@ -528,6 +528,7 @@ pub enum IkFeedback {
 /// | `period` | s | 0.002 | control period: integration step and limit look-ahead |
 /// | `feedback` | – | `integrated` | `integrated` (position control) or `measured` |
 /// | `qp` | – | stride-qp defaults | `backend` (`active_set` / `clarabel`), `regularization`, `fallback`, `relaxation_weight`, … |
+/// | `eliminate_equalities` | – | true | solve the null-space reduced QP (no hard equalities) first; the full QP only when that fails |
 /// | `tasks` | – | see `default_for_bundled_model` | task list |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -541,8 +542,15 @@ pub struct IkConfig {
     /// stride-qp settings (backend, regularization, fallback, relaxation weight, backend settings).
     #[serde(default)]
     pub qp: QpSettings,
+    /// Eliminate the hard equality tasks by a null-space parametrization before calling stride-qp.
+    #[serde(default = "yes")]
+    pub eliminate_equalities: bool,
     /// Tasks.
     pub tasks: Vec<TaskConfig>,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn default_ik_period() -> f64 {
@@ -559,6 +567,7 @@ fn default_tsid_period() -> f64 {
 /// | `period` | s | 0.001 | control period: ramps and limit look-ahead |
 /// | `gravity` | m/s² | [0, 0, -9.81] | gravity vector |
 /// | `qp` | – | stride-qp defaults | `backend` (`active_set` / `clarabel`), `regularization`, `fallback`, `relaxation_weight`, … |
+/// | `eliminate_equalities` | – | true | solve the null-space reduced QP (no hard equalities) first; the full QP only when that fails |
 /// | `tasks` | – | see `default_for_bundled_model` | task list |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -572,6 +581,9 @@ pub struct TsidConfig {
     /// stride-qp settings (backend, regularization, fallback, relaxation weight, backend settings).
     #[serde(default)]
     pub qp: QpSettings,
+    /// Eliminate the hard equality tasks by a null-space parametrization before calling stride-qp.
+    #[serde(default = "yes")]
+    pub eliminate_equalities: bool,
     /// Tasks.
     pub tasks: Vec<TaskConfig>,
 }
@@ -622,6 +634,7 @@ impl IkConfig {
             period: default_ik_period(),
             feedback: IkFeedback::Integrated,
             qp: QpSettings::default(),
+            eliminate_equalities: true,
             tasks: vec![
                 TaskConfig::Se3(Se3TaskConfig {
                     name: "left_foot".into(),
@@ -729,6 +742,7 @@ impl TsidConfig {
             period: default_tsid_period(),
             gravity: default_gravity(),
             qp: QpSettings::default(),
+            eliminate_equalities: true,
             tasks: vec![
                 TaskConfig::FloatingBaseDynamics(FloatingBaseDynamicsTaskConfig {
                     name: "dynamics".into(),

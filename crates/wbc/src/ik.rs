@@ -12,8 +12,8 @@ use crate::config::{IkConfig, IkFeedback, Priority, TaskConfig};
 use crate::error::WbcError;
 use crate::io::{IkOutput, SolveReport, TaskResidual, WbcInput};
 use crate::tasks::{
-    check_gain, expand_weight, joint_limits, AngularMomentumVelocityTask, ComVelocityTask, FrameTask,
-    JointRegularizationTask, Level, TaskBlock,
+    check_gain, expand_weight, joint_limits, AngularMomentumVelocityTask, ComVelocityTask,
+    FrameTask, JointRegularizationTask, Level, TaskBlock,
 };
 
 /// What a config entry became.
@@ -89,15 +89,16 @@ impl QpIk {
                     reason: "duplicate task name".into(),
                 });
             }
-            let eq_block = |rows: usize, priority: Priority, weight| -> Result<TaskBlock, WbcError> {
-                let hard = priority == Priority::Hard;
-                let w = if hard {
-                    vec![1.0; rows]
-                } else {
-                    expand_weight(task.name(), weight, rows)?
+            let eq_block =
+                |rows: usize, priority: Priority, weight| -> Result<TaskBlock, WbcError> {
+                    let hard = priority == Priority::Hard;
+                    let w = if hard {
+                        vec![1.0; rows]
+                    } else {
+                        expand_weight(task.name(), weight, rows)?
+                    };
+                    Ok(TaskBlock::equality(task.name(), rows, nv, hard, w))
                 };
-                Ok(TaskBlock::equality(task.name(), rows, nv, hard, w))
-            };
             match task {
                 TaskConfig::Se3(c) => {
                     let mut t = FrameTask::from_se3(&model, c, Level::Velocity)?;
@@ -132,7 +133,11 @@ impl QpIk {
                     let mut t = JointRegularizationTask::new(&model, c, Level::Velocity)?;
                     t.block = blocks.len();
                     slots.push(Slot::Block(blocks.len()));
-                    let w = if t.hard { vec![1.0; n] } else { t.weights.clone() };
+                    let w = if t.hard {
+                        vec![1.0; n]
+                    } else {
+                        t.weights.clone()
+                    };
                     blocks.push(TaskBlock::equality(&c.name, n, nv, t.hard, w));
                     joint_tasks.push(t);
                 }
@@ -176,7 +181,7 @@ impl QpIk {
             }
         }
         let layout = VariableLayout::new(&[("base_velocity", 6), ("joint_velocities", n)])?;
-        let bridge = QpBridge::new(layout, &blocks, &config.qp)?;
+        let bridge = QpBridge::new(layout, &blocks, &config.qp, config.eliminate_equalities)?;
         let residuals = config
             .tasks
             .iter()
@@ -333,7 +338,7 @@ impl QpIk {
         let n = self.model.dof();
         for (k, slot) in self.slots.iter().enumerate() {
             let r = match slot {
-                Slot::Block(b) => self.bridge.residual(*b),
+                Slot::Block(b) => self.blocks[*b].residual(&self.x),
                 Slot::PositionLimits | Slot::VelocityLimits => {
                     let mut s = 0.0;
                     for i in 0..n {
@@ -361,8 +366,18 @@ pub(crate) fn check_state(model: &Model, state: &RobotState) -> Result<(), WbcEr
     let finite = state.joint_positions.iter().all(|v| v.is_finite())
         && state.joint_velocities.iter().all(|v| v.is_finite())
         && state.base_velocity.iter().all(|v| v.is_finite())
-        && state.base_pose.translation.vector.iter().all(|v| v.is_finite())
-        && state.base_pose.rotation.coords.iter().all(|v| v.is_finite());
+        && state
+            .base_pose
+            .translation
+            .vector
+            .iter()
+            .all(|v| v.is_finite())
+        && state
+            .base_pose
+            .rotation
+            .coords
+            .iter()
+            .all(|v| v.is_finite());
     if !finite {
         return Err(WbcError::InvalidInput("state has non-finite values".into()));
     }
@@ -399,11 +414,27 @@ pub(crate) fn check_references(model: &Model, input: &WbcInput) -> Result<(), Wb
             .vector
             .iter()
             .all(|v| v.is_finite()),
-        input.left_foot.pose.rotation.coords.iter().all(|v| v.is_finite()),
-        input.right_foot.pose.rotation.coords.iter().all(|v| v.is_finite()),
+        input
+            .left_foot
+            .pose
+            .rotation
+            .coords
+            .iter()
+            .all(|v| v.is_finite()),
+        input
+            .right_foot
+            .pose
+            .rotation
+            .coords
+            .iter()
+            .all(|v| v.is_finite()),
         input.torso.orientation.coords.iter().all(|v| v.is_finite()),
         input.torso.angular_velocity.iter().all(|v| v.is_finite()),
-        input.torso.angular_acceleration.iter().all(|v| v.is_finite()),
+        input
+            .torso
+            .angular_acceleration
+            .iter()
+            .all(|v| v.is_finite()),
         input.angular_momentum.iter().all(|v| v.is_finite()),
         input
             .desired_zmp

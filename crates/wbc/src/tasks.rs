@@ -104,7 +104,11 @@ impl TaskBlock {
     }
 }
 
-pub(crate) fn expand_weight(task: &str, weight: &Weight, rows: usize) -> Result<Vec<f64>, WbcError> {
+pub(crate) fn expand_weight(
+    task: &str,
+    weight: &Weight,
+    rows: usize,
+) -> Result<Vec<f64>, WbcError> {
     let w = weight.expand(rows).ok_or_else(|| WbcError::InvalidConfig {
         task: task.to_owned(),
         key: "weight",
@@ -460,7 +464,6 @@ impl AngularMomentumVelocityTask {
 /// Joint regularization: `ṡ = K_p (s_ref − s)` (velocity) or `s̈ = −K_d ṡ + K_p (s_ref − s)` (acceleration).
 #[derive(Debug, Clone)]
 pub(crate) struct JointRegularizationTask {
-    pub name: String,
     kp: f64,
     kd: f64,
     pub posture: DVector<f64>,
@@ -488,7 +491,6 @@ impl JointRegularizationTask {
         let weights = joint_map(model, &c.name, &c.joint_weights, c.weight)?;
         debug_assert_eq!(posture.len(), n);
         Ok(JointRegularizationTask {
-            name: c.name.clone(),
             kp: c.kp,
             kd: c.kd,
             posture: DVector::from_vec(posture),

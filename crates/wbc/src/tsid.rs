@@ -67,10 +67,10 @@ impl Contact {
         if c.facets == 0 || c.facets > 16 {
             return Err(bad("facets", format!("{} must be in 1..=16", c.facets)));
         }
-        if !(c.foot_x[0] < c.foot_x[1]) || !c.foot_x.iter().all(|v| v.is_finite()) {
+        if !c.foot_x.iter().all(|v| v.is_finite()) || c.foot_x[0] >= c.foot_x[1] {
             return Err(bad("foot_x", "needs lower < upper".into()));
         }
-        if !(c.foot_y[0] < c.foot_y[1]) || !c.foot_y.iter().all(|v| v.is_finite()) {
+        if !c.foot_y.iter().all(|v| v.is_finite()) || c.foot_y[0] >= c.foot_y[1] {
             return Err(bad("foot_y", "needs lower < upper".into()));
         }
         check_gain(&c.name, "torsional_friction", c.torsional_friction)?;
@@ -81,7 +81,10 @@ impl Contact {
         if !(c.max_normal_force.is_finite() && c.max_normal_force > c.min_normal_force) {
             return Err(bad(
                 "max_normal_force",
-                format!("{} must be finite and > min_normal_force", c.max_normal_force),
+                format!(
+                    "{} must be finite and > min_normal_force",
+                    c.max_normal_force
+                ),
             ));
         }
         let s = c.facets;
@@ -166,8 +169,8 @@ impl Contact {
         } else if self.load > 0.0 {
             if !self.unloading {
                 self.unloading = true;
-                self.unload_from = (self.last_fz / self.load.max(1e-12))
-                    .clamp(0.0, self.max_normal_force);
+                self.unload_from =
+                    (self.last_fz / self.load.max(1e-12)).clamp(0.0, self.max_normal_force);
             }
             self.load = (self.load - step).max(0.0);
             if self.load <= 0.0 {
@@ -339,7 +342,11 @@ impl Tsid {
                 }
                 TaskConfig::JointRegularization(c) => {
                     let t = JointRegularizationTask::new(&model, c, Level::Acceleration)?;
-                    let w = if t.hard { vec![1.0; n] } else { t.weights.clone() };
+                    let w = if t.hard {
+                        vec![1.0; n]
+                    } else {
+                        t.weights.clone()
+                    };
                     eq_weights.push(Some((t.hard, w)));
                     tasks.push(TsidTask::Joint(joint_tasks.len()));
                     joint_tasks.push(t);
@@ -372,7 +379,8 @@ impl Tsid {
                 }
                 TaskConfig::JointVelocityLimits(c) => {
                     check_gain(&c.name, "scale", c.scale)?;
-                    velocity_limits = Some((vmax.iter().map(|v| v * c.scale).collect(), config.period));
+                    velocity_limits =
+                        Some((vmax.iter().map(|v| v * c.scale).collect(), config.period));
                     eq_weights.push(None);
                     tasks.push(TsidTask::VelocityLimits);
                 }
@@ -503,8 +511,7 @@ impl Tsid {
                         TsidTask::WrenchRegularization => {
                             if loaded {
                                 let rows = 6 * mask.count_ones() as usize;
-                                let w: Vec<f64> =
-                                    (0..rows).map(|r| wrench_weight[r % 6]).collect();
+                                let w: Vec<f64> = (0..rows).map(|r| wrench_weight[r % 6]).collect();
                                 s.push(blocks.len());
                                 blocks.push(TaskBlock::equality(name, rows, nx, false, w));
                             }
@@ -526,7 +533,12 @@ impl Tsid {
                 }
                 let var_refs: Vec<(&str, usize)> =
                     vars.iter().map(|(s, z)| (s.as_str(), *z)).collect();
-                let bridge = QpBridge::new(VariableLayout::new(&var_refs)?, &blocks, &config.qp)?;
+                let bridge = QpBridge::new(
+                    VariableLayout::new(&var_refs)?,
+                    &blocks,
+                    &config.qp,
+                    config.eliminate_equalities,
+                )?;
                 variants.push(Variant {
                     offsets,
                     slots,
@@ -546,10 +558,10 @@ impl Tsid {
                 name: t.name().to_owned(),
                 hard: match &eq_weights[i] {
                     Some((hard, _)) => *hard,
-                    None => !matches!(
-                        tasks[i],
-                        TsidTask::WrenchRegularization | TsidTask::Zmp
-                    ) || (matches!(tasks[i], TsidTask::Zmp) && zmp_hard),
+                    None => {
+                        !matches!(tasks[i], TsidTask::WrenchRegularization | TsidTask::Zmp)
+                            || (matches!(tasks[i], TsidTask::Zmp) && zmp_hard)
+                    }
                 },
                 residual: 0.0,
             })
@@ -744,17 +756,23 @@ impl Tsid {
                     e.fixed_rows_mut::<3>(0).copy_from(
                         &(contact.reference.translation.vector - contact.pose.translation.vector),
                     );
-                    e.fixed_rows_mut::<3>(3).copy_from(&crate::math::orientation_error(
-                        &contact.reference.rotation,
-                        &contact.pose.rotation,
-                    ));
+                    e.fixed_rows_mut::<3>(3)
+                        .copy_from(&crate::math::orientation_error(
+                            &contact.reference.rotation,
+                            &contact.pose.rotation,
+                        ));
                     for r in 0..6 {
-                        b.b[r] = -contact.bias[r] - contact.kd * contact.velocity[r]
-                            + contact.kp * e[r];
+                        b.b[r] =
+                            -contact.bias[r] - contact.kd * contact.velocity[r] + contact.kp * e[r];
                     }
                     // feasibility: A blockdiag(Rᵀ, Rᵀ) f ≤ 0, then the normal force row
                     let b = &mut variant.blocks[slots[1]];
-                    let rt = contact.pose.rotation.to_rotation_matrix().matrix().transpose();
+                    let rt = contact
+                        .pose
+                        .rotation
+                        .to_rotation_matrix()
+                        .matrix()
+                        .transpose();
                     let mut rot6 = Matrix6::zeros();
                     rot6.view_mut((0, 0), (3, 3)).copy_from(&rt);
                     rot6.view_mut((3, 3), (3, 3)).copy_from(&rt);
@@ -898,7 +916,7 @@ impl Tsid {
         for (k, slots) in variant.slots.iter().enumerate() {
             let mut s = 0.0;
             for &b in slots {
-                let r = variant.bridge.residual(b);
+                let r = variant.blocks[b].residual(x);
                 s += r * r;
             }
             self.output.residuals[k].residual = match self.tasks[k] {

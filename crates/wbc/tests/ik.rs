@@ -78,11 +78,18 @@ fn converges_from_random_postures_to_random_reachable_targets() {
         let mut converged_at = None;
         for step in 0..max_steps {
             let out = ik.step(&input).unwrap();
-            assert_eq!(out.report.status, QpStatus::Solved, "trial {trial} step {step}");
+            assert_eq!(
+                out.report.status,
+                QpStatus::Solved,
+                "trial {trial} step {step}"
+            );
             assert!(!out.report.fallback && !out.report.held);
             assert!(out.joint_positions.iter().all(|v| v.is_finite()));
             let v = limit_violation(&model, &out.joint_positions);
-            assert!(v < 1e-9, "trial {trial} step {step}: joint limits violated by {v}");
+            assert!(
+                v < 1e-9,
+                "trial {trial} step {step}: joint limits violated by {v}"
+            );
             let e = hard_errors(&model, ik.integrated_state(), &input);
             if e < 1e-6 {
                 converged_at = Some(step);
@@ -123,10 +130,15 @@ fn joint_limits_hold_when_the_target_needs_more_than_the_range() {
         assert!(out.report.status.is_success());
         let v = limit_violation(&model, &out.joint_positions);
         assert!(v < 1e-9, "joint limits violated by {v}");
-        reached_a_limit |= (0..q.len())
-            .any(|i| (out.joint_positions[i] - lo[i]).abs() < 1e-6 || (hi[i] - out.joint_positions[i]).abs() < 1e-6);
+        reached_a_limit |= (0..q.len()).any(|i| {
+            (out.joint_positions[i] - lo[i]).abs() < 1e-6
+                || (hi[i] - out.joint_positions[i]).abs() < 1e-6
+        });
     }
-    assert!(reached_a_limit, "the test should drive some joint to its limit");
+    assert!(
+        reached_a_limit,
+        "the test should drive some joint to its limit"
+    );
 }
 
 #[test]
@@ -151,9 +163,11 @@ fn hard_tasks_are_satisfied_exactly_and_velocity_mode_reproduces_reference_rates
     kd.set_representation(VelocityRepresentation::Mixed);
     kd.set_state(&state).unwrap();
     let mut j = nalgebra::DMatrix::zeros(6, model.nv());
-    kd.frame_jacobian(model.frame_id("l_sole").unwrap(), &mut j).unwrap();
+    kd.frame_jacobian(model.frame_id("l_sole").unwrap(), &mut j)
+        .unwrap();
     assert!((&j * &nu - input.left_foot.velocity).norm() < 1e-9);
-    kd.frame_jacobian(model.frame_id("r_sole").unwrap(), &mut j).unwrap();
+    kd.frame_jacobian(model.frame_id("r_sole").unwrap(), &mut j)
+        .unwrap();
     assert!((&j * &nu).norm() < 1e-9);
     let mut jc = nalgebra::DMatrix::zeros(3, model.nv());
     kd.com_jacobian(&mut jc).unwrap();
@@ -186,7 +200,8 @@ fn clarabel_and_active_set_agree_on_ik_ticks() {
             let oa = ik_a.step(&input).unwrap().clone();
             let oc = ik_c.step(&input).unwrap().clone();
             assert!(oa.report.status.is_success() && oc.report.status.is_success());
-            let d = (&oa.joint_velocities - &oc.joint_velocities).amax()
+            let d = (&oa.joint_velocities - &oc.joint_velocities)
+                .amax()
                 .max((oa.base_velocity - oc.base_velocity).amax());
             assert!(d < 1e-6, "active set vs clarabel differ by {d}");
             // keep both integrating from the same state
@@ -208,13 +223,21 @@ fn unreachable_feet_fall_back_to_the_relaxed_problem_without_nan() {
     let mut ik = QpIk::new(Arc::clone(&model), test_config(0.01, 100.0)).unwrap();
     let out = ik.step(&input).unwrap();
     assert_eq!(out.report.status, QpStatus::Infeasible);
-    assert!(out.report.fallback, "the relaxed problem should give the command");
+    assert!(
+        out.report.fallback,
+        "the relaxed problem should give the command"
+    );
     assert_eq!(out.report.relaxed_status, Some(QpStatus::Solved));
     assert!(!out.report.held);
     assert!(out.joint_positions.iter().all(|v| v.is_finite()));
     assert!(limit_violation(&model, &out.joint_positions) < 1e-9);
     // the hard feet tasks are violated and say so
-    let feet: f64 = out.residuals.iter().filter(|r| r.name.ends_with("foot")).map(|r| r.residual).sum();
+    let feet: f64 = out
+        .residuals
+        .iter()
+        .filter(|r| r.name.ends_with("foot"))
+        .map(|r| r.residual)
+        .sum();
     assert!(feet > 1.0);
 }
 
@@ -293,17 +316,50 @@ name = "limits"
 
     // model-level errors carry names
     let bad_frame = text.replace("frame = \"l_sole\"", "frame = \"l_foot_sole\"");
-    let err = QpIk::new(Arc::clone(&model), toml::from_str(&bad_frame).unwrap()).err().unwrap();
+    let err = QpIk::new(Arc::clone(&model), toml::from_str(&bad_frame).unwrap())
+        .err()
+        .unwrap();
     assert!(err.to_string().contains("l_foot_sole"), "{err}");
     let bad_joint = text.replace("l_knee = 0.5", "l_kne = 0.5");
-    let err = QpIk::new(Arc::clone(&model), toml::from_str(&bad_joint).unwrap()).err().unwrap();
+    let err = QpIk::new(Arc::clone(&model), toml::from_str(&bad_joint).unwrap())
+        .err()
+        .unwrap();
     assert!(err.to_string().contains("l_kne"), "{err}");
     // TSID-only task in the IK
     let tsid_task = format!("{text}\n[[tasks]]\ntype = \"joint_torque_limits\"\nname = \"tau\"\n");
-    let err = QpIk::new(Arc::clone(&model), toml::from_str(&tsid_task).unwrap()).err().unwrap();
+    let err = QpIk::new(Arc::clone(&model), toml::from_str(&tsid_task).unwrap())
+        .err()
+        .unwrap();
     assert!(err.to_string().contains("joint_torque_limits"), "{err}");
     // the defaults serialize and parse back identically
     let default = IkConfig::default_for_bundled_model();
     let back: IkConfig = toml::from_str(&toml::to_string(&default).unwrap()).unwrap();
     assert_eq!(back, default);
+}
+
+#[test]
+fn null_space_elimination_gives_the_full_problem_solution() {
+    let model = bundled_model();
+    let mut rng = rng(17);
+    for _ in 0..5 {
+        let target = references_at(
+            &model,
+            &standing_state(&model, &random_posture(&model, &mut rng, 0.2, 0.05)),
+        );
+        let mut input = target.clone();
+        input.state = standing_state(&model, &random_posture(&model, &mut rng, 0.2, 0.05));
+        let reduced_config = test_config(0.01, 10.0);
+        let mut full_config = reduced_config.clone();
+        full_config.eliminate_equalities = false;
+        let mut reduced = QpIk::new(Arc::clone(&model), reduced_config).unwrap();
+        let mut full = QpIk::new(Arc::clone(&model), full_config).unwrap();
+        let a = reduced.step(&input).unwrap().clone();
+        let b = full.step(&input).unwrap().clone();
+        assert_eq!(reduced.qp_problem().n(), model.nv() - 15);
+        assert_eq!(full.qp_problem().n(), model.nv());
+        let d = (&a.joint_velocities - &b.joint_velocities)
+            .amax()
+            .max((a.base_velocity - b.base_velocity).amax());
+        assert!(d < 1e-6, "eliminated vs full differ by {d}");
+    }
 }

@@ -28,20 +28,35 @@ fn kd_at(model: &Arc<Model>, state: &RobotState) -> KinDyn {
 /// Checks with stride-model's RNEA that `M ν̇ + h − Σ Jᵀ f = [0; τ]` and that every wrench is feasible.
 fn check_physics(model: &Arc<Model>, state: &RobotState, out: &TsidOutput, tol: f64, mu: f64) {
     let mut kd = kd_at(model, state);
-    let frames = [model.frame_id("l_sole").unwrap(), model.frame_id("r_sole").unwrap()];
+    let frames = [
+        model.frame_id("l_sole").unwrap(),
+        model.frame_id("r_sole").unwrap(),
+    ];
     let wrenches: Vec<ExternalWrench> = frames
         .iter()
         .zip(out.contact_wrenches.iter())
-        .map(|(f, w)| ExternalWrench { frame: *f, wrench: *w })
+        .map(|(f, w)| ExternalWrench {
+            frame: *f,
+            wrench: *w,
+        })
         .collect();
     let mut gen = DVector::zeros(model.nv());
-    kd.inverse_dynamics(&out.accelerations, &wrenches, &mut gen).unwrap();
+    kd.inverse_dynamics(&out.accelerations, &wrenches, &mut gen)
+        .unwrap();
     let base = gen.rows(0, 6).amax();
     assert!(base < tol, "base rows of the dynamics violated by {base}");
     let joints = (gen.rows(6, model.dof()) - &out.joint_torques).amax();
-    assert!(joints < tol, "torques differ from the RNEA ones by {joints}");
+    assert!(
+        joints < tol,
+        "torques differ from the RNEA ones by {joints}"
+    );
     for (i, j) in model.joints().iter().enumerate() {
-        assert!(out.joint_torques[i].abs() <= j.effort_limit + 1e-9, "{}: {}", j.name, out.joint_torques[i]);
+        assert!(
+            out.joint_torques[i].abs() <= j.effort_limit + 1e-9,
+            "{}: {}",
+            j.name,
+            out.joint_torques[i]
+        );
     }
     for (f, w) in frames.iter().zip(out.contact_wrenches.iter()) {
         let rt = kd.frame_pose(*f).rotation.inverse();
@@ -50,11 +65,22 @@ fn check_physics(model: &Arc<Model>, state: &RobotState, out: &TsidOutput, tol: 
         let fz = force.z;
         assert!(fz >= -1e-9, "negative normal force {fz}");
         // the inscribed 4-facet pyramid: |fx| + |fy| ≤ μ fz
-        assert!(force.x.abs() + force.y.abs() <= mu * fz + 1e-7, "friction: {force:?}");
+        assert!(
+            force.x.abs() + force.y.abs() <= mu * fz + 1e-7,
+            "friction: {force:?}"
+        );
         if fz > 1e-6 {
             let cop = Vector2::new(-torque.y / fz, torque.x / fz);
-            assert!(cop.x >= FOOT_X[0] - 1e-7 && cop.x <= FOOT_X[1] + 1e-7, "CoP x {}", cop.x);
-            assert!(cop.y >= FOOT_Y[0] - 1e-7 && cop.y <= FOOT_Y[1] + 1e-7, "CoP y {}", cop.y);
+            assert!(
+                cop.x >= FOOT_X[0] - 1e-7 && cop.x <= FOOT_X[1] + 1e-7,
+                "CoP x {}",
+                cop.x
+            );
+            assert!(
+                cop.y >= FOOT_Y[0] - 1e-7 && cop.y <= FOOT_Y[1] + 1e-7,
+                "CoP y {}",
+                cop.y
+            );
         } else {
             assert!(w.amax() < 1e-6, "unloaded foot carries {w:?}");
         }
@@ -82,15 +108,25 @@ fn solutions_satisfy_the_equations_of_motion_cones_cop_and_torque_limits() {
             flatten_on(&model, &mut state, if l { "l_sole" } else { "r_sole" });
         }
         let mut input = references_at(&model, &state);
-        input.com_position += Vector3::new(rng.random_range(-0.01..0.01), rng.random_range(-0.01..0.01), 0.0);
+        input.com_position += Vector3::new(
+            rng.random_range(-0.01..0.01),
+            rng.random_range(-0.01..0.01),
+            0.0,
+        );
         input.posture = Some(default_posture(&model));
         input.left_in_contact = l;
         input.right_in_contact = r;
         if !(l && r) {
             // single support: a LIPM-consistent CoM acceleration, ZMP at the stance sole point nearest
             // to the CoM projection
-            let foot = if l { &input.left_foot } else { &input.right_foot };
-            let local = foot.pose.inverse_transform_point(&nalgebra::Point3::from(input.com_position));
+            let foot = if l {
+                &input.left_foot
+            } else {
+                &input.right_foot
+            };
+            let local = foot
+                .pose
+                .inverse_transform_point(&nalgebra::Point3::from(input.com_position));
             let zmp = foot.pose.transform_point(&nalgebra::Point3::new(
                 local.x.clamp(FOOT_X[0], FOOT_X[1]),
                 local.y.clamp(FOOT_Y[0], FOOT_Y[1]),
@@ -121,7 +157,12 @@ fn solutions_satisfy_the_equations_of_motion_cones_cop_and_torque_limits() {
         }
         // hard task residuals are tiny; KKT holds
         for res in out.residuals.iter().filter(|r| r.hard) {
-            assert!(res.residual < 1e-7, "trial {trial} {}: {}", res.name, res.residual);
+            assert!(
+                res.residual < 1e-7,
+                "trial {trial} {}: {}",
+                res.name,
+                res.residual
+            );
         }
         let kkt = tsid.qp_problem().unwrap().check_kkt();
         assert!(kkt.is_satisfied(1e-6), "{kkt:?}");
@@ -136,25 +177,43 @@ fn standing_still_needs_no_acceleration_and_carries_the_weight() {
     // without torque regularization and with the angular momentum rate fixed (hard, zero) the feasible
     // ν̇ satisfy M_b ν̇ = 0 and J_feet ν̇ = 0, and every ν̇ cost is minimal at ν̇ = 0: the unique optimum
     let mut config = TsidConfig::default_for_bundled_model();
-    config.tasks.retain(|t| !matches!(t, TaskConfig::TorqueRegularization(_)));
-    config.tasks.push(TaskConfig::AngularMomentum(stride_wbc::AngularMomentumTaskConfig {
-        name: "angular_momentum".into(),
-        kp: 0.0,
-        priority: Priority::Hard,
-        weight: stride_wbc::Weight::Scalar(1.0),
-    }));
+    config
+        .tasks
+        .retain(|t| !matches!(t, TaskConfig::TorqueRegularization(_)));
+    config.tasks.push(TaskConfig::AngularMomentum(
+        stride_wbc::AngularMomentumTaskConfig {
+            name: "angular_momentum".into(),
+            kp: 0.0,
+            priority: Priority::Hard,
+            weight: stride_wbc::Weight::Scalar(1.0),
+        },
+    ));
     let mut tsid = Tsid::new(Arc::clone(&model), config).unwrap();
     let out = tsid.step(&input).unwrap();
     assert_eq!(out.report.status, QpStatus::Solved);
     let fz: f64 = out.contact_wrenches.iter().map(|w| w[2]).sum();
-    assert!((fz - model.total_mass() * 9.81).abs() < 1e-8, "Σ f_z = {fz}");
-    assert!(out.accelerations.amax() < 1e-9, "ν̇ = {}", out.accelerations.amax());
+    assert!(
+        (fz - model.total_mass() * 9.81).abs() < 1e-8,
+        "Σ f_z = {fz}"
+    );
+    assert!(
+        out.accelerations.amax() < 1e-9,
+        "ν̇ = {}",
+        out.accelerations.amax()
+    );
     // default: the QP trades a tiny acceleration for lower torques and sole moments
     let mut tsid = Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
     let out = tsid.step(&input).unwrap();
     let fz: f64 = out.contact_wrenches.iter().map(|w| w[2]).sum();
-    assert!((fz - model.total_mass() * 9.81).abs() < 1e-8, "Σ f_z = {fz}");
-    assert!(out.accelerations.amax() < 1e-3, "ν̇ = {}", out.accelerations.amax());
+    assert!(
+        (fz - model.total_mass() * 9.81).abs() < 1e-8,
+        "Σ f_z = {fz}"
+    );
+    assert!(
+        out.accelerations.amax() < 1e-3,
+        "ν̇ = {}",
+        out.accelerations.amax()
+    );
 }
 
 /// Integrates the closed loop TSID → forward dynamics with the planned wrenches as the contact
@@ -167,7 +226,10 @@ fn simulate(
     dt: f64,
     mut each: impl FnMut(usize, &TsidOutput, &RobotState, &RobotState),
 ) {
-    let frames = [model.frame_id("l_sole").unwrap(), model.frame_id("r_sole").unwrap()];
+    let frames = [
+        model.frame_id("l_sole").unwrap(),
+        model.frame_id("r_sole").unwrap(),
+    ];
     let mut kd = KinDyn::new(Arc::clone(model));
     kd.set_representation(VelocityRepresentation::Mixed);
     let mut acc = DVector::zeros(model.nv());
@@ -175,19 +237,30 @@ fn simulate(
         let out = tsid.step(input).unwrap().clone();
         assert!(out.report.status.is_success(), "step {k}: {:?}", out.report);
         let wrenches = [
-            ExternalWrench { frame: frames[0], wrench: out.contact_wrenches[0] },
-            ExternalWrench { frame: frames[1], wrench: out.contact_wrenches[1] },
+            ExternalWrench {
+                frame: frames[0],
+                wrench: out.contact_wrenches[0],
+            },
+            ExternalWrench {
+                frame: frames[1],
+                wrench: out.contact_wrenches[1],
+            },
         ];
         let before = input.state.clone();
         kd.set_state(&input.state).unwrap();
-        kd.forward_dynamics(&out.joint_torques, &wrenches, &mut acc).unwrap();
-        assert!((&acc - &out.accelerations).amax() < 1e-6, "forward dynamics disagrees with the TSID");
+        kd.forward_dynamics(&out.joint_torques, &wrenches, &mut acc)
+            .unwrap();
+        assert!(
+            (&acc - &out.accelerations).amax() < 1e-6,
+            "forward dynamics disagrees with the TSID"
+        );
         let s = &mut input.state;
         s.base_velocity += acc.fixed_rows::<6>(0) * dt;
         for i in 0..model.dof() {
             s.joint_velocities[i] += acc[6 + i] * dt;
         }
-        s.integrate(model, VelocityRepresentation::Mixed, dt).unwrap();
+        s.integrate(model, VelocityRepresentation::Mixed, dt)
+            .unwrap();
         each(k, &out, &before, s);
     }
 }
@@ -200,14 +273,18 @@ fn a_standing_robot_under_tsid_keeps_its_com_still() {
     let com0 = input.com_position;
     let feet0 = [input.left_foot.pose, input.right_foot.pose];
     let mut tsid = Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
-    let frames = [model.frame_id("l_sole").unwrap(), model.frame_id("r_sole").unwrap()];
+    let frames = [
+        model.frame_id("l_sole").unwrap(),
+        model.frame_id("r_sole").unwrap(),
+    ];
     let mut worst_com: f64 = 0.0;
     let mut worst_foot: f64 = 0.0;
     simulate(&model, &mut tsid, &mut input, 2000, 1e-3, |_, _, _, s| {
         let kd = kd_at(&model, s);
         worst_com = worst_com.max((kd.com_position() - com0).norm());
         for (f, p0) in frames.iter().zip(feet0.iter()) {
-            worst_foot = worst_foot.max((kd.frame_pose(*f).translation.vector - p0.translation.vector).norm());
+            worst_foot = worst_foot
+                .max((kd.frame_pose(*f).translation.vector - p0.translation.vector).norm());
         }
     });
     assert!(worst_com < 1e-6, "CoM moved by {worst_com} m in 2 s");
@@ -225,11 +302,21 @@ fn a_pushed_robot_returns_its_com_to_the_reference() {
     let mut tsid = Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
     let mut last = f64::INFINITY;
     let target = input.com_position;
-    simulate(&model, &mut tsid, &mut input, 1500, 1e-3, |_, out, before, after| {
-        check_physics(&model, before, out, 1e-8, MU);
-        last = (kd_at(&model, after).com_position() - target).norm();
-    });
-    assert!(last < 1e-4, "CoM error after 1.5 s: {last} (started 0.022 from {com0:?})");
+    simulate(
+        &model,
+        &mut tsid,
+        &mut input,
+        1500,
+        1e-3,
+        |_, out, before, after| {
+            check_physics(&model, before, out, 1e-8, MU);
+            last = (kd_at(&model, after).com_position() - target).norm();
+        },
+    );
+    assert!(
+        last < 1e-4,
+        "CoM error after 1.5 s: {last} (started 0.022 from {com0:?})"
+    );
 }
 
 #[test]
@@ -289,7 +376,10 @@ fn desired_zmp_outside_the_support_polygon_is_infeasible_and_falls_back() {
     // documented fallback: hard equalities relaxed, inequalities (cones, CoP, torque limits) kept hard
     let kd = kd_at(&model, &state);
     for (frame, w) in ["l_sole", "r_sole"].iter().zip(out.contact_wrenches.iter()) {
-        let rt = kd.frame_pose(model.frame_id(frame).unwrap()).rotation.inverse();
+        let rt = kd
+            .frame_pose(model.frame_id(frame).unwrap())
+            .rotation
+            .inverse();
         let f = rt * Vector3::new(w[0], w[1], w[2]);
         let t = rt * Vector3::new(w[3], w[4], w[5]);
         assert!(f.z >= -1e-9 && f.x.abs() + f.y.abs() <= MU * f.z + 1e-7);
@@ -298,7 +388,10 @@ fn desired_zmp_outside_the_support_polygon_is_infeasible_and_falls_back() {
         }
     }
     let zmp = out.residuals.iter().find(|r| r.name == "zmp").unwrap();
-    assert!(zmp.hard && zmp.residual > 1.0, "the violated hard ZMP shows in its residual: {zmp:?}");
+    assert!(
+        zmp.hard && zmp.residual > 1.0,
+        "the violated hard ZMP shows in its residual: {zmp:?}"
+    );
     assert!(out.joint_torques.iter().all(|v| v.is_finite()));
 
     // same problem with the ZMP inside the feet: feasible, nominal path
@@ -318,10 +411,17 @@ fn com_target_far_outside_the_support_polygon_with_hard_wrench_constraints_is_in
     let mut config = TsidConfig::default_for_bundled_model();
     config.qp.fallback = false;
     let mut tsid = Tsid::new(Arc::clone(&model), config).unwrap();
-    let first = tsid.step(&references_at(&model, &state)).unwrap().joint_torques.clone();
+    let first = tsid
+        .step(&references_at(&model, &state))
+        .unwrap()
+        .joint_torques
+        .clone();
     let out = tsid.step(&input).unwrap();
     assert_eq!(out.report.status, QpStatus::Infeasible);
-    assert!(out.report.held, "no fallback configured: the last valid torques are held");
+    assert!(
+        out.report.held,
+        "no fallback configured: the last valid torques are held"
+    );
     assert_eq!(out.joint_torques, first);
 }
 
@@ -360,7 +460,12 @@ fn lift_off_ramps_the_wrench_instead_of_jumping() {
     // ramped: the normal force decreases to zero over 50 ticks, never increasing, then stays zero
     assert!(fz[0] > 0.0);
     for k in 1..fz.len() {
-        assert!(fz[k] <= fz[k - 1] + 1e-9, "tick {k}: {} > {}", fz[k], fz[k - 1]);
+        assert!(
+            fz[k] <= fz[k - 1] + 1e-9,
+            "tick {k}: {} > {}",
+            fz[k],
+            fz[k - 1]
+        );
     }
     assert!(fz[49..].iter().all(|f| *f == 0.0), "{:?}", &fz[45..]);
     assert!(
@@ -377,9 +482,40 @@ fn config_parses_from_toml_and_requires_the_dynamics() {
     assert_eq!(back, default);
     let model = bundled_model();
     let mut no_dynamics = default.clone();
-    no_dynamics.tasks.retain(|t| !matches!(t, TaskConfig::FloatingBaseDynamics(_)));
+    no_dynamics
+        .tasks
+        .retain(|t| !matches!(t, TaskConfig::FloatingBaseDynamics(_)));
     let err = Tsid::new(Arc::clone(&model), no_dynamics).err().unwrap();
     assert!(err.to_string().contains("floating_base_dynamics"), "{err}");
     let bad = text.replace("friction = 0.33", "friction = 0.33\nrestitution = 0.1");
     assert!(toml::from_str::<TsidConfig>(&bad).is_err());
+}
+
+#[test]
+fn null_space_elimination_gives_the_full_problem_solution() {
+    let model = bundled_model();
+    let mut rng = rng(8);
+    for trial in 0..6 {
+        let state = perturbed_state(&model, &mut rng);
+        let mut input = references_at(&model, &state);
+        input.com_position.y += 0.005;
+        input.desired_zmp = Some(Vector2::new(input.com_position.x, input.com_position.y));
+        input.left_in_contact = trial % 3 != 1;
+        let mut reduced =
+            Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
+        let mut config = TsidConfig::default_for_bundled_model();
+        config.eliminate_equalities = false;
+        let mut full = Tsid::new(Arc::clone(&model), config).unwrap();
+        let a = reduced.step(&input).unwrap().clone();
+        let b = full.step(&input).unwrap().clone();
+        assert_eq!(a.report.status, QpStatus::Solved);
+        assert_eq!(b.report.status, QpStatus::Solved);
+        // the reduced problem has only the null-space coordinates as variables
+        assert!(reduced.qp_problem().unwrap().n() < full.qp_problem().unwrap().n());
+        let d = (&a.joint_torques - &b.joint_torques)
+            .amax()
+            .max((&a.accelerations - &b.accelerations).amax())
+            .max((a.contact_wrenches[0] - b.contact_wrenches[0]).amax());
+        assert!(d < 1e-6, "trial {trial}: eliminated vs full differ by {d}");
+    }
 }

@@ -10,7 +10,10 @@ use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_wbc::{bundled_posture, FootReference, WbcInput};
 
 pub fn model_path() -> String {
-    format!("{}/../../models/stride_humanoid.urdf", env!("CARGO_MANIFEST_DIR"))
+    format!(
+        "{}/../../models/stride_humanoid.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    )
 }
 
 pub fn bundled_model() -> Arc<Model> {
@@ -31,7 +34,12 @@ pub fn default_posture(model: &Model) -> DVector<f64> {
 }
 
 /// The default posture perturbed by up to `amplitude` rad per joint, kept `margin` inside the limits.
-pub fn random_posture(model: &Model, rng: &mut ChaCha8Rng, amplitude: f64, margin: f64) -> DVector<f64> {
+pub fn random_posture(
+    model: &Model,
+    rng: &mut ChaCha8Rng,
+    amplitude: f64,
+    margin: f64,
+) -> DVector<f64> {
     let mut q = default_posture(model);
     for (i, j) in model.joints().iter().enumerate() {
         let v = q[i] + rng.random_range(-amplitude..amplitude);
@@ -50,7 +58,8 @@ pub fn standing_state(model: &Arc<Model>, q: &DVector<f64>) -> RobotState {
     let l = kd.frame_pose(model.frame_id("l_sole").unwrap());
     let r = kd.frame_pose(model.frame_id("r_sole").unwrap());
     let z = 0.5 * (l.translation.vector.z + r.translation.vector.z);
-    state.base_pose = Isometry3::from_parts(Translation3::new(0.0, 0.0, -z), UnitQuaternion::identity());
+    state.base_pose =
+        Isometry3::from_parts(Translation3::new(0.0, 0.0, -z), UnitQuaternion::identity());
     state
 }
 
@@ -77,9 +86,20 @@ pub fn references_at(model: &Arc<Model>, state: &RobotState) -> WbcInput {
 
 /// A random base pose: translation within ±`t` m, rotation within ±`r` rad about each axis.
 pub fn random_pose(rng: &mut ChaCha8Rng, t: f64, r: f64) -> Isometry3<f64> {
-    let tr = Vector3::new(rng.random_range(-t..t), rng.random_range(-t..t), rng.random_range(-t..t));
-    let rot = Vector3::new(rng.random_range(-r..r), rng.random_range(-r..r), rng.random_range(-r..r));
-    Isometry3::from_parts(Translation3::from(tr), UnitQuaternion::from_scaled_axis(rot))
+    let tr = Vector3::new(
+        rng.random_range(-t..t),
+        rng.random_range(-t..t),
+        rng.random_range(-t..t),
+    );
+    let rot = Vector3::new(
+        rng.random_range(-r..r),
+        rng.random_range(-r..r),
+        rng.random_range(-r..r),
+    );
+    Isometry3::from_parts(
+        Translation3::from(tr),
+        UnitQuaternion::from_scaled_axis(rot),
+    )
 }
 
 /// Rotates and shifts the base so that `frame` (a sole) is flat on z = 0, keeping its x, y.
