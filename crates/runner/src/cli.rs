@@ -179,6 +179,12 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Writes to stdout; a closed pipe (reader gone) is not an error worth a panic.
+pub fn write_stdout(args: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let _ = std::io::stdout().lock().write_fmt(args);
+}
+
 /// The error and its chain of causes as one line.
 pub fn one_paragraph(e: &(dyn std::error::Error + 'static)) -> String {
     let mut s = e.to_string();

@@ -14,8 +14,8 @@ use crate::run::{run_scenario, Outcome, RunOptions};
 pub fn check(path: &Path) -> Result<ExitCode, CliError> {
     let s = Scenario::load(path)?;
     let c = &s.config;
-    println!("{}: ok", path.display());
-    println!(
+    crate::outln!("{}: ok", path.display());
+    crate::outln!(
         "  files: {}",
         s.sources
             .files
@@ -24,13 +24,19 @@ pub fn check(path: &Path) -> Result<ExitCode, CliError> {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    println!("  scenario: {} ({:?} control, {:?} plant, {} s)", c.scenario.name, c.scenario.control_mode, c.scenario.plant, c.scenario.duration);
-    println!("  model: {}", s.urdf_path.display());
+    crate::outln!(
+        "  scenario: {} ({:?} control, {:?} plant, {} s)",
+        c.scenario.name,
+        c.scenario.control_mode,
+        c.scenario.plant,
+        c.scenario.duration
+    );
+    crate::outln!("  model: {}", s.urdf_path.display());
     let planner = match c.rates.planner_mode {
         PlannerMode::Event => "event-driven".to_string(),
         PlannerMode::Periodic => format!("{} Hz", c.rates.planner_hz),
     };
-    println!(
+    crate::outln!(
         "  rates: base {} Hz, planner {planner}, simplified {} Hz, whole-body {} Hz, simulator {} Hz",
         c.rates.base_hz, c.rates.simplified_hz, c.rates.wbc_hz, c.rates.sim_hz
     );
@@ -40,9 +46,9 @@ pub fn check(path: &Path) -> Result<ExitCode, CliError> {
         Goal::Velocity { segments } => format!("velocity schedule of {} segments", segments.len()),
         Goal::Stand {} => "stand".into(),
     };
-    println!("  goal: {goal}");
+    crate::outln!("  goal: {goal}");
     if !c.sim.pushes.is_empty() {
-        println!("  pushes: {}", c.sim.pushes.len());
+        crate::outln!("  pushes: {}", c.sim.pushes.len());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -58,46 +64,63 @@ pub fn plan(path: &Path, json: bool, dt: Option<f64>) -> Result<ExitCode, CliErr
     let c = &scenario.config;
     let dt = dt.unwrap_or(1.0 / f64::from(c.rates.simplified_hz));
     if !(dt.is_finite() && dt > 0.0) {
-        return Err(CliError::msg(format!("--dt {dt}: expected a positive number of seconds")));
+        return Err(CliError::msg(format!(
+            "--dt {dt}: expected a positive number of seconds"
+        )));
     }
-    let model = crate::run::load_model(&scenario).map_err(|e| err(e))?;
-    let q0 = crate::run::initial_joint_positions(&scenario, &model).map_err(|e| err(e))?;
+    let model = crate::run::load_model(&scenario).map_err(err)?;
+    let q0 = crate::run::initial_joint_positions(&scenario, &model).map_err(err)?;
     let frame = |name: &str, key: &str| {
-        model
-            .frame_id(name)
-            .ok_or_else(|| CliError::from(scenario.invalid(key, format!("the model has no frame `{name}`"))))
+        model.frame_id(name).ok_or_else(|| {
+            CliError::from(scenario.invalid(key, format!("the model has no frame `{name}`")))
+        })
     };
     let l = frame(&c.robot.left_sole, "robot.left_sole")?;
     let r = frame(&c.robot.right_sole, "robot.right_sole")?;
-    let state = crate::robot::standing_state(&model, &q0, l, r).map_err(|e| err(e))?;
+    let state = crate::robot::standing_state(&model, &q0, l, r).map_err(err)?;
     let mut kd = stride_model::KinDyn::new(Arc::clone(&model));
-    kd.set_state(&state).map_err(|e| err(e))?;
+    kd.set_state(&state).map_err(err)?;
     let (lp, rp) = (kd.frame_pose(l), kd.frame_pose(r));
     let events = crate::stack::goal_events(&c.goal);
-    let mut planner = stride_planner::Planner::new(c.planner.clone()).map_err(|e| err(e))?;
-    let first = events.first().map_or(stride_planner::Goal::Stand, |e| e.goal.clone());
-    planner.start(0.0, &lp, &rp, &first).map_err(|e| err(e))?;
+    let mut planner = stride_planner::Planner::new(c.planner.clone()).map_err(err)?;
+    let first = events
+        .first()
+        .map_or(stride_planner::Goal::Stand, |e| e.goal.clone());
+    planner.start(0.0, &lp, &rp, &first).map_err(err)?;
     for e in events.iter().skip(1) {
-        planner.replan(e.time_ns as f64 * 1e-9, &e.goal).map_err(|e| err(e))?;
+        planner
+            .replan(e.time_ns as f64 * 1e-9, &e.goal)
+            .map_err(err)?;
     }
     let plan = planner
         .plan()
         .ok_or_else(|| CliError::msg("the planner produced no plan"))?;
-    let report = plan.report(dt).map_err(|e| err(e))?;
+    let report = plan.report(dt).map_err(err)?;
     if json {
-        println!("{}", serde_json::to_string(&report).map_err(|e| CliError::msg(e.to_string()))?);
+        crate::outln!(
+            "{}",
+            serde_json::to_string(&report).map_err(|e| CliError::msg(e.to_string()))?
+        );
         return Ok(ExitCode::SUCCESS);
     }
-    println!(
+    crate::outln!(
         "plan of {}: {} steps, ends at {:.2} s ({:.2} s of samples every {dt} s)",
         c.scenario.name,
         plan.step_count(),
         plan.end_time,
         plan.end_time - plan.start_time
     );
-    println!("  {:<6} {:>9} {:>9} {:>9} {:>10} {:>10}", "foot", "x [m]", "y [m]", "yaw [°]", "on [s]", "off [s]");
+    crate::outln!(
+        "  {:<6} {:>9} {:>9} {:>9} {:>10} {:>10}",
+        "foot",
+        "x [m]",
+        "y [m]",
+        "yaw [°]",
+        "on [s]",
+        "off [s]"
+    );
     for f in plan.footsteps() {
-        println!(
+        crate::outln!(
             "  {:<6} {:>9.3} {:>9.3} {:>9.1} {:>10.2} {:>10}",
             match f.foot {
                 stride_planner::Foot::Left => "left",
@@ -107,7 +130,8 @@ pub fn plan(path: &Path, json: bool, dt: Option<f64>) -> Result<ExitCode, CliErr
             f.pose.translation.y,
             f.pose.rotation.euler_angles().2.to_degrees(),
             f.activation_time,
-            f.deactivation_time.map_or("-".to_string(), |t| format!("{t:.2}"))
+            f.deactivation_time
+                .map_or("-".to_string(), |t| format!("{t:.2}"))
         );
     }
     Ok(ExitCode::SUCCESS)
@@ -125,7 +149,9 @@ pub fn run(
     let scenario = Scenario::load(path)?;
     if let Some(d) = duration {
         if !(d.is_finite() && d > 0.0) {
-            return Err(CliError::msg(format!("--duration {d}: expected a positive number of seconds")));
+            return Err(CliError::msg(format!(
+                "--duration {d}: expected a positive number of seconds"
+            )));
         }
     }
     let stop = Arc::new(AtomicBool::new(false));
@@ -146,8 +172,9 @@ pub fn run(
         }),
         ..RunOptions::default()
     };
-    let summary = run_scenario(&scenario, &options).map_err(|e| CliError::msg(crate::cli::one_paragraph(&e)))?;
-    print!("{}", summary.render());
+    let summary = run_scenario(&scenario, &options)
+        .map_err(|e| CliError::msg(crate::cli::one_paragraph(&e)))?;
+    crate::out!("{}", summary.render());
     Ok(match summary.outcome {
         Outcome::DurationReached | Outcome::GoalReached | Outcome::Interrupted => ExitCode::SUCCESS,
         Outcome::Fell { .. } => ExitCode::from(3),
@@ -165,24 +192,34 @@ pub fn replay(
     let report = crate::replay::replay(log, layer, config.as_deref(), output.as_ref())
         .map_err(|e| CliError::msg(crate::cli::one_paragraph(&e)))?;
     let d = &report.difference;
-    println!(
+    crate::outln!(
         "replayed {} {:?} ticks from {}{}",
         report.ticks,
         layer,
         log.display(),
-        config.as_ref().map(|c| format!(" with {}", c.display())).unwrap_or_default()
+        config
+            .as_ref()
+            .map(|c| format!(" with {}", c.display()))
+            .unwrap_or_default()
     );
-    println!(
+    crate::outln!(
         "largest difference from the logged outputs: {:e}{}; non-numeric differences: {}",
         d.max_abs,
-        if d.at.is_empty() { String::new() } else { format!(" (at {})", d.at) },
+        if d.at.is_empty() {
+            String::new()
+        } else {
+            format!(" (at {})", d.at)
+        },
         d.mismatches
     );
     if report.layer_errors > 0 {
-        println!("layer errors during replay (output held): {}", report.layer_errors);
+        crate::outln!(
+            "layer errors during replay (output held): {}",
+            report.layer_errors
+        );
     }
     if let Some(o) = output {
-        println!("replayed outputs written to {}", o.display());
+        crate::outln!("replayed outputs written to {}", o.display());
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -1,6 +1,18 @@
 //! stride-runner: configuration, scheduler, MCAP logging, replay and the `stride` command line.
 #![warn(missing_docs)]
 
+/// `println!` that ignores a closed stdout (e.g. piped into `head`) instead of panicking.
+#[macro_export]
+macro_rules! outln {
+    ($($t:tt)*) => { $crate::cli::write_stdout(format_args!("{}\n", format_args!($($t)*))) };
+}
+
+/// `print!` that ignores a closed stdout.
+#[macro_export]
+macro_rules! out {
+    ($($t:tt)*) => { $crate::cli::write_stdout(format_args!($($t)*)) };
+}
+
 pub mod cli;
 pub mod commands;
 pub mod config;

@@ -263,7 +263,11 @@ impl LogWriter {
     }
 
     /// Stores a metadata record (string map).
-    pub fn metadata(&mut self, name: &str, entries: BTreeMap<String, String>) -> Result<(), LogError> {
+    pub fn metadata(
+        &mut self,
+        name: &str,
+        entries: BTreeMap<String, String>,
+    ) -> Result<(), LogError> {
         self.send(Msg::Metadata {
             name: name.into(),
             entries,
@@ -329,7 +333,8 @@ fn writer_thread(
                     match schema {
                         Some(s) => {
                             let sid = w.add_schema(&schema_name, "jsonschema", s.as_bytes())?;
-                            channels[idx] = Some(w.add_channel(sid, &topic, "json", &BTreeMap::new())?);
+                            channels[idx] =
+                                Some(w.add_channel(sid, &topic, "json", &BTreeMap::new())?);
                         }
                         None => {
                             pending.insert(id, (topic, schema_name));
@@ -345,25 +350,27 @@ fn writer_thread(
                     let idx = usize::from(id);
                     if channels.get(idx).copied().flatten().is_none() {
                         if let Some((topic, schema_name)) = pending.remove(&id) {
-                            let value: serde_json::Value = serde_json::from_slice(&buf).map_err(|e| {
-                                LogError::Serialize {
+                            let value: serde_json::Value =
+                                serde_json::from_slice(&buf).map_err(|e| LogError::Serialize {
                                     topic: topic.clone(),
                                     source: e,
-                                }
-                            })?;
+                                })?;
                             let schema = schema_from_example(&value, &schema_name);
-                            let sid = w.add_schema(&schema_name, "jsonschema", schema.to_string().as_bytes())?;
+                            let sid = w.add_schema(
+                                &schema_name,
+                                "jsonschema",
+                                schema.to_string().as_bytes(),
+                            )?;
                             if channels.len() <= idx {
                                 channels.resize(idx + 1, None);
                             }
-                            channels[idx] = Some(w.add_channel(sid, &topic, "json", &BTreeMap::new())?);
+                            channels[idx] =
+                                Some(w.add_channel(sid, &topic, "json", &BTreeMap::new())?);
                         }
                     }
-                    let channel_id = channels
-                        .get(idx)
-                        .copied()
-                        .flatten()
-                        .ok_or_else(|| LogError::Content(format!("message for unregistered topic {id}")))?;
+                    let channel_id = channels.get(idx).copied().flatten().ok_or_else(|| {
+                        LogError::Content(format!("message for unregistered topic {id}"))
+                    })?;
                     w.write_to_known_channel(
                         &mcap::records::MessageHeader {
                             channel_id,
@@ -423,7 +430,10 @@ fn writer_thread(
 pub fn schema_from_example(example: &serde_json::Value, title: &str) -> serde_json::Value {
     let mut s = schema_of(example);
     if let serde_json::Value::Object(m) = &mut s {
-        m.insert("$schema".into(), "https://json-schema.org/draft/2020-12/schema".into());
+        m.insert(
+            "$schema".into(),
+            "https://json-schema.org/draft/2020-12/schema".into(),
+        );
         m.insert("title".into(), title.into());
     }
     s
@@ -630,7 +640,8 @@ pub fn read_log(path: &Path) -> Result<LogContents, LogError> {
     for rec in mcap::read::LinearReader::new(&bytes)? {
         match rec? {
             mcap::records::Record::Attachment { header, data, .. } => {
-                out.attachments.insert(header.name.clone(), data.into_owned());
+                out.attachments
+                    .insert(header.name.clone(), data.into_owned());
             }
             mcap::records::Record::Metadata(m) => {
                 out.metadata.insert(m.name.clone(), m.metadata.clone());

@@ -5,7 +5,9 @@ use std::path::Path;
 use std::process::ExitCode;
 use std::sync::Arc;
 
-use nalgebra::{DMatrix, DVector, Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{
+    DMatrix, DVector, Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3, Vector6,
+};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use stride_model::{FrameKind, KinDyn, Model, RobotState, VelocityRepresentation};
@@ -19,7 +21,11 @@ pub fn model(command: ModelCommand) -> Result<ExitCode, CliError> {
             let model = load(&urdf)?;
             let info = info(&model)?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&info).map_err(|e| CliError::msg(e.to_string()))?);
+                crate::outln!(
+                    "{}",
+                    serde_json::to_string_pretty(&info)
+                        .map_err(|e| CliError::msg(e.to_string()))?
+                );
             } else {
                 print_info(&info);
             }
@@ -31,12 +37,16 @@ pub fn model(command: ModelCommand) -> Result<ExitCode, CliError> {
             representation,
         } => {
             let model = load(&urdf)?;
-            let text = std::fs::read_to_string(&state)
-                .map_err(|e| CliError::msg(format!("cannot read state file {}: {e}", state.display())))?;
+            let text = std::fs::read_to_string(&state).map_err(|e| {
+                CliError::msg(format!("cannot read state file {}: {e}", state.display()))
+            })?;
             let input: EvalInput = serde_json::from_str(&text)
                 .map_err(|e| CliError::msg(format!("state file {}: {e}", state.display())))?;
             let out = eval(&model, &input, representation)?;
-            println!("{}", serde_json::to_string(&out).map_err(|e| CliError::msg(e.to_string()))?);
+            crate::outln!(
+                "{}",
+                serde_json::to_string(&out).map_err(|e| CliError::msg(e.to_string()))?
+            );
             Ok(ExitCode::SUCCESS)
         }
     }
@@ -175,7 +185,10 @@ pub fn info(model: &Arc<Model>) -> Result<ModelInfo, CliError> {
             .iter()
             .map(|f| FrameInfo {
                 name: f.name.clone(),
-                body: bodies.get(f.link).map(|b| b.name.clone()).unwrap_or_default(),
+                body: bodies
+                    .get(f.link)
+                    .map(|b| b.name.clone())
+                    .unwrap_or_default(),
                 kind: f.kind,
             })
             .collect(),
@@ -196,20 +209,35 @@ pub fn info(model: &Arc<Model>) -> Result<ModelInfo, CliError> {
 }
 
 fn print_info(i: &ModelInfo) {
-    println!("model {}: {} DoF (nv = {}), root link {}", i.name, i.dof, i.nv, i.root_link);
-    println!("total mass: {:.4} kg", i.total_mass);
-    println!(
-        "CoM at zero configuration: [{:.4}, {:.4}, {:.4}] m",
-        i.com_at_zero[0], i.com_at_zero[1], i.com_at_zero[2]
+    crate::outln!(
+        "model {}: {} DoF (nv = {}), root link {}",
+        i.name,
+        i.dof,
+        i.nv,
+        i.root_link
     );
-    println!("joints ({}), in model order:", i.joints.len());
-    println!(
+    crate::outln!("total mass: {:.4} kg", i.total_mass);
+    crate::outln!(
+        "CoM at zero configuration: [{:.4}, {:.4}, {:.4}] m",
+        i.com_at_zero[0],
+        i.com_at_zero[1],
+        i.com_at_zero[2]
+    );
+    crate::outln!("joints ({}), in model order:", i.joints.len());
+    crate::outln!(
         "  {:>3}  {:<24} {:<10} {:<22} {:>9} {:>9} {:>8} {:>8}",
-        "#", "name", "type", "axis", "lower", "upper", "vel", "effort"
+        "#",
+        "name",
+        "type",
+        "axis",
+        "lower",
+        "upper",
+        "vel",
+        "effort"
     );
     for (k, j) in i.joints.iter().enumerate() {
         let lim = |x: Option<f64>| x.map_or("-inf/inf".to_string(), |v| format!("{v:.3}"));
-        println!(
+        crate::outln!(
             "  {:>3}  {:<24} {:<10} [{:>5.2}, {:>5.2}, {:>5.2}]     {:>9} {:>9} {:>8.2} {:>8.2}{}",
             k,
             j.name,
@@ -221,23 +249,36 @@ fn print_info(i: &ModelInfo) {
             lim(j.upper),
             j.velocity_limit,
             j.effort_limit,
-            j.mimic.as_ref().map(|m| format!("  (mimics {m})")).unwrap_or_default()
+            j.mimic
+                .as_ref()
+                .map(|m| format!("  (mimics {m})"))
+                .unwrap_or_default()
         );
     }
-    println!("links ({}): {}", i.links.len(), i.links.join(", "));
+    crate::outln!("links ({}): {}", i.links.len(), i.links.join(", "));
     let extra: Vec<&str> = i
         .frames
         .iter()
         .filter(|f| f.kind != FrameKind::Body)
         .map(|f| f.name.as_str())
         .collect();
-    println!("frames ({} in total; besides body frames): {}", i.frames.len(), extra.join(", "));
-    println!("sensors ({}):", i.sensors.len());
+    crate::outln!(
+        "frames ({} in total; besides body frames): {}",
+        i.frames.len(),
+        extra.join(", ")
+    );
+    crate::outln!("sensors ({}):", i.sensors.len());
     for s in &i.sensors {
-        println!("  {} ({}) on joint {}, frame {}", s.name, s.kind, s.joint, s.frame);
+        crate::outln!(
+            "  {} ({}) on joint {}, frame {}",
+            s.name,
+            s.kind,
+            s.joint,
+            s.frame
+        );
     }
     for w in &i.warnings {
-        println!("warning: {w}");
+        crate::outln!("warning: {w}");
     }
 }
 
@@ -276,7 +317,9 @@ fn default_gravity() -> [f64; 3] {
 }
 
 fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    (0..m.nrows()).map(|r| m.row(r).iter().copied().collect()).collect()
+    (0..m.nrows())
+        .map(|r| m.row(r).iter().copied().collect())
+        .collect()
 }
 
 /// Evaluates the `model eval` output object.
@@ -295,11 +338,17 @@ pub fn eval(
     let [qx, qy, qz, qw] = input.base_orientation_xyzw;
     let norm = (qx * qx + qy * qy + qz * qz + qw * qw).sqrt();
     if !norm.is_finite() || norm < 1e-9 {
-        return Err(CliError::msg("base_orientation_xyzw: expected a non-zero finite quaternion [x, y, z, w]"));
+        return Err(CliError::msg(
+            "base_orientation_xyzw: expected a non-zero finite quaternion [x, y, z, w]",
+        ));
     }
     let mut state = RobotState::zero(model);
     state.base_pose = Isometry3::from_parts(
-        Translation3::new(input.base_position[0], input.base_position[1], input.base_position[2]),
+        Translation3::new(
+            input.base_position[0],
+            input.base_position[1],
+            input.base_position[2],
+        ),
         UnitQuaternion::from_quaternion(Quaternion::new(qw, qx, qy, qz)),
     );
     state.base_velocity = Vector6::from_column_slice(&input.base_velocity);
@@ -337,9 +386,11 @@ pub fn eval(
     let mut frames = serde_json::Map::new();
     let mut jac = DMatrix::zeros(6, nv);
     for name in &input.frames {
-        let id = model
-            .frame_id(name)
-            .ok_or_else(|| CliError::msg(format!("frames: unknown frame `{name}` (see `stride model info`)")))?;
+        let id = model.frame_id(name).ok_or_else(|| {
+            CliError::msg(format!(
+                "frames: unknown frame `{name}` (see `stride model info`)"
+            ))
+        })?;
         let pose = kd.frame_pose(id);
         kd.frame_jacobian(id, &mut jac).map_err(err)?;
         let a = kd.frame_bias_acceleration(id);

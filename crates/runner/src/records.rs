@@ -7,7 +7,9 @@
 
 use std::borrow::Cow;
 
-use nalgebra::{DVector, Isometry3, Quaternion, Translation3, UnitQuaternion, Vector2, Vector3, Vector6};
+use nalgebra::{
+    DVector, Isometry3, Quaternion, Translation3, UnitQuaternion, Vector2, Vector3, Vector6,
+};
 use serde::{Deserialize, Serialize};
 use stride_model::RobotState;
 use stride_planner::{FootSample, Goal as PlannerGoal, PhaseKind, PlanSample, PlannerInput};
@@ -313,9 +315,12 @@ impl<'a> WbcInputRecord<'a> {
         i.left_in_contact = self.left_in_contact;
         i.right_in_contact = self.right_in_contact;
         i.desired_zmp = self.desired_zmp.map(|z| Vector2::new(z[0], z[1]));
-        i.desired_wrenches = self
-            .desired_wrenches
-            .map(|w| [Vector6::from_column_slice(&w[0]), Vector6::from_column_slice(&w[1])]);
+        i.desired_wrenches = self.desired_wrenches.map(|w| {
+            [
+                Vector6::from_column_slice(&w[0]),
+                Vector6::from_column_slice(&w[1]),
+            ]
+        });
         let [x, y, z, w] = self.torso.orientation_xyzw;
         i.torso = OrientationReference {
             orientation: UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z)),
@@ -398,7 +403,9 @@ impl<'a> TsidOutputRecord<'a> {
 }
 
 /// `/simplified/output`: the layer's output with the MPC solve time zeroed.
-pub fn simplified_output_record(o: &stride_simplified::SimplifiedOutput) -> stride_simplified::SimplifiedOutput {
+pub fn simplified_output_record(
+    o: &stride_simplified::SimplifiedOutput,
+) -> stride_simplified::SimplifiedOutput {
     let mut r = *o;
     r.diagnostics.mpc.solve_time = 0.0;
     r

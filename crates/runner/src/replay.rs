@@ -20,7 +20,8 @@ use crate::cli::LayerName;
 use crate::config::{ControlMode, Scenario};
 use crate::log::{read_log, LogContents, LogOptions, LogWriter};
 use crate::records::{
-    simplified_output_record, IkOutputRecord, PlanSampleRecord, PlannerInputRecord, TsidOutputRecord, WbcInputRecord,
+    simplified_output_record, IkOutputRecord, PlanSampleRecord, PlannerInputRecord,
+    TsidOutputRecord, WbcInputRecord,
 };
 
 /// Why a replay failed.
@@ -59,11 +60,20 @@ pub struct ReplayReport {
     pub layer_errors: usize,
 }
 
-fn diff(a: &serde_json::Value, b: &serde_json::Value, path: &mut String, d: &mut Difference, time: f64) {
+fn diff(
+    a: &serde_json::Value,
+    b: &serde_json::Value,
+    path: &mut String,
+    d: &mut Difference,
+    time: f64,
+) {
     use serde_json::Value;
     match (a, b) {
         (Value::Number(x), Value::Number(y)) => {
-            let (x, y) = (x.as_f64().unwrap_or(f64::NAN), y.as_f64().unwrap_or(f64::NAN));
+            let (x, y) = (
+                x.as_f64().unwrap_or(f64::NAN),
+                y.as_f64().unwrap_or(f64::NAN),
+            );
             let e = (x - y).abs();
             if e > d.max_abs || (e.is_nan() && !d.max_abs.is_nan()) {
                 d.max_abs = e;
@@ -102,25 +112,33 @@ fn diff(a: &serde_json::Value, b: &serde_json::Value, path: &mut String, d: &mut
 }
 
 fn parse<T: serde::de::DeserializeOwned>(data: &[u8], topic: &str) -> Result<T, ReplayError> {
-    serde_json::from_slice(data).map_err(|e| ReplayError::Content(format!("a message on {topic} does not parse: {e}")))
+    serde_json::from_slice(data)
+        .map_err(|e| ReplayError::Content(format!("a message on {topic} does not parse: {e}")))
 }
 
 /// The scenario stored in a log.
 pub fn logged_scenario(log: &LogContents, log_path: &Path) -> Result<Scenario, ReplayError> {
-    let text = log
-        .attachments
-        .get("scenario.toml")
-        .ok_or_else(|| ReplayError::Content(format!("{} holds no scenario.toml attachment", log_path.display())))?;
+    let text = log.attachments.get("scenario.toml").ok_or_else(|| {
+        ReplayError::Content(format!(
+            "{} holds no scenario.toml attachment",
+            log_path.display()
+        ))
+    })?;
     let text = String::from_utf8_lossy(text).into_owned();
-    Ok(Scenario::from_texts(vec![(log_path.join("scenario.toml"), text)])?)
+    Ok(Scenario::from_texts(vec![(
+        log_path.join("scenario.toml"),
+        text,
+    )])?)
 }
 
 /// The model stored in a log.
 pub fn logged_model(log: &LogContents, log_path: &Path) -> Result<Arc<Model>, ReplayError> {
-    let urdf = log
-        .attachments
-        .get("model.urdf")
-        .ok_or_else(|| ReplayError::Content(format!("{} holds no model.urdf attachment", log_path.display())))?;
+    let urdf = log.attachments.get("model.urdf").ok_or_else(|| {
+        ReplayError::Content(format!(
+            "{} holds no model.urdf attachment",
+            log_path.display()
+        ))
+    })?;
     Model::from_urdf_str(&String::from_utf8_lossy(urdf))
         .map(Arc::new)
         .map_err(|e| ReplayError::Content(format!("the URDF stored in the log does not load: {e}")))
@@ -145,7 +163,11 @@ pub fn replay(
     let mut writer = match output {
         Some(p) => {
             let mut w = LogWriter::create(p, &LogOptions::default())?;
-            w.attach("scenario.toml", "application/toml", scenario.merged_toml().into_bytes())?;
+            w.attach(
+                "scenario.toml",
+                "application/toml",
+                scenario.merged_toml().into_bytes(),
+            )?;
             if let Some(u) = log.attachments.get("model.urdf") {
                 w.attach("model.urdf", "application/xml", u.clone())?;
             }
@@ -164,7 +186,13 @@ pub fn replay(
      -> Result<(), ReplayError> {
         let logged: serde_json::Value = parse(logged, topic)?;
         path.clear();
-        diff(&replayed, &logged, &mut path, &mut report.difference, t as f64 * 1e-9);
+        diff(
+            &replayed,
+            &logged,
+            &mut path,
+            &mut report.difference,
+            t as f64 * 1e-9,
+        );
         report.ticks += 1;
         if let Some(w) = writer.as_mut() {
             let id = w.topic_id(topic)?;
@@ -191,7 +219,14 @@ pub fn replay(
                             .sample(m.time_ns as f64 * 1e-9, &mut sample)
                             .map_err(|e| ReplayError::Content(format!("planner: {e}")))?;
                         let v = to_value(&PlanSampleRecord::from_sample(&sample));
-                        compare(&mut report, &mut writer, "/planner/references", m.time_ns, v, &m.data)?;
+                        compare(
+                            &mut report,
+                            &mut writer,
+                            "/planner/references",
+                            m.time_ns,
+                            v,
+                            &m.data,
+                        )?;
                     }
                     _ => {}
                 }
@@ -209,10 +244,17 @@ pub fn replay(
                     report.layer_errors += 1;
                 }
                 let out = simplified_output_record(ctl.output());
-                let logged = outputs
-                    .get(i)
-                    .ok_or_else(|| ReplayError::Content("fewer /simplified/output than inputs".into()))?;
-                compare(&mut report, &mut writer, "/simplified/output", m.time_ns, to_value(&out), &logged.data)?;
+                let logged = outputs.get(i).ok_or_else(|| {
+                    ReplayError::Content("fewer /simplified/output than inputs".into())
+                })?;
+                compare(
+                    &mut report,
+                    &mut writer,
+                    "/simplified/output",
+                    m.time_ns,
+                    to_value(&out),
+                    &logged.data,
+                )?;
             }
         }
         LayerName::Wbc => {
@@ -226,12 +268,18 @@ pub fn replay(
                 ControlMode::Position => {
                     let mut cfg = c.wbc.ik.clone();
                     cfg.period = period;
-                    ik = Some(QpIk::new(Arc::clone(&model), cfg).map_err(|e| ReplayError::Content(format!("QP-IK: {e}")))?);
+                    ik = Some(
+                        QpIk::new(Arc::clone(&model), cfg)
+                            .map_err(|e| ReplayError::Content(format!("QP-IK: {e}")))?,
+                    );
                 }
                 ControlMode::Torque => {
                     let mut cfg = c.wbc.tsid.clone();
                     cfg.period = period;
-                    tsid = Some(Tsid::new(Arc::clone(&model), cfg).map_err(|e| ReplayError::Content(format!("TSID: {e}")))?);
+                    tsid = Some(
+                        Tsid::new(Arc::clone(&model), cfg)
+                            .map_err(|e| ReplayError::Content(format!("TSID: {e}")))?,
+                    );
                 }
             }
             for (i, m) in log.topic("/wbc/input").enumerate() {
@@ -253,7 +301,14 @@ pub fn replay(
                 let logged = outputs
                     .get(i)
                     .ok_or_else(|| ReplayError::Content("fewer /wbc/output than inputs".into()))?;
-                compare(&mut report, &mut writer, "/wbc/output", m.time_ns, v, &logged.data)?;
+                compare(
+                    &mut report,
+                    &mut writer,
+                    "/wbc/output",
+                    m.time_ns,
+                    v,
+                    &logged.data,
+                )?;
             }
         }
     }

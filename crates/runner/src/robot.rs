@@ -166,7 +166,8 @@ impl IdealPlant {
     ) -> Result<Self, RobotError> {
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_representation(VelocityRepresentation::Mixed);
-        kd.set_state(initial).map_err(|e| RobotError(e.to_string()))?;
+        kd.set_state(initial)
+            .map_err(|e| RobotError(e.to_string()))?;
         let anchor_pose = kd.frame_pose(left_sole);
         let mut meas = Measurement::new(&model);
         meas.state = initial.clone();
@@ -250,13 +251,15 @@ impl Robot for IdealPlant {
             )));
         }
         self.pending.mode = command.mode;
-        self.pending.joint_positions.copy_from(&command.joint_positions);
+        self.pending
+            .joint_positions
+            .copy_from(&command.joint_positions);
         self.pending.contacts = command.contacts;
         Ok(())
     }
     fn advance(&mut self) -> Result<(), RobotError> {
         let dt = self.period_ns as f64 * 1e-9;
-        self.previous.clone_from(&self.meas.state);
+        copy_state(&mut self.previous, &self.meas.state);
         // Re-anchor when the anchored foot leaves the ground and the other one is down.
         let contacts = self.pending.contacts;
         if !contacts[self.anchor] && contacts[1 - self.anchor] {
@@ -264,8 +267,12 @@ impl Robot for IdealPlant {
             self.anchor_pose = self.kd.frame_pose(self.feet[self.anchor]);
         }
         let state = &mut self.meas.state;
-        state.joint_positions.copy_from(&self.pending.joint_positions);
-        self.kd.set_state(state).map_err(|e| RobotError(e.to_string()))?;
+        state
+            .joint_positions
+            .copy_from(&self.pending.joint_positions);
+        self.kd
+            .set_state(state)
+            .map_err(|e| RobotError(e.to_string()))?;
         // base_H_anchor with the new joints; world_H_base = world_H_anchor · anchor_H_base.
         let base_to_anchor = self.kd.relative_transform_from_base(self.feet[self.anchor]);
         let mut base = self.anchor_pose * base_to_anchor.inverse();
@@ -282,11 +289,14 @@ impl Robot for IdealPlant {
         let rot = base.rotation * prev.base_pose.rotation.inverse();
         let ang = rot.scaled_axis() / dt;
         state.base_velocity = Vector6::new(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z);
-        self.kd.set_state(state).map_err(|e| RobotError(e.to_string()))?;
+        self.kd
+            .set_state(state)
+            .map_err(|e| RobotError(e.to_string()))?;
         self.meas.time_ns += self.period_ns;
         self.meas.imu.orientation = base.rotation;
         self.meas.imu.angular_velocity = base.rotation.inverse() * ang;
-        self.meas.imu.linear_acceleration = base.rotation.inverse() * Vector3::new(0.0, 0.0, self.gravity);
+        self.meas.imu.linear_acceleration =
+            base.rotation.inverse() * Vector3::new(0.0, 0.0, self.gravity);
         self.update_wrenches();
         Ok(())
     }
@@ -322,13 +332,15 @@ pub fn standing_state(
     let mut state = RobotState::zero(model);
     state.joint_positions.copy_from(joint_positions);
     let mut kd = KinDyn::new(Arc::clone(model));
-    kd.set_state(&state).map_err(|e| RobotError(e.to_string()))?;
+    kd.set_state(&state)
+        .map_err(|e| RobotError(e.to_string()))?;
     let l = kd.frame_pose(left_sole);
     let r = kd.frame_pose(right_sole);
     // Level the left sole: base orientation such that world_R_sole = identity (yaw kept 0).
     let base_rot = l.rotation.inverse();
     state.base_pose = Isometry3::from_parts(nalgebra::Translation3::identity(), base_rot);
-    kd.set_state(&state).map_err(|e| RobotError(e.to_string()))?;
+    kd.set_state(&state)
+        .map_err(|e| RobotError(e.to_string()))?;
     let l = kd.frame_pose(left_sole).translation.vector;
     let r2 = kd.frame_pose(right_sole).translation.vector;
     let _ = r;
@@ -336,4 +348,18 @@ pub fn standing_state(
     let lowest = l.z.min(r2.z);
     state.base_pose.translation.vector -= Vector3::new(mid.x, mid.y, lowest);
     Ok(state)
+}
+
+/// Copies a state into another of the same size without allocating (`clone_from` on `RobotState` would
+/// reallocate its vectors).
+pub fn copy_state(dst: &mut RobotState, src: &RobotState) {
+    dst.base_pose = src.base_pose;
+    dst.base_velocity = src.base_velocity;
+    if dst.joint_positions.len() == src.joint_positions.len() {
+        dst.joint_positions.copy_from(&src.joint_positions);
+        dst.joint_velocities.copy_from(&src.joint_velocities);
+    } else {
+        dst.joint_positions = src.joint_positions.clone();
+        dst.joint_velocities = src.joint_velocities.clone();
+    }
 }

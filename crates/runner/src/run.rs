@@ -32,11 +32,14 @@ use nalgebra::{DVector, Vector3};
 use serde::Serialize;
 use stride_model::{KinDyn, Model};
 
-use crate::config::{ControlMode, Goal, PlantKind, PlannerMode, Scenario};
-use crate::log::{FoxgloveQuaternion, FoxgloveTime, FoxgloveVector3, FrameTransform, FrameTransforms, LogError, LogOptions, LogStats, LogWriter, TopicId, FRAME_TRANSFORMS_SCHEMA};
+use crate::config::{ControlMode, Goal, PlannerMode, PlantKind, Scenario};
+use crate::log::{
+    FoxgloveQuaternion, FoxgloveTime, FoxgloveVector3, FrameTransform, FrameTransforms, LogError,
+    LogOptions, LogStats, LogWriter, TopicId, FRAME_TRANSFORMS_SCHEMA,
+};
 use crate::records::{
-    phase_name, simplified_output_record, EventRecord, IkOutputRecord, PlanSampleRecord, PlannerInputRecord,
-    PoseRecord, StateRecord, TimingRecord, TsidOutputRecord, WbcInputRecord,
+    phase_name, simplified_output_record, EventRecord, IkOutputRecord, PlanSampleRecord,
+    PlannerInputRecord, PoseRecord, StateRecord, TimingRecord, TsidOutputRecord, WbcInputRecord,
 };
 use crate::robot::{standing_state, IdealPlant, Robot};
 use crate::sim_plant::SimPlant;
@@ -264,7 +267,11 @@ impl Topics {
             sim_state: w.topic("/sim/state", "stride.sim.State", None)?,
             sensors_feet: w.topic("/sensors/feet", "stride.sensors.Feet", None)?,
             sensors_imu: w.topic("/sensors/imu", "stride.sensors.Imu", None)?,
-            tf: w.topic("/tf", "foxglove.FrameTransforms", Some(FRAME_TRANSFORMS_SCHEMA.to_string()))?,
+            tf: w.topic(
+                "/tf",
+                "foxglove.FrameTransforms",
+                Some(FRAME_TRANSFORMS_SCHEMA.to_string()),
+            )?,
             tracking: w.topic("/runner/tracking", "stride.runner.Tracking", None)?,
             runner_timing: w.topic("/runner/timing", "stride.runner.Timing", None)?,
             events: w.topic("/events", "stride.Event", None)?,
@@ -371,13 +378,19 @@ pub fn git_commit() -> Option<String> {
 }
 
 /// Initial joint positions from the scenario (unknown joint names are configuration errors).
-pub fn initial_joint_positions(scenario: &Scenario, model: &Model) -> Result<DVector<f64>, RunError> {
+pub fn initial_joint_positions(
+    scenario: &Scenario,
+    model: &Model,
+) -> Result<DVector<f64>, RunError> {
     let mut q = DVector::zeros(model.dof());
     for (name, v) in &scenario.config.robot.initial_joint_positions {
         let i = model.joint_index(name).ok_or_else(|| {
             scenario.invalid(
                 &format!("robot.initial_joint_positions.{name}"),
-                format!("the model has no joint `{name}`; expected one of: {}", joint_list(model)),
+                format!(
+                    "the model has no joint `{name}`; expected one of: {}",
+                    joint_list(model)
+                ),
             )
         })?;
         q[i] = *v;
@@ -386,7 +399,12 @@ pub fn initial_joint_positions(scenario: &Scenario, model: &Model) -> Result<DVe
 }
 
 fn joint_list(model: &Model) -> String {
-    model.joints().iter().map(|j| j.name.as_str()).collect::<Vec<_>>().join(", ")
+    model
+        .joints()
+        .iter()
+        .map(|j| j.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Loads the scenario's model.
@@ -427,7 +445,13 @@ pub fn build_robot(
         PlantKind::Ideal => {
             let state = standing_state(model, &q0, soles[0], soles[1])?;
             let period = 1_000_000_000 / u64::from(c.rates.sim_hz);
-            Box::new(IdealPlant::new(Arc::clone(model), period, soles[0], soles[1], &state)?)
+            Box::new(IdealPlant::new(
+                Arc::clone(model),
+                period,
+                soles[0],
+                soles[1],
+                &state,
+            )?)
         }
     })
 }
@@ -467,7 +491,12 @@ fn mid_pose(soles: &[nalgebra::Isometry3<f64>; 2]) -> [f64; 3] {
 }
 
 impl Loop<'_> {
-    fn write<T: Serialize + ?Sized>(&mut self, pick: impl Fn(&Topics) -> TopicId, t: u64, v: &T) -> Result<(), LogError> {
+    fn write<T: Serialize + ?Sized>(
+        &mut self,
+        pick: impl Fn(&Topics) -> TopicId,
+        t: u64,
+        v: &T,
+    ) -> Result<(), LogError> {
         if let Some((w, topics)) = self.log.as_mut() {
             w.write(pick(topics), t, v)?;
         }
@@ -594,7 +623,11 @@ impl Loop<'_> {
         }
         if m.tilt.to_degrees() > e.fall_tilt_deg {
             return Some(Outcome::Fell {
-                reason: format!("torso tilt {:.1}° exceeds {:.1}°", m.tilt.to_degrees(), e.fall_tilt_deg),
+                reason: format!(
+                    "torso tilt {:.1}° exceeds {:.1}°",
+                    m.tilt.to_degrees(),
+                    e.fall_tilt_deg
+                ),
             });
         }
         if self.robot.measurement().fallen {
@@ -608,7 +641,8 @@ impl Loop<'_> {
                     let p = mid_pose(&m.soles);
                     let d = ((p[0] - g[0]).powi(2) + (p[1] - g[1]).powi(2)).sqrt();
                     d <= e.goal_position_tolerance
-                        && wrap_angle(p[2] - g[2]).abs().to_degrees() <= e.goal_heading_tolerance_deg
+                        && wrap_angle(p[2] - g[2]).abs().to_degrees()
+                            <= e.goal_heading_tolerance_deg
                 }
                 None => false,
             };
@@ -629,7 +663,9 @@ impl Loop<'_> {
 pub fn goal_pose(goal: &Goal) -> Option<[f64; 3]> {
     match goal {
         Goal::Pose(p) => Some([p.x, p.y, p.heading_deg.to_radians()]),
-        Goal::Waypoints { points } => points.last().map(|p| [p.x, p.y, p.heading_deg.to_radians()]),
+        Goal::Waypoints { points } => points
+            .last()
+            .map(|p| [p.x, p.y, p.heading_deg.to_radians()]),
         _ => None,
     }
 }
@@ -667,12 +703,16 @@ pub fn run_with_robot(
     }
     let wbc_every = every(c.rates.wbc_hz);
     let simplified_every = every(c.rates.simplified_hz);
-    let planner_every = (c.rates.planner_mode == PlannerMode::Periodic).then(|| every(c.rates.planner_hz));
+    let planner_every =
+        (c.rates.planner_mode == PlannerMode::Periodic).then(|| every(c.rates.planner_hz));
     let state_every = u64::from(c.rates.base_hz / c.log.state_hz.max(1)).max(sim_every);
     let total_ticks = (duration * 1e9 / base_ns as f64).round() as u64;
 
     // The log.
-    let log_path = options.output.clone().unwrap_or_else(|| default_log_path(scenario));
+    let log_path = options
+        .output
+        .clone()
+        .unwrap_or_else(|| default_log_path(scenario));
     let mut writer = if c.log.enabled && !options.no_log {
         Some(LogWriter::create(
             &log_path,
@@ -690,10 +730,20 @@ pub fn run_with_robot(
         let topics = Topics::register(w)?;
         let urdf = std::fs::read(&scenario.urdf_path).unwrap_or_default();
         w.attach("model.urdf", "application/xml", urdf)?;
-        w.attach("scenario.toml", "application/toml", scenario.merged_toml().into_bytes())?;
+        w.attach(
+            "scenario.toml",
+            "application/toml",
+            scenario.merged_toml().into_bytes(),
+        )?;
         let mut prov = std::collections::BTreeMap::new();
-        prov.insert("stride_version".into(), env!("CARGO_PKG_VERSION").to_string());
-        prov.insert("git_commit".into(), git_commit().unwrap_or_else(|| "unknown".into()));
+        prov.insert(
+            "stride_version".into(),
+            env!("CARGO_PKG_VERSION").to_string(),
+        );
+        prov.insert(
+            "git_commit".into(),
+            git_commit().unwrap_or_else(|| "unknown".into()),
+        );
         prov.insert("scenario".into(), c.scenario.name.clone());
         prov.insert(
             "config_files".into(),
@@ -814,7 +864,8 @@ pub fn run_with_robot(
             // 2. planner (events)
             if run_planner && lp.stack.planner_tick(t).map_err(|e| e.to_string())? {
                 let rec = PlannerInputRecord::from_input(t, &lp.stack.planner_input);
-                lp.write(|tp| tp.planner_input, t, &rec).map_err(|e| e.to_string())?;
+                lp.write(|tp| tp.planner_input, t, &rec)
+                    .map_err(|e| e.to_string())?;
                 if let Some(plan) = lp.stack.planner.plan() {
                     let end_time = plan.end_time;
                     let steps = FootstepsMsg {
@@ -838,22 +889,30 @@ pub fn run_with_robot(
                             .collect(),
                     };
                     let n = steps.footsteps.len();
-                    lp.write(|tp| tp.planner_footsteps, t, &steps).map_err(|e| e.to_string())?;
-                    let kind = if k == 0 { "start" } else { "replan" };
-                    lp.event(t, kind, format!("plan with {n} contacts, ends at {end_time:.2} s"))
+                    lp.write(|tp| tp.planner_footsteps, t, &steps)
                         .map_err(|e| e.to_string())?;
+                    let kind = if k == 0 { "start" } else { "replan" };
+                    lp.event(
+                        t,
+                        kind,
+                        format!("plan with {n} contacts, ends at {end_time:.2} s"),
+                    )
+                    .map_err(|e| e.to_string())?;
                 }
             }
             // 3. simplified
             if run_simplified {
                 let held = lp.stack.simplified_tick(t).map_err(|e| e.to_string())?;
                 let rec = PlanSampleRecord::from_sample(&lp.stack.plan_sample);
-                lp.write(|tp| tp.planner_references, t, &rec).map_err(|e| e.to_string())?;
+                lp.write(|tp| tp.planner_references, t, &rec)
+                    .map_err(|e| e.to_string())?;
                 let input = &lp.stack.simplified_input;
                 if let Some((w, topics)) = lp.log.as_mut() {
-                    w.write(topics.simplified_input, t, input).map_err(|e| e.to_string())?;
+                    w.write(topics.simplified_input, t, input)
+                        .map_err(|e| e.to_string())?;
                     let out = simplified_output_record(&lp.stack.simplified_output);
-                    w.write(topics.simplified_output, t, &out).map_err(|e| e.to_string())?;
+                    w.write(topics.simplified_output, t, &out)
+                        .map_err(|e| e.to_string())?;
                     let st = lp.stack.simplified_output.diagnostics.mpc.solve_time;
                     w.write(
                         topics.simplified_timing,
@@ -865,10 +924,15 @@ pub fn run_with_robot(
                     )
                     .map_err(|e| e.to_string())?;
                 }
-                lp.simplified_times.push(lp.stack.simplified_output.diagnostics.mpc.solve_time);
+                lp.simplified_times
+                    .push(lp.stack.simplified_output.diagnostics.mpc.solve_time);
                 if let Some(msg) = held {
-                    lp.event(t, "hold", format!("simplified layer held its references: {msg}"))
-                        .map_err(|e| e.to_string())?;
+                    lp.event(
+                        t,
+                        "hold",
+                        format!("simplified layer held its references: {msg}"),
+                    )
+                    .map_err(|e| e.to_string())?;
                 }
                 lp.track(t).map_err(|e| e.to_string())?;
             }
@@ -890,10 +954,17 @@ pub fn run_with_robot(
                 lp.wbc_times.push(solve);
                 if let Some((w, topics)) = lp.log.as_mut() {
                     let rec = WbcInputRecord::from_input(t, &lp.stack.wbc_input);
-                    w.write(topics.wbc_input, t, &rec).map_err(|e| e.to_string())?;
+                    w.write(topics.wbc_input, t, &rec)
+                        .map_err(|e| e.to_string())?;
                     match &lp.stack.wbc {
-                        Wbc::Ik(ik) => w.write(topics.wbc_output, t, &IkOutputRecord::new(ik_output(ik))),
-                        Wbc::Tsid(ts) => w.write(topics.wbc_output, t, &TsidOutputRecord::new(tsid_output(ts))),
+                        Wbc::Ik(ik) => {
+                            w.write(topics.wbc_output, t, &IkOutputRecord::new(ik_output(ik)))
+                        }
+                        Wbc::Tsid(ts) => w.write(
+                            topics.wbc_output,
+                            t,
+                            &TsidOutputRecord::new(tsid_output(ts)),
+                        ),
                     }
                     .map_err(|e| e.to_string())?;
                     w.write(
@@ -907,15 +978,22 @@ pub fn run_with_robot(
                     .map_err(|e| e.to_string())?;
                 }
                 if lp.stack.counters.wbc_fallbacks > fallbacks {
-                    lp.event(t, "fallback", "whole-body QP solved by the relaxed fallback".into())
-                        .map_err(|e| e.to_string())?;
+                    lp.event(
+                        t,
+                        "fallback",
+                        "whole-body QP solved by the relaxed fallback".into(),
+                    )
+                    .map_err(|e| e.to_string())?;
                 }
                 let phase = phase_name(&lp.stack.plan_sample.phase);
                 if phase != lp.last_phase {
                     lp.last_phase = phase;
-                    lp.event(t, "phase", phase.to_string()).map_err(|e| e.to_string())?;
+                    lp.event(t, "phase", phase.to_string())
+                        .map_err(|e| e.to_string())?;
                 }
-                lp.robot.command(&lp.stack.command).map_err(|e| e.to_string())?;
+                lp.robot
+                    .command(&lp.stack.command)
+                    .map_err(|e| e.to_string())?;
                 if realtime {
                     let target = Duration::from_nanos(t);
                     let now = wall_start.elapsed();
@@ -930,7 +1008,11 @@ pub fn run_with_robot(
             if k % state_every == 0 {
                 lp.log_state(t).map_err(|e| e.to_string())?;
                 let wall = wall_start.elapsed().as_secs_f64();
-                let rtf = if wall > 0.0 { t as f64 * 1e-9 / wall } else { 0.0 };
+                let rtf = if wall > 0.0 {
+                    t as f64 * 1e-9 / wall
+                } else {
+                    0.0
+                };
                 let misses = lp.summary.deadline_misses;
                 lp.write(
                     |tp| tp.runner_timing,
@@ -944,8 +1026,10 @@ pub fn run_with_robot(
                 .map_err(|e| e.to_string())?;
                 if let Some(pb) = progress.as_ref() {
                     let mid = mid_pose(&lp.stack.measured.soles);
-                    let d = ((mid[0] - lp.start_mid[0]).powi(2) + (mid[1] - lp.start_mid[1]).powi(2)).sqrt();
-                    pb.set_position((t / 1_000_000).min(u64::MAX));
+                    let d = ((mid[0] - lp.start_mid[0]).powi(2)
+                        + (mid[1] - lp.start_mid[1]).powi(2))
+                    .sqrt();
+                    pb.set_position(t / 1_000_000);
                     pb.set_message(format!("{:.2} m  {:.1}x real time", d, rtf));
                 }
             }
@@ -989,7 +1073,11 @@ pub fn run_with_robot(
     let s = &mut lp.summary;
     s.outcome = outcome;
     s.wall_time = wall;
-    s.real_time_factor = if wall > 0.0 { s.simulated_time / wall } else { 0.0 };
+    s.real_time_factor = if wall > 0.0 {
+        s.simulated_time / wall
+    } else {
+        0.0
+    };
     let dx = mid[0] - lp.start_mid[0];
     let dy = mid[1] - lp.start_mid[1];
     s.distance = (dx * dx + dy * dy).sqrt();
@@ -1033,8 +1121,9 @@ fn progress_bar(enabled: bool, duration: f64) -> Option<indicatif::ProgressBar> 
         return None;
     }
     let pb = indicatif::ProgressBar::new((duration * 1000.0) as u64);
-    let style = indicatif::ProgressStyle::with_template("{bar:40} {pos:>6}/{len} ms simulated  {msg}")
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    let style =
+        indicatif::ProgressStyle::with_template("{bar:40} {pos:>6}/{len} ms simulated  {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
     pb.set_style(style);
     Some(pb)
 }
@@ -1044,7 +1133,11 @@ impl RunSummary {
     pub fn render(&self) -> String {
         let mut s = String::new();
         use std::fmt::Write as _;
-        let _ = writeln!(s, "scenario {} on the {} plant: {}", self.scenario, self.plant, self.outcome);
+        let _ = writeln!(
+            s,
+            "scenario {} on the {} plant: {}",
+            self.scenario, self.plant, self.outcome
+        );
         let _ = writeln!(
             s,
             "  simulated {:.2} s in {:.2} s wall clock: {:.1}x real time",
@@ -1071,10 +1164,22 @@ impl RunSummary {
             ("ZMP", &self.zmp_error),
             ("feet", &self.feet_error),
         ] {
-            let _ = writeln!(s, "    {:<10} {:>10.1} {:>10.1}", name, e.rms * 1e3, e.max * 1e3);
+            let _ = writeln!(
+                s,
+                "    {:<10} {:>10.1} {:>10.1}",
+                name,
+                e.rms * 1e3,
+                e.max * 1e3
+            );
         }
-        let _ = writeln!(s, "  solve time      p50 [ms]   p99 [ms]   max [ms]   solves");
-        for (name, t) in [("whole-body", &self.wbc_solve_time), ("simplified", &self.simplified_solve_time)] {
+        let _ = writeln!(
+            s,
+            "  solve time      p50 [ms]   p99 [ms]   max [ms]   solves"
+        );
+        for (name, t) in [
+            ("whole-body", &self.wbc_solve_time),
+            ("simplified", &self.simplified_solve_time),
+        ] {
             let _ = writeln!(
                 s,
                 "    {:<10} {:>10.3} {:>10.3} {:>10.3} {:>8}",

@@ -90,8 +90,14 @@ impl SimPlant {
         // Ground-truth base, measured joints.
         self.meas.state.base_pose = out.state.base_pose;
         self.meas.state.base_velocity = out.state.base_velocity;
-        self.meas.state.joint_positions.copy_from(&out.joint_positions);
-        self.meas.state.joint_velocities.copy_from(&out.joint_velocities);
+        self.meas
+            .state
+            .joint_positions
+            .copy_from(&out.joint_positions);
+        self.meas
+            .state
+            .joint_velocities
+            .copy_from(&out.joint_velocities);
         self.meas.joint_torques.copy_from(&out.joint_torques);
         self.meas.imu.orientation = out.imu.orientation;
         self.meas.imu.angular_velocity = out.imu.angular_velocity;
@@ -129,8 +135,12 @@ impl Robot for SimPlant {
         if command.joint_positions.len() != n || command.joint_torques.len() != n {
             return Err(RobotError(format!("command sized for {n} joints expected")));
         }
-        self.input.joint_positions.copy_from(&command.joint_positions);
-        self.input.joint_velocities.copy_from(&command.joint_velocities);
+        self.input
+            .joint_positions
+            .copy_from(&command.joint_positions);
+        self.input
+            .joint_velocities
+            .copy_from(&command.joint_velocities);
         self.input.joint_torques.copy_from(&command.joint_torques);
         Ok(())
     }

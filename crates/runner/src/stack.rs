@@ -19,8 +19,8 @@ use stride_block::Block;
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_planner::{Goal as PlannerGoal, PhaseKind, PlanSample, Planner, PlannerInput, Waypoint};
 use stride_simplified::{
-    feet_support_polygon, measured_zmp, FootRectangle, FootWrench, HorizonSample, SimplifiedController,
-    SimplifiedInput, SimplifiedOutput, SupportPolygon,
+    feet_support_polygon, measured_zmp, FootRectangle, FootWrench, HorizonSample,
+    SimplifiedController, SimplifiedInput, SimplifiedOutput, SupportPolygon,
 };
 use stride_wbc::{QpIk, Tsid, WbcInput};
 
@@ -184,13 +184,22 @@ pub struct Counters {
 
 impl Stack {
     /// Builds every layer from the scenario. `initial` is the robot's measured initial state.
-    pub fn new(scenario: &Scenario, model: Arc<Model>, initial: &RobotState) -> Result<Self, StackError> {
+    pub fn new(
+        scenario: &Scenario,
+        model: Arc<Model>,
+        initial: &RobotState,
+    ) -> Result<Self, StackError> {
         let c = &scenario.config;
         let frame = |name: &str, key: &str| {
             model.frame_id(name).ok_or_else(|| {
                 StackError::Other(format!(
                     "{}",
-                    scenario.invalid(key, format!("the model has no frame `{name}`; expected one of its links or frames"))
+                    scenario.invalid(
+                        key,
+                        format!(
+                            "the model has no frame `{name}`; expected one of its links or frames"
+                        )
+                    )
                 ))
             })
         };
@@ -203,7 +212,8 @@ impl Stack {
         kd.set_representation(VelocityRepresentation::Mixed);
         kd.set_state(initial)?;
         let planner = Planner::new(c.planner.clone())?;
-        let simplified_period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
+        let simplified_period =
+            Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
         let simplified = SimplifiedController::new(&c.simplified, simplified_period)?;
         let wbc_period = 1.0 / f64::from(c.rates.wbc_hz);
         let wbc = match c.scenario.control_mode {
@@ -348,7 +358,10 @@ impl Stack {
             dcm: com.xy() + vcom.xy() / omega,
             zmp,
             zmp_from_wrenches: ok,
-            soles: [self.kd.frame_pose(self.soles[0]), self.kd.frame_pose(self.soles[1])],
+            soles: [
+                self.kd.frame_pose(self.soles[0]),
+                self.kd.frame_pose(self.soles[1]),
+            ],
             tilt: up.z.clamp(-1.0, 1.0).acos(),
             base_height: m.state.base_pose.translation.z,
         };
@@ -357,7 +370,11 @@ impl Stack {
 
     /// Whether a planner event is due at `time_ns` (the first tick always is).
     pub fn planner_due(&self, time_ns: u64) -> bool {
-        self.planner.plan().is_none() || self.events.get(self.next_event).is_some_and(|e| e.time_ns <= time_ns)
+        self.planner.plan().is_none()
+            || self
+                .events
+                .get(self.next_event)
+                .is_some_and(|e| e.time_ns <= time_ns)
     }
 
     /// Runs the planner block with the due event's goal (a replan, or the first plan from the measured
@@ -389,7 +406,8 @@ impl Stack {
 
     /// Samples the plan at `time_ns` into [`Stack::plan_sample`].
     pub fn sample_plan(&mut self, time_ns: u64) -> Result<(), StackError> {
-        self.planner.sample(time_ns as f64 * 1e-9, &mut self.plan_sample)?;
+        self.planner
+            .sample(time_ns as f64 * 1e-9, &mut self.plan_sample)?;
         Ok(())
     }
 
@@ -465,12 +483,16 @@ impl Stack {
         self.sample_plan(time_ns)?;
         let s = &self.plan_sample;
         let i = &mut self.wbc_input;
-        i.state.clone_from(&m.state);
+        crate::robot::copy_state(&mut i.state, &m.state);
         let so = &self.simplified_output;
         if self.simplified_valid {
             i.com_position = Vector3::new(so.com_position.x, so.com_position.y, s.com_position.z);
             i.com_velocity = Vector3::new(so.com_velocity.x, so.com_velocity.y, s.com_velocity.z);
-            i.com_acceleration = Vector3::new(so.com_acceleration.x, so.com_acceleration.y, s.com_acceleration.z);
+            i.com_acceleration = Vector3::new(
+                so.com_acceleration.x,
+                so.com_acceleration.y,
+                s.com_acceleration.z,
+            );
             i.desired_zmp = Some(so.desired_zmp);
         } else {
             i.com_position = s.com_position;

@@ -6,7 +6,11 @@ use stride_runner::config::{ConfigError, ControlMode, Goal, Scenario};
 
 fn invalid(e: ConfigError) -> (String, usize, usize, String, String) {
     match e {
-        ConfigError::Invalid { location, key, message } => {
+        ConfigError::Invalid {
+            location,
+            key,
+            message,
+        } => {
             let l = location.expect("a location");
             (l.path.display().to_string(), l.line, l.column, key, message)
         }
@@ -21,7 +25,10 @@ fn typo_in_included_file_names_that_file_line_column_and_key() {
         "robots/r.toml",
         "[robot]\nleft_sole = \"l_sole\"\nright_sol = \"r_sole\"\n",
     );
-    let top = s.write("scenario.toml", "include = [\"robots/r.toml\"]\n[scenario]\nname = \"x\"\n");
+    let top = s.write(
+        "scenario.toml",
+        "include = [\"robots/r.toml\"]\n[scenario]\nname = \"x\"\n",
+    );
     let err = Scenario::load(&top).unwrap_err();
     let text = err.to_string();
     let (path, line, column, key, message) = invalid(err);
@@ -29,19 +36,31 @@ fn typo_in_included_file_names_that_file_line_column_and_key() {
     assert_eq!((line, column), (3, 1), "{text}");
     assert_eq!(key, "robot.right_sol");
     assert!(message.contains("unknown field `right_sol`"), "{message}");
-    assert!(message.contains("right_sole"), "the allowed keys are listed: {message}");
-    assert!(text.contains("r.toml:3:1") && text.contains("robot.right_sol"), "{text}");
+    assert!(
+        message.contains("right_sole"),
+        "the allowed keys are listed: {message}"
+    );
+    assert!(
+        text.contains("r.toml:3:1") && text.contains("robot.right_sol"),
+        "{text}"
+    );
 }
 
 #[test]
 fn wrong_type_names_key_and_expected_type() {
     let s = Scratch::new("type");
-    let top = s.write("scenario.toml", "[scenario]\nname = \"x\"\n\nduration = \"long\"\n");
+    let top = s.write(
+        "scenario.toml",
+        "[scenario]\nname = \"x\"\n\nduration = \"long\"\n",
+    );
     let (path, line, column, key, message) = invalid(Scenario::load(&top).unwrap_err());
     assert!(path.ends_with("scenario.toml"));
     assert_eq!((line, column), (4, 12));
     assert_eq!(key, "scenario.duration");
-    assert!(message.contains("expected") && message.contains("f64"), "{message}");
+    assert!(
+        message.contains("expected") && message.contains("f64"),
+        "{message}"
+    );
 }
 
 #[test]
@@ -51,13 +70,19 @@ fn unknown_enum_value_lists_allowed_values() {
     let (_, line, _, key, message) = invalid(Scenario::load(&top).unwrap_err());
     assert_eq!(line, 2);
     assert_eq!(key, "scenario.control_mode");
-    assert!(message.contains("position") && message.contains("torque"), "{message}");
+    assert!(
+        message.contains("position") && message.contains("torque"),
+        "{message}"
+    );
 }
 
 #[test]
 fn rates_must_divide_the_base_rate() {
     let s = Scratch::new("rates");
-    let text = format!("{}\n[rates]\nbase_hz = 2000\nsim_hz = 2000\nwbc_hz = 300\n", common::robot_section());
+    let text = format!(
+        "{}\n[rates]\nbase_hz = 2000\nsim_hz = 2000\nwbc_hz = 300\n",
+        common::robot_section()
+    );
     let top = s.write("scenario.toml", &text);
     let err = Scenario::load(&top).unwrap_err();
     let (path, line, _, key, message) = invalid(err);
@@ -65,10 +90,16 @@ fn rates_must_divide_the_base_rate() {
     assert_eq!(key, "rates.wbc_hz");
     let expected_line = text.lines().position(|l| l.starts_with("wbc_hz")).unwrap() + 1;
     assert_eq!(line, expected_line);
-    assert!(message.contains("does not divide") && message.contains("500"), "{message}");
+    assert!(
+        message.contains("does not divide") && message.contains("500"),
+        "{message}"
+    );
 
     // A base rate whose period is not a whole number of nanoseconds.
-    let top = s.write("b.toml", "[rates]\nbase_hz = 3000\nsim_hz = 3000\nwbc_hz = 500\n");
+    let top = s.write(
+        "b.toml",
+        "[rates]\nbase_hz = 3000\nsim_hz = 3000\nwbc_hz = 500\n",
+    );
     let (_, _, _, key, message) = invalid(Scenario::load(&top).unwrap_err());
     assert_eq!(key, "rates.base_hz");
     assert!(message.contains("1 000 000 000"), "{message}");
@@ -76,7 +107,10 @@ fn rates_must_divide_the_base_rate() {
     // Exact divisors are accepted.
     let top = s.write(
         "c.toml",
-        &format!("{}\n[rates]\nbase_hz = 4000\nsim_hz = 4000\nwbc_hz = 1000\nsimplified_hz = 100\n", common::robot_section()),
+        &format!(
+            "{}\n[rates]\nbase_hz = 4000\nsim_hz = 4000\nwbc_hz = 1000\nsimplified_hz = 100\n",
+            common::robot_section()
+        ),
     );
     Scenario::load(&top).unwrap();
 }
@@ -84,7 +118,10 @@ fn rates_must_divide_the_base_rate() {
 #[test]
 fn include_overlay_deep_merges_and_later_wins() {
     let s = Scratch::new("overlay");
-    s.write("layers/a.toml", "[rates]\nwbc_hz = 1000\nsimplified_hz = 50\n[scenario]\nduration = 10.0\n");
+    s.write(
+        "layers/a.toml",
+        "[rates]\nwbc_hz = 1000\nsimplified_hz = 50\n[scenario]\nduration = 10.0\n",
+    );
     s.write("layers/b.toml", "[rates]\nsimplified_hz = 100\n");
     let robot = common::robot_section();
     s.write("robots/r.toml", &robot);
@@ -97,11 +134,18 @@ fn include_overlay_deep_merges_and_later_wins() {
     let c = &sc.config;
     assert_eq!(c.rates.wbc_hz, 1000, "from a.toml, not overridden");
     assert_eq!(c.rates.simplified_hz, 100, "b.toml overrides a.toml");
-    assert_eq!(c.rates.base_hz, 4000, "the scenario file overrides its includes");
-    assert_eq!(c.scenario.duration, 10.0, "sibling keys of merged tables survive");
+    assert_eq!(
+        c.rates.base_hz, 4000,
+        "the scenario file overrides its includes"
+    );
+    assert_eq!(
+        c.scenario.duration, 10.0,
+        "sibling keys of merged tables survive"
+    );
     assert_eq!(c.scenario.control_mode, ControlMode::Torque);
     assert_eq!(c.robot.left_sole, "l_sole");
-    assert_eq!(sc.sources.files.len(), 4);
+    assert_eq!(sc.sources.files.len(), 5, "built-in defaults + 4 files");
+    assert_eq!(sc.sources.files[0].path, std::path::Path::new(stride_runner::config::load::DEFAULTS_PATH));
     // The merged document stored in logs parses back to the same configuration.
     let again = Scenario::from_texts(vec![(s.path("merged.toml"), sc.merged_toml())]).unwrap();
     assert_eq!(again.config, sc.config);
@@ -112,11 +156,25 @@ fn include_overlay_deep_merges_and_later_wins() {
 }
 
 #[test]
+fn one_key_of_a_layer_section_can_be_overridden() {
+    // IkConfig's task list has no serde default: the built-in defaults fill it, the file changes one key.
+    let s = Scratch::new("partial");
+    let top = s.write("s.toml", "[wbc.ik]\nfeedback = \"measured\"\n[goal.stand]\n");
+    let sc = Scenario::load(&top).unwrap();
+    assert_eq!(sc.config.wbc.ik.feedback, stride_wbc::IkFeedback::Measured);
+    assert_eq!(sc.config.wbc.ik.tasks, stride_wbc::IkConfig::default_for_bundled_model().tasks);
+    assert!(matches!(sc.config.goal, Goal::Stand {}));
+}
+
+#[test]
 fn include_cycles_are_rejected() {
     let s = Scratch::new("cycle");
     s.write("a.toml", "include = [\"b.toml\"]\n");
     let b = s.write("b.toml", "include = [\"a.toml\"]\n");
-    assert!(matches!(Scenario::load(&b), Err(ConfigError::IncludeCycle { .. })));
+    assert!(matches!(
+        Scenario::load(&b),
+        Err(ConfigError::IncludeCycle { .. })
+    ));
 }
 
 #[test]
@@ -125,7 +183,11 @@ fn urdf_path_is_relative_to_the_file_that_sets_it() {
     s.write("robots/r.toml", "[robot]\nurdf = \"../models/x.urdf\"\n");
     let top = s.write("sub/scenario.toml", "include = [\"../robots/r.toml\"]\n");
     let sc = Scenario::load(&top).unwrap();
-    assert!(sc.urdf_path.ends_with("robots/../models/x.urdf"), "{}", sc.urdf_path.display());
+    assert!(
+        sc.urdf_path.ends_with("robots/../models/x.urdf"),
+        "{}",
+        sc.urdf_path.display()
+    );
 }
 
 #[test]
@@ -148,7 +210,12 @@ fn every_shipped_scenario_is_valid() {
             let sc = Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
             assert!(sc.urdf_path.exists(), "{}", sc.urdf_path.display());
             let torque = p.file_name().unwrap().to_string_lossy().contains("torque");
-            assert_eq!(sc.config.scenario.control_mode == ControlMode::Torque, torque, "{}", p.display());
+            assert_eq!(
+                sc.config.scenario.control_mode == ControlMode::Torque,
+                torque,
+                "{}",
+                p.display()
+            );
             n += 1;
         }
     }

@@ -4,7 +4,9 @@ mod common;
 use std::collections::BTreeMap;
 
 use common::Scratch;
-use stride_runner::log::{read_log, FrameTransforms, LogOptions, LogWriter, FRAME_TRANSFORMS_SCHEMA};
+use stride_runner::log::{
+    read_log, FrameTransforms, LogOptions, LogWriter, FRAME_TRANSFORMS_SCHEMA,
+};
 
 #[derive(serde::Serialize)]
 struct Sample<'a> {
@@ -16,17 +18,43 @@ struct Sample<'a> {
 fn written_log_reads_back_completely() {
     let s = Scratch::new("mcap");
     let path = s.path("a.mcap");
-    let mut w = LogWriter::create(&path, &LogOptions { queue_capacity: 16, ..LogOptions::default() }).unwrap();
+    let mut w = LogWriter::create(
+        &path,
+        &LogOptions {
+            queue_capacity: 16,
+            ..LogOptions::default()
+        },
+    )
+    .unwrap();
     let a = w.topic("/a", "test.A", None).unwrap();
-    let tf = w.topic("/tf", "foxglove.FrameTransforms", Some(FRAME_TRANSFORMS_SCHEMA.into())).unwrap();
-    w.attach("scenario.toml", "application/toml", b"[scenario]\n".to_vec()).unwrap();
+    let tf = w
+        .topic(
+            "/tf",
+            "foxglove.FrameTransforms",
+            Some(FRAME_TRANSFORMS_SCHEMA.into()),
+        )
+        .unwrap();
+    w.attach(
+        "scenario.toml",
+        "application/toml",
+        b"[scenario]\n".to_vec(),
+    )
+    .unwrap();
     let mut meta = BTreeMap::new();
     meta.insert("stride_version".to_string(), "x".to_string());
     w.metadata("stride", meta).unwrap();
     let values = [0.1, 1.0 / 3.0, -2.5e-300, f64::MAX];
     let n = 5000u64;
     for k in 0..n {
-        w.write(a, k * 1000, &Sample { time: k as f64, values: &values }).unwrap();
+        w.write(
+            a,
+            k * 1000,
+            &Sample {
+                time: k as f64,
+                values: &values,
+            },
+        )
+        .unwrap();
     }
     w.write(tf, n * 1000, &FrameTransforms::default()).unwrap();
     let stats = w.finish().unwrap();
@@ -34,7 +62,9 @@ fn written_log_reads_back_completely() {
 
     // Independent check with the mcap crate directly: summary present, every message readable.
     let bytes = std::fs::read(&path).unwrap();
-    let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary section");
+    let summary = mcap::Summary::read(&bytes)
+        .unwrap()
+        .expect("a summary section");
     assert_eq!(summary.stats.as_ref().unwrap().message_count, n + 1);
     let mut count = 0;
     let mut last = None;
@@ -56,7 +86,10 @@ fn written_log_reads_back_completely() {
     // f64 values round-trip bit-exactly.
     let first: serde_json::Value = serde_json::from_slice(&log.messages[0].data).unwrap();
     let back: Vec<f64> = serde_json::from_value(first["values"].clone()).unwrap();
-    assert_eq!(back.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), values.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+    assert_eq!(
+        back.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+        values.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+    );
     // The derived schema describes the message.
     let schema: serde_json::Value = serde_json::from_str(&log.schemas["/a"].2).unwrap();
     assert_eq!(schema["type"], "object");
@@ -71,7 +104,15 @@ fn dropped_writer_still_finishes_the_file() {
         let mut w = LogWriter::create(&path, &LogOptions::default()).unwrap();
         let a = w.topic("/a", "test.A", None).unwrap();
         for k in 0..100u64 {
-            w.write(a, k, &Sample { time: k as f64, values: &[] }).unwrap();
+            w.write(
+                a,
+                k,
+                &Sample {
+                    time: k as f64,
+                    values: &[],
+                },
+            )
+            .unwrap();
         }
         // No finish(): as when a run unwinds.
     }

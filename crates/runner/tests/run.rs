@@ -8,11 +8,16 @@ use stride_runner::cli::LayerName;
 use stride_runner::config::{PlantKind, Scenario};
 use stride_runner::log::read_log;
 use stride_runner::robot::{JointCommand, Measurement, Robot, RobotError};
-use stride_runner::run::{build_robot, load_model, run_scenario, run_with_robot, Outcome, RunOptions, WALL_CLOCK_TOPICS};
+use stride_runner::run::{
+    build_robot, load_model, run_scenario, run_with_robot, Outcome, RunOptions, WALL_CLOCK_TOPICS,
+};
 
 fn scenario(s: &Scratch) -> Scenario {
     s.write("robots/r.toml", &common::robot_section());
-    s.write("layers/rates.toml", &std::fs::read_to_string(common::root().join("configs/layers/rates.toml")).unwrap());
+    s.write(
+        "layers/rates.toml",
+        &std::fs::read_to_string(common::root().join("configs/layers/rates.toml")).unwrap(),
+    );
     let top = s.write(
         "walk.toml",
         "include = [\"robots/r.toml\", \"layers/rates.toml\"]\n[scenario]\nname = \"t\"\nduration = 1.5\nplant = \"ideal\"\n\
@@ -55,10 +60,21 @@ fn two_runs_give_identical_logs_and_replay_is_exact() {
         assert_eq!(x, y, "first difference on {} at {} ns", x.0, x.1);
     }
     let log = read_log(&s.path("a.mcap")).unwrap();
-    for topic in ["/planner/input", "/planner/references", "/simplified/input", "/wbc/input", "/wbc/output", "/tf", "/sim/state", "/events"] {
+    for topic in [
+        "/planner/input",
+        "/planner/references",
+        "/simplified/input",
+        "/wbc/input",
+        "/wbc/output",
+        "/tf",
+        "/sim/state",
+        "/events",
+    ] {
         assert!(log.topic(topic).count() > 0, "no messages on {topic}");
     }
-    assert!(log.attachments.contains_key("model.urdf") && log.attachments.contains_key("scenario.toml"));
+    assert!(
+        log.attachments.contains_key("model.urdf") && log.attachments.contains_key("scenario.toml")
+    );
     assert!(log.metadata["stride"].contains_key("git_commit"));
 
     // Replay of each layer with the logged configuration reproduces its outputs exactly.
@@ -74,9 +90,18 @@ fn two_runs_give_identical_logs_and_replay_is_exact() {
         "include = [\"walk.toml\"]\n[simplified.instantaneous]\nkp = 2.0\n",
     );
     let out = s.path("replayed.mcap");
-    let r = stride_runner::replay::replay(&s.path("a.mcap"), LayerName::Simplified, Some(&other), Some(&out)).unwrap();
+    let r = stride_runner::replay::replay(
+        &s.path("a.mcap"),
+        LayerName::Simplified,
+        Some(&other),
+        Some(&out),
+    )
+    .unwrap();
     assert!(r.difference.max_abs > 0.0, "{:?}", r.difference);
-    assert_eq!(read_log(&out).unwrap().topic("/simplified/output").count(), r.ticks);
+    assert_eq!(
+        read_log(&out).unwrap().topic("/simplified/output").count(),
+        r.ticks
+    );
 }
 
 #[test]
@@ -137,7 +162,12 @@ fn panic_in_the_loop_is_reported_and_the_log_closed() {
     let sc = scenario(&s);
     let model = load_model(&sc).unwrap();
     let inner = build_robot(&sc, &model, PlantKind::Ideal).unwrap();
-    let summary = run_with_robot(&sc, &options(s.path("p.mcap")), Box::new(Panicking { inner, steps: 0 })).unwrap();
+    let summary = run_with_robot(
+        &sc,
+        &options(s.path("p.mcap")),
+        Box::new(Panicking { inner, steps: 0 }),
+    )
+    .unwrap();
     match &summary.outcome {
         Outcome::Error { message } => assert!(message.contains("driver crashed"), "{message}"),
         other => panic!("expected an error outcome, got {other:?}"),

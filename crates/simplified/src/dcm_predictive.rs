@@ -798,7 +798,10 @@ fn solve_with_stride_qp(
     sparse.gradient.copy_from_slice(&qp.gradient);
     let mut entries = [(0usize, 0.0f64); crate::banded::MAX_ROW_ENTRIES];
     for row in &qp.rows[..m] {
-        for (slot, (&c, &v)) in entries.iter_mut().zip(row.columns.iter().zip(row.values.iter())) {
+        for (slot, (&c, &v)) in entries
+            .iter_mut()
+            .zip(row.columns.iter().zip(row.values.iter()))
+        {
             *slot = (c, v);
         }
         sparse.add_row(&entries[..row.len], f64::NEG_INFINITY, row.bound);

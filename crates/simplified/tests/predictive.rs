@@ -418,3 +418,50 @@ fn plan_is_a_fixed_point_and_constant_reference_gives_constant_zmp() {
     assert_eq!(out.diagnostics.status, MpcStatus::Unconstrained);
     assert!(out.diagnostics.cost < 1e-18);
 }
+
+mod containment {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn arbitrary_polygon() -> impl Strategy<Value = SupportPolygon> {
+        prop::collection::vec((-0.2f64..0.2, -0.2f64..0.2), 3..10).prop_filter_map(
+            "degenerate",
+            |pts| {
+                let pts: Vec<Vector2<f64>> =
+                    pts.into_iter().map(|(x, y)| Vector2::new(x, y)).collect();
+                SupportPolygon::convex_hull(&pts)
+                    .ok()
+                    .filter(|p| p.area() > 1e-4)
+            },
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        #[test]
+        fn desired_zmp_never_leaves_the_support_polygon(
+            polygon in arbitrary_polygon(),
+            ex in -0.5f64..0.5, ey in -0.5f64..0.5,
+            rate in prop::bool::ANY,
+        ) {
+            let config = DcmPredictiveConfig {
+                horizon: 0.5,
+                zmp_rate_reference: if rate { ZmpRateReference::Plan } else { ZmpRateReference::Zero },
+                ..Default::default()
+            };
+            let mut controller = DcmPredictiveController::new(config, 0.01).unwrap();
+            let reference = polygon.vertex_mean();
+            let mut horizon = DcmHorizon::with_capacity(controller.horizon_samples());
+            for _ in 0..controller.horizon_samples() {
+                horizon.push(HorizonSample { dcm_position: reference, zmp: reference, support: polygon }).unwrap();
+            }
+            let out = controller.step(OMEGA, reference + Vector2::new(ex, ey), &horizon, &polygon).unwrap();
+            prop_assert!(polygon.contains(out.desired_zmp, 1e-12));
+            prop_assert!(out.desired_zmp.iter().all(|v| v.is_finite()));
+            // the QP only falls back once the DCM is outside the polygon
+            if polygon.contains(reference + Vector2::new(ex, ey), 0.0) {
+                prop_assert!(!out.diagnostics.fallback);
+            }
+        }
+    }
+}

@@ -126,11 +126,15 @@ fn input(robot: &Robot) -> WbcInput {
     let mut kd = KinDyn::new(Arc::clone(model));
     kd.set_representation(VelocityRepresentation::Mixed);
     kd.set_state(&state).unwrap();
+    // base placed so that the left sole is flat on z = 0 (iCub's root_link is yawed by π and the
+    // walking posture pitches the feet)
     let l = kd.frame_pose(model.frame_id(robot.left).unwrap());
-    state.base_pose = Isometry3::from_parts(
-        Translation3::new(0.0, 0.0, -l.translation.z),
-        UnitQuaternion::identity(),
+    let (_, _, yaw) = l.rotation.euler_angles();
+    let flat = Isometry3::from_parts(
+        Translation3::new(l.translation.x, l.translation.y, 0.0),
+        UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
     );
+    state.base_pose = flat * l.inverse() * state.base_pose;
     kd.set_state(&state).unwrap();
     let mut input = WbcInput::new(model);
     input.state = state;
@@ -170,6 +174,12 @@ fn bench(c: &mut Criterion) {
             c.bench_function(&format!("qp_ik/{}/{tag}", robot.name), |b| {
                 b.iter(|| ik.step(&input).unwrap().report.iterations)
             });
+            let report = ik.step(&input).unwrap().report;
+            assert!(
+                report.status.is_success() && !report.fallback,
+                "{}: the benchmarked IK tick must be a nominal solve: {report:?}",
+                robot.name
+            );
             let mut config = TsidConfig::default_for_bundled_model();
             config.qp.backend = backend;
             adapt(config.tasks.iter_mut(), robot);
@@ -178,6 +188,12 @@ fn bench(c: &mut Criterion) {
             c.bench_function(&format!("tsid/{}/{tag}", robot.name), |b| {
                 b.iter(|| tsid.step(&input).unwrap().report.iterations)
             });
+            let report = tsid.step(&input).unwrap().report;
+            assert!(
+                report.status.is_success() && !report.fallback,
+                "{}: the benchmarked TSID tick must be a nominal solve: {report:?}",
+                robot.name
+            );
         }
     }
 }

@@ -396,6 +396,17 @@ impl QpBridge {
         }
     }
 
+    /// Sets the weights of soft block `k` (one value or one per row) in both problems.
+    pub fn set_weights(&mut self, k: usize, weights: &[f64]) -> Result<(), WbcError> {
+        self.problem.task_mut(self.tasks[k]).set_weights(weights)?;
+        if let Some(r) = &mut self.reduced {
+            if let Some(id) = r.task_of_block[k] {
+                r.problem.task_mut(id).set_weights(weights)?;
+            }
+        }
+        Ok(())
+    }
+
     pub fn reset(&mut self) {
         self.problem.reset_warm_start();
         if let Some(r) = &mut self.reduced {

@@ -255,6 +255,38 @@ impl QpIk {
         Ok(())
     }
 
+    /// Changes the weight of a soft task at run time (e.g. walking vs standing): one value for every
+    /// row or one per row. Allocation-free.
+    ///
+    /// Errors: unknown task name, a hard task or a limit (no weight), wrong length, negative or
+    /// non-finite weight.
+    pub fn set_task_weight(&mut self, task: &str, weights: &[f64]) -> Result<(), WbcError> {
+        let k = self
+            .config
+            .tasks
+            .iter()
+            .position(|t| t.name() == task)
+            .ok_or_else(|| WbcError::InvalidInput(format!("no task `{task}`")))?;
+        let b = match self.slots[k] {
+            Slot::Block(b) if !self.blocks[b].hard => b,
+            _ => {
+                return Err(WbcError::InvalidInput(format!(
+                    "task `{task}` is not a soft task"
+                )))
+            }
+        };
+        self.bridge.set_weights(b, weights)?;
+        let block = &mut self.blocks[b];
+        for i in 0..block.rows() {
+            block.weight[i] = if weights.len() == 1 {
+                weights[0]
+            } else {
+                weights[i]
+            };
+        }
+        Ok(())
+    }
+
     /// The last output.
     pub fn output(&self) -> &IkOutput {
         &self.output

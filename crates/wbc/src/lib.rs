@@ -13,6 +13,8 @@
 //! (hard equalities as heavily weighted costs) and, if that also fails, hold the last valid command;
 //! the output says which. See docs/wbc.md for the formulation choices and measured numbers.
 
+#![warn(missing_docs)]
+
 mod bridge;
 pub mod config;
 mod error;

@@ -610,6 +610,63 @@ impl Tsid {
         &self.config
     }
 
+    /// Changes the weight of a soft task at run time (e.g. walking vs standing) in every prebuilt QP:
+    /// one value for every row or one per row (per-row lists of `wrench_regularization` have 6 entries,
+    /// applied to each contact). Allocation-free.
+    ///
+    /// Errors: unknown task name, a hard task or a constraint, wrong length, negative or non-finite weight.
+    pub fn set_task_weight(&mut self, task: &str, weights: &[f64]) -> Result<(), WbcError> {
+        let k = self
+            .config
+            .tasks
+            .iter()
+            .position(|t| t.name() == task)
+            .ok_or_else(|| WbcError::InvalidInput(format!("no task `{task}`")))?;
+        if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) {
+            return Err(WbcError::InvalidInput(format!(
+                "task `{task}`: weights must be finite and >= 0"
+            )));
+        }
+        let wrench = matches!(self.tasks[k], TsidTask::WrenchRegularization);
+        if wrench && weights.len() != 1 && weights.len() != 6 {
+            return Err(WbcError::InvalidInput(format!(
+                "task `{task}`: 1 or 6 weights"
+            )));
+        }
+        let mut found = false;
+        for variant in &mut self.variants {
+            for &b in &variant.slots[k] {
+                let block = &mut variant.blocks[b];
+                if block.hard || block.kind != crate::tasks::RowKind::Equality {
+                    return Err(WbcError::InvalidInput(format!(
+                        "task `{task}` is not a soft task"
+                    )));
+                }
+                let rows = block.rows();
+                if !wrench && weights.len() != 1 && weights.len() != rows {
+                    return Err(WbcError::InvalidInput(format!(
+                        "task `{task}`: 1 or {rows} weights"
+                    )));
+                }
+                for i in 0..rows {
+                    block.weight[i] = match weights.len() {
+                        1 => weights[0],
+                        _ if wrench => weights[i % 6],
+                        _ => weights[i],
+                    };
+                }
+                variant.bridge.set_weights(b, block.weight.as_slice())?;
+                found = true;
+            }
+        }
+        if !found {
+            return Err(WbcError::InvalidInput(format!(
+                "task `{task}` has no weight"
+            )));
+        }
+        Ok(())
+    }
+
     /// The last output.
     pub fn output(&self) -> &TsidOutput {
         &self.output

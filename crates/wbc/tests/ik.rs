@@ -363,3 +363,149 @@ fn null_space_elimination_gives_the_full_problem_solution() {
         assert!(d < 1e-6, "eliminated vs full differ by {d}");
     }
 }
+
+#[test]
+fn redundant_hard_tasks_are_solved_by_both_backends_alike() {
+    // a second hard task on the left sole duplicates 6 rows: the hard rows are rank deficient, the
+    // null-space reduction declines and the full problem (dependent but consistent rows) is solved
+    let model = bundled_model();
+    let mut rng = rng(23);
+    let target = references_at(
+        &model,
+        &standing_state(&model, &random_posture(&model, &mut rng, 0.2, 0.05)),
+    );
+    let mut input = target.clone();
+    input.state = standing_state(&model, &random_posture(&model, &mut rng, 0.2, 0.05));
+    let mut config = test_config(0.01, 10.0);
+    let duplicate = config
+        .tasks
+        .iter()
+        .find(|t| t.name() == "left_foot")
+        .unwrap()
+        .clone();
+    if let TaskConfig::Se3(mut c) = duplicate {
+        c.name = "left_foot_again".into();
+        config.tasks.push(TaskConfig::Se3(c));
+    }
+    let mut outputs = Vec::new();
+    for backend in [Backend::ActiveSet, Backend::Clarabel] {
+        let mut c = config.clone();
+        c.qp.backend = backend;
+        c.qp.clarabel.tolerance = 1e-12;
+        let mut ik = QpIk::new(Arc::clone(&model), c).unwrap();
+        let out = ik.step(&input).unwrap().clone();
+        assert!(
+            out.report.status.is_success(),
+            "{backend:?}: {:?}",
+            out.report
+        );
+        assert!(!out.report.fallback);
+        assert_eq!(
+            ik.qp_problem().n(),
+            model.nv(),
+            "the full problem was solved"
+        );
+        outputs.push(out);
+    }
+    let d = (&outputs[0].joint_velocities - &outputs[1].joint_velocities).amax();
+    assert!(d < 1e-6, "backends differ by {d}");
+    // and the same answer as without the duplicate
+    let mut ik = QpIk::new(Arc::clone(&model), test_config(0.01, 10.0)).unwrap();
+    let plain = ik.step(&input).unwrap();
+    assert!((&plain.joint_velocities - &outputs[0].joint_velocities).amax() < 1e-6);
+}
+
+#[test]
+fn soft_weights_change_at_run_time() {
+    let model = bundled_model();
+    let q = common::default_posture(&model);
+    let state = standing_state(&model, &q);
+    let mut input = references_at(&model, &state);
+    // torso reference tilted: torso task and posture task compete
+    input.torso.orientation =
+        nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.2, 0.0) * input.torso.orientation;
+    let mut config = test_config(0.01, 10.0);
+    config.feedback = stride_wbc::IkFeedback::Measured;
+    let mut ik = QpIk::new(Arc::clone(&model), config.clone()).unwrap();
+    let before = ik.step(&input).unwrap().joint_velocities.clone();
+    ik.set_task_weight("torso", &[500.0]).unwrap();
+    let after = ik.step(&input).unwrap().joint_velocities.clone();
+    // same as a controller built with that weight
+    for t in &mut config.tasks {
+        if let TaskConfig::So3(c) = t {
+            c.weight = stride_wbc::Weight::Scalar(500.0);
+        }
+    }
+    let mut reference = QpIk::new(Arc::clone(&model), config).unwrap();
+    let expected = reference.step(&input).unwrap().joint_velocities.clone();
+    assert!((&after - &expected).amax() < 1e-9);
+    assert!((&after - &before).amax() > 1e-3);
+    assert!(
+        ik.set_task_weight("left_foot", &[1.0]).is_err(),
+        "hard tasks have no weight"
+    );
+    assert!(ik.set_task_weight("nope", &[1.0]).is_err());
+    assert!(ik.set_task_weight("torso", &[-1.0]).is_err());
+}
+
+/// Min-jerk profile s(t) ∈ [0, 1] and its derivative over duration `d`.
+fn min_jerk(t: f64, d: f64) -> (f64, f64) {
+    let x = (t / d).clamp(0.0, 1.0);
+    let s = x * x * x * (10.0 - 15.0 * x + 6.0 * x * x);
+    let ds = 30.0 * x * x * (1.0 - x) * (1.0 - x) / d;
+    (s, ds)
+}
+
+#[test]
+fn a_step_with_the_default_config_tracks_feet_and_com_references() {
+    // a walking-like motion at 500 Hz: CoM shifts over the left foot, the right foot swings 10 cm
+    // forward with a 3 cm apex, then the CoM moves between the feet; references carry feedforward
+    // velocities, so the integrated IK tracks them with small lag
+    let model = bundled_model();
+    let state = standing_state(&model, &common::default_posture(&model));
+    let start = references_at(&model, &state);
+    let mut input = start.clone();
+    let config = IkConfig::default_for_bundled_model();
+    let dt = config.period;
+    let mut ik = QpIk::new(Arc::clone(&model), config).unwrap();
+    let com0 = start.com_position;
+    let left = start.left_foot.pose.translation.vector;
+    let right0 = start.right_foot.pose.translation.vector;
+    let (shift, swing, settle) = (1.0, 0.8, 1.0);
+    let steps = ((shift + swing + settle) / dt) as usize;
+    let mut worst_foot: f64 = 0.0;
+    let mut worst_com: f64 = 0.0;
+    for k in 0..steps {
+        let t = k as f64 * dt;
+        // CoM: to 80 % over the left foot, then to the middle of the new support polygon
+        let (s1, ds1) = min_jerk(t, shift);
+        let (s3, ds3) = min_jerk(t - shift - swing, settle);
+        let over_left = nalgebra::Vector3::new(left.x, 0.8 * left.y, com0.z)
+            - nalgebra::Vector3::new(com0.x, com0.y, com0.z);
+        let middle = nalgebra::Vector3::new(0.05, 0.0, com0.z) - (com0 + over_left);
+        input.com_position = com0 + over_left * s1 + middle * s3;
+        input.com_velocity = over_left * ds1 + middle * ds3;
+        // right foot swing
+        let (s2, ds2) = min_jerk(t - shift, swing);
+        let apex = (std::f64::consts::PI * s2).sin();
+        let dapex = std::f64::consts::PI * (std::f64::consts::PI * s2).cos() * ds2;
+        input.right_foot.pose.translation.vector =
+            right0 + nalgebra::Vector3::new(0.1 * s2, 0.0, 0.03 * apex);
+        input.right_foot.velocity =
+            nalgebra::Vector6::new(0.1 * ds2, 0.0, 0.03 * dapex, 0.0, 0.0, 0.0);
+        let out = ik.step(&input).unwrap();
+        assert_eq!(out.report.status, QpStatus::Solved, "t = {t}");
+        assert!(!out.report.fallback);
+        assert!(limit_violation(&model, &out.joint_positions) < 1e-9);
+        let mut kd = KinDyn::new(Arc::clone(&model));
+        kd.set_representation(VelocityRepresentation::Mixed);
+        kd.set_state(ik.integrated_state()).unwrap();
+        let r = kd.frame_pose(model.frame_id("r_sole").unwrap());
+        worst_foot = worst_foot
+            .max((r.translation.vector - input.right_foot.pose.translation.vector).norm());
+        worst_com = worst_com.max((kd.com_position() - input.com_position).norm());
+    }
+    // one Euler step of lag on a ≤ 0.25 m/s reference is ≤ 0.5 mm
+    assert!(worst_foot < 1e-3, "right foot tracking error {worst_foot}");
+    assert!(worst_com < 1e-3, "CoM tracking error {worst_com}");
+}

@@ -519,3 +519,167 @@ fn null_space_elimination_gives_the_full_problem_solution() {
         assert!(d < 1e-6, "trial {trial}: eliminated vs full differ by {d}");
     }
 }
+
+#[test]
+fn soft_weights_change_at_run_time() {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    input.com_position.x += 0.01;
+    let mut tsid = Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
+    tsid.step(&input).unwrap();
+    tsid.set_task_weight("torque_regularization", &[1e-2])
+        .unwrap();
+    tsid.set_task_weight(
+        "wrench_regularization",
+        &[1e-3, 1e-3, 1e-5, 1e-2, 1e-2, 1e-2],
+    )
+    .unwrap();
+    let changed = tsid.step(&input).unwrap().joint_torques.clone();
+    let mut config = TsidConfig::default_for_bundled_model();
+    for t in &mut config.tasks {
+        match t {
+            TaskConfig::TorqueRegularization(c) => c.weight = stride_wbc::Weight::Scalar(1e-2),
+            TaskConfig::WrenchRegularization(c) => {
+                c.weight = stride_wbc::Weight::PerRow(vec![1e-3, 1e-3, 1e-5, 1e-2, 1e-2, 1e-2])
+            }
+            _ => {}
+        }
+    }
+    let mut reference = Tsid::new(Arc::clone(&model), config).unwrap();
+    reference.step(&input).unwrap();
+    let expected = reference.step(&input).unwrap().joint_torques.clone();
+    assert!(
+        (&changed - &expected).amax() < 1e-8,
+        "{}",
+        (&changed - &expected).amax()
+    );
+    assert!(tsid.set_task_weight("com", &[1.0]).is_err(), "hard");
+    assert!(
+        tsid.set_task_weight("joint_torque_limits", &[1.0]).is_err(),
+        "constraint"
+    );
+}
+
+fn min_jerk(t: f64, d: f64) -> (f64, f64, f64) {
+    let x = (t / d).clamp(0.0, 1.0);
+    let inside = t > 0.0 && t < d;
+    let s = x * x * x * (10.0 - 15.0 * x + 6.0 * x * x);
+    let ds = if inside {
+        30.0 * x * x * (1.0 - x) * (1.0 - x) / d
+    } else {
+        0.0
+    };
+    let dds = if inside {
+        60.0 * x * (1.0 - x) * (1.0 - 2.0 * x) / (d * d)
+    } else {
+        0.0
+    };
+    (s, ds, dds)
+}
+
+#[test]
+fn a_step_under_tsid_with_forward_dynamics_lands_the_foot_and_tracks_the_com() {
+    // CoM over the left foot (1 s), right foot swing 8 cm forward with a 3 cm apex (0.8 s, contact
+    // unloaded by the ramp), touch-down and CoM to the middle (1 s); integrated with ABA and the planned
+    // wrenches as rigid contact wrenches
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    let com0 = input.com_position;
+    let left = input.left_foot.pose.translation.vector;
+    let right0 = input.right_foot.pose.translation.vector;
+    let (shift, swing, settle) = (1.0, 0.8, 1.0);
+    let dt = 1e-3;
+    let over_left = Vector3::new(left.x, 0.85 * left.y, com0.z) - com0;
+    let landing = right0 + Vector3::new(0.08, 0.0, 0.0);
+    let middle = Vector3::new(0.5 * (left.x + landing.x), 0.0, com0.z) - (com0 + over_left);
+    // contact stabilization (Baumgarte): the Euler integration of this test drifts the stance foot by
+    // O(dt) per tick once the robot moves (3.5e-5 m over the step without it)
+    let mut config = TsidConfig::default_for_bundled_model();
+    for task in &mut config.tasks {
+        if let TaskConfig::Contact(c) = task {
+            c.kp = 400.0;
+            c.kd = 40.0;
+        }
+    }
+    let mut tsid = Tsid::new(Arc::clone(&model), config).unwrap();
+    let mut worst_com: f64 = 0.0;
+    let mut t = 0.0;
+    let steps = ((shift + swing + settle) / dt) as usize;
+    let frames = [
+        model.frame_id("l_sole").unwrap(),
+        model.frame_id("r_sole").unwrap(),
+    ];
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    let mut acc = DVector::zeros(model.nv());
+    for _ in 0..steps {
+        let (s1, ds1, dds1) = min_jerk(t, shift);
+        let (s3, ds3, dds3) = min_jerk(t - shift - swing, settle);
+        input.com_position = com0 + over_left * s1 + middle * s3;
+        input.com_velocity = over_left * ds1 + middle * ds3;
+        input.com_acceleration = over_left * dds1 + middle * dds3;
+        let (s2, ds2, dds2) = min_jerk(t - shift, swing);
+        let pi = std::f64::consts::PI;
+        let (a, da, dda) = (
+            (pi * s2).sin(),
+            pi * (pi * s2).cos() * ds2,
+            -pi * pi * (pi * s2).sin() * ds2 * ds2 + pi * (pi * s2).cos() * dds2,
+        );
+        input.right_foot.pose.translation.vector =
+            right0 + (landing - right0) * s2 + Vector3::new(0.0, 0.0, 0.03 * a);
+        let v = (landing - right0) * ds2 + Vector3::new(0.0, 0.0, 0.03 * da);
+        let acc_ref = (landing - right0) * dds2 + Vector3::new(0.0, 0.0, 0.03 * dda);
+        input.right_foot.velocity = Vector6::new(v.x, v.y, v.z, 0.0, 0.0, 0.0);
+        input.right_foot.acceleration =
+            Vector6::new(acc_ref.x, acc_ref.y, acc_ref.z, 0.0, 0.0, 0.0);
+        input.right_in_contact = !(t >= shift && t < shift + swing);
+
+        let out = tsid.step(&input).unwrap().clone();
+        assert_eq!(
+            out.report.status,
+            QpStatus::Solved,
+            "t = {t}: {:?}",
+            out.report
+        );
+        check_physics(&model, &input.state, &out, 1e-8, MU);
+        let wrenches = [
+            ExternalWrench {
+                frame: frames[0],
+                wrench: out.contact_wrenches[0],
+            },
+            ExternalWrench {
+                frame: frames[1],
+                wrench: out.contact_wrenches[1],
+            },
+        ];
+        kd.set_state(&input.state).unwrap();
+        kd.forward_dynamics(&out.joint_torques, &wrenches, &mut acc)
+            .unwrap();
+        let s = &mut input.state;
+        s.base_velocity += acc.fixed_rows::<6>(0) * dt;
+        for i in 0..model.dof() {
+            s.joint_velocities[i] += acc[6 + i] * dt;
+        }
+        s.integrate(&model, VelocityRepresentation::Mixed, dt)
+            .unwrap();
+        t += dt;
+        let kd_now = kd_at(&model, s);
+        worst_com = worst_com.max((kd_now.com_position() - input.com_position).norm());
+    }
+    let kd_end = kd_at(&model, &input.state);
+    let r = kd_end.frame_pose(frames[1]).translation.vector;
+    let l = kd_end.frame_pose(frames[0]).translation.vector;
+    assert!(
+        (r - landing).norm() < 1e-3,
+        "right foot landed {} m from the target",
+        (r - landing).norm()
+    );
+    assert!(
+        (l - left).norm() < 1e-6,
+        "the stance foot moved by {}",
+        (l - left).norm()
+    );
+    assert!(worst_com < 5e-3, "CoM tracking error {worst_com}");
+}

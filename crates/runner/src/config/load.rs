@@ -14,6 +14,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
+use serde::Serialize;
 use toml::de::{DeArray, DeTable, DeValue};
 use toml::Spanned;
 
@@ -67,6 +68,10 @@ impl SourceMap {
             .iter()
             .rev()
             .find(|f| offset >= f.offset && offset <= f.offset + f.text.len())?;
+        if file.path == Path::new(DEFAULTS_PATH) {
+            // Built-in defaults were not written by the user: no location.
+            return None;
+        }
         let local = offset - file.offset;
         let before = &file.text[..local.min(file.text.len())];
         let line = before.matches('\n').count() + 1;
@@ -104,7 +109,11 @@ impl SourceMap {
     /// Folder of the file in which the value at `path` was written (for resolving relative paths).
     pub fn value_dir(&self, path: &str) -> Option<PathBuf> {
         let loc = self.value_location(path)?;
-        Some(loc.path.parent().map_or_else(PathBuf::new, Path::to_path_buf))
+        Some(
+            loc.path
+                .parent()
+                .map_or_else(PathBuf::new, Path::to_path_buf),
+        )
     }
 
     /// The dotted key path whose key or value span contains `span` most tightly.
@@ -123,6 +132,9 @@ impl SourceMap {
 }
 
 const MAX_INCLUDE_DEPTH: usize = 16;
+
+/// Name of the virtual first file holding the built-in defaults.
+pub const DEFAULTS_PATH: &str = "<built-in defaults>";
 
 /// Reads `path` and every file it includes, depth-first, includes before includers.
 fn collect(
@@ -302,15 +314,47 @@ pub struct Loaded<T> {
 }
 
 /// Reads `path` with its includes and deserializes the merged document into `T`.
-pub fn load<T: DeserializeOwned>(path: &Path) -> Result<Loaded<T>, ConfigError> {
+///
+/// The serialized `T::default()` is merged first, as a virtual file: every section is complete before
+/// the user's files are overlaid, so a file can change one key of a layer's configuration (say
+/// `wbc.ik.feedback`) without restating the fields that have no serde default (the task list).
+/// Top-level keys in `exclusive` (tables that select one alternative, such as an externally tagged enum)
+/// are not pre-filled from the defaults: a file that writes another alternative must not be merged with
+/// the default one.
+pub fn load<T: DeserializeOwned + Serialize + Default>(
+    path: &Path,
+    exclusive: &[&str],
+) -> Result<Loaded<T>, ConfigError> {
     let mut files = Vec::new();
     collect(path, &mut Vec::new(), &mut files)?;
-    load_files(files)
+    load_files(files, exclusive)
 }
 
-/// Deserializes in-memory files (merge order: earlier files are overlaid by later ones). Include lists
+/// Deserializes in-memory files (merge order: the built-in defaults, then earlier files overlaid by later
+/// ones). Include lists
 /// in these texts are ignored; used by tests and by replay from a log.
-pub fn load_files<T: DeserializeOwned>(files: Vec<SourceFile>) -> Result<Loaded<T>, ConfigError> {
+pub fn load_files<T: DeserializeOwned + Serialize + Default>(
+    mut files: Vec<SourceFile>,
+    exclusive: &[&str],
+) -> Result<Loaded<T>, ConfigError> {
+    let bad = |e: String| ConfigError::Invalid {
+        location: None,
+        key: String::new(),
+        message: format!("the built-in defaults do not serialize: {e}"),
+    };
+    let mut table = toml::Table::try_from(T::default()).map_err(|e| bad(e.to_string()))?;
+    for k in exclusive {
+        table.remove(*k);
+    }
+    let defaults = toml::to_string(&table).map_err(|e| bad(e.to_string()))?;
+    files.insert(
+        0,
+        SourceFile {
+            path: PathBuf::from(DEFAULTS_PATH),
+            text: defaults,
+            offset: 0,
+        },
+    );
     let mut sources = SourceMap {
         files,
         ..SourceMap::default()

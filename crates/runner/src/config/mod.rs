@@ -368,6 +368,10 @@ fn layer_key(section: &str, message: &str) -> String {
     }
 }
 
+/// Sections that choose one alternative (`[goal.pose]`, `[goal.stand]`, ...): not pre-filled from the
+/// defaults, so writing another alternative replaces the default one instead of merging with it.
+const EXCLUSIVE_SECTIONS: &[&str] = &["goal"];
+
 /// A loaded, validated scenario with its sources (for error locations and relative paths).
 #[derive(Debug, Clone)]
 pub struct Scenario {
@@ -384,7 +388,7 @@ pub struct Scenario {
 impl Scenario {
     /// Reads, merges, deserializes and validates a scenario file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let loaded: Loaded<ScenarioConfig> = load::load(path)?;
+        let loaded: Loaded<ScenarioConfig> = load::load(path, EXCLUSIVE_SECTIONS)?;
         Self::from_loaded(loaded)
     }
 
@@ -398,7 +402,7 @@ impl Scenario {
                 offset: 0,
             })
             .collect();
-        Self::from_loaded(load::load_files(files)?)
+        Self::from_loaded(load::load_files(files, EXCLUSIVE_SECTIONS)?)
     }
 
     fn from_loaded(loaded: Loaded<ScenarioConfig>) -> Result<Self, ConfigError> {
@@ -408,10 +412,12 @@ impl Scenario {
             merged,
         } = loaded;
         let dir = sources.value_dir("robot.urdf").unwrap_or_else(|| {
+            // Only in the built-in defaults: relative to the top-level scenario file.
             // Not written anywhere: relative to the top-level scenario file.
             sources
                 .files
                 .last()
+                .filter(|f| f.path != Path::new(load::DEFAULTS_PATH))
                 .and_then(|f| f.path.parent().map(Path::to_path_buf))
                 .unwrap_or_default()
         });
@@ -433,14 +439,13 @@ impl Scenario {
     /// An error about `key`, located where it was written.
     pub fn invalid(&self, key: &str, message: impl Into<String>) -> ConfigError {
         ConfigError::Invalid {
-            location: self
-                .sources
-                .value_location(key)
-                .or_else(|| self.sources.files.last().map(|f| Location {
+            location: self.sources.value_location(key).or_else(|| {
+                self.sources.files.last().map(|f| Location {
                     path: f.path.clone(),
                     line: 1,
                     column: 1,
-                })),
+                })
+            }),
             key: key.into(),
             message: message.into(),
         }
@@ -453,16 +458,23 @@ impl Scenario {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(self.invalid(key, format!("{v} is not allowed; expected a finite number > 0 {unit}")))
+                Err(self.invalid(
+                    key,
+                    format!("{v} is not allowed; expected a finite number > 0 {unit}"),
+                ))
             }
         };
-        let in_range = |key: &str, v: f64, lo: f64, hi: f64, unit: &str| -> Result<(), ConfigError> {
-            if v.is_finite() && v >= lo && v <= hi {
-                Ok(())
-            } else {
-                Err(self.invalid(key, format!("{v} is out of range; expected {lo} ≤ value ≤ {hi} {unit}")))
-            }
-        };
+        let in_range =
+            |key: &str, v: f64, lo: f64, hi: f64, unit: &str| -> Result<(), ConfigError> {
+                if v.is_finite() && v >= lo && v <= hi {
+                    Ok(())
+                } else {
+                    Err(self.invalid(
+                        key,
+                        format!("{v} is out of range; expected {lo} ≤ value ≤ {hi} {unit}"),
+                    ))
+                }
+            };
         finite_pos("scenario.duration", c.scenario.duration, "[s]")?;
         in_range("scenario.duration", c.scenario.duration, 0.0, 3600.0, "[s]")?;
 
@@ -498,14 +510,22 @@ impl Scenario {
         };
         divides("rates.sim_hz", r.sim_hz, r.base_hz, "rates.base_hz")?;
         divides("rates.wbc_hz", r.wbc_hz, r.base_hz, "rates.base_hz")?;
-        divides("rates.simplified_hz", r.simplified_hz, r.base_hz, "rates.base_hz")?;
+        divides(
+            "rates.simplified_hz",
+            r.simplified_hz,
+            r.base_hz,
+            "rates.base_hz",
+        )?;
         if r.planner_mode == PlannerMode::Periodic {
             divides("rates.planner_hz", r.planner_hz, r.base_hz, "rates.base_hz")?;
         }
         if r.wbc_hz > r.sim_hz {
             return Err(self.invalid(
                 "rates.wbc_hz",
-                format!("{} Hz is faster than the simulator ({} Hz); expected wbc_hz ≤ sim_hz", r.wbc_hz, r.sim_hz),
+                format!(
+                    "{} Hz is faster than the simulator ({} Hz); expected wbc_hz ≤ sim_hz",
+                    r.wbc_hz, r.sim_hz
+                ),
             ));
         }
         if r.simplified_hz > r.wbc_hz {
@@ -521,7 +541,10 @@ impl Scenario {
             divides("log.state_hz", c.log.state_hz, r.sim_hz, "rates.sim_hz")?;
         }
         if c.log.queue_capacity == 0 {
-            return Err(self.invalid("log.queue_capacity", "0 is not allowed; expected ≥ 1 [messages]"));
+            return Err(self.invalid(
+                "log.queue_capacity",
+                "0 is not allowed; expected ≥ 1 [messages]",
+            ));
         }
 
         // Goal.
@@ -529,7 +552,9 @@ impl Scenario {
             Goal::Pose(p) => self.check_pose("goal.pose", p)?,
             Goal::Waypoints { points } => {
                 if points.is_empty() {
-                    return Err(self.invalid("goal.waypoints.points", "empty; expected at least one pose"));
+                    return Err(
+                        self.invalid("goal.waypoints.points", "empty; expected at least one pose")
+                    );
                 }
                 for (i, p) in points.iter().enumerate() {
                     self.check_pose(&format!("goal.waypoints.points[{i}]"), p)?;
@@ -546,11 +571,17 @@ impl Scenario {
                         ("yaw_rate_deg", s.yaw_rate_deg),
                     ] {
                         if !v.is_finite() {
-                            return Err(self.invalid(&format!("{k}.{name}"), format!("{v}: expected a finite number")));
+                            return Err(self.invalid(
+                                &format!("{k}.{name}"),
+                                format!("{v}: expected a finite number"),
+                            ));
                         }
                     }
                     if s.start < last {
-                        return Err(self.invalid(&format!("{k}.start"), "segments must be sorted by start time [s]"));
+                        return Err(self.invalid(
+                            &format!("{k}.start"),
+                            "segments must be sorted by start time [s]",
+                        ));
                     }
                     last = s.start;
                 }
@@ -562,12 +593,23 @@ impl Scenario {
         if !(e.fall_height_fraction > 0.0 && e.fall_height_fraction < 1.0) {
             return Err(self.invalid(
                 "end.fall_height_fraction",
-                format!("{} is out of range; expected 0 < value < 1 [-]", e.fall_height_fraction),
+                format!(
+                    "{} is out of range; expected 0 < value < 1 [-]",
+                    e.fall_height_fraction
+                ),
             ));
         }
         in_range("end.fall_tilt_deg", e.fall_tilt_deg, 1.0, 90.0, "[deg]")?;
-        finite_pos("end.goal_position_tolerance", e.goal_position_tolerance, "[m]")?;
-        finite_pos("end.goal_heading_tolerance_deg", e.goal_heading_tolerance_deg, "[deg]")?;
+        finite_pos(
+            "end.goal_position_tolerance",
+            e.goal_position_tolerance,
+            "[m]",
+        )?;
+        finite_pos(
+            "end.goal_heading_tolerance_deg",
+            e.goal_heading_tolerance_deg,
+            "[deg]",
+        )?;
         finite_pos("end.standstill_speed", e.standstill_speed, "[m/s]")?;
         finite_pos("end.standstill_time", e.standstill_time, "[s]")?;
         for (name, q) in &c.robot.initial_joint_positions {
@@ -580,7 +622,10 @@ impl Scenario {
         }
         // Layer periods are derived from [rates]; an explicit, different value is a contradiction.
         let wbc_period = 1.0 / f64::from(r.wbc_hz);
-        for (key, period) in [("wbc.ik.period", c.wbc.ik.period), ("wbc.tsid.period", c.wbc.tsid.period)] {
+        for (key, period) in [
+            ("wbc.ik.period", c.wbc.ik.period),
+            ("wbc.tsid.period", c.wbc.tsid.period),
+        ] {
             if self.sources.key_location(key).is_some() && (period - wbc_period).abs() > 1e-12 {
                 return Err(self.invalid(
                     key,
@@ -617,7 +662,10 @@ impl Scenario {
     fn check_pose(&self, key: &str, p: &PlanarPose) -> Result<(), ConfigError> {
         for (name, v) in [("x", p.x), ("y", p.y), ("heading_deg", p.heading_deg)] {
             if !v.is_finite() {
-                return Err(self.invalid(&format!("{key}.{name}"), format!("{v}: expected a finite number")));
+                return Err(self.invalid(
+                    &format!("{key}.{name}"),
+                    format!("{v}: expected a finite number"),
+                ));
             }
         }
         Ok(())

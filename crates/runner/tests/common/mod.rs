@@ -13,7 +13,8 @@ pub struct Scratch(pub PathBuf);
 
 impl Scratch {
     pub fn new(name: &str) -> Self {
-        let base = std::env::temp_dir().join(format!("stride-runner-test-{}-{name}", std::process::id()));
+        let base =
+            std::env::temp_dir().join(format!("stride-runner-test-{}-{name}", std::process::id()));
         let _ = std::fs::remove_dir_all(&base);
         std::fs::create_dir_all(&base).unwrap();
         Scratch(base)
@@ -38,6 +39,10 @@ impl Drop for Scratch {
 /// A scenario text that uses the bundled model through an absolute URDF path.
 pub fn robot_section() -> String {
     let urdf = root().join("models/stride_humanoid.urdf");
-    let robot = std::fs::read_to_string(root().join("configs/robots/stride_humanoid.toml")).unwrap();
-    robot.replace("\"../../models/stride_humanoid.urdf\"", &format!("{:?}", urdf.display().to_string()))
+    let robot =
+        std::fs::read_to_string(root().join("configs/robots/stride_humanoid.toml")).unwrap();
+    robot.replace(
+        "\"../../models/stride_humanoid.urdf\"",
+        &format!("{:?}", urdf.display().to_string()),
+    )
 }
