@@ -145,7 +145,10 @@ fn include_overlay_deep_merges_and_later_wins() {
     assert_eq!(c.scenario.control_mode, ControlMode::Torque);
     assert_eq!(c.robot.left_sole, "l_sole");
     assert_eq!(sc.sources.files.len(), 5, "built-in defaults + 4 files");
-    assert_eq!(sc.sources.files[0].path, std::path::Path::new(stride_runner::config::load::DEFAULTS_PATH));
+    assert_eq!(
+        sc.sources.files[0].path,
+        std::path::Path::new(stride_runner::config::load::DEFAULTS_PATH)
+    );
     // The merged document stored in logs parses back to the same configuration.
     let again = Scenario::from_texts(vec![(s.path("merged.toml"), sc.merged_toml())]).unwrap();
     assert_eq!(again.config, sc.config);
@@ -159,10 +162,16 @@ fn include_overlay_deep_merges_and_later_wins() {
 fn one_key_of_a_layer_section_can_be_overridden() {
     // IkConfig's task list has no serde default: the built-in defaults fill it, the file changes one key.
     let s = Scratch::new("partial");
-    let top = s.write("s.toml", "[wbc.ik]\nfeedback = \"measured\"\n[goal.stand]\n");
+    let top = s.write(
+        "s.toml",
+        "[wbc.ik]\nfeedback = \"measured\"\n[goal.stand]\n",
+    );
     let sc = Scenario::load(&top).unwrap();
     assert_eq!(sc.config.wbc.ik.feedback, stride_wbc::IkFeedback::Measured);
-    assert_eq!(sc.config.wbc.ik.tasks, stride_wbc::IkConfig::default_for_bundled_model().tasks);
+    assert_eq!(
+        sc.config.wbc.ik.tasks,
+        stride_wbc::IkConfig::default_for_bundled_model().tasks
+    );
     assert!(matches!(sc.config.goal, Goal::Stand {}));
 }
 

@@ -627,7 +627,7 @@ fn arm_weights(value: f64) -> BTreeMap<String, f64> {
 impl IkConfig {
     /// The thesis's QP-IK (7.1.16) for `models/stride_humanoid.urdf`, with the gains of the iCub
     /// walking controller (anchors §1.1): feet SE(3) hard (K_p 7 / 5), CoM hard (K 1… here 2 for a 500 Hz
-    /// loop), chest SO(3) soft (K 5, weight 5), posture soft (K 5, weights 1 torso/legs, 2 arms), joint
+    /// loop), chest SO(3) soft (K 5, weight 5), pelvis (`root_link`) SO(3) soft (K 5, weight 50), posture soft (K 5, weights 1 torso/legs, 2 arms), joint
     /// position and velocity limits.
     pub fn default_for_bundled_model() -> Self {
         IkConfig {
@@ -677,6 +677,20 @@ impl IkConfig {
                     mask: [true; 3],
                     priority: Priority::Soft,
                     weight: Weight::Scalar(5.0),
+                }),
+                // Keeping the pelvis upright matters on a real (dynamic) plant: without it the QP lets the
+                // root link roll and pitch by up to 8-9° in single support, the torso joints compensate,
+                // and the angular momentum this creates drives the ZMP to the foot edge (measured in
+                // stride-sim; the robot fell in its first step).
+                TaskConfig::So3(Frame3TaskConfig {
+                    name: "pelvis".into(),
+                    frame: "root_link".into(),
+                    reference: FrameReferenceSource::Torso,
+                    kp: 5.0,
+                    kd: 0.0,
+                    mask: [true; 3],
+                    priority: Priority::Soft,
+                    weight: Weight::Scalar(50.0),
                 }),
                 TaskConfig::JointRegularization(JointRegularizationTaskConfig {
                     name: "posture".into(),

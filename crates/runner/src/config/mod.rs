@@ -426,13 +426,14 @@ impl Scenario {
         } else {
             dir.join(&value.robot.urdf)
         };
-        let scenario = Self {
+        let mut scenario = Self {
             config: value,
             sources,
             merged,
             urdf_path,
         };
         scenario.validate()?;
+        scenario.apply_derived();
         Ok(scenario)
     }
 
@@ -669,6 +670,27 @@ impl Scenario {
             }
         }
         Ok(())
+    }
+
+    /// Writes the keys the runner derives from `[rates]` (`wbc.ik.period`, `wbc.tsid.period`,
+    /// `sim.rate_hz`) into the configuration and the merged document, so both state the effective values.
+    fn apply_derived(&mut self) {
+        let c = &mut self.config;
+        let period = 1.0 / f64::from(c.rates.wbc_hz);
+        c.wbc.ik.period = period;
+        c.wbc.tsid.period = period;
+        c.sim.rate_hz = c.rates.sim_hz;
+        let sim_hz = c.rates.sim_hz;
+        if let Some(toml::Value::Table(w)) = self.merged.get_mut("wbc") {
+            for k in ["ik", "tsid"] {
+                if let Some(toml::Value::Table(t)) = w.get_mut(k) {
+                    t.insert("period".into(), toml::Value::Float(period));
+                }
+            }
+        }
+        if let Some(toml::Value::Table(s)) = self.merged.get_mut("sim") {
+            s.insert("rate_hz".into(), toml::Value::Integer(i64::from(sim_hz)));
+        }
     }
 
     /// The simulator configuration with the runner's rate applied.

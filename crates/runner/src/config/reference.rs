@@ -182,9 +182,12 @@ pub fn render(
     s.push_str("     STRIDE_UPDATE_DOCS=1; the same test fails when this file and the code disagree. -->\n\n");
     s.push_str(
         "A scenario is one TOML file in `configs/`. It may start with `include = [\"robots/x.toml\", ...]`: the \
-         included files (paths relative to the including file) are merged first, in order, then the file itself \
-         on top; tables merge key by key, every other value (numbers, strings, arrays) is replaced whole by the \
-         later file. Every table rejects unknown keys. Errors name the file, line, column and key and say what \
+         built-in defaults (the table below) come first, then the included files (paths relative to the \
+         including file), in order, then the file itself on top; tables merge key by key, every other value \
+         (numbers, strings, arrays, including arrays of tables such as task lists) is replaced whole by the \
+         later file, so a file can change a single key of any section. `[goal]` is the exception: its \
+         alternatives (`[goal.pose]`, `[goal.waypoints]`, `[goal.velocity]`, `[goal.stand]`) are exclusive \
+         and not pre-filled (the default is `[goal.pose] x = 2`). Every table rejects unknown keys. Errors name the file, line, column and key and say what \
          is expected. `stride check <CONFIG>` validates a scenario without running it.\n\n\
          Rates are in Hz and must divide `rates.base_hz` exactly; `base_hz` must divide 10⁹ so the base period \
          is a whole number of nanoseconds. The layers' own period keys (`wbc.ik.period`, `wbc.tsid.period`, \
