@@ -45,7 +45,18 @@ impl SimPlant {
             }
         }
         let mut sim = SimRobot::new(Arc::clone(&model), config).map_err(err)?;
-        let state = sim.set_standing_on_ground(joint_positions).map_err(err)?;
+        let mut state = sim.set_standing_on_ground(joint_positions).map_err(err)?;
+        // Start with the soles' mid-point above the world origin (as the ideal plant and `stride plan` do),
+        // so goals are distances from the start.
+        let mut kd = KinDyn::new(Arc::clone(&model));
+        kd.set_state(&state)
+            .map_err(|e| RobotError(format!("simulator: {e}")))?;
+        let mid = (kd.frame_pose(soles[0]).translation.vector
+            + kd.frame_pose(soles[1]).translation.vector)
+            * 0.5;
+        state.base_pose.translation.x -= mid.x;
+        state.base_pose.translation.y -= mid.y;
+        sim.set_initial_state(&state).map_err(err)?;
         let mut surfaces = [None, None];
         for (i, s) in sim.config().contact.surfaces.iter().enumerate() {
             for (k, sole) in soles.iter().enumerate() {

@@ -46,7 +46,10 @@ fn steady_state_ticks_do_not_allocate() {
     let s = Scratch::new("alloc");
     s.write("r.toml", &common::robot_section());
     // Standing: no phase-change events in the measured window.
-    let top = s.write("s.toml", "include = [\"r.toml\"]\n[goal.stand]\n[end]\nstop_at_goal = false\n");
+    let top = s.write(
+        "s.toml",
+        "include = [\"r.toml\"]\n[goal.stand]\n[end]\nstop_at_goal = false\n",
+    );
     let sc = Scenario::load(&top).unwrap();
     let short = allocations_for(&sc, 0.5);
     let long = allocations_for(&sc, 1.5);

@@ -175,3 +175,26 @@ fn panic_in_the_loop_is_reported_and_the_log_closed() {
     let log = read_log(&s.path("p.mcap")).unwrap();
     assert!(log.topic("/wbc/output").count() > 10);
 }
+
+#[test]
+fn simulator_runs_are_deterministic_too() {
+    let s = Scratch::new("simdet");
+    s.write("r.toml", &common::robot_section());
+    let top = s.write(
+        "s.toml",
+        "include = [\"r.toml\"]\n[scenario]\nduration = 0.5\n[goal.stand]\n[end]\nstop_at_goal = false\n",
+    );
+    let sc = Scenario::load(&top).unwrap();
+    let o = |p: &str| RunOptions {
+        output: Some(s.path(p)),
+        plant: Some(PlantKind::Simulator),
+        ..RunOptions::default()
+    };
+    let a = run_scenario(&sc, &o("a.mcap")).unwrap();
+    run_scenario(&sc, &o("b.mcap")).unwrap();
+    assert_eq!(a.outcome, Outcome::DurationReached, "{}", a.render());
+    assert_eq!(a.plant, "simulator");
+    let ma = deterministic_messages(&s.path("a.mcap"));
+    assert!(ma.len() > 100);
+    assert_eq!(ma, deterministic_messages(&s.path("b.mcap")));
+}
