@@ -715,11 +715,44 @@ impl IkConfig {
     }
 }
 
+/// CoP region of the default TSID contacts along the sole's x axis (m): 60 % of the 0.20 m sole's
+/// half-length.
+///
+/// A compliant sole (stride-sim: a 3 × 3 grid of spring-damper points over 0.20 m × 0.09 m) keeps every
+/// point loaded only while the CoP stays within 2/3 of the half-size from the centre (linear springs at
+/// `−a, 0, a`: the far row unloads when the CoP reaches `2a/3`). Beyond that the foot rolls on its edge row,
+/// which the rigid contact constraint does not model: with the full sole rectangle the TSID put the stance
+/// foot's CoP on its edge at the first lift-off and the foot rolled over within 10 ms (ankle roll velocity
+/// ×1.5 per tick up to 18 rad/s, then infeasible QPs). The region is kept at 90 % (x) and 83 % (y) of
+/// that 2/3 bound; measured in stride-sim: 0.08 × 0.035 → 7 QP fallbacks in `walk_straight_torque`,
+/// 0.07 × 0.03 and 0.06 × 0.025 → none.
+pub const BUNDLED_COP_X: [f64; 2] = [-0.06, 0.06];
+/// CoP region of the default TSID contacts along the sole's y axis (m): 56 % of the 0.09 m sole's
+/// half-width; see [`BUNDLED_COP_X`].
+pub const BUNDLED_COP_Y: [f64; 2] = [-0.025, 0.025];
+/// CoM gain K_p (1/s²) of the default TSID.
+pub const BUNDLED_TSID_COM_KP: f64 = 25.0;
+/// CoM gain K_d (1/s) of the default TSID.
+///
+/// The runner closes the simplified layer's ZMP-CoM loop through the TSID's CoM task: that layer sets
+/// `ẋ* = … + k_zmp (r_measured − r_desired)` at 100 Hz and the TSID turns it into `ẍ ≈ K_d (ẋ* − ẋ)`, which
+/// moves the measured ZMP by `−(z_com/g) ẍ` within the same simplified tick. The loop gain per tick is
+/// `(z_com/g) K_d k_zmp` ≈ 0.055 K_d k_zmp for the bundled robot (z_com 0.54 m; stride-simplified's
+/// k_zmp is 1 standing, 1.5 walking): K_d = 20 gives 1.1 standing, a sign-alternating ZMP limit cycle at
+/// 50 Hz that saturates at the sole edges (measured: ZMP error 94 mm RMS, 277 QP fallbacks, fall after
+/// 2.8 s when standing). K_d = 5 gives 0.28 standing and 0.41 walking.
+pub const BUNDLED_TSID_COM_KD: f64 = 5.0;
+
 impl TsidConfig {
     /// The thesis's TSID (7.2.31) for `models/stride_humanoid.urdf`: floating-base dynamics, feet
     /// SE(3) hard (swing tracking; contact constraint when loaded), linear momentum (CoM) hard, chest SO(3),
     /// posture, wrench and torque regularization soft, ZMP soft, torque/position/velocity limits and
     /// contact wrench feasibility hard.
+    ///
+    /// Two values are tuned for the torque-controlled robot in stride-sim (see their docs): the CoP region
+    /// of the contacts ([`BUNDLED_COP_X`], [`BUNDLED_COP_Y`], a margin inside the sole for a compliant
+    /// floor) and the CoM gains ([`BUNDLED_TSID_COM_KP`], [`BUNDLED_TSID_COM_KD`], low enough for the
+    /// ZMP-CoM feedback of the simplified layer to stay stable).
     pub fn default_for_bundled_model() -> Self {
         let foot = |name: &str, frame: &str, reference| {
             TaskConfig::Se3(Se3TaskConfig {
@@ -742,8 +775,8 @@ impl TsidConfig {
                 foot,
                 friction: default_friction(),
                 facets: default_facets(),
-                foot_x: default_foot_x(),
-                foot_y: default_foot_y(),
+                foot_x: BUNDLED_COP_X,
+                foot_y: BUNDLED_COP_Y,
                 torsional_friction: default_torsional(),
                 min_normal_force: 0.0,
                 max_normal_force: default_max_fz(),
@@ -767,8 +800,8 @@ impl TsidConfig {
                 foot("right_foot", "r_sole", FrameReferenceSource::RightFoot),
                 TaskConfig::Com(ComTaskConfig {
                     name: "com".into(),
-                    kp: 100.0,
-                    kd: 20.0,
+                    kp: BUNDLED_TSID_COM_KP,
+                    kd: BUNDLED_TSID_COM_KD,
                     mask: [true; 3],
                     priority: Priority::Hard,
                     weight: Weight::Scalar(1.0),

@@ -431,9 +431,12 @@ fn soft_weights_change_at_run_time() {
     ik.set_task_weight("torso", &[500.0]).unwrap();
     let after = ik.step(&input).unwrap().joint_velocities.clone();
     // same as a controller built with that weight
+    // only the `torso` task: the default config has a second SO(3) task (`pelvis`)
     for t in &mut config.tasks {
         if let TaskConfig::So3(c) = t {
-            c.weight = stride_wbc::Weight::Scalar(500.0);
+            if c.name == "torso" {
+                c.weight = stride_wbc::Weight::Scalar(500.0);
+            }
         }
     }
     let mut reference = QpIk::new(Arc::clone(&model), config).unwrap();
