@@ -700,3 +700,37 @@ fn a_step_under_tsid_with_forward_dynamics_lands_the_foot_and_tracks_the_com() {
     );
     assert!(worst_com < 5e-3, "CoM tracking error {worst_com}");
 }
+
+#[test]
+fn default_contacts_keep_the_cop_inside_the_compliance_margin() {
+    // A ZMP pulled strongly towards the toes (soft task, large weight) ends on the default CoP bound
+    // (stride_wbc::BUNDLED_COP_X), not on the sole edge: the margin a compliant floor needs is active.
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    let kd = kd_at(&model, &state);
+    let frames = ["l_sole", "r_sole"].map(|f| model.frame_id(f).unwrap());
+    let mid = 0.5
+        * (kd.frame_pose(frames[0]).translation.vector
+            + kd.frame_pose(frames[1]).translation.vector);
+    input.desired_zmp = Some(Vector2::new(mid.x + 0.095, mid.y));
+    let mut tsid = Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
+    tsid.set_task_weight("zmp", &[1e3]).unwrap();
+    let out = tsid.step(&input).unwrap().clone();
+    assert_eq!(out.report.status, QpStatus::Solved);
+    check_physics(&model, &state, &out, 1e-8, MU);
+    for (f, w) in frames.iter().zip(out.contact_wrenches.iter()) {
+        let rt = kd.frame_pose(*f).rotation.inverse();
+        let force = rt * Vector3::new(w[0], w[1], w[2]);
+        let torque = rt * Vector3::new(w[3], w[4], w[5]);
+        assert!(force.z > 50.0, "both feet loaded: {force:?}");
+        let cop_x = -torque.y / force.z;
+        assert!(
+            (cop_x - stride_wbc::BUNDLED_COP_X[1]).abs() < 1e-6,
+            "CoP x {cop_x} should sit on the bound {}",
+            stride_wbc::BUNDLED_COP_X[1]
+        );
+        let cop_y = torque.x / force.z;
+        assert!(cop_y.abs() <= stride_wbc::BUNDLED_COP_Y[1] + 1e-7);
+    }
+}
