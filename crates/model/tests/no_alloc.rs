@@ -2,33 +2,13 @@
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
 use nalgebra::{DMatrix, DVector, Vector6};
 use stride_model::{ExternalWrench, KinDyn, Model, VelocityRepresentation};
 
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
 
 fn exercise(model: Arc<Model>) {
     let nv = model.nv();
@@ -54,7 +34,7 @@ fn exercise(model: Arc<Model>) {
     }];
     let mut integrated = states[0].clone();
 
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = ALLOC.allocations();
     let mut sink = 0.0;
     for rep in [
         VelocityRepresentation::Mixed,
@@ -85,7 +65,7 @@ fn exercise(model: Arc<Model>) {
             integrated.integrate(&model, rep, 1e-3).unwrap();
         }
     }
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    let after = ALLOC.allocations();
     assert!(sink.is_finite());
     assert_eq!(
         after - before,

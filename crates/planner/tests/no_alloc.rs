@@ -2,33 +2,14 @@
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use common::*;
 use stride_block::Block;
 use stride_planner::{Goal, PlanSample, Planner, PlannerConfig, PlannerInput};
 
-struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
 
 #[test]
 fn sampling_and_stepping_do_not_allocate() {
@@ -59,7 +40,7 @@ fn sampling_and_stepping_do_not_allocate() {
     input.goal = None;
     let mut out = PlanSample::default();
     let end = planner.plan().unwrap().end_time;
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = ALLOC.allocations();
     let mut k = 0u64;
     let mut checksum = 0.0;
     while (k as f64) * 0.01 < end + 2.0 {
@@ -71,7 +52,7 @@ fn sampling_and_stepping_do_not_allocate() {
         checksum += o.com_position.y;
         k += 1;
     }
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    let after = ALLOC.allocations();
     assert!(checksum.is_finite());
     assert!(k > 1000);
     assert_eq!(

@@ -3,33 +3,13 @@
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 
 use stride_block::Block;
 use stride_sim::{IntegratorKind, PushConfig, SimConfig, SimInput, SimRobot};
 
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
 
 #[test]
 fn stepping_does_not_allocate() {
@@ -64,11 +44,11 @@ fn stepping_does_not_allocate() {
         for _ in 0..10 {
             sim.step(&input).unwrap();
         }
-        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        let before = ALLOC.allocations();
         for _ in 0..500 {
             sim.step(&input).unwrap();
         }
-        let after = ALLOCATIONS.load(Ordering::SeqCst);
+        let after = ALLOC.allocations();
         assert_eq!(
             after - before,
             0,

@@ -1,54 +1,17 @@
 //! `step` allocates nothing after construction: PI, ZMP-CoM, the whole block with either controller
 //! (MPC with the banded interior-point solver), counted with a global allocator.
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
 use nalgebra::Vector2;
 use stride_block::Block;
 use stride_simplified::*;
 
-struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-thread_local! {
-    /// Only allocations of the thread under test are counted (the test harness's own threads may
-    /// allocate at any time).
-    static COUNTING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-}
-
-fn record() {
-    if COUNTING.with(|c| c.get()) {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        record();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        record();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
+/// Only allocations of the thread under test are counted (the test harness's own threads may
+/// allocate at any time): see `CountingAllocator::allocations_during`.
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
 
 const OMEGA: f64 = 4.302_325_511_579_751;
-
-fn count<R>(f: impl FnOnce() -> R) -> (usize, R) {
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
-    COUNTING.with(|c| c.set(true));
-    let r = f();
-    COUNTING.with(|c| c.set(false));
-    (ALLOCATIONS.load(Ordering::SeqCst) - before, r)
-}
 
 #[test]
 fn steps_do_not_allocate() {
@@ -60,7 +23,7 @@ fn steps_do_not_allocate() {
         ..Default::default()
     })
     .unwrap();
-    let (n, _) = count(|| {
+    let (_, n) = ALLOC.allocations_during(|| {
         for i in 0..100 {
             let e = 0.001 * i as f64;
             pi.step(
@@ -77,7 +40,7 @@ fn steps_do_not_allocate() {
     assert_eq!(n, 0, "DCM PI step allocated");
 
     let mut zc = ZmpComController::new(ZmpComConfig::default()).unwrap();
-    let (n, _) = count(|| {
+    let (_, n) = ALLOC.allocations_during(|| {
         for i in 0..100 {
             let z = Vector2::new(0.001 * i as f64, 0.0);
             zc.step(i % 30 < 15, OMEGA, z, -z, z, z, -z, 0.01).unwrap();
@@ -97,7 +60,7 @@ fn steps_do_not_allocate() {
         let samples = block.horizon_samples();
         let mut input = SimplifiedInput::new(samples, foot);
         input.omega = OMEGA;
-        let (n, _) = count(|| {
+        let (_, n) = ALLOC.allocations_during(|| {
             for tick in 0..40 {
                 input.horizon.clear();
                 for k in 0..samples {
