@@ -12,8 +12,8 @@ use crate::config::{IkConfig, IkFeedback, Priority, TaskConfig};
 use crate::error::WbcError;
 use crate::io::{IkOutput, SolveReport, TaskResidual, WbcInput};
 use crate::tasks::{
-    check_gain, expand_weight, joint_limits, AngularMomentumVelocityTask, ComVelocityTask,
-    FrameTask, JointRegularizationTask, Level, TaskBlock,
+    check_gain, expand_weight, joint_limits, position_limit_bounds, AngularMomentumVelocityTask,
+    ComVelocityTask, FrameTask, JointRegularizationTask, Level, TaskBlock,
 };
 
 /// What a config entry became.
@@ -142,28 +142,8 @@ impl QpIk {
                     joint_tasks.push(t);
                 }
                 TaskConfig::JointPositionLimits(c) => {
-                    check_gain(&c.name, "margin", c.margin)?;
-                    let look_ahead = c.look_ahead.unwrap_or(config.period);
-                    if !(look_ahead.is_finite() && look_ahead > 0.0) {
-                        return Err(WbcError::InvalidConfig {
-                            task: c.name.clone(),
-                            key: "look_ahead",
-                            reason: format!("{look_ahead} must be > 0"),
-                        });
-                    }
-                    let l: Vec<f64> = lo.iter().map(|v| v + c.margin).collect();
-                    let u: Vec<f64> = hi.iter().map(|v| v - c.margin).collect();
-                    if let Some(i) = (0..n).find(|&i| l[i] > u[i]) {
-                        return Err(WbcError::InvalidConfig {
-                            task: c.name.clone(),
-                            key: "margin",
-                            reason: format!(
-                                "larger than half the range of joint `{}`",
-                                model.joints()[i].name
-                            ),
-                        });
-                    }
-                    position_limits = Some((l, u, look_ahead));
+                    position_limits =
+                        Some(position_limit_bounds(c, config.period, &lo, &hi, &model)?);
                     slots.push(Slot::PositionLimits);
                 }
                 TaskConfig::JointVelocityLimits(c) => {

@@ -136,6 +136,39 @@ pub(crate) fn check_gain(task: &str, key: &'static str, value: f64) -> Result<()
     }
 }
 
+/// Validates a joint position limits task and returns its bounds: the model's limits `lo`/`hi` moved
+/// inward by the task's margin (rad or m), and the look-ahead time (s; the control `period` by default).
+pub(crate) fn position_limit_bounds(
+    c: &crate::config::JointPositionLimitsTaskConfig,
+    period: f64,
+    lo: &[f64],
+    hi: &[f64],
+    model: &Model,
+) -> Result<(Vec<f64>, Vec<f64>, f64), WbcError> {
+    check_gain(&c.name, "margin", c.margin)?;
+    let look_ahead = c.look_ahead.unwrap_or(period);
+    if !(look_ahead.is_finite() && look_ahead > 0.0) {
+        return Err(WbcError::InvalidConfig {
+            task: c.name.clone(),
+            key: "look_ahead",
+            reason: format!("{look_ahead} must be > 0"),
+        });
+    }
+    let l: Vec<f64> = lo.iter().map(|v| v + c.margin).collect();
+    let u: Vec<f64> = hi.iter().map(|v| v - c.margin).collect();
+    if let Some(i) = (0..l.len()).find(|&i| l[i] > u[i]) {
+        return Err(WbcError::InvalidConfig {
+            task: c.name.clone(),
+            key: "margin",
+            reason: format!(
+                "larger than half the range of joint `{}`",
+                model.joints()[i].name
+            ),
+        });
+    }
+    Ok((l, u, look_ahead))
+}
+
 pub(crate) fn frame_id(model: &Model, task: &str, frame: &str) -> Result<FrameId, WbcError> {
     model.frame_id(frame).ok_or_else(|| WbcError::UnknownFrame {
         task: task.to_owned(),

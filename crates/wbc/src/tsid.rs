@@ -21,8 +21,8 @@ use crate::ik::{check_references, check_state};
 use crate::io::{SolveReport, TaskResidual, TsidOutput, WbcInput};
 use crate::math::skew;
 use crate::tasks::{
-    check_gain, expand_weight, frame_id, joint_limits, FrameTask, JointRegularizationTask, Level,
-    TaskBlock,
+    check_gain, expand_weight, frame_id, joint_limits, position_limit_bounds, FrameTask,
+    JointRegularizationTask, Level, TaskBlock,
 };
 
 /// Maximum number of contacts (2^k QPs are prebuilt).
@@ -352,28 +352,8 @@ impl Tsid {
                     joint_tasks.push(t);
                 }
                 TaskConfig::JointPositionLimits(c) => {
-                    check_gain(&c.name, "margin", c.margin)?;
-                    let look_ahead = c.look_ahead.unwrap_or(config.period);
-                    if !(look_ahead.is_finite() && look_ahead > 0.0) {
-                        return Err(WbcError::InvalidConfig {
-                            task: c.name.clone(),
-                            key: "look_ahead",
-                            reason: format!("{look_ahead} must be > 0"),
-                        });
-                    }
-                    let l: Vec<f64> = lo.iter().map(|v| v + c.margin).collect();
-                    let u: Vec<f64> = hi.iter().map(|v| v - c.margin).collect();
-                    if let Some(i) = (0..n).find(|&i| l[i] > u[i]) {
-                        return Err(WbcError::InvalidConfig {
-                            task: c.name.clone(),
-                            key: "margin",
-                            reason: format!(
-                                "larger than half the range of joint `{}`",
-                                model.joints()[i].name
-                            ),
-                        });
-                    }
-                    position_limits = Some((l, u, look_ahead));
+                    position_limits =
+                        Some(position_limit_bounds(c, config.period, &lo, &hi, &model)?);
                     eq_weights.push(None);
                     tasks.push(TsidTask::PositionLimits);
                 }
