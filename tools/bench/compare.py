@@ -6,8 +6,8 @@ Usage: compare.py CRITERION_DIR PINOCCHIO_JSON [--since EPOCH_SECONDS] [--json O
 Criterion benchmark ids are matched to algorithms and models by name (case-insensitive substrings):
   model:      "icub" or "v2_7" -> iCubGazeboV2_7, otherwise stride_humanoid
   algorithm:  set_state ("set_state": stride's state update = Pinocchio's forwardKinematics(q, v)),
-              fk (forward kinematics of all frames: "kinematics", "fk", "poses"), jacobians ("jacobian" but not
-              "com"), crba ("crba", "mass"), rnea ("rnea", "inverse", "bias"), aba ("aba", "forward_dyn"),
+              fk (forward kinematics of all frames: "kinematics", "fk", "poses"), jacobians ("joint" +
+              "jacobian"), crba ("crba", "mass"), rnea ("rnea", "inverse", "bias"), aba ("aba", "forward_dyn"),
               cmm ("cmm", "centroidal")
 Prints one line per algorithm and model:
   <model>/<algorithm> stride=<us> pinocchio=<us> ratio=<stride/pinocchio>
@@ -29,7 +29,9 @@ def classify(full_id):
     if "set_state" in s:
         algo = "set_state"
     elif "jacobian" in s and "com" not in s:
-        algo = "jacobians"
+        # Pinocchio's computeJointJacobians fills the joint columns once: compare it with stride's one-pass
+        # `joint_jacobians`, not with the per-link dense frame Jacobians (reported by criterion only).
+        algo = "jacobians" if "joint" in s else None
     elif "crba" in s or "mass" in s:
         algo = "crba"
     elif "rnea" in s or "inverse" in s or "bias" in s:

@@ -90,6 +90,13 @@ fn bench_model(c: &mut Criterion, label: &str, model: Arc<Model>) {
             }
         })
     });
+    group.bench_function("joint Jacobians (one pass)", |b| {
+        b.iter(|| {
+            kd.set_state(&states[next()]).unwrap();
+            kd.joint_jacobians(&mut jac).unwrap();
+            black_box(&jac);
+        })
+    });
     group.bench_function("CRBA (mass matrix)", |b| {
         b.iter(|| {
             kd.set_state(&states[next()]).unwrap();

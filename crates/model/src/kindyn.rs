@@ -509,6 +509,31 @@ impl KinDyn {
         Ok(())
     }
 
+    /// Every joint's Jacobian column in one pass, like Pinocchio's `computeJointJacobians` (WORLD frame).
+    ///
+    /// Column `k` (6 × nv output, `[linear; angular]`) is the inertial (right-trivialized) twist, about the
+    /// world origin and in world coordinates, that a unit `ν[k]` gives every body downstream of that degree
+    /// of freedom; the base columns map the base velocity in the current representation. The
+    /// inertial twist of a body is therefore this matrix times ν with the columns of the joints that are not
+    /// its ancestors set to zero. One pass over the bodies, no allocation.
+    pub fn joint_jacobians(&self, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
+        let nv = self.model.nv();
+        check_shape("joint_jacobians output", (6, nv), out.shape())?;
+        let to_origin = -self.base_pos;
+        let t = self.base_t();
+        let data = out.as_mut_slice();
+        for k in 0..6 {
+            let col = shift_motion(&t.column(k).into_owned(), &to_origin);
+            data[6 * k..6 * k + 6].copy_from_slice(col.as_slice());
+        }
+        for i in 1..self.model.body_count() {
+            let col = shift_motion(&self.s[i], &to_origin);
+            let start = 6 * (5 + i);
+            data[start..start + 6].copy_from_slice(col.as_slice());
+        }
+        Ok(())
+    }
+
     /// `J̇ ν` of a frame: its acceleration in the current representation when ν̇ = 0.
     pub fn frame_bias_acceleration(&self, frame: FrameId) -> Vector6<f64> {
         let (b, r, p) = self.frame_rt(frame);
