@@ -139,39 +139,7 @@ impl KinDyn {
     /// Sets the state (base velocity in the current representation) and computes the kinematics of every
     /// body (poses, velocities, bias accelerations). Checks sizes and finiteness.
     pub fn set_state(&mut self, state: &RobotState) -> Result<(), ModelError> {
-        let n = self.model.dof();
-        check_len("joint_positions", n, state.joint_positions.len())?;
-        check_len("joint_velocities", n, state.joint_velocities.len())?;
-        let pose_ok = state
-            .base_pose
-            .translation
-            .vector
-            .iter()
-            .all(|v| v.is_finite())
-            && state
-                .base_pose
-                .rotation
-                .coords
-                .iter()
-                .all(|v| v.is_finite());
-        if !pose_ok {
-            return Err(ModelError::NonFiniteInput { what: "base_pose" });
-        }
-        if !state.joint_positions.iter().all(|v| v.is_finite()) {
-            return Err(ModelError::NonFiniteInput {
-                what: "joint_positions",
-            });
-        }
-        if !state.base_velocity.iter().all(|v| v.is_finite()) {
-            return Err(ModelError::NonFiniteInput {
-                what: "base_velocity",
-            });
-        }
-        if !state.joint_velocities.iter().all(|v| v.is_finite()) {
-            return Err(ModelError::NonFiniteInput {
-                what: "joint_velocities",
-            });
-        }
+        state.validate(&self.model)?;
         self.base_pose = state.base_pose;
         self.q.copy_from(&state.joint_positions);
         self.qd.copy_from(&state.joint_velocities);

@@ -63,6 +63,42 @@ pub struct RobotState {
 }
 
 impl RobotState {
+    /// Checks that the state fits `model` (one position and one velocity per joint) and holds only finite
+    /// numbers. Every consumer of a user-supplied state (kinematics, controllers, simulator) calls this one
+    /// check.
+    pub fn validate(&self, model: &Model) -> Result<(), ModelError> {
+        let n = model.dof();
+        check_len("joint_positions", n, self.joint_positions.len())?;
+        check_len("joint_velocities", n, self.joint_velocities.len())?;
+        let pose_finite = self
+            .base_pose
+            .translation
+            .vector
+            .iter()
+            .all(|v| v.is_finite())
+            && self.base_pose.rotation.coords.iter().all(|v| v.is_finite());
+        for (what, finite) in [
+            ("base_pose", pose_finite),
+            (
+                "joint_positions",
+                self.joint_positions.iter().all(|v| v.is_finite()),
+            ),
+            (
+                "base_velocity",
+                self.base_velocity.iter().all(|v| v.is_finite()),
+            ),
+            (
+                "joint_velocities",
+                self.joint_velocities.iter().all(|v| v.is_finite()),
+            ),
+        ] {
+            if !finite {
+                return Err(ModelError::NonFiniteInput { what });
+            }
+        }
+        Ok(())
+    }
+
     /// Identity base pose, zero joint positions and velocities.
     pub fn zero(model: &Model) -> Self {
         Self {

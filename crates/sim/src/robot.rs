@@ -5,7 +5,9 @@ use std::time::Duration;
 
 use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 use stride_block::Block;
-use stride_model::{ExternalWrench, FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
+use stride_model::{
+    ExternalWrench, FrameId, KinDyn, Model, ModelError, RobotState, VelocityRepresentation,
+};
 
 use crate::config::{
     ActuationMode, EffortLimitPolicy, IntegratorKind, JointActuatorConfig, PushConfig, SimConfig,
@@ -666,50 +668,20 @@ impl SimRobot {
     }
 
     fn check_state(&self, state: &RobotState) -> Result<(), SimError> {
-        let n = self.model.dof();
-        for (what, len) in [
-            ("joint_positions", state.joint_positions.len()),
-            ("joint_velocities", state.joint_velocities.len()),
-        ] {
-            if len != n {
-                return Err(SimError::Dimension {
-                    what,
-                    expected: n,
-                    actual: len,
-                });
-            }
-        }
-        let pose_ok = state
-            .base_pose
-            .translation
-            .vector
-            .iter()
-            .all(|x| x.is_finite())
-            && state
-                .base_pose
-                .rotation
-                .coords
-                .iter()
-                .all(|x| x.is_finite());
-        if !pose_ok {
-            return Err(SimError::NonFiniteState { what: "base pose" });
-        }
-        if !state.base_velocity.iter().all(|x| x.is_finite()) {
-            return Err(SimError::NonFiniteState {
-                what: "base velocity",
-            });
-        }
-        if !state.joint_positions.iter().all(|x| x.is_finite()) {
-            return Err(SimError::NonFiniteState {
-                what: "joint positions",
-            });
-        }
-        if !state.joint_velocities.iter().all(|x| x.is_finite()) {
-            return Err(SimError::NonFiniteState {
-                what: "joint velocities",
-            });
-        }
-        Ok(())
+        state.validate(&self.model).map_err(|e| match e {
+            ModelError::NonFiniteInput { what } => SimError::NonFiniteState { what },
+            ModelError::DimensionMismatch {
+                what,
+                expected_rows,
+                rows,
+                ..
+            } => SimError::Dimension {
+                what,
+                expected: expected_rows,
+                actual: rows,
+            },
+            other => SimError::Model(other),
+        })
     }
 
     /// Recomputes the kinematics, initialises contact anchors and the output after a state change.

@@ -367,33 +367,7 @@ impl QpIk {
 }
 
 pub(crate) fn check_state(model: &Model, state: &RobotState) -> Result<(), WbcError> {
-    let n = model.dof();
-    if state.joint_positions.len() != n || state.joint_velocities.len() != n {
-        return Err(WbcError::InvalidInput(format!(
-            "state has {} joint positions and {} joint velocities, the model has {n} joints",
-            state.joint_positions.len(),
-            state.joint_velocities.len()
-        )));
-    }
-    let finite = state.joint_positions.iter().all(|v| v.is_finite())
-        && state.joint_velocities.iter().all(|v| v.is_finite())
-        && state.base_velocity.iter().all(|v| v.is_finite())
-        && state
-            .base_pose
-            .translation
-            .vector
-            .iter()
-            .all(|v| v.is_finite())
-        && state
-            .base_pose
-            .rotation
-            .coords
-            .iter()
-            .all(|v| v.is_finite());
-    if !finite {
-        return Err(WbcError::InvalidInput("state has non-finite values".into()));
-    }
-    Ok(())
+    Ok(state.validate(model)?)
 }
 
 pub(crate) fn copy_state(dst: &mut RobotState, src: &RobotState) {
