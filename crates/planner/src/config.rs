@@ -33,7 +33,7 @@ pub enum DcmInterpolation {
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
-/// | `com_height` | m | 0.53 | constant CoM height above the ground (LIPM), gives ω = √(g/h) |
+/// | `com_height` | m | 0.53 | constant CoM height above the ground (LIPM), gives ω = √(g/h); in (0, 10] |
 /// | `gravity` | m/s² | 9.81 | gravity magnitude |
 /// | `step_duration_min` | s | 0.8 | min time between two touch-downs (10.1.11) |
 /// | `step_duration_nominal` | s | 1.0 | duration of the closing steps once the unicycle stopped |
@@ -71,7 +71,7 @@ pub enum DcmInterpolation {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerConfig {
-    /// Constant CoM height above the ground \[m\].
+    /// Constant CoM height above the ground \[m\], in (0, 10].
     pub com_height: f64,
     /// Gravity magnitude \[m/s²\].
     pub gravity: f64,
@@ -202,6 +202,10 @@ fn check(
     }
 }
 
+/// Largest accepted `com_height` \[m\]: ω = √(g/h) ≈ 0.99 rad/s there; far larger heights make the DCM
+/// plan's closed forms (terms in 1/ω³) lose every digit.
+pub const MAX_COM_HEIGHT: f64 = 10.0;
+
 impl PlannerConfig {
     /// Checks every field; the error names the first offending parameter.
     pub fn validate(&self) -> Result<(), PlannerError> {
@@ -209,8 +213,10 @@ impl PlannerConfig {
         check(
             "com_height",
             c.com_height,
-            c.com_height > 0.0,
-            "must be > 0",
+            c.com_height > 0.0 && c.com_height <= MAX_COM_HEIGHT,
+            format!(
+                "must lie in (0, {MAX_COM_HEIGHT}] m (beyond, ω·T is so small that the LIPM plan is ill-conditioned)"
+            ),
         )?;
         check("gravity", c.gravity, c.gravity > 0.0, "must be > 0")?;
         check(

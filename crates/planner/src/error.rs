@@ -64,6 +64,15 @@ pub enum PlannerError {
         /// Why.
         reason: &'static str,
     },
+    /// The closed-form DCM plan came out non-finite (an ill-conditioned combination of parameters, e.g. a
+    /// huge CoM height with very short phases). Never returned as a plan with NaN in it.
+    #[error("the DCM plan is not finite in the segment starting at t = {time:.3} s ({quantity}); check com_height and the phase durations")]
+    NonFinitePlan {
+        /// Start time \[s\] of the first non-finite segment.
+        time: f64,
+        /// Which quantity: `zmp`, `dcm`, `com`.
+        quantity: &'static str,
+    },
     /// `replan`/`sample` called before `start`.
     #[error("the planner has no plan yet: call `start` first")]
     NoPlan,

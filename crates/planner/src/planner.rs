@@ -43,6 +43,27 @@ fn xy(h: &Isometry3<f64>) -> Vector2<f64> {
     Vector2::new(h.translation.x, h.translation.y)
 }
 
+/// Every coefficient of every segment is finite, or the plan is refused: a plan never carries NaN.
+fn check_segments_finite(segments: &[DcmSegment]) -> Result<(), PlannerError> {
+    let finite = |c: &[Vector2<f64>]| c.iter().all(|v| v.iter().all(|x| x.is_finite()));
+    for seg in segments {
+        let quantity = if !finite(&seg.zmp) {
+            "zmp"
+        } else if !finite(&seg.dcm_poly) || !finite(&[seg.growth]) {
+            "dcm"
+        } else if !finite(&seg.com_poly) || !finite(&[seg.decay]) {
+            "com"
+        } else {
+            continue;
+        };
+        return Err(PlannerError::NonFinitePlan {
+            time: seg.start,
+            quantity,
+        });
+    }
+    Ok(())
+}
+
 fn check_time(name: &'static str, t: f64) -> Result<(), PlannerError> {
     if t.is_finite() {
         Ok(())
@@ -286,6 +307,7 @@ fn build_plan(cfg: &PlannerConfig, start: &StartState, goal: &Goal) -> Result<Pl
             segments
         };
 
+        check_segments_finite(&segments)?;
         // The ZMP of every double support whose shape depends on the DCM boundary conditions (the first one;
         // all of them for the thesis DCM cubic) is checked against the support polygon, 1e-4 m inside at 64
         // points (the ZMP cubic cannot move more than ~3e-5 m away from its chords between those points).
@@ -309,7 +331,9 @@ fn build_plan(cfg: &PlannerConfig, start: &StartState, goal: &Goal) -> Result<Pl
             for k in 0..=CHECKS {
                 let tau = d * k as f64 / CHECKS as f64;
                 let z = seg.evaluate_local(tau, omega).zmp;
+                // (a NaN distance counts as outside: it must never pass the check)
                 let dist = polygon.signed_distance(z) - 1e-4;
+                let dist = if dist.is_nan() { -f64::INFINITY } else { dist };
                 if dist < worst.0 {
                     worst = (dist, seg.start + tau, i);
                 }
@@ -335,6 +359,7 @@ fn build_plan(cfg: &PlannerConfig, start: &StartState, goal: &Goal) -> Result<Pl
                 com = seg.evaluate_local(d, omega).com;
             }
         }
+        check_segments_finite(&segments)?;
 
         // phases, contacts and swings
         let mut phases = Vec::with_capacity(2 * n + 1);
@@ -821,5 +846,36 @@ impl stride_block::Block for Planner {
     fn reset(&mut self) {
         self.plan = None;
         self.output = PlanSample::default();
+    }
+}
+
+#[cfg(test)]
+mod finiteness_tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_segments_are_refused_and_named() {
+        let z = zmp_constant(Vector2::new(0.1, 0.0));
+        let good = DcmSegment::new(0.0, Some(0.5), z, 4.0);
+        assert!(check_segments_finite(std::slice::from_ref(&good)).is_ok());
+        for (quantity, edit) in [
+            (
+                "zmp",
+                (|s: &mut DcmSegment| s.zmp[1].x = f64::NAN) as fn(&mut DcmSegment),
+            ),
+            ("dcm", |s| s.growth.y = f64::INFINITY),
+            ("com", |s| s.decay.x = f64::NAN),
+        ] {
+            let mut bad = good.clone();
+            bad.start = 1.25;
+            edit(&mut bad);
+            match check_segments_finite(&[good.clone(), bad]) {
+                Err(PlannerError::NonFinitePlan { time, quantity: q }) => {
+                    assert_eq!(time, 1.25);
+                    assert_eq!(q, quantity);
+                }
+                other => panic!("{quantity}: expected NonFinitePlan, got {other:?}"),
+            }
+        }
     }
 }

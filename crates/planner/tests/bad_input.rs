@@ -40,6 +40,8 @@ fn bad_parameters_are_named() {
         ("step_duration_max", Box::new(|c| c.step_duration_max = 0.5)),
         ("step_length_max", Box::new(|c| c.step_length_max = 0.15)),
         ("com_height", Box::new(|c| c.com_height = f64::NAN)),
+        // ω ≈ 1e-4 rad/s: the closed forms (1/ω³ terms) lose every digit (found by never_panics_or_nans)
+        ("com_height", Box::new(|c| c.com_height = 1e9)),
         ("gravity", Box::new(|c| c.gravity = 0.0)),
         (
             "double_support_fraction",
@@ -280,7 +282,8 @@ proptest! {
     }
 }
 
-/// Goals far beyond the horizon (pose or very long velocity command) give a prefix quickly, never hang.
+/// Goals far beyond the horizon (pose or very long velocity command) give a prefix bounded by the horizon
+/// (so the search cannot run away: at most horizon / step_duration_min steps), never hang.
 #[test]
 fn far_goals_give_prefixes() {
     let cfg = PlannerConfig {
@@ -288,7 +291,7 @@ fn far_goals_give_prefixes() {
         ..PlannerConfig::default()
     };
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-    let start = std::time::Instant::now();
+    let max_steps = (cfg.horizon / cfg.step_duration_min).ceil() as usize + 2;
     for goal in [
         Goal::Pose {
             x: 1e12,
@@ -315,10 +318,20 @@ fn far_goals_give_prefixes() {
             "{:?}",
             plan.outcome
         );
+        assert!(
+            plan.step_count() <= max_steps,
+            "{} steps > {max_steps}",
+            plan.step_count()
+        );
+        assert!(
+            plan.end_time - plan.start_time
+                <= cfg.horizon + cfg.step_duration_max + cfg.final_double_support_duration,
+            "plan spans {} s",
+            plan.end_time - plan.start_time
+        );
         check_steps(&cfg, &plan, true);
         check_dynamics(&cfg, &plan, 0.02);
     }
-    assert!(start.elapsed().as_secs_f64() < 30.0);
 }
 
 /// Sampling at NaN/±∞ never yields NaN: before the start clamps to the start, after the end stands.

@@ -46,6 +46,65 @@ fn random_qp(seed: u64, n: usize, me: usize, mi: usize) -> DenseQp {
     qp
 }
 
+/// `base` (one equality row) with its equality row repeated scaled by `scale` and every inequality row
+/// repeated once.
+fn with_duplicated_rows(base: &DenseQp, scale: f64) -> DenseQp {
+    let (n, mi) = (base.n(), base.n_ineq());
+    let mut dup = DenseQp::new(n, 2, 2 * mi);
+    *dup.hessian_mut() = base.hessian().clone();
+    *dup.gradient_mut() = base.gradient().clone();
+    for r in 0..2 {
+        let f = if r == 0 { 1.0 } else { scale };
+        dup.eq_matrix_mut()
+            .row_mut(r)
+            .copy_from(&(base.eq_matrix().row(0) * f));
+        dup.eq_rhs_mut()[r] = base.eq_rhs()[0] * f;
+    }
+    for i in 0..mi {
+        for r in [i, mi + i] {
+            dup.ineq_matrix_mut()
+                .row_mut(r)
+                .copy_from(&base.ineq_matrix().row(i));
+            dup.ineq_lower_mut()[r] = base.ineq_lower()[i];
+            dup.ineq_upper_mut()[r] = base.ineq_upper()[i];
+        }
+    }
+    *dup.lower_bounds_mut() = base.lower_bounds().clone();
+    *dup.upper_bounds_mut() = base.upper_bounds().clone();
+    dup
+}
+
+/// A problem found by `redundant_rows_do_not_change_the_answer` on which clarabel with Ruiz equilibration
+/// stalls (iteration limit at tolerance 1e-8..1e-11, NumericalError at 1e-12): the backend's retry without
+/// equilibration solves it, and the answer matches the active-set solution of the non-duplicated problem.
+#[test]
+fn clarabel_retries_a_stalled_solve_without_equilibration() {
+    let base = random_qp(11442055783903989687, 8, 1, 2);
+    let dup = with_duplicated_rows(&base, 0.5);
+    let mut reference = SolverOutput::new(&base);
+    ActiveSetSolver::new(ActiveSetSettings::default()).solve(&base, &mut reference);
+    assert_eq!(reference.status, QpStatus::Solved);
+    for tolerance in [1e-10, 1e-12] {
+        let mut c = ClarabelSolver::new(ClarabelSettings {
+            tolerance,
+            ..ClarabelSettings::default()
+        });
+        let mut out = SolverOutput::new(&dup);
+        c.solve(&dup, &mut out);
+        assert_eq!(c.retries(), 1, "tolerance {tolerance:e}");
+        assert!(out.status.is_success(), "{:?}", out.status);
+        let diff = (&out.x - &reference.x).amax();
+        assert!(diff < 1e-6 * (1.0 + reference.x.amax()), "diff {diff:e}");
+        let k = check_kkt(&dup, &out);
+        assert!(k.is_satisfied(1e-7), "{k:?}");
+        // the next call starts from the equilibrated solver again (and the base problem needs no retry)
+        let mut out_base = SolverOutput::new(&base);
+        c.solve(&base, &mut out_base);
+        assert_eq!(out_base.status, QpStatus::Solved);
+        assert_eq!(c.retries(), 1);
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
 
@@ -96,23 +155,7 @@ proptest! {
     #[test]
     fn redundant_rows_do_not_change_the_answer(seed in any::<u64>(), n in 2usize..9, mi in 1usize..8, scale in 0.5f64..3.0) {
         let base = random_qp(seed, n, 1, mi);
-        let mut dup = DenseQp::new(n, 2, 2 * mi);
-        *dup.hessian_mut() = base.hessian().clone();
-        *dup.gradient_mut() = base.gradient().clone();
-        for r in 0..2 {
-            let f = if r == 0 { 1.0 } else { scale };
-            dup.eq_matrix_mut().row_mut(r).copy_from(&(base.eq_matrix().row(0) * f));
-            dup.eq_rhs_mut()[r] = base.eq_rhs()[0] * f;
-        }
-        for i in 0..mi {
-            for r in [i, mi + i] {
-                dup.ineq_matrix_mut().row_mut(r).copy_from(&base.ineq_matrix().row(i));
-                dup.ineq_lower_mut()[r] = base.ineq_lower()[i];
-                dup.ineq_upper_mut()[r] = base.ineq_upper()[i];
-            }
-        }
-        *dup.lower_bounds_mut() = base.lower_bounds().clone();
-        *dup.upper_bounds_mut() = base.upper_bounds().clone();
+        let dup = with_duplicated_rows(&base, scale);
         let mut ob = SolverOutput::new(&base);
         ActiveSetSolver::new(ActiveSetSettings::default()).solve(&base, &mut ob);
         prop_assert_eq!(ob.status, QpStatus::Solved);
