@@ -28,15 +28,20 @@
 //! returned at once (status `Unconstrained`, exact). `solver = "clarabel"` solves the same QP with
 //! clarabel (sparse, reference; allocates every tick).
 //!
-//! Interior-point methods do not benefit from warm starts; what is reused across ticks is all memory and
-//! the band structure (nothing is allocated by `step` with the banded solver).
+//! Reused across ticks: all memory, the band structure, `P` and its Cholesky factor (they depend only
+//! on `ω T` and the weights: rebuilt when `ω` changes), so an unconstrained tick costs one banded
+//! solve. The constraint rows are stored per stage as half-planes on that stage's ZMP
+//! `z_k = a ξ_{k+1} + c ξ_k` (`banded::PointGroup`), so products with `C` and the Newton update
+//! `Cᵀ diag(λ/s) C` cost a few flops per polygon edge. A warm start from the previous solution shifted
+//! by one stage is available (`warm_start`, off by default: it lowers the mean iteration count but not
+//! the worst tick, see the config table). Nothing is allocated by `step` with the banded solver.
 
 use std::time::Instant;
 
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
-use crate::banded::{BandedQp, IpmOutcome, IpmSettings, SparseRow};
+use crate::banded::{BandedQp, HalfPlaneRow, IpmOutcome, IpmSettings, PointGroup};
 use crate::error::{check_positive, Result, SimplifiedError};
 use crate::lipm::{check_omega, check_point, LipmDiscretization};
 use crate::polygon::{SupportPolygon, MAX_POLYGON_VERTICES};
@@ -77,6 +82,7 @@ pub enum MpcSolverKind {
 /// | `solver` | – | `"banded_interior_point"` | or `"clarabel"` (clarabel called directly) or `"stride_qp"` (stride-qp's sparse clarabel backend) |
 /// | `tolerance` | – | 1e-9 | interior-point tolerance on scaled residuals and complementarity |
 /// | `max_iterations` | – | 50 | interior-point iteration limit |
+/// | `warm_start` | – | false | start the banded interior point from the previous tick's solution shifted by one stage (slacks ≥ 3 mm, multipliers ≥ 1e-5 pushed into the interior). Measured on pushed walks it cuts the mean iterations of constrained ticks by 20–60 % but raises the worst tick (e.g. 12 → 20 iterations), and a real-time budget is set by the worst tick: off by default. Reset by `reset`. The optimum is the same (to the solver tolerance) |
 /// | `fallback` | – | true | on a failed solve (in practice only once the DCM has left the support polygon, where the predicted DCM grows as `e^{ωNT}` and the QP becomes ill-conditioned), use `p* = proj(ẑ_0 + 2 (ξ − ξ_ref,0))` and report it (`fallback`, solver status); false: return `SolverFailed` |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -97,6 +103,8 @@ pub struct DcmPredictiveConfig {
     pub max_iterations: u32,
     /// On a failed solve, produce the fallback law's ZMP (true) or return an error (false).
     pub fallback: bool,
+    /// Start the banded interior-point method from the previous tick's solution shifted by one stage.
+    pub warm_start: bool,
 }
 
 impl Default for DcmPredictiveConfig {
@@ -110,6 +118,7 @@ impl Default for DcmPredictiveConfig {
             tolerance: 1e-9,
             max_iterations: 50,
             fallback: true,
+            warm_start: false,
         }
     }
 }
@@ -292,6 +301,13 @@ pub struct DcmPredictiveController {
     previous_planned_zmp: Option<Vector2<f64>>,
     last_problem: Option<ProblemConstants>,
     stride_qp: StrideQpBackend,
+    /// `(a, c, Λ_z/Λ_ξ, rate reference)` the Hessian in `qp` was built for.
+    hessian_key: Option<(f64, f64, f64, ZmpRateReference)>,
+    /// Last constrained solution (QP units) for the warm start: `x`, multipliers, row range per stage.
+    warm_x: Vec<f64>,
+    warm_multiplier: Vec<f64>,
+    warm_rows: Vec<(usize, usize)>,
+    warm_valid: bool,
 }
 
 /// Lazily built stride-qp backend. Cloning gives a fresh (unbuilt) backend: the cached clarabel object
@@ -368,7 +384,7 @@ impl DcmPredictiveController {
             config,
             period,
             stages,
-            qp: BandedQp::new(2 * stages, max_rows),
+            qp: BandedQp::new(2 * stages, stages, max_rows),
             reference_dcm: vec![Vector2::zeros(); stages + 1],
             reference_zmp: vec![Vector2::zeros(); stages],
             supports: vec![placeholder; stages],
@@ -380,6 +396,11 @@ impl DcmPredictiveController {
             previous_planned_zmp: None,
             last_problem: None,
             stride_qp: StrideQpBackend::default(),
+            hessian_key: None,
+            warm_x: vec![0.0; 2 * stages],
+            warm_multiplier: vec![0.0; max_rows],
+            warm_rows: vec![(0, 0); stages],
+            warm_valid: false,
         })
     }
 
@@ -403,6 +424,7 @@ impl DcmPredictiveController {
         self.previous_desired_zmp = None;
         self.previous_planned_zmp = None;
         self.last_problem = None;
+        self.warm_valid = false;
     }
 
     /// Overrides `z_{−1}`, the previous desired ZMP (e.g. after switching from another controller).
@@ -482,6 +504,10 @@ impl DcmPredictiveController {
         let a = 1.0 / g;
         let c = -f / g;
         self.assemble(&constants, a, c);
+        if self.config.warm_start && self.warm_valid {
+            self.prepare_warm_start();
+        }
+        self.warm_valid = false;
         let (outcome, iterations) = match self.config.solver {
             MpcSolverKind::BandedInteriorPoint => self.qp.solve(&IpmSettings {
                 tolerance: self.config.tolerance,
@@ -552,6 +578,14 @@ impl DcmPredictiveController {
             0
         };
         let cost = self.cost(&constants);
+        if self.config.warm_start && status == MpcStatus::Solved {
+            self.warm_x.copy_from_slice(&self.qp.x);
+            self.warm_multiplier[..rows].copy_from_slice(&self.qp.multiplier[..rows]);
+            for (k, g) in self.qp.groups[..self.qp.group_count].iter().enumerate() {
+                self.warm_rows[k] = (g.first_row, g.end_row);
+            }
+            self.warm_valid = true;
+        }
         let unprojected = self.solution_zmp[0];
         let (desired, _) = support.project(unprojected);
         let projection_active = support.max_violation(unprojected) > 1e-9;
@@ -574,6 +608,29 @@ impl DcmPredictiveController {
                 fallback: false,
             },
         })
+    }
+
+    /// Loads the previous solution shifted by one stage into the solver's start (stage `k` takes the
+    /// previous stage `k + 1`, the last stage is held; a stage whose polygon changed its number of
+    /// edges starts its multipliers at zero, the solver pushes them into the interior).
+    fn prepare_warm_start(&mut self) {
+        let n = self.stages;
+        let qp = &mut self.qp;
+        for k in 0..n {
+            let source = (k + 1).min(n - 1);
+            qp.start_x[2 * k] = self.warm_x[2 * source];
+            qp.start_x[2 * k + 1] = self.warm_x[2 * source + 1];
+            let g = qp.groups[k];
+            let (first, end) = self.warm_rows[source];
+            for (offset, i) in (g.first_row..g.end_row).enumerate() {
+                qp.start_multiplier[i] = if end - first == g.end_row - g.first_row {
+                    self.warm_multiplier[first + offset]
+                } else {
+                    0.0
+                };
+            }
+        }
+        qp.warm_start = true;
     }
 
     /// Cost of the current solution (original weights).
@@ -604,8 +661,16 @@ impl DcmPredictiveController {
     fn assemble(&mut self, constants: &ProblemConstants, a: f64, c: f64) {
         let n = self.stages;
         let rate_weight = self.config.zmp_rate_weight / self.config.dcm_weight;
+        // P depends only on (a, c) and the weights: rebuilt (and refactorised by the solver) only when
+        // they change, e.g. with ω.
+        let hessian_key = (a, c, rate_weight, self.config.zmp_rate_reference);
+        let build_hessian = self.hessian_key != Some(hessian_key);
+        self.hessian_key = Some(hessian_key);
         let qp = &mut self.qp;
-        qp.hessian.fill_zero();
+        if build_hessian {
+            qp.hessian.fill_zero();
+            qp.hessian_changed();
+        }
         qp.gradient.iter_mut().for_each(|v| *v = 0.0);
         // A residual row per axis: Σ coef · ξ_stage + constant, stage 0 being the constant ξ̄.
         // Adds ½ w (row)² to the cost.
@@ -623,6 +688,9 @@ impl DcmPredictiveController {
                 for axis in 0..2 {
                     let i = 2 * (si - 1) + axis;
                     qp.gradient[i] += weight * ci * offset[axis];
+                }
+                if !build_hessian {
+                    continue;
                 }
                 for &(sj, cj) in terms {
                     if sj == 0 || sj > si {
@@ -666,34 +734,39 @@ impl DcmPredictiveController {
                 }
             }
         }
-        // Polygon rows: nᵀ (a ξ_{k+1} + c ξ_k) ≤ b.
+        // Polygon rows: nᵀ z_k ≤ b with z_k = a ξ_{k+1} + c ξ_k, one group per stage (ξ_0 = ξ̄ is
+        // constant: its term moves into the bounds).
         let mut r = 0;
         for k in 0..n {
             let polygon = &self.supports[k];
+            let mut group = PointGroup {
+                first_row: r,
+                ..PointGroup::default()
+            };
+            if k > 0 {
+                group.columns[group.terms] = 2 * (k - 1);
+                group.coefficients[group.terms] = c;
+                group.terms += 1;
+            }
+            group.columns[group.terms] = 2 * k;
+            group.coefficients[group.terms] = a;
+            group.terms += 1;
             for e in 0..polygon.len() {
-                let (normal, bound) = polygon.half_plane(e);
-                let mut row = SparseRow {
-                    bound,
-                    ..SparseRow::default()
-                };
-                let mut push = |column: usize, value: f64| {
-                    row.columns[row.len] = column;
-                    row.values[row.len] = value;
-                    row.len += 1;
-                };
+                let (normal, mut bound) = polygon.half_plane(e);
                 if k == 0 {
-                    row.bound -= c * normal.dot(&constants.initial_dcm);
-                } else {
-                    push(2 * (k - 1), c * normal.x);
-                    push(2 * (k - 1) + 1, c * normal.y);
+                    bound -= c * normal.dot(&constants.initial_dcm);
                 }
-                push(2 * k, a * normal.x);
-                push(2 * k + 1, a * normal.y);
-                qp.rows[r] = row;
+                qp.rows[r] = HalfPlaneRow {
+                    normal: [normal.x, normal.y],
+                    bound,
+                };
                 self.row_stage[r] = (k, e);
                 r += 1;
             }
+            group.end_row = r;
+            qp.groups[k] = group;
         }
+        qp.group_count = n;
         qp.row_count = r;
     }
 }
@@ -724,7 +797,7 @@ fn solve_with_clarabel(qp: &mut BandedQp, config: &DcmPredictiveConfig) -> (IpmO
     }
     let p = CscMatrix::new(n, n, colptr, rowval, nzval);
     let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
-    for (i, row) in qp.rows[..m].iter().enumerate() {
+    for (i, row) in qp.sparse_rows().enumerate() {
         for e in 0..row.len {
             triplets.push((row.columns[e], i, row.values[e]));
         }
@@ -740,7 +813,7 @@ fn solve_with_clarabel(qp: &mut BandedQp, config: &DcmPredictiveConfig) -> (IpmO
     let rowval: Vec<usize> = triplets.iter().map(|t| t.1).collect();
     let nzval: Vec<f64> = triplets.iter().map(|t| t.2).collect();
     let a = CscMatrix::new(m, n, colptr, rowval, nzval);
-    let b: Vec<f64> = qp.rows[..m].iter().map(|r| r.bound).collect();
+    let b: Vec<f64> = qp.sparse_rows().map(|r| r.bound).collect();
     let cones: Vec<SupportedConeT<f64>> = vec![NonnegativeConeT(m)];
     let Ok(settings) = DefaultSettingsBuilder::default()
         .verbose(false)
@@ -797,7 +870,7 @@ fn solve_with_stride_qp(
     }
     sparse.gradient.copy_from_slice(&qp.gradient);
     let mut entries = [(0usize, 0.0f64); crate::banded::MAX_ROW_ENTRIES];
-    for row in &qp.rows[..m] {
+    for row in qp.sparse_rows() {
         for (slot, (&c, &v)) in entries
             .iter_mut()
             .zip(row.columns.iter().zip(row.values.iter()))

@@ -48,12 +48,17 @@ fn steps_do_not_allocate() {
     });
     assert_eq!(n, 0, "ZMP-CoM step allocated");
 
-    for kind in [
-        DcmControllerKind::Instantaneous,
-        DcmControllerKind::Predictive,
+    for (kind, warm_start) in [
+        (DcmControllerKind::Instantaneous, false),
+        (DcmControllerKind::Predictive, false),
+        (DcmControllerKind::Predictive, true),
     ] {
         let config = SimplifiedConfig {
             dcm_controller: kind,
+            predictive: DcmPredictiveConfig {
+                warm_start,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let mut block = SimplifiedController::new(&config, Duration::from_millis(10)).unwrap();
@@ -82,7 +87,10 @@ fn steps_do_not_allocate() {
                 assert!(out.valid);
             }
         });
-        assert_eq!(n, 0, "block step allocated with {kind:?}");
+        assert_eq!(
+            n, 0,
+            "block step allocated with {kind:?} (warm start {warm_start})"
+        );
         if kind == DcmControllerKind::Predictive {
             // make sure the constrained (iterative) path ran
             assert_eq!(block.output().diagnostics.mpc.status, MpcStatus::Solved);
