@@ -77,6 +77,15 @@ fn benches(c: &mut Criterion) {
             out.dcm_position.x
         })
     });
+    // run-time verification of the 10 m plan, sampled every 10 ms (the Planner's setting)
+    let samples = plan
+        .verify(&cfg, 0.01)
+        .expect("the 10 m plan verifies")
+        .samples;
+    eprintln!("'verify 10 m plan' checks {samples} samples");
+    c.bench_function("verify_10m_plan", |b| {
+        b.iter(|| plan.verify(black_box(&cfg), 0.01).map(|r| r.samples))
+    });
     let _ = Vector3::<f64>::zeros();
 }
 

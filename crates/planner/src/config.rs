@@ -28,6 +28,31 @@ pub enum DcmInterpolation {
     DcmCubic,
 }
 
+/// When the [`crate::Planner`] checks the invariants of each plan it makes ([`crate::Plan::verify`]); a
+/// violation is returned as [`crate::PlannerError::InvariantViolated`] and the previous plan is kept.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum PlanVerification {
+    /// Never.
+    Never,
+    /// In builds with debug assertions (as `debug_assert!`), never in release builds.
+    #[default]
+    DebugBuilds,
+    /// Always.
+    Always,
+}
+
+impl PlanVerification {
+    /// Whether plans are verified in this build.
+    pub fn enabled(self) -> bool {
+        match self {
+            PlanVerification::Never => false,
+            PlanVerification::DebugBuilds => cfg!(debug_assertions),
+            PlanVerification::Always => true,
+        }
+    }
+}
+
 /// All parameters of the trajectory layer. Defaults are iCub-v2.7-like (see `anchors-walking-stacks.md` §1.1,
 /// §1.3 and the thesis digest §7).
 ///
@@ -65,6 +90,7 @@ pub enum DcmInterpolation {
 /// | `turn_in_place_threshold` | rad | 0.8 | heading error to a waypoint above which the robot turns in place first |
 /// | `backward_max_distance` | m | 0.5 | a waypoint behind the robot closer than this is reached walking backwards |
 /// | `merge_point_fraction` | – | 0.4 | where inside a double support a new plan is merged, in [0, 1) |
+/// | `verify_plans` | – | `"debug_builds"` | when the [`crate::Planner`] checks each new or merged plan with [`crate::Plan::verify`]: `"never"`, `"debug_builds"` (like `debug_assert!`) or `"always"` (sampled every 10 ms: about 2 ms for a 68-step plan, 3.5× the planning time) |
 /// | `first_swing_foot` | – | `auto` | `auto`, `left` or `right` |
 /// | `dcm_interpolation` | – | `zmp_first` | `zmp_first` or `dcm_cubic` (thesis (10.1.23)) |
 /// | `last_step_dcm_alpha` | – | 0.2 | α_LS of (10.2.3), in [0, 1] (only for `dcm_cubic`) |
@@ -135,6 +161,8 @@ pub struct PlannerConfig {
     pub backward_max_distance: f64,
     /// Merge point position inside a double support, in [0, 1).
     pub merge_point_fraction: f64,
+    /// When the planner checks each new or merged plan (`Plan::verify`): `never`, `debug_builds` or `always`.
+    pub verify_plans: PlanVerification,
     /// Which foot swings first from standing.
     pub first_swing_foot: FirstSwingFoot,
     /// Double-support DCM method.
@@ -178,6 +206,7 @@ impl Default for PlannerConfig {
             turn_in_place_threshold: 0.8,
             backward_max_distance: 0.5,
             merge_point_fraction: 0.4,
+            verify_plans: PlanVerification::DebugBuilds,
             first_swing_foot: FirstSwingFoot::Auto,
             dcm_interpolation: DcmInterpolation::ZmpFirst,
             last_step_dcm_alpha: 0.2,

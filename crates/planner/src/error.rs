@@ -73,6 +73,11 @@ pub enum PlannerError {
         /// Which quantity: `zmp`, `dcm`, `com`.
         quantity: &'static str,
     },
+    /// A plan failed its run-time verification ([`crate::Plan::verify`], enabled by
+    /// [`crate::PlannerConfig::verify_plans`]): a planner defect, never the user's input. The previous plan is
+    /// kept.
+    #[error("the new plan failed verification: {0} (a planner defect: please report it with the config and goal)")]
+    InvariantViolated(#[from] crate::verify::InvariantViolation),
     /// `replan`/`sample` called before `start`.
     #[error("the planner has no plan yet: call `start` first")]
     NoPlan,

@@ -24,6 +24,9 @@
 //!   contact flag), the gait phase and the support polygon (fixed capacity) — O(log n), no allocation.
 //!   [`Plan::report`]`(dt) -> PlanReport` is exactly the JSON object of `stride plan --json` (design.md):
 //!   `serde_json::to_string(&plan.report(dt)?)`.
+//! * [`Plan::verify`]`(config, dt) -> Result<VerifyReport, InvariantViolation>`: the plan's invariants (step
+//!   bounds, ZMP in the support polygon, LIPM, continuity, swing boundaries, final state) checked at run time;
+//!   the [`Planner`] runs it on every new or merged plan per [`PlannerConfig::verify_plans`] (see [`verify`]).
 //! * Contacts as data: [`ContactList`] per foot (`active_at(t)`, `next_after(t)`), [`PlannedContact`]
 //!   `{ foot, pose, activation_time, deactivation_time: Option }`, [`Phase`] list, [`SwingTrajectory`].
 //!
@@ -61,8 +64,9 @@ pub mod plan;
 pub mod planner;
 pub mod swing;
 mod unicycle;
+pub mod verify;
 
-pub use config::{DcmInterpolation, FirstSwingFoot, PlannerConfig};
+pub use config::{DcmInterpolation, FirstSwingFoot, PlanVerification, PlannerConfig};
 pub use contacts::{ContactList, Foot, Phase, PhaseKind, PlannedContact};
 pub use error::PlannerError;
 pub use geometry::{Pose2, SupportPolygon};
@@ -70,3 +74,4 @@ pub use goal::{Goal, Waypoint};
 pub use plan::{FootSample, Plan, PlanOutcome, PlanReport, PlanSample};
 pub use planner::{plan_from_standing, Planner, PlannerInput};
 pub use swing::{SwingShape, SwingTrajectory};
+pub use verify::{Invariant, InvariantViolation, VerifyReport};

@@ -596,6 +596,7 @@ impl Planner {
         goal: &Goal,
     ) -> Result<&Plan, PlannerError> {
         let plan = plan_from_standing(&self.config, t0, left, right, goal)?;
+        self.verify(&plan)?;
         Ok(self.plan.insert(plan))
     }
 
@@ -708,10 +709,22 @@ impl Planner {
         };
         let new = build_plan(cfg, &start, goal)?;
         let merged = merge(plan, new, m);
+        self.verify(&merged)?;
         self.plan = Some(merged);
         Ok(m)
     }
+
+    /// Verifies `plan` when [`PlannerConfig::verify_plans`] is enabled in this build.
+    fn verify(&self, plan: &Plan) -> Result<(), PlannerError> {
+        if self.config.verify_plans.enabled() {
+            plan.verify(&self.config, VERIFY_SAMPLING_PERIOD)?;
+        }
+        Ok(())
+    }
 }
+
+/// Sampling period of the run-time plan verification \[s\].
+pub const VERIFY_SAMPLING_PERIOD: f64 = 0.01;
 
 fn mid_pose(l: &Isometry3<f64>, r: &Isometry3<f64>) -> Pose2 {
     let (a, b) = (Pose2::from_isometry(l), Pose2::from_isometry(r));

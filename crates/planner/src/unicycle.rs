@@ -230,9 +230,12 @@ fn twist_feasible(cfg: &PlannerConfig, v: f64, v_lat: f64, omega: f64) -> bool {
         yaw: 0.0,
     };
     let u2 = integrate(u1, v, v_lat, omega, cfg.step_duration_min);
+    // (the width margin never exceeds half the slack between the nominal and the minimum width: with
+    // `nominal_width == min_width` steady walking at the nominal width must stay feasible)
+    let width_margin = 0.002f64.min(0.5 * (cfg.nominal_width - cfg.min_width));
     let margin = PlannerConfig {
         step_length_max: cfg.step_length_max - 0.002,
-        min_width: cfg.min_width + 0.002,
+        min_width: cfg.min_width + width_margin,
         max_yaw_per_step: cfg.max_yaw_per_step * 0.98,
         ..cfg.clone()
     };
@@ -479,6 +482,11 @@ impl Violation {
     }
 }
 
+/// Rounding allowance on the step bounds \[m, rad\]: a step exactly at a bound (e.g. at `min_width` when it
+/// equals `nominal_width`) is feasible even when its computed value is off by a few ulps. The same 1e-9 as
+/// [`crate::Plan::verify`].
+const BOUND_TOLERANCE: f64 = 1e-9;
+
 pub(crate) fn feet_feasible(
     cfg: &PlannerConfig,
     left: Pose2,
@@ -491,10 +499,10 @@ pub(crate) fn feet_feasible(
         length: len,
         lateral: rel.y,
         yaw: dyaw,
-        too_long: len > cfg.step_length_max,
-        too_short: len < cfg.step_length_min,
-        too_narrow: rel.y < cfg.min_width,
-        too_twisted: dyaw.abs() > cfg.max_yaw_per_step,
+        too_long: len > cfg.step_length_max + BOUND_TOLERANCE,
+        too_short: len < cfg.step_length_min - BOUND_TOLERANCE,
+        too_narrow: rel.y < cfg.min_width - BOUND_TOLERANCE,
+        too_twisted: dyaw.abs() > cfg.max_yaw_per_step + BOUND_TOLERANCE,
     };
     if v.too_long || v.too_short || v.too_narrow || v.too_twisted {
         Err(v)

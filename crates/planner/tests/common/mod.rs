@@ -379,8 +379,15 @@ pub fn check_swings(cfg: &PlannerConfig, plan: &Plan) {
     }
 }
 
+/// The independent checks above, then the library's run-time verification, which must accept every plan
+/// they accept (and report the touch-downs it checked).
 pub fn check_all(cfg: &PlannerConfig, plan: &Plan, fresh: bool) {
     check_steps(cfg, plan, fresh);
     check_dynamics(cfg, plan, 0.01);
     check_swings(cfg, plan);
+    let report = plan.verify(cfg, 0.01).unwrap_or_else(|e| {
+        panic!("Plan::verify rejects a plan the independent checks accept: {e}")
+    });
+    assert_eq!(report.touch_downs, plan.step_count());
+    assert!(report.min_zmp_margin >= -1e-9 && report.final_dcm_error <= 1e-3);
 }
