@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use stride_runner::config::Scenario;
+use stride_runner::config::{PlantKind, Scenario};
 use stride_runner::run::{run_scenario, Outcome, RunOptions, RunSummary};
 
 fn config_path(name: &str) -> PathBuf {
@@ -16,12 +16,18 @@ fn config_path(name: &str) -> PathBuf {
 }
 
 fn run(name: &str) -> RunSummary {
+    run_on(name, None)
+}
+
+/// Runs `name` on its own plant, or on `plant` when given.
+fn run_on(name: &str, plant: Option<PlantKind>) -> RunSummary {
     let scenario =
         Scenario::load(&config_path(name)).unwrap_or_else(|e| panic!("{name} does not load: {e}"));
     let dir = std::env::temp_dir().join(format!("stride-e2e-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let options = RunOptions {
-        output: Some(dir.join(name.replace(".toml", ".mcap"))),
+        output: Some(dir.join(name.replace(".toml", &format!("{plant:?}.mcap")))),
+        plant,
         ..RunOptions::default()
     };
     let summary = run_scenario(&scenario, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -133,4 +139,113 @@ fn turning_in_place_ends_within_ten_degrees_of_the_goal_heading() {
 fn standing_robot_survives_its_push() {
     let s = run("stand_push.toml");
     assert_stayed_up("stand_push", &s);
+}
+
+/// Velocity commands that change over time (forward, forward while turning, sideways, stop) replan online at
+/// the planner's merge points, and the closed loop follows the replanned plan: the robot ends where the same
+/// scenario ends on the ideal (kinematic) plant, which executes the plan exactly.
+#[test]
+fn velocity_commands_replan_online_and_the_robot_follows() {
+    let name = "walk_velocity.toml";
+    let s = run(name);
+    assert_stayed_up("walk_velocity", &s);
+    assert_eq!(
+        s.replans, 3,
+        "one replan per velocity segment after the first"
+    );
+    let ideal = run_on(name, Some(PlantKind::Ideal));
+    assert_eq!(ideal.replans, 3);
+    let (real, plan) = (s.final_pose, ideal.final_pose);
+    let position_gap = ((real[0] - plan[0]).powi(2) + (real[1] - plan[1]).powi(2)).sqrt();
+    let heading_gap = real[2] - plan[2]; // degrees
+    assert!(
+        position_gap < 0.03 && heading_gap.abs() < 2.0,
+        "closed loop ends at {real:?}, the plan at {plan:?}"
+    );
+    // the turning segment commands 6°/s for 6 s
+    assert!(
+        (plan[2] - 36.0).abs() < 3.0,
+        "planned heading {:.1}°",
+        plan[2]
+    );
+    assert!(real[0] > 0.8, "walked only {:.3} m forward", real[0]);
+}
+
+/// Whether the official iCub models are available (`STRIDE_ICUB_MODELS_DIR`, as CI exports it); prints why
+/// the test is skipped otherwise.
+fn icub_models_available(test: &str) -> bool {
+    match std::env::var_os("STRIDE_ICUB_MODELS_DIR") {
+        Some(dir) => {
+            let urdf = Path::new(&dir).join("iCubGazeboV2_7").join("model.urdf");
+            assert!(
+                urdf.exists(),
+                "STRIDE_ICUB_MODELS_DIR is set but {} does not exist",
+                urdf.display()
+            );
+            true
+        }
+        None => {
+            eprintln!(
+                "{test}: skipped, STRIDE_ICUB_MODELS_DIR is not set (the official iCub URDFs are not committed; \
+                 `bash tools/reference/icub-models-dir.sh` prints the folder)"
+            );
+            false
+        }
+    }
+}
+
+/// The official iCub model walks the default scenario's 2 m: checks the frame-convention handling too (the
+/// run starts at heading 0 although iCub's `root_link` points backward, and its chest, y up, is upright).
+fn assert_icub_walked_two_metres(name: &str, s: &RunSummary) {
+    assert_stayed_up(name, s);
+    assert!(
+        matches!(s.outcome, Outcome::GoalReached),
+        "{name}: outcome {}",
+        s.outcome
+    );
+    assert!(
+        s.final_pose[0] >= 2.0,
+        "{name}: walked only {:.3} m forward",
+        s.final_pose[0]
+    );
+    let goal_distance = s.goal_distance.expect("a pose goal has a distance");
+    assert!(
+        goal_distance <= 0.10,
+        "{name}: ended {goal_distance:.3} m from the goal"
+    );
+    let heading_error = s.goal_heading_error_deg.expect("a pose goal has a heading");
+    assert!(
+        heading_error.abs() <= 5.0,
+        "{name}: heading error {heading_error:.1}°"
+    );
+    assert!(
+        s.max_tilt_deg < 10.0,
+        "{name}: torso tilted {:.1}°",
+        s.max_tilt_deg
+    );
+    assert!(
+        s.dcm_error.rms < 0.03,
+        "{name}: DCM error {:.1} mm RMS",
+        1e3 * s.dcm_error.rms
+    );
+}
+
+#[test]
+fn icub_walks_two_metres_in_position_control() {
+    let name = "walk_straight_icub.toml";
+    if !icub_models_available(name) {
+        return;
+    }
+    let s = run(name);
+    assert_icub_walked_two_metres(name, &s);
+}
+
+#[test]
+fn icub_walks_two_metres_in_torque_control() {
+    let name = "walk_straight_icub_torque.toml";
+    if !icub_models_available(name) {
+        return;
+    }
+    let s = run(name);
+    assert_icub_walked_two_metres(name, &s);
 }

@@ -91,7 +91,7 @@ pub enum Command {
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
-        /// Sampling period of the printed references [s] (default: the simplified layer's period).
+        /// Sampling period of the printed references \[s\] (default: the simplified layer's period).
         #[arg(long)]
         dt: Option<f64>,
     },
@@ -102,7 +102,7 @@ pub enum Command {
         /// Log file (default: `log.path` of the scenario, else `<scenario name>.mcap`).
         #[arg(short, long)]
         output: Option<PathBuf>,
-        /// Override the scenario duration [s].
+        /// Override the scenario duration \[s\].
         #[arg(long)]
         duration: Option<f64>,
         /// Pace the loop at 1× wall-clock time and count deadline misses.

@@ -60,9 +60,9 @@ pub enum LogError {
 pub struct LogOptions {
     /// Chunk compression.
     pub compression: Compression,
-    /// Target uncompressed chunk size [bytes].
+    /// Target uncompressed chunk size \[bytes\].
     pub chunk_size: u64,
-    /// Bounded queue length between loop and writer [messages].
+    /// Bounded queue length between loop and writer \[messages\].
     pub queue_capacity: usize,
 }
 
@@ -111,7 +111,7 @@ pub struct LogStats {
     pub messages: u64,
     /// Times the loop had to wait for the writer.
     pub stalls: u64,
-    /// File size [bytes].
+    /// File size \[bytes\].
     pub bytes: u64,
 }
 
@@ -564,7 +564,7 @@ pub struct FrameTransform {
     pub parent_frame_id: String,
     /// Child frame (a link name).
     pub child_frame_id: String,
-    /// Translation [m].
+    /// Translation \[m\].
     pub translation: FoxgloveVector3,
     /// Rotation.
     pub rotation: FoxgloveQuaternion,
@@ -582,7 +582,7 @@ pub struct FrameTransforms {
 pub struct LoggedMessage {
     /// Topic.
     pub topic: String,
-    /// Log time [ns].
+    /// Log time \[ns\].
     pub time_ns: u64,
     /// JSON payload.
     pub data: Vec<u8>,

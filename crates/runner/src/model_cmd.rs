@@ -124,9 +124,9 @@ pub struct ModelInfo {
     pub nv: usize,
     /// Root link (floating base).
     pub root_link: String,
-    /// Total mass [kg].
+    /// Total mass \[kg\].
     pub total_mass: f64,
-    /// CoM [m] at the zero configuration with the base at the world origin.
+    /// CoM \[m\] at the zero configuration with the base at the world origin.
     pub com_at_zero: [f64; 3],
     /// Joints in model order.
     pub joints: Vec<JointInfo>,
@@ -286,7 +286,7 @@ fn print_info(i: &ModelInfo) {
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct EvalInput {
-    /// Base position [m].
+    /// Base position \[m\].
     #[serde(default)]
     pub base_position: [f64; 3],
     /// Base orientation, xyzw.

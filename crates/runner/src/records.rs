@@ -15,10 +15,10 @@ use stride_model::RobotState;
 use stride_planner::{FootSample, Goal as PlannerGoal, PhaseKind, PlanSample, PlannerInput};
 use stride_wbc::{FootReference, OrientationReference, WbcInput};
 
-/// A pose: position [m] and orientation quaternion `[x, y, z, w]`.
+/// A pose: position \[m\] and orientation quaternion `[x, y, z, w]`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub struct PoseRecord {
-    /// Position [m].
+    /// Position \[m\].
     pub position: [f64; 3],
     /// Orientation `[x, y, z, w]`.
     pub orientation_xyzw: [f64; 4],
@@ -55,7 +55,7 @@ fn v6(v: &Vector6<f64>) -> [f64; 6] {
 pub struct StateRecord<'a> {
     /// Base pose.
     pub base: PoseRecord,
-    /// Joint positions [rad], model order.
+    /// Joint positions \[rad\], model order.
     pub joint_positions: Cow<'a, [f64]>,
     /// Base twist `[v; ω]` (mixed) [m/s; rad/s].
     pub base_velocity: [f64; 6],
@@ -95,7 +95,7 @@ impl<'a> StateRecord<'a> {
 /// `/planner/input`: what the planner block received on an event tick.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PlannerInputRecord {
-    /// Time [ns].
+    /// Time \[ns\].
     pub time_ns: u64,
     /// The new goal, if any.
     pub goal: Option<PlannerGoal>,
@@ -153,17 +153,17 @@ impl FootSampleRecord {
 /// `/planner/references`: the plan sampled at a tick.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct PlanSampleRecord {
-    /// Plan time [s].
+    /// Plan time \[s\].
     pub time: f64,
     /// LIPM natural frequency [1/s].
     pub omega: f64,
-    /// DCM [m].
+    /// DCM \[m\].
     pub dcm_position: [f64; 3],
     /// DCM velocity [m/s].
     pub dcm_velocity: [f64; 3],
-    /// ZMP [m].
+    /// ZMP \[m\].
     pub zmp: [f64; 3],
-    /// CoM [m].
+    /// CoM \[m\].
     pub com_position: [f64; 3],
     /// CoM velocity [m/s].
     pub com_velocity: [f64; 3],
@@ -234,11 +234,11 @@ pub struct OrientationRecord {
 /// `/wbc/input`: everything the whole-body block received.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct WbcInputRecord<'a> {
-    /// Time [ns].
+    /// Time \[ns\].
     pub time_ns: u64,
     /// Measured state.
     pub state: StateRecord<'a>,
-    /// CoM position reference [m].
+    /// CoM position reference \[m\].
     pub com_position: [f64; 3],
     /// CoM velocity reference [m/s].
     pub com_velocity: [f64; 3],
@@ -252,13 +252,13 @@ pub struct WbcInputRecord<'a> {
     pub left_in_contact: bool,
     /// Right foot in contact.
     pub right_in_contact: bool,
-    /// Desired ZMP [m].
+    /// Desired ZMP \[m\].
     pub desired_zmp: Option<[f64; 2]>,
     /// Desired contact wrenches.
     pub desired_wrenches: Option<[[f64; 6]; 2]>,
     /// Torso orientation reference.
     pub torso: OrientationRecord,
-    /// Posture reference [rad] (model order), if overriding the configured one.
+    /// Posture reference \[rad\] (model order), if overriding the configured one.
     pub posture: Option<Cow<'a, [f64]>>,
     /// Centroidal angular momentum reference [kg m²/s].
     pub angular_momentum: [f64; 3],
@@ -337,7 +337,7 @@ impl<'a> WbcInputRecord<'a> {
 /// (same JSON shape, so it deserializes as `IkOutput`).
 #[derive(Debug, Serialize)]
 pub struct IkOutputRecord<'a> {
-    /// Joint position commands [rad].
+    /// Joint position commands \[rad\].
     pub joint_positions: &'a DVector<f64>,
     /// Joint velocities [rad/s].
     pub joint_velocities: &'a DVector<f64>,
@@ -414,16 +414,16 @@ pub fn simplified_output_record(
 /// `/*/timing`: wall-clock measurements of one layer tick (not deterministic, kept apart).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub struct TimingRecord {
-    /// QP solve time [s].
+    /// QP solve time \[s\].
     pub solve_time: f64,
-    /// Whole tick time [s].
+    /// Whole tick time \[s\].
     pub tick_time: f64,
 }
 
 /// `/events`: something that happened.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EventRecord {
-    /// Simulated time [s].
+    /// Simulated time \[s\].
     pub time: f64,
     /// `start`, `replan`, `phase`, `fallback`, `hold`, `fall`, `push`, `end`, `error`.
     pub kind: String,

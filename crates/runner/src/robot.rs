@@ -26,7 +26,7 @@ pub struct FootMeasurement {
     /// `[f; τ]` applied by the ground on the robot, world orientation, torque about the sole frame origin
     /// [N; N m].
     pub wrench: Vector6<f64>,
-    /// World position of the sole frame origin the torque is taken about [m].
+    /// World position of the sole frame origin the torque is taken about \[m\].
     pub point: Vector3<f64>,
 }
 
@@ -64,7 +64,7 @@ impl Default for ImuReading {
 /// What the robot reports each plant period.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Measurement {
-    /// Plant time [ns].
+    /// Plant time \[ns\].
     pub time_ns: u64,
     /// Base pose, joint positions, base twist (mixed) and joint velocities (estimated on a real robot).
     pub state: RobotState,
@@ -97,7 +97,7 @@ impl Measurement {
 pub struct JointCommand {
     /// Which fields the servos use.
     pub mode: ControlMode,
-    /// Joint position set-points [rad] (position mode).
+    /// Joint position set-points \[rad\] (position mode).
     pub joint_positions: DVector<f64>,
     /// Joint velocity feed-forward [rad/s] (position mode).
     pub joint_velocities: DVector<f64>,
@@ -127,7 +127,7 @@ pub trait Robot {
     fn name(&self) -> &str;
     /// The model the robot is described by.
     fn model(&self) -> &Arc<Model>;
-    /// Plant period [ns]: how much [`Robot::advance`] moves time.
+    /// Plant period \[ns\]: how much [`Robot::advance`] moves time.
     fn period_ns(&self) -> u64;
     /// The latest measurement (at the current plant time).
     fn measurement(&self) -> &Measurement;

@@ -109,7 +109,7 @@ impl std::fmt::Display for Outcome {
 pub struct RunOptions {
     /// Log path (overrides the scenario's).
     pub output: Option<PathBuf>,
-    /// Duration override [s].
+    /// Duration override \[s\].
     pub duration: Option<f64>,
     /// Pace at 1× wall-clock time.
     pub realtime: bool,
@@ -128,9 +128,9 @@ pub struct RunOptions {
 /// Root-mean-square and maximum of a tracking error.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct ErrorStats {
-    /// RMS [m].
+    /// RMS \[m\].
     pub rms: f64,
-    /// Max [m].
+    /// Max \[m\].
     pub max: f64,
     #[serde(skip)]
     sum_sq: f64,
@@ -147,7 +147,7 @@ impl ErrorStats {
     }
 }
 
-/// Percentiles of a layer's solve times [s].
+/// Percentiles of a layer's solve times \[s\].
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct SolveTimes {
     /// Median.
@@ -185,37 +185,37 @@ pub struct RunSummary {
     pub plant: String,
     /// How the run ended.
     pub outcome: Outcome,
-    /// Simulated time [s].
+    /// Simulated time \[s\].
     pub simulated_time: f64,
-    /// Wall-clock time of the loop [s].
+    /// Wall-clock time of the loop \[s\].
     pub wall_time: f64,
     /// Simulated / wall-clock time.
     pub real_time_factor: f64,
-    /// Planar distance of the soles' mid-point from its start [m].
+    /// Planar distance of the soles' mid-point from its start \[m\].
     pub distance: f64,
     /// Forward displacement (along the initial heading) / simulated time [m/s].
     pub mean_forward_speed: f64,
-    /// Final planar position of the soles' mid-point [m] and heading [deg].
+    /// Final planar position of the soles' mid-point \[m\] and heading \[deg\].
     pub final_pose: [f64; 3],
-    /// Planar distance to the goal at the end [m] (pose/waypoint goals).
+    /// Planar distance to the goal at the end \[m\] (pose/waypoint goals).
     pub goal_distance: Option<f64>,
-    /// Heading error to the goal at the end [deg].
+    /// Heading error to the goal at the end \[deg\].
     pub goal_heading_error_deg: Option<f64>,
     /// Lowest base height relative to the initial one [-].
     pub min_base_height_fraction: f64,
-    /// Largest torso tilt [deg].
+    /// Largest torso tilt \[deg\].
     pub max_tilt_deg: f64,
-    /// DCM tracking error (measured vs planned, planar) [m].
+    /// DCM tracking error (measured vs planned, planar) \[m\].
     pub dcm_error: ErrorStats,
-    /// CoM tracking error (measured vs simplified-layer reference, 3D) [m].
+    /// CoM tracking error (measured vs simplified-layer reference, 3D) \[m\].
     pub com_error: ErrorStats,
-    /// ZMP tracking error (measured vs desired) [m], over ticks with a measurable ZMP.
+    /// ZMP tracking error (measured vs desired) \[m\], over ticks with a measurable ZMP.
     pub zmp_error: ErrorStats,
-    /// Feet tracking error (measured vs planned sole positions, worst foot) [m].
+    /// Feet tracking error (measured vs planned sole positions, worst foot) \[m\].
     pub feet_error: ErrorStats,
-    /// Whole-body QP solve times [s].
+    /// Whole-body QP solve times \[s\].
     pub wbc_solve_time: SolveTimes,
-    /// Simplified-layer solve times [s] (MPC; 0 for the instantaneous controller).
+    /// Simplified-layer solve times \[s\] (MPC; 0 for the instantaneous controller).
     pub simplified_solve_time: SolveTimes,
     /// Whole-body ticks solved by the relaxed fallback QP.
     pub wbc_fallbacks: u64,

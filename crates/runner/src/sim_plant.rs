@@ -46,11 +46,25 @@ impl SimPlant {
         }
         let mut sim = SimRobot::new(Arc::clone(&model), config).map_err(err)?;
         let mut state = sim.set_standing_on_ground(joint_positions).map_err(err)?;
-        // Start with the soles' mid-point above the world origin (as the ideal plant and `stride plan` do),
-        // so goals are distances from the start.
+        // Start heading along +x, the heading being the soles' mean yaw (sole frames have x forward by
+        // convention, whereas base links differ: iCub's `root_link` points x backward). A rotation about the
+        // vertical keeps every contact point's height, so the simulator's placement on the ground holds.
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_state(&state)
             .map_err(|e| RobotError(format!("simulator: {e}")))?;
+        let yl = kd.frame_pose(soles[0]).rotation.euler_angles().2;
+        let yr = kd.frame_pose(soles[1]).rotation.euler_angles().2;
+        let heading = yl + 0.5 * crate::stack::wrap_angle(yr - yl);
+        if heading.abs() > 1e-12 {
+            let turn = nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.0, -heading);
+            state.base_pose =
+                nalgebra::Isometry3::from_parts(nalgebra::Translation3::identity(), turn)
+                    * state.base_pose;
+            kd.set_state(&state)
+                .map_err(|e| RobotError(format!("simulator: {e}")))?;
+        }
+        // Start with the soles' mid-point above the world origin (as the ideal plant and `stride plan` do),
+        // so goals are distances from the start.
         let mid = (kd.frame_pose(soles[0]).translation.vector
             + kd.frame_pose(soles[1]).translation.vector)
             * 0.5;

@@ -59,7 +59,7 @@ pub enum Wbc {
 /// A planner event scheduled in simulated time.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GoalEvent {
-    /// When [ns].
+    /// When \[ns\].
     pub time_ns: u64,
     /// The goal handed to the planner.
     pub goal: PlannerGoal,
@@ -113,21 +113,22 @@ pub fn goal_events(goal: &Goal) -> Vec<GoalEvent> {
 /// Measured quantities of one tick.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Measured {
-    /// CoM [m].
+    /// CoM \[m\].
     pub com: Vector3<f64>,
     /// CoM velocity [m/s].
     pub com_velocity: Vector3<f64>,
-    /// DCM (xy) with the plan's ω [m].
+    /// DCM (xy) with the plan's ω \[m\].
     pub dcm: Vector2<f64>,
-    /// ZMP from the feet wrenches [m].
+    /// ZMP from the feet wrenches \[m\].
     pub zmp: Vector2<f64>,
     /// Whether the ZMP came from the wrenches (false: CoM projection fallback).
     pub zmp_from_wrenches: bool,
     /// Left and right sole poses.
     pub soles: [nalgebra::Isometry3<f64>; 2],
-    /// Torso tilt from vertical [rad].
+    /// Torso tilt \[rad\]: angle between the vertical and the torso frame's axis that was vertical in the
+    /// initial posture.
     pub tilt: f64,
-    /// Base height [m].
+    /// Base height \[m\].
     pub base_height: f64,
 }
 
@@ -137,6 +138,10 @@ pub struct Stack {
     kd: KinDyn,
     soles: [FrameId; 2],
     torso: FrameId,
+    /// The world's vertical in the torso frame's coordinates at the initial posture: the torso's "up"
+    /// axis, whatever the frame convention of the model (z up on the bundled humanoid, y up on iCub's
+    /// `chest`). The tilt is the angle of this axis from the vertical.
+    torso_up: Vector3<f64>,
     mode: ControlMode,
     foot_half_length: f64,
     foot_half_width: f64,
@@ -211,6 +216,9 @@ impl Stack {
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_representation(VelocityRepresentation::Mixed);
         kd.set_state(initial)?;
+        // The initial posture is upright by construction (soles flat on the ground): the torso's up axis is
+        // the world vertical seen from the torso frame there.
+        let torso_up = kd.frame_pose(torso).rotation.inverse() * Vector3::z();
         let planner = Planner::new(c.planner.clone())?;
         let simplified_period =
             Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
@@ -247,6 +255,7 @@ impl Stack {
         Ok(Self {
             soles,
             torso,
+            torso_up,
             mode: c.scenario.control_mode,
             foot_half_length: c.planner.foot_length * 0.5,
             foot_half_width: c.planner.foot_width * 0.5,
@@ -351,7 +360,7 @@ impl Stack {
             Err(_) => (com.xy(), false),
         };
         let torso = self.kd.frame_pose(self.torso);
-        let up = torso.rotation * Vector3::z();
+        let up = torso.rotation * self.torso_up;
         self.measured = Measured {
             com,
             com_velocity: vcom,

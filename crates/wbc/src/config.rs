@@ -125,8 +125,25 @@ pub struct Se3TaskConfig {
     pub weight: Weight,
 }
 
+/// How an orientation task relates its reference to the frame (`reference_offset` of an `so3` task).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ReferenceOffset {
+    /// The reference is the frame's orientation: `R* = R_ref` (the frame is world-aligned when the reference
+    /// is; e.g. the bundled humanoid's `chest` and `root_link`, x forward and z up when upright).
+    #[default]
+    None,
+    /// The frame keeps the orientation relative to the reference it has at the first tick after
+    /// construction or `reset` (`stride_block::Block`): `R* = R_ref · R_off`, `R_off = R_ref(t₀)ᵀ R(t₀)`;
+    /// angular velocity and acceleration references are unchanged (`R_off` is constant). For models whose
+    /// frames are not world-aligned when upright (iCub's `chest` has x left, y up, z forward, its
+    /// `root_link` x backward), started upright at the reference's heading (as the runner does).
+    Initial,
+}
+
 /// SO(3) (orientation) or R³ (position) tracking of a frame. Same keys as [`Se3TaskConfig`] with
-/// `kp`, `kd` and a 3-entry `mask`.
+/// `kp`, `kd` and a 3-entry `mask`, plus `reference_offset` (`so3` only; `none` or `initial`, default
+/// `none`, see [`ReferenceOffset`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Frame3TaskConfig {
@@ -136,6 +153,10 @@ pub struct Frame3TaskConfig {
     pub frame: String,
     /// Reference source.
     pub reference: FrameReferenceSource,
+    /// Orientation offset between the reference and the frame (`so3` tasks; `r3` tasks accept only
+    /// `none`).
+    #[serde(default)]
+    pub reference_offset: ReferenceOffset,
     /// Proportional gain (1/s in IK, 1/s² in TSID).
     #[serde(default)]
     pub kp: f64,
@@ -672,6 +693,7 @@ impl IkConfig {
                     name: "torso".into(),
                     frame: "chest".into(),
                     reference: FrameReferenceSource::Torso,
+                    reference_offset: ReferenceOffset::None,
                     kp: 5.0,
                     kd: 0.0,
                     mask: [true; 3],
@@ -686,6 +708,7 @@ impl IkConfig {
                     name: "pelvis".into(),
                     frame: "root_link".into(),
                     reference: FrameReferenceSource::Torso,
+                    reference_offset: ReferenceOffset::None,
                     kp: 5.0,
                     kd: 0.0,
                     mask: [true; 3],
@@ -810,6 +833,7 @@ impl TsidConfig {
                     name: "torso".into(),
                     frame: "chest".into(),
                     reference: FrameReferenceSource::Torso,
+                    reference_offset: ReferenceOffset::None,
                     kp: 100.0,
                     kd: 20.0,
                     mask: [true; 3],

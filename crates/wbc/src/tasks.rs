@@ -7,12 +7,12 @@
 
 use std::collections::BTreeMap;
 
-use nalgebra::{DMatrix, DVector, Isometry3, Vector3, Vector6};
+use nalgebra::{DMatrix, DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
 use stride_model::{FrameId, KinDyn, Model};
 
 use crate::config::{
     ComTaskConfig, Frame3TaskConfig, FrameReferenceSource, JointRegularizationTaskConfig, Priority,
-    Se3TaskConfig, Weight,
+    ReferenceOffset, Se3TaskConfig, Weight,
 };
 use crate::error::WbcError;
 use crate::io::WbcInput;
@@ -195,6 +195,9 @@ pub(crate) struct FrameTask {
     /// Kept 6D rows (0..3 linear, 3..6 angular).
     rows: Vec<usize>,
     initial: Option<Isometry3<f64>>,
+    /// Orientation offset mode and, once recorded, `R_off = R_refᵀ R` at the first tick.
+    offset_mode: ReferenceOffset,
+    offset: Option<UnitQuaternion<f64>>,
     jacobian: DMatrix<f64>,
     pub level: Level,
     /// Block index in the controller's block list.
@@ -253,11 +256,20 @@ impl FrameTask {
                 reason: "`torso` gives an orientation only: use an `so3` task".into(),
             });
         }
+        if !angular && c.reference_offset != ReferenceOffset::None {
+            return Err(WbcError::InvalidConfig {
+                task: c.name.clone(),
+                key: "reference_offset",
+                reason: "an orientation offset applies to `so3` tasks only; remove it".into(),
+            });
+        }
         let offset = if angular { 3 } else { 0 };
         let rows: Vec<usize> = (0..3).filter(|&i| c.mask[i]).map(|i| i + offset).collect();
         let kp = Vector6::from_element(c.kp);
         let kd = Vector6::from_element(c.kd);
-        Self::build(model, &c.name, &c.frame, c.reference, kp, kd, rows, level)
+        let mut task = Self::build(model, &c.name, &c.frame, c.reference, kp, kd, rows, level)?;
+        task.offset_mode = c.reference_offset;
+        Ok(task)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -286,6 +298,8 @@ impl FrameTask {
             kd,
             rows,
             initial: None,
+            offset_mode: ReferenceOffset::None,
+            offset: None,
             jacobian: DMatrix::zeros(6, model.nv()),
             level,
             block: usize::MAX,
@@ -298,9 +312,23 @@ impl FrameTask {
 
     pub fn reset(&mut self) {
         self.initial = None;
+        self.offset = None;
     }
 
     fn reference(&mut self, kd: &KinDyn, input: &WbcInput) -> FrameRef {
+        let mut r = self.source_reference(kd, input);
+        if self.offset_mode == ReferenceOffset::Initial {
+            let frame = self.frame;
+            let reference = r.pose.rotation;
+            let offset = *self
+                .offset
+                .get_or_insert_with(|| reference.inverse() * kd.frame_pose(frame).rotation);
+            r.pose.rotation = reference * offset;
+        }
+        r
+    }
+
+    fn source_reference(&mut self, kd: &KinDyn, input: &WbcInput) -> FrameRef {
         match self.source {
             FrameReferenceSource::LeftFoot => FrameRef {
                 pose: input.left_foot.pose,

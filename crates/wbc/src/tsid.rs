@@ -241,7 +241,7 @@ impl Tsid {
     /// Builds the controller and its QPs (all allocation happens here).
     ///
     /// Errors: unknown frames/joints, invalid values, no `floating_base_dynamics` task, more than
-    /// [`MAX_CONTACTS`] contacts, or a QP that stride-qp rejects.
+    /// `MAX_CONTACTS` contacts, or a QP that stride-qp rejects.
     pub fn new(model: Arc<Model>, config: TsidConfig) -> Result<Self, WbcError> {
         let ctl = "<tsid>";
         if !(config.period.is_finite() && config.period > 0.0) {

@@ -512,3 +512,106 @@ fn a_step_with_the_default_config_tracks_feet_and_com_references() {
     assert!(worst_foot < 1e-3, "right foot tracking error {worst_foot}");
     assert!(worst_com < 1e-3, "CoM tracking error {worst_com}");
 }
+
+/// The `torso` and `pelvis` tasks with `reference_offset`, the `pelvis` task removed (it would compare
+/// different references between the two controllers of the test).
+fn offset_config(offset: stride_wbc::ReferenceOffset) -> IkConfig {
+    let mut c = test_config(0.01, 10.0);
+    c.feedback = stride_wbc::IkFeedback::Measured;
+    c.tasks.retain(|t| t.name() != "pelvis");
+    for t in &mut c.tasks {
+        if let TaskConfig::So3(s) = t {
+            s.reference_offset = offset;
+        }
+    }
+    c
+}
+
+#[test]
+fn initial_reference_offset_keeps_the_frames_initial_orientation_relative_to_the_reference() {
+    use nalgebra::{UnitQuaternion, Vector3};
+    use stride_wbc::ReferenceOffset;
+    let model = bundled_model();
+    let q = common::default_posture(&model);
+    let mut state = standing_state(&model, &q);
+    // A robot whose chest is not world-aligned when "upright" (as iCub's chest: x left, y up, z forward):
+    // the whole robot rotated by an arbitrary R₀.
+    let r0 = UnitQuaternion::from_euler_angles(0.3, -0.2, 2.5);
+    state.base_pose =
+        nalgebra::Isometry3::from_parts(nalgebra::Translation3::identity(), r0) * state.base_pose;
+    let mut input = references_at(&model, &state);
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    kd.set_state(&state).unwrap();
+    let chest = kd.frame_pose(model.frame_id("chest").unwrap()).rotation;
+    // The torso reference is a heading (yaw) only; the recorded offset is R_refᵀ R_chest.
+    let reference0 = UnitQuaternion::from_euler_angles(0.0, 0.0, 0.4);
+    let offset = reference0.inverse() * chest;
+    input.torso.orientation = reference0;
+    let mut with_offset =
+        QpIk::new(Arc::clone(&model), offset_config(ReferenceOffset::Initial)).unwrap();
+    let mut plain = QpIk::new(Arc::clone(&model), offset_config(ReferenceOffset::None)).unwrap();
+    // First tick: the offset is recorded, so the torso task's reference is the chest's own orientation,
+    // which is what the plain controller gets as an absolute reference.
+    let first = with_offset.step(&input).unwrap().joint_velocities.clone();
+    let mut absolute = input.clone();
+    absolute.torso.orientation = chest;
+    let expected = plain.step(&absolute).unwrap().joint_velocities.clone();
+    assert!((&first - &expected).amax() < 1e-9);
+    // A new heading and angular velocity: the reference is R_ref · R_off, the angular velocity unchanged.
+    let reference1 = UnitQuaternion::from_euler_angles(0.0, 0.0, 0.55);
+    input.torso.orientation = reference1;
+    input.torso.angular_velocity = Vector3::new(0.0, 0.0, 0.3);
+    absolute.torso.orientation = reference1 * offset;
+    absolute.torso.angular_velocity = input.torso.angular_velocity;
+    let turned = with_offset.step(&input).unwrap().joint_velocities.clone();
+    let expected = plain.step(&absolute).unwrap().joint_velocities.clone();
+    assert!(
+        (&turned - &expected).amax() < 1e-9,
+        "{}",
+        (&turned - &expected).amax()
+    );
+    assert!(
+        (&turned - &first).amax() > 1e-3,
+        "the heading change moves the robot"
+    );
+    // Without the offset the same input would drive the chest to the bare yaw (a large rotation).
+    let bare = plain.step(&input).unwrap().joint_velocities.clone();
+    assert!((&bare - &turned).amax() > 1e-2);
+    // `reset` records the offset again, at the next tick.
+    with_offset.reset();
+    absolute.torso.orientation = chest;
+    absolute.torso.angular_velocity = input.torso.angular_velocity;
+    let again = with_offset.step(&input).unwrap().joint_velocities.clone();
+    let expected = plain.step(&absolute).unwrap().joint_velocities.clone();
+    assert!((&again - &expected).amax() < 1e-9);
+}
+
+#[test]
+fn reference_offset_is_rejected_on_position_tasks() {
+    let text = r#"
+[[tasks]]
+type = "r3"
+name = "hand"
+frame = "chest"
+reference = "initial"
+reference_offset = "initial"
+kp = 1.0
+"#;
+    let config: IkConfig = toml::from_str(text).unwrap();
+    let err = QpIk::new(bundled_model(), config).err().unwrap();
+    let text = err.to_string();
+    assert!(
+        text.contains("reference_offset") && text.contains("hand"),
+        "{text}"
+    );
+    // and the default is `none`
+    let so3: IkConfig = toml::from_str(
+        "[[tasks]]\ntype = \"so3\"\nname = \"t\"\nframe = \"chest\"\nreference = \"torso\"\n",
+    )
+    .unwrap();
+    assert!(matches!(
+        &so3.tasks[0],
+        TaskConfig::So3(c) if c.reference_offset == stride_wbc::ReferenceOffset::None
+    ));
+}

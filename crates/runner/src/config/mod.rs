@@ -3,7 +3,7 @@
 //! A scenario is one TOML file in `configs/` that may `include` shared robot and layer sections (see
 //! [`load`] for the include/overlay rules). Every table rejects unknown keys; every error names the file,
 //! line, column and key and says what is expected. The full key reference is `docs/configuration.md`,
-//! generated from [`reference`] and checked by a test so it cannot drift from the code.
+//! generated from [`mod@reference`] and checked by a test so it cannot drift from the code.
 
 pub mod load;
 pub mod reference;
@@ -82,7 +82,7 @@ pub struct ScenarioSection {
     pub name: String,
     /// One line saying what the scenario shows.
     pub description: String,
-    /// Simulated duration [s]; the run ends here at the latest.
+    /// Simulated duration \[s\]; the run ends here at the latest.
     pub duration: f64,
     /// Position or torque control.
     pub control_mode: ControlMode,
@@ -106,7 +106,9 @@ impl Default for ScenarioSection {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RobotSection {
-    /// URDF path, relative to the file that sets this key.
+    /// URDF path, relative to the file that sets this key; `${NAME}` is replaced by the environment
+    /// variable `NAME` (an unset variable is a configuration error), e.g.
+    /// `"${STRIDE_ICUB_MODELS_DIR}/iCubGazeboV2_7/model.urdf"` for a model that is not in the repository.
     pub urdf: PathBuf,
     /// Frame at the centre of the left sole.
     pub left_sole: String,
@@ -146,17 +148,17 @@ pub enum PlannerMode {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RatesSection {
-    /// Base clock rate [Hz]; every other rate divides it.
+    /// Base clock rate \[Hz\]; every other rate divides it.
     pub base_hz: u32,
     /// Planner scheduling.
     pub planner_mode: PlannerMode,
-    /// Planner rate [Hz] when `planner_mode = "periodic"`.
+    /// Planner rate \[Hz\] when `planner_mode = "periodic"`.
     pub planner_hz: u32,
-    /// Simplified-model layer rate [Hz].
+    /// Simplified-model layer rate \[Hz\].
     pub simplified_hz: u32,
-    /// Whole-body layer rate [Hz].
+    /// Whole-body layer rate \[Hz\].
     pub wbc_hz: u32,
-    /// Simulator (plant) rate [Hz].
+    /// Simulator (plant) rate \[Hz\].
     pub sim_hz: u32,
 }
 
@@ -177,11 +179,11 @@ impl Default for RatesSection {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlanarPose {
-    /// x [m] in the world frame.
+    /// x \[m\] in the world frame.
     pub x: f64,
-    /// y [m] in the world frame.
+    /// y \[m\] in the world frame.
     pub y: f64,
-    /// Heading [deg] about world z.
+    /// Heading \[deg\] about world z.
     pub heading_deg: f64,
 }
 
@@ -189,7 +191,7 @@ pub struct PlanarPose {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct VelocitySegment {
-    /// Start time of this segment [s]; segments are sorted by start.
+    /// Start time of this segment \[s\]; segments are sorted by start.
     pub start: f64,
     /// Forward speed [m/s] (in the robot's heading frame).
     pub forward: f64,
@@ -250,11 +252,11 @@ pub struct LogSection {
     pub enabled: bool,
     /// Output path (relative to the working directory); empty = `<scenario.name>.mcap`. `--output` wins.
     pub path: PathBuf,
-    /// Rate of `/tf`, `/sim/state` and `/sensors/*` [Hz]; must divide `rates.sim_hz`.
+    /// Rate of `/tf`, `/sim/state` and `/sensors/*` \[Hz\]; must divide `rates.sim_hz`.
     pub state_hz: u32,
     /// Chunk compression.
     pub compression: Compression,
-    /// Target chunk size [bytes] before compression.
+    /// Target chunk size \[bytes\] before compression.
     pub chunk_size: u64,
     /// Messages the loop may queue ahead of the writer thread before it waits.
     pub queue_capacity: usize,
@@ -279,17 +281,17 @@ impl Default for LogSection {
 pub struct EndSection {
     /// Fall when the base height drops below this fraction of its initial height [-], in (0, 1).
     pub fall_height_fraction: f64,
-    /// Fall when the torso tilts more than this from vertical [deg].
+    /// Fall when the torso tilts more than this from vertical \[deg\].
     pub fall_tilt_deg: f64,
     /// Stop when the goal is reached and the robot stands still.
     pub stop_at_goal: bool,
-    /// Goal reached: planar distance from the goal [m].
+    /// Goal reached: planar distance from the goal \[m\].
     pub goal_position_tolerance: f64,
-    /// Goal reached: heading error [deg].
+    /// Goal reached: heading error \[deg\].
     pub goal_heading_tolerance_deg: f64,
     /// Standing still: CoM speed below this [m/s] ...
     pub standstill_speed: f64,
-    /// ... for this long [s].
+    /// ... for this long \[s\].
     pub standstill_time: f64,
 }
 
@@ -372,6 +374,43 @@ fn layer_key(section: &str, message: &str) -> String {
 /// defaults, so writing another alternative replaces the default one instead of merging with it.
 const EXCLUSIVE_SECTIONS: &[&str] = &["goal"];
 
+/// Replaces every `${NAME}` in `text` by the value `lookup(NAME)` (the process environment for
+/// `robot.urdf`). `$` not followed by `{` is kept as written. Errors (as a message for
+/// [`ConfigError::Invalid`]): an unset or empty variable, an unterminated `${`, or an empty or invalid name
+/// (names are ASCII letters, digits and `_`).
+pub fn expand_env_vars(
+    text: &str,
+    lookup: impl Fn(&str) -> Option<String>,
+) -> Result<String, String> {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find("${") {
+        out.push_str(&rest[..start]);
+        let after = &rest[start + 2..];
+        let end = after
+            .find('}')
+            .ok_or_else(|| format!("unterminated `${{` in \"{text}\"; expected `${{NAME}}`"))?;
+        let name = &after[..end];
+        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(format!(
+                "`${{{name}}}` in \"{text}\" is not a valid environment variable name (letters, digits, `_`)"
+            ));
+        }
+        match lookup(name) {
+            Some(v) if !v.is_empty() => out.push_str(&v),
+            _ => {
+                return Err(format!(
+                    "environment variable `{name}` (used in \"{text}\") is not set; set it (e.g. `export \
+                     {name}=...`) or write the path without it"
+                ))
+            }
+        }
+        rest = &after[end + 1..];
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
 /// A loaded, validated scenario with its sources (for error locations and relative paths).
 #[derive(Debug, Clone)]
 pub struct Scenario {
@@ -421,11 +460,32 @@ impl Scenario {
                 .and_then(|f| f.path.parent().map(Path::to_path_buf))
                 .unwrap_or_default()
         });
-        let urdf_path = if value.robot.urdf.is_absolute() {
-            value.robot.urdf.clone()
+        let written = value.robot.urdf.to_string_lossy().into_owned();
+        let expanded =
+            expand_env_vars(&written, |name| std::env::var(name).ok()).map_err(|message| {
+                ConfigError::Invalid {
+                    location: sources.value_location("robot.urdf"),
+                    key: "robot.urdf".into(),
+                    message,
+                }
+            })?;
+        let expanded = PathBuf::from(expanded);
+        let urdf_path = if expanded.is_absolute() {
+            expanded
         } else {
-            dir.join(&value.robot.urdf)
+            dir.join(&expanded)
         };
+        let mut merged = merged;
+        if written.contains('$') {
+            // Store the resolved path in the merged document (what logs keep), so a log replays without the
+            // environment variables of the machine that wrote it.
+            if let Some(toml::Value::Table(r)) = merged.get_mut("robot") {
+                r.insert(
+                    "urdf".into(),
+                    toml::Value::String(urdf_path.to_string_lossy().into_owned()),
+                );
+            }
+        }
         let mut scenario = Self {
             config: value,
             sources,
