@@ -130,6 +130,12 @@ fn configuration_reference_matches_the_code() {
             .find(|(s, _)| {
                 !parent.is_empty() && (s.starts_with(&parent) || parent.starts_with(s.as_str()))
             })
+            // e.g. `simplified.predictive.horizon` is a field of `DcmPredictiveConfig`
+            .or_else(|| {
+                candidates
+                    .iter()
+                    .find(|(s, _)| !parent.is_empty() && s.contains(&parent))
+            })
             .or_else(|| candidates.first())?;
         Some(best.1.clone())
     };

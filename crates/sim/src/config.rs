@@ -26,7 +26,7 @@ use crate::error::SimError;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimConfig {
-    /// Simulation rate in Hz (steps per simulated second). Default 2000.
+    /// Simulation rate (steps per simulated second), Hz. Default 2000.
     pub rate_hz: u32,
     /// Gravity in the world frame, m/s². Default `[0, 0, -9.81]`.
     pub gravity: [f64; 3],
@@ -293,15 +293,15 @@ impl Default for ActuationConfig {
 pub struct JointActuatorConfig {
     /// Servo mode.
     pub mode: ActuationMode,
-    /// Position gain.
+    /// Position gain (N/m for prismatic joints), N·m/rad.
     pub kp: f64,
-    /// Velocity gain.
+    /// Velocity gain (N·s/m for prismatic joints), N·m·s/rad.
     pub kd: f64,
     /// Motor torque bound (`None`: the model's effort limit).
     pub effort_limit: Option<f64>,
-    /// Passive viscous damping.
+    /// Passive viscous joint damping, N·m·s/rad.
     pub damping: f64,
-    /// Reflected rotor inertia.
+    /// Reflected rotor inertia added to the joint's diagonal of the mass matrix, kg·m².
     pub armature: f64,
 }
 
@@ -474,11 +474,11 @@ impl Default for FallConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SafetyConfig {
-    /// Largest joint speed.
+    /// Largest joint speed (m/s for prismatic joints), rad/s.
     pub max_joint_velocity: f64,
-    /// Largest base linear or angular speed.
+    /// Largest base linear or angular speed, m/s or rad/s.
     pub max_base_velocity: f64,
-    /// Largest penetration of a contact point into the ground.
+    /// Largest penetration of a contact point into the ground, m.
     pub max_penetration: f64,
 }
 

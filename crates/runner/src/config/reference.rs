@@ -166,6 +166,46 @@ fn walk(t: &toml::Table, prefix: &str, out: &mut BTreeMap<String, Row>) {
     }
 }
 
+/// The unit a layer key's doc comment states: the first bracketed unit (`\\[m\\]`, `[s⁻¹]`), or the
+/// trailing `, N/m³` of its first sentence (the stride-sim style). `None` when the meaning states none.
+fn unit_in_meaning(meaning: &str) -> Option<&str> {
+    let looks_like_unit = |u: &str| {
+        !u.is_empty()
+            && u.chars().count() <= 16
+            && !u.contains(char::is_whitespace)
+            && !u.contains('`')
+            && u.chars().any(|c| c.is_alphabetic() || c == '°')
+    };
+    let mut rest = meaning;
+    while let Some(open) = rest.find('[') {
+        let after = &rest[open + 1..];
+        if let Some(close) = after.find(']') {
+            let unit = after[..close].trim_end_matches('\\');
+            if looks_like_unit(unit) {
+                return Some(unit);
+            }
+        }
+        rest = after;
+    }
+    let first_sentence = meaning.split(". ").next().unwrap_or(meaning);
+    if let Some(unit) = first_sentence
+        .trim_end_matches('.')
+        .strip_suffix(')')
+        .and_then(|s| s.rsplit_once(" ("))
+        .map(|(_, u)| u)
+        .filter(|u| looks_like_unit(u) && u.chars().count() <= 6)
+    {
+        return Some(unit);
+    }
+    let (_, tail) = first_sentence.rsplit_once(", ")?;
+    let unit = tail.trim_end_matches('.');
+    looks_like_unit(unit).then_some(unit).filter(|u| {
+        u.chars()
+            .all(|c| !c.is_ascii_lowercase() || "msgkradz".contains(c))
+            || u.contains('/')
+    })
+}
+
 /// Renders docs/configuration.md. `layer_doc(key)` gives the meaning of a layer key (from the layer's
 /// field docs); runner keys come from [`RUNNER_KEYS`]. Returns the text and the keys without a meaning.
 pub fn render(
@@ -204,7 +244,7 @@ pub fn render(
         let (unit, meaning) = if let Some(d) = RUNNER_KEYS.iter().find(|d| d.key == r.key) {
             (d.unit.to_string(), d.meaning.to_string())
         } else if let Some(m) = layer_doc(&r.key) {
-            ("see meaning".to_string(), m)
+            (unit_in_meaning(&m).unwrap_or("-").to_string(), m)
         } else {
             missing.push(r.key.clone());
             ("?".into(), "(undocumented)".into())
@@ -265,4 +305,43 @@ pub fn render(
         }
     }
     (s, missing)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::unit_in_meaning;
+
+    #[test]
+    fn units_are_read_from_the_layer_docs() {
+        let cases = [
+            (
+                "Constant CoM height above the ground \\[m\\], in (0, 10].",
+                Some("m"),
+            ),
+            ("Integral gain \\[s⁻¹\\] (≥ 0).", Some("s⁻¹")),
+            ("Control period (s).", Some("s")),
+            ("Normal stiffness density `k`, N/m³.", Some("N/m³")),
+            (
+                "Simulation rate (steps per simulated second), Hz. Default 2000.",
+                Some("Hz"),
+            ),
+            ("Servo mode.", None),
+            (
+                "Fraction of each step spent in double support, in (0, 1).",
+                None,
+            ),
+            (
+                "Merge point position inside a double support, in [0, 1).",
+                None,
+            ),
+            (
+                "Variant tag of the entry (see the layer's config enum for the allowed values).",
+                None,
+            ),
+            ("Name used in outputs and errors, a string.", None),
+        ];
+        for (meaning, unit) in cases {
+            assert_eq!(unit_in_meaning(meaning), unit, "{meaning}");
+        }
+    }
 }
