@@ -245,6 +245,7 @@ struct Topics {
     sensors_feet: TopicId,
     sensors_imu: TopicId,
     tf: TopicId,
+    tf_static: TopicId,
     tracking: TopicId,
     runner_timing: TopicId,
     events: TopicId,
@@ -269,6 +270,11 @@ impl Topics {
             sensors_imu: w.topic("/sensors/imu", "stride.sensors.Imu", None)?,
             tf: w.topic(
                 "/tf",
+                "foxglove.FrameTransforms",
+                Some(FRAME_TRANSFORMS_SCHEMA.to_string()),
+            )?,
+            tf_static: w.topic(
+                "/tf_static",
                 "foxglove.FrameTransforms",
                 Some(FRAME_TRANSFORMS_SCHEMA.to_string()),
             )?,
@@ -474,6 +480,11 @@ struct Loop<'a> {
     tf_kd: KinDyn,
     tf_msg: FrameTransforms,
     tf_frames: Vec<stride_model::FrameId>,
+    /// Frames rigidly attached to a body (merged fixed links, sensors), relative to their body: written
+    /// on `/tf_static` at the first state tick and then every `tf_static_every` state ticks.
+    tf_static_msg: FrameTransforms,
+    tf_static_every: u64,
+    state_ticks: u64,
     wbc_times: Vec<f64>,
     simplified_times: Vec<f64>,
     summary: RunSummary,
@@ -542,7 +553,8 @@ impl Loop<'_> {
             angular_velocity: m.imu.angular_velocity.into(),
             linear_acceleration: m.imu.linear_acceleration.into(),
         };
-        // /tf: world → every link and frame (poses from the measured state).
+        // /tf: world → every body (the links moved by joints, and the root), from the measured state; the
+        // frames rigidly attached to them go to /tf_static.
         let _ = self.tf_kd.set_state(&m.state);
         let stamp = FoxgloveTime::from_ns(t);
         for (i, f) in self.tf_frames.iter().enumerate() {
@@ -567,7 +579,15 @@ impl Loop<'_> {
             w.write(topics.sensors_feet, t, &feet)?;
             w.write(topics.sensors_imu, t, &imu)?;
             w.write(topics.tf, t, &self.tf_msg)?;
+            if self.state_ticks % self.tf_static_every == 0 {
+                let stamp = FoxgloveTime::from_ns(t);
+                for tr in &mut self.tf_static_msg.transforms {
+                    tr.timestamp = stamp;
+                }
+                w.write(topics.tf_static, t, &self.tf_static_msg)?;
+            }
         }
+        self.state_ticks += 1;
         Ok(())
     }
 
@@ -761,8 +781,13 @@ pub fn run_with_robot(
         log = Some((w, topics));
     }
 
-    let tf_frames: Vec<_> = (0..model.frames().len())
-        .filter_map(|i| model.frame_id(&model.frames()[i].name))
+    // /tf carries the bodies (moved by joints), /tf_static the frames rigidly attached to them (iCub's
+    // URDF has 214 frames on 33 bodies): the static part is written once a second, not at every state tick.
+    let frames = model.frames();
+    let tf_frames: Vec<_> = frames
+        .iter()
+        .filter(|f| f.kind == stride_model::FrameKind::Body)
+        .filter_map(|f| model.frame_id(&f.name))
         .collect();
     let tf_msg = FrameTransforms {
         transforms: tf_frames
@@ -774,6 +799,32 @@ pub fn run_with_robot(
             })
             .collect(),
     };
+    let tf_static_msg = FrameTransforms {
+        transforms: frames
+            .iter()
+            .filter(|f| f.kind != stride_model::FrameKind::Body)
+            .map(|f| {
+                let (p, q) = (f.placement.translation.vector, f.placement.rotation.coords);
+                FrameTransform {
+                    parent_frame_id: model.bodies()[f.link].name.clone(),
+                    child_frame_id: f.name.clone(),
+                    translation: FoxgloveVector3 {
+                        x: p.x,
+                        y: p.y,
+                        z: p.z,
+                    },
+                    rotation: FoxgloveQuaternion {
+                        x: q.x,
+                        y: q.y,
+                        z: q.z,
+                        w: q.w,
+                    },
+                    ..FrameTransform::default()
+                }
+            })
+            .collect(),
+    };
+    let tf_static_every = u64::from(c.log.state_hz.max(1));
     let wbc_ticks = (total_ticks / wbc_every + 2) as usize;
     let simplified_ticks = (total_ticks / simplified_every + 2) as usize;
     let mut lp = Loop {
@@ -783,6 +834,9 @@ pub fn run_with_robot(
         tf_kd: KinDyn::new(Arc::clone(&model)),
         tf_msg,
         tf_frames,
+        tf_static_msg,
+        tf_static_every,
+        state_ticks: 0,
         wbc_times: Vec::with_capacity(wbc_ticks),
         simplified_times: Vec::with_capacity(simplified_ticks),
         summary: RunSummary {

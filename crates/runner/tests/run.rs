@@ -198,3 +198,88 @@ fn simulator_runs_are_deterministic_too() {
     assert!(ma.len() > 100);
     assert_eq!(ma, deterministic_messages(&s.path("b.mcap")));
 }
+
+/// `/tf` (world → every body, at each state tick) composed with `/tf_static` (body → each rigidly attached
+/// frame, once a second) gives every frame of the model at the logged state, as stride-model computes it.
+#[test]
+fn tf_and_tf_static_reconstruct_every_frame() {
+    use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+    use std::collections::BTreeMap;
+    use stride_model::{KinDyn, RobotState};
+    use stride_runner::records::StateRecord;
+
+    let s = Scratch::new("tf");
+    let sc = scenario(&s);
+    run_scenario(&sc, &options(s.path("tf.mcap"))).unwrap();
+    let log = read_log(&s.path("tf.mcap")).unwrap();
+    let model = load_model(&sc).unwrap();
+    let pose = |t: &serde_json::Value| {
+        let (p, q) = (&t["translation"], &t["rotation"]);
+        let f = |v: &serde_json::Value| v.as_f64().unwrap();
+        Isometry3::from_parts(
+            Translation3::new(f(&p["x"]), f(&p["y"]), f(&p["z"])),
+            UnitQuaternion::from_quaternion(Quaternion::new(
+                f(&q["w"]),
+                f(&q["x"]),
+                f(&q["y"]),
+                f(&q["z"]),
+            )),
+        )
+    };
+    let parse = |data: &[u8]| -> Vec<(String, String, Isometry3<f64>)> {
+        let v: serde_json::Value = serde_json::from_slice(data).unwrap();
+        v["transforms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| {
+                (
+                    t["parent_frame_id"].as_str().unwrap().to_string(),
+                    t["child_frame_id"].as_str().unwrap().to_string(),
+                    pose(t),
+                )
+            })
+            .collect()
+    };
+    let statics: Vec<_> = log.topic("/tf_static").collect();
+    let tfs: Vec<_> = log.topic("/tf").collect();
+    // once at the start and then once a second (the scenario lasts 1.5 s)
+    assert_eq!(statics.len(), 2);
+    assert_eq!(statics[0].time_ns, tfs[0].time_ns);
+    let attached: BTreeMap<String, (String, Isometry3<f64>)> = parse(&statics[0].data)
+        .into_iter()
+        .map(|(parent, child, p)| (child, (parent, p)))
+        .collect();
+    let mut kd = KinDyn::new(model.clone());
+    let mut state = RobotState::zero(&model);
+    let states: Vec<_> = log.topic("/sim/state").collect();
+    assert_eq!(states.len(), tfs.len());
+    for (st, tf) in states.iter().zip(&tfs).step_by(37) {
+        assert_eq!(st.time_ns, tf.time_ns);
+        let record: StateRecord = serde_json::from_slice(&st.data).unwrap();
+        record.to_state(&mut state).unwrap();
+        kd.set_state(&state).unwrap();
+        let bodies: BTreeMap<String, Isometry3<f64>> = parse(&tf.data)
+            .into_iter()
+            .map(|(parent, child, p)| {
+                assert_eq!(parent, "world");
+                (child, p)
+            })
+            .collect();
+        assert_eq!(bodies.len() + attached.len(), model.frames().len());
+        for frame in model.frames() {
+            let expected = kd.frame_pose(model.frame_id(&frame.name).unwrap());
+            let got = match bodies.get(&frame.name) {
+                Some(p) => *p,
+                None => {
+                    let (parent, local) = &attached[&frame.name];
+                    bodies[parent] * local
+                }
+            };
+            let error = (got.translation.vector - expected.translation.vector)
+                .norm()
+                .max(got.rotation.angle_to(&expected.rotation));
+            assert!(error < 1e-12, "{}: {error:e}", frame.name);
+        }
+    }
+}
