@@ -2,8 +2,8 @@
 //!
 //! The control loop serializes each message to JSON into a buffer taken from a pool of preallocated
 //! buffers and hands it to a bounded channel; a dedicated thread writes it into a chunked, compressed
-//! MCAP file and returns the buffer to the pool. In steady state nothing allocates on the loop side: the
-//! buffers keep their capacity. If the writer ever falls behind by `queue_capacity` messages the loop
+//! MCAP file and returns the buffer to the pool. Every message that can be in flight owns a buffer from
+//! the start, sized above the largest per-tick message, so nothing allocates on the loop side. If the writer ever falls behind by `queue_capacity` messages the loop
 //! waits for it (logs stay complete and deterministic) and the wait is counted in [`LogStats::stalls`].
 //!
 //! Schemas are JSON Schema (`jsonschema`), messages JSON (`json`); see docs/logging.md for why. `/tf` uses
@@ -62,7 +62,8 @@ pub struct LogOptions {
     pub compression: Compression,
     /// Target uncompressed chunk size \[bytes\].
     pub chunk_size: u64,
-    /// Bounded queue length between loop and writer \[messages\].
+    /// Bounded queue length between loop and writer \[messages\]; `queue_capacity + 2` buffers of
+    /// [`POOLED_BUFFER_BYTES`] are preallocated.
     pub queue_capacity: usize,
 }
 
@@ -71,7 +72,7 @@ impl Default for LogOptions {
         Self {
             compression: Compression::Zstd,
             chunk_size: 1 << 20,
-            queue_capacity: 8192,
+            queue_capacity: 1024,
         }
     }
 }
@@ -156,9 +157,14 @@ impl LogWriter {
             .create(BufWriter::with_capacity(1 << 16, file))?;
         let capacity = options.queue_capacity.max(1);
         let (tx, rx) = mpsc::sync_channel::<Msg>(capacity);
-        let (pool_tx, pool_rx) = mpsc::sync_channel::<Vec<u8>>(capacity + 1);
-        for _ in 0..capacity {
-            let _ = pool_tx.try_send(Vec::with_capacity(1024));
+        // (queued messages + the one the writer holds + the one the loop is serializing)
+        let (pool_tx, pool_rx) = mpsc::sync_channel::<Vec<u8>>(capacity + 2);
+        // Every message the loop may have in flight owns a preallocated buffer, large enough for any per-tick
+        // message: the loop never allocates one nor grows one, whatever the writer's timing. (With 1 KB
+        // buffers and a smaller pool, buffers grew or were created on the loop thread for seconds, each
+        // time the writer paused to compress a chunk.)
+        for _ in 0..capacity + 2 {
+            let _ = pool_tx.try_send(Vec::with_capacity(POOLED_BUFFER_BYTES));
         }
         let thread_path = path.to_path_buf();
         let thread = std::thread::Builder::new()
@@ -458,6 +464,11 @@ fn schema_of(v: &serde_json::Value) -> serde_json::Value {
         }
     }
 }
+
+/// Capacity of each pooled buffer \[bytes\]: above the largest per-tick message (`/tf` of a 33-body model
+/// ≈ 10 KB, `/wbc/input` ≈ 3 KB). A rarer, larger message (`/tf_static` of a model with hundreds of frames)
+/// grows the buffer it lands in once. The pool holds `queue_capacity + 2` of them (16 MB by default).
+pub const POOLED_BUFFER_BYTES: usize = 16 * 1024;
 
 /// The JSON Schema of `foxglove.FrameTransforms` (Foxglove's published schema, JSON encoding).
 pub const FRAME_TRANSFORMS_SCHEMA: &str = r#"{

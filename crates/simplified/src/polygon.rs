@@ -22,8 +22,8 @@ pub const MIN_POLYGON_AREA: f64 = 1e-10;
 ///
 /// Every constructor validates these invariants, so a `SupportPolygon` value is always usable.
 /// In serde form it is a list of `[x, y]` vertices (any order; the convex hull is taken).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(try_from = "Vec<[f64; 2]>", into = "Vec<[f64; 2]>")]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(try_from = "Vec<[f64; 2]>")]
 pub struct SupportPolygon {
     vertices: [Vector2<f64>; MAX_POLYGON_VERTICES],
     len: usize,
@@ -49,6 +49,17 @@ impl TryFrom<Vec<[f64; 2]>> for SupportPolygon {
 impl From<SupportPolygon> for Vec<[f64; 2]> {
     fn from(polygon: SupportPolygon) -> Self {
         polygon.vertices().iter().map(|v| [v.x, v.y]).collect()
+    }
+}
+
+/// The serde form: the list of `[x, y]` vertices, written without building a `Vec` (logging a polygon
+/// every control tick must not allocate).
+impl Serialize for SupportPolygon {
+    fn serialize<S: serde::Serializer>(
+        &self,
+        serializer: S,
+    ) -> std::result::Result<S::Ok, S::Error> {
+        serializer.collect_seq(self.vertices().iter().map(|v| [v.x, v.y]))
     }
 }
 

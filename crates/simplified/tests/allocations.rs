@@ -97,3 +97,24 @@ fn steps_do_not_allocate() {
         }
     }
 }
+
+/// Logging the layer's input every tick serializes its support polygons: the serde form (a list of
+/// `[x, y]` vertices, unchanged) is written without building a `Vec`. (It used to go through
+/// `Vec<[f64; 2]>`, one allocation per polygon per logged tick.)
+#[test]
+fn serializing_a_support_polygon_does_not_allocate() {
+    let polygon = SupportPolygon::rectangle(-0.1, 0.1, -0.05, 0.12).unwrap();
+    let as_vec: Vec<[f64; 2]> = polygon.into();
+    let expected = serde_json::to_vec(&as_vec).unwrap();
+    let mut buffer: Vec<u8> = Vec::with_capacity(4096);
+    let (_, allocations) = ALLOC.allocations_during(|| {
+        for _ in 0..100 {
+            buffer.clear();
+            serde_json::to_writer(&mut buffer, &polygon).unwrap();
+        }
+    });
+    assert_eq!(allocations, 0);
+    assert_eq!(buffer, expected);
+    let back: SupportPolygon = serde_json::from_slice(&buffer).unwrap();
+    assert_eq!(back, polygon);
+}

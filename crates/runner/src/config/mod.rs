@@ -270,7 +270,7 @@ impl Default for LogSection {
             state_hz: 100,
             compression: Compression::Zstd,
             chunk_size: 1 << 20,
-            queue_capacity: 8192,
+            queue_capacity: 1024,
         }
     }
 }

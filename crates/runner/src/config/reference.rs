@@ -59,7 +59,7 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "log.state_hz", unit: "Hz", meaning: "Rate of `/sim/state`, `/sensors/*`, `/tf`, `/runner/timing`; divides `rates.sim_hz`." },
     KeyDoc { key: "log.compression", unit: "-", meaning: "Chunk compression: `zstd`, `lz4` or `none`." },
     KeyDoc { key: "log.chunk_size", unit: "bytes", meaning: "Target uncompressed chunk size." },
-    KeyDoc { key: "log.queue_capacity", unit: "messages", meaning: "Messages the loop may queue ahead of the writer thread (≥ 1); beyond it the loop waits (counted)." },
+    KeyDoc { key: "log.queue_capacity", unit: "messages", meaning: "Messages the loop may queue ahead of the writer thread (≥ 1); beyond it the loop waits (counted in the summary as writer waits). Each owns a preallocated 16 KB buffer (16 MB by default), so the loop never allocates for logging." },
     KeyDoc { key: "end.fall_height_fraction", unit: "-", meaning: "Fall when the base height drops below this fraction of its initial height; 0 < value < 1." },
     KeyDoc { key: "end.fall_tilt_deg", unit: "deg", meaning: "Fall when `robot.torso_frame` tilts more than this from its initial (upright) orientation; 1 ≤ value ≤ 90." },
     KeyDoc { key: "end.stop_at_goal", unit: "-", meaning: "End the run when the plan is finished, the goal is reached within tolerance and the CoM stands still." },
