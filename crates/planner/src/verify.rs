@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::PlannerConfig;
 use crate::contacts::Foot;
-use crate::geometry::{wrap_angle, yaw_of, SupportPolygon};
+use crate::geometry::{wrap_angle, Pose2, SupportPolygon};
 use crate::plan::{Plan, PlanSample};
 
 /// Tolerance on lengths and angles of the step checks \[m, rad, s\].
@@ -308,11 +308,9 @@ impl Plan {
                 ));
             };
             // left sole in the right sole's frame (planar)
-            let right_yaw = yaw_of(&r.pose.rotation);
-            let d = l.pose.translation.vector - r.pose.translation.vector;
-            let (s, c) = right_yaw.sin_cos();
-            let relative = Vector2::new(c * d.x + s * d.y, -s * d.x + c * d.y);
-            let relative_yaw = wrap_angle(yaw_of(&l.pose.rotation) - right_yaw);
+            let (left, right) = (Pose2::from_isometry(&l.pose), Pose2::from_isometry(&r.pose));
+            let relative = right.inverse_transform_point(left.position());
+            let relative_yaw = wrap_angle(left.yaw - right.yaw);
             let length = relative.norm();
             if length > config.step_length_max + STEP_TOLERANCE
                 || length < config.step_length_min - STEP_TOLERANCE

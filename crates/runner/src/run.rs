@@ -496,9 +496,7 @@ struct Loop<'a> {
 
 fn mid_pose(soles: &[nalgebra::Isometry3<f64>; 2]) -> [f64; 3] {
     let p = (soles[0].translation.vector + soles[1].translation.vector) * 0.5;
-    let yl = soles[0].rotation.euler_angles().2;
-    let yr = soles[1].rotation.euler_angles().2;
-    [p.x, p.y, yl + 0.5 * wrap_angle(yr - yl)]
+    [p.x, p.y, crate::stack::soles_heading(&soles[0], &soles[1])]
 }
 
 impl Loop<'_> {

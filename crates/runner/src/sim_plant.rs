@@ -52,9 +52,8 @@ impl SimPlant {
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_state(&state)
             .map_err(|e| RobotError(format!("simulator: {e}")))?;
-        let yl = kd.frame_pose(soles[0]).rotation.euler_angles().2;
-        let yr = kd.frame_pose(soles[1]).rotation.euler_angles().2;
-        let heading = yl + 0.5 * crate::stack::wrap_angle(yr - yl);
+        let heading =
+            crate::stack::soles_heading(&kd.frame_pose(soles[0]), &kd.frame_pose(soles[1]));
         if heading.abs() > 1e-12 {
             let turn = nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.0, -heading);
             state.base_pose =

@@ -518,9 +518,7 @@ impl Stack {
         i.left_in_contact = s.left.in_contact;
         i.right_in_contact = s.right.in_contact;
         // Torso: upright, heading the mean of the feet yaws.
-        let yl = s.left.pose.rotation.euler_angles().2;
-        let yr = s.right.pose.rotation.euler_angles().2;
-        let yaw = yl + 0.5 * wrap_angle(yr - yl);
+        let yaw = soles_heading(&s.left.pose, &s.right.pose);
         i.torso.orientation = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
         let wl = s.left.twist[5];
         let wr = s.right.twist[5];
@@ -584,6 +582,13 @@ impl Stack {
     pub fn zero_joints(&self) -> DVector<f64> {
         DVector::zeros(self.model.dof())
     }
+}
+
+/// Heading of a stance: the mean of the two soles' yaws (about world z), the shorter way round \[rad\].
+pub fn soles_heading(left: &nalgebra::Isometry3<f64>, right: &nalgebra::Isometry3<f64>) -> f64 {
+    let yl = left.rotation.euler_angles().2;
+    let yr = right.rotation.euler_angles().2;
+    yl + 0.5 * wrap_angle(yr - yl)
 }
 
 /// Wraps an angle to (−π, π].
