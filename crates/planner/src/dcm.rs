@@ -99,6 +99,22 @@ impl DcmSegment {
         }
     }
 
+    /// The first quantity with a non-finite coefficient (`"start"`, `"zmp"`, `"dcm"` or `"com"`), if any.
+    pub fn non_finite_quantity(&self) -> Option<&'static str> {
+        let finite = |c: &[Vector2<f64>]| c.iter().all(|v| v.iter().all(|x| x.is_finite()));
+        if !self.start.is_finite() {
+            Some("start")
+        } else if !finite(&self.zmp) {
+            Some("zmp")
+        } else if !finite(&self.dcm_poly) || !finite(&[self.growth]) {
+            Some("dcm")
+        } else if !finite(&self.com_poly) || !finite(&[self.decay]) {
+            Some("com")
+        } else {
+            None
+        }
+    }
+
     /// End time (infinite for the last segment).
     pub fn end(&self) -> f64 {
         self.duration.map_or(f64::INFINITY, |d| self.start + d)

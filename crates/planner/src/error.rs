@@ -70,7 +70,7 @@ pub enum PlannerError {
     NonFinitePlan {
         /// Start time \[s\] of the first non-finite segment.
         time: f64,
-        /// Which quantity: `zmp`, `dcm`, `com`.
+        /// Which quantity: `start`, `zmp`, `dcm` or `com`.
         quantity: &'static str,
     },
     /// A plan failed its run-time verification ([`crate::Plan::verify`], enabled by

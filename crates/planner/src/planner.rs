@@ -45,23 +45,13 @@ fn xy(h: &Isometry3<f64>) -> Vector2<f64> {
 
 /// Every coefficient of every segment is finite, or the plan is refused: a plan never carries NaN.
 fn check_segments_finite(segments: &[DcmSegment]) -> Result<(), PlannerError> {
-    let finite = |c: &[Vector2<f64>]| c.iter().all(|v| v.iter().all(|x| x.is_finite()));
-    for seg in segments {
-        let quantity = if !finite(&seg.zmp) {
-            "zmp"
-        } else if !finite(&seg.dcm_poly) || !finite(&[seg.growth]) {
-            "dcm"
-        } else if !finite(&seg.com_poly) || !finite(&[seg.decay]) {
-            "com"
-        } else {
-            continue;
-        };
-        return Err(PlannerError::NonFinitePlan {
-            time: seg.start,
-            quantity,
-        });
+    match segments
+        .iter()
+        .find_map(|seg| seg.non_finite_quantity().map(|q| (seg.start, q)))
+    {
+        Some((time, quantity)) => Err(PlannerError::NonFinitePlan { time, quantity }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 fn check_time(name: &'static str, t: f64) -> Result<(), PlannerError> {

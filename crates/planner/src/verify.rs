@@ -213,18 +213,11 @@ impl Plan {
             ));
         }
         for seg in &self.segments {
-            let numbers = seg
-                .zmp
-                .iter()
-                .chain(seg.dcm_poly.iter())
-                .chain(seg.com_poly.iter())
-                .chain([&seg.growth, &seg.decay])
-                .flat_map(|v| v.iter());
-            if !seg.start.is_finite() || !all_finite(numbers) {
+            if let Some(quantity) = seg.non_finite_quantity() {
                 return Err(violation(
                     Invariant::Finite,
                     seg.start,
-                    "a DCM segment has a non-finite coefficient".into(),
+                    format!("a DCM segment has a non-finite {quantity} coefficient"),
                 ));
             }
         }
