@@ -72,14 +72,14 @@ pub struct KinDyn {
 }
 
 impl KinDyn {
-    /// Builds the workspace (allocates) with the zero state, mixed representation and gravity
-    /// `[0, 0, −9.81]` m/s².
+    /// Builds the workspace (allocates) with the zero state, mixed representation and the model's gravity
+    /// ([`Model::gravity`]).
     pub fn new(model: Arc<Model>) -> Self {
         let nb = model.body_count();
         let n = model.dof();
         let mut kd = Self {
             repr: VelocityRepresentation::Mixed,
-            gravity: Vector3::new(0.0, 0.0, -9.81),
+            gravity: model.gravity(),
             base_pose: Isometry3::identity(),
             base_pos: Vector3::zeros(),
             base_rot: Matrix3::identity(),
@@ -131,7 +131,7 @@ impl KinDyn {
         self.gravity
     }
 
-    /// Sets the gravity acceleration in world coordinates (m/s²; default `[0, 0, −9.81]`).
+    /// Sets this workspace's gravity acceleration in world coordinates (m/s²; default the model's).
     pub fn set_gravity(&mut self, gravity: Vector3<f64>) {
         self.gravity = gravity;
     }

@@ -32,7 +32,9 @@ mod urdf;
 
 pub use error::ModelError;
 pub use kindyn::{ExternalWrench, KinDyn};
-pub use model::{Body, Frame, FrameId, FrameKind, FtSensor, Joint, JointKind, Mimic, Model};
+pub use model::{
+    Body, Frame, FrameId, FrameKind, FtSensor, Joint, JointKind, Mimic, Model, STANDARD_GRAVITY,
+};
 pub use state::{convert_velocity, se3_exp, RobotState, VelocityRepresentation};
 
 impl Model {

@@ -4,6 +4,7 @@ use std::collections::HashMap;
 
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
+use crate::error::ModelError;
 use crate::spatial::Inertia;
 
 /// Type of a movable joint.
@@ -153,6 +154,8 @@ pub struct Model {
     pub(crate) ft_sensors: Vec<FtSensor>,
     pub(crate) warnings: Vec<String>,
     pub(crate) total_mass: f64,
+    /// Gravity acceleration in world coordinates (m/s²).
+    pub(crate) gravity: Vector3<f64>,
     // Flat data for the algorithms (index = body).
     pub(crate) parent: Vec<usize>,
     pub(crate) placement_rot: Vec<Matrix3<f64>>,
@@ -170,7 +173,30 @@ pub struct Model {
     pub(crate) frame_pos: Vec<Vector3<f64>>,
 }
 
+/// Standard gravity g₀ (m/s²), the magnitude of the default gravity `[0, 0, −g₀]` of a [`Model`].
+pub const STANDARD_GRAVITY: f64 = 9.81;
+
 impl Model {
+    /// Gravity acceleration in world coordinates (m/s²; default `[0, 0, −9.81]`): the one gravity of a
+    /// model, which every [`KinDyn`](crate::KinDyn) workspace built on it starts from, and which
+    /// controllers and simulators built on the model read (like Pinocchio's `Model::gravity`).
+    pub fn gravity(&self) -> Vector3<f64> {
+        self.gravity
+    }
+
+    /// Sets the model's gravity (m/s², world coordinates). Set it before sharing the model: workspaces
+    /// built earlier keep the value they copied.
+    ///
+    /// # Errors
+    /// [`ModelError::NonFiniteInput`] when a component is not finite.
+    pub fn set_gravity(&mut self, gravity: Vector3<f64>) -> Result<(), ModelError> {
+        if !gravity.iter().all(|g| g.is_finite()) {
+            return Err(ModelError::NonFiniteInput { what: "gravity" });
+        }
+        self.gravity = gravity;
+        Ok(())
+    }
+
     /// Robot name (`<robot name>`).
     pub fn name(&self) -> &str {
         &self.name

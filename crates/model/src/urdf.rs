@@ -732,6 +732,7 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
         ft_sensors,
         warnings,
         total_mass,
+        gravity: Vector3::new(0.0, 0.0, -crate::model::STANDARD_GRAVITY),
         parent,
         placement_rot,
         placement_pos,
