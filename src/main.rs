@@ -2,5 +2,5 @@
 //! that `cargo run --release -- <subcommand>` works from the workspace root.
 
 fn main() -> std::process::ExitCode {
-    stride_runner::cli::main()
+    stride_runner::commands::main()
 }

@@ -63,6 +63,23 @@ pub struct RobotState {
 }
 
 impl RobotState {
+    /// Copies `other` into `self`, reusing `self`'s joint vectors when the sizes agree (no allocation, as
+    /// in a control tick); `clone_from` would reallocate. Resizes (allocating) otherwise.
+    pub fn copy_from(&mut self, other: &RobotState) {
+        self.base_pose = other.base_pose;
+        self.base_velocity = other.base_velocity;
+        if self.joint_positions.len() == other.joint_positions.len() {
+            self.joint_positions.copy_from(&other.joint_positions);
+        } else {
+            self.joint_positions = other.joint_positions.clone();
+        }
+        if self.joint_velocities.len() == other.joint_velocities.len() {
+            self.joint_velocities.copy_from(&other.joint_velocities);
+        } else {
+            self.joint_velocities = other.joint_velocities.clone();
+        }
+    }
+
     /// Checks that the state fits `model` (one position and one velocity per joint) and holds only finite
     /// numbers. Every consumer of a user-supplied state (kinematics, controllers, simulator) calls this one
     /// check.

@@ -1,11 +1,10 @@
 //! The `stride` command line.
 //!
-//! Every subcommand returns a [`CliError`]; [`main`] prints it as one paragraph (the error and its causes
+//! Every subcommand returns a [`CliError`]; [`crate::commands::main`] prints it as one paragraph (the error and its causes
 //! joined by `: `) and exits with status 1 (2 for usage errors, printed by clap). `--verbose` turns on
 //! `tracing` diagnostics on stderr (`RUST_LOG` refines them).
 
 use std::path::PathBuf;
-use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
@@ -155,30 +154,6 @@ pub enum ModelCommand {
     },
 }
 
-/// Entry point of the `stride` binary.
-pub fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
-        Ok(c) => c,
-        Err(e) => {
-            // clap prints help/version to stdout and usage errors to stderr.
-            let _ = e.print();
-            return if e.use_stderr() {
-                ExitCode::from(2)
-            } else {
-                ExitCode::SUCCESS
-            };
-        }
-    };
-    init_tracing(cli.verbose);
-    match run(cli) {
-        Ok(code) => code,
-        Err(e) => {
-            eprintln!("error: {}", one_paragraph(&e));
-            ExitCode::FAILURE
-        }
-    }
-}
-
 /// Writes to stdout; a closed pipe (reader gone) is not an error worth a panic.
 pub fn write_stdout(args: std::fmt::Arguments<'_>) {
     use std::io::Write;
@@ -198,38 +173,4 @@ pub fn one_paragraph(e: &(dyn std::error::Error + 'static)) -> String {
         cur = c.source();
     }
     s
-}
-
-fn init_tracing(verbose: bool) {
-    use tracing_subscriber::EnvFilter;
-    let default = if verbose { "debug" } else { "warn" };
-    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default));
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .with_target(false)
-        .try_init();
-}
-
-/// Runs a parsed command line.
-pub fn run(cli: Cli) -> Result<ExitCode, CliError> {
-    match cli.command {
-        Command::Model { command } => crate::commands::model(command),
-        Command::Check { config } => crate::commands::check(&config),
-        Command::Plan { config, json, dt } => crate::commands::plan(&config, json, dt),
-        Command::Run {
-            config,
-            output,
-            duration,
-            realtime,
-            no_progress,
-            plant,
-        } => crate::commands::run(&config, output, duration, realtime, no_progress, plant),
-        Command::Replay {
-            log,
-            layer,
-            config,
-            output,
-        } => crate::commands::replay(&log, layer, config, output),
-    }
 }

@@ -1,9 +1,12 @@
-//! Implementations of the `stride` subcommands.
+//! Implementations of the `stride` subcommands, and [`main`], which parses the command line ([`Cli`])
+//! and dispatches to them.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use crate::cli::{CliError, LayerName, ModelCommand};
+use clap::Parser;
+
+use crate::cli::{one_paragraph, Cli, CliError, Command, LayerName, ModelCommand};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
@@ -226,4 +229,62 @@ pub fn replay(
 
 fn err<E: std::error::Error + 'static>(e: E) -> CliError {
     CliError::msg(crate::cli::one_paragraph(&e))
+}
+
+/// Entry point of the `stride` binary.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            // clap prints help/version to stdout and usage errors to stderr.
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    init_tracing(cli.verbose);
+    match dispatch(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {}", one_paragraph(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn init_tracing(verbose: bool) {
+    use tracing_subscriber::EnvFilter;
+    let default = if verbose { "debug" } else { "warn" };
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(default));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .try_init();
+}
+
+/// Runs a parsed command line.
+pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
+    match cli.command {
+        Command::Model { command } => model(command),
+        Command::Check { config } => check(&config),
+        Command::Plan { config, json, dt } => plan(&config, json, dt),
+        Command::Run {
+            config,
+            output,
+            duration,
+            realtime,
+            no_progress,
+            plant,
+        } => run(&config, output, duration, realtime, no_progress, plant),
+        Command::Replay {
+            log,
+            layer,
+            config,
+            output,
+        } => replay(&log, layer, config, output),
+    }
 }

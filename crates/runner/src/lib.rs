@@ -16,11 +16,16 @@ macro_rules! out {
 pub mod cli;
 pub mod commands;
 pub mod config;
+pub mod error;
 pub mod log;
 pub mod model_cmd;
 pub mod records;
 pub mod replay;
 pub mod robot;
 pub mod run;
+pub mod setup;
 pub mod sim_plant;
+pub mod sink;
 pub mod stack;
+pub mod summary;
+mod tracking;

@@ -313,7 +313,7 @@ fn identity_xyzw() -> [f64; 4] {
     [0.0, 0.0, 0.0, 1.0]
 }
 fn default_gravity() -> [f64; 3] {
-    [0.0, 0.0, -9.81]
+    [0.0, 0.0, -stride_model::STANDARD_GRAVITY]
 }
 
 fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {

@@ -15,6 +15,8 @@ use stride_model::RobotState;
 use stride_planner::{FootSample, Goal as PlannerGoal, PhaseKind, PlanSample, PlannerInput};
 use stride_wbc::{FootReference, OrientationReference, WbcInput};
 
+use crate::config::ControlMode;
+
 /// A pose: position \[m\] and orientation quaternion `[x, y, z, w]`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub struct PoseRecord {
@@ -429,4 +431,94 @@ pub struct EventRecord {
     pub kind: String,
     /// Human-readable detail.
     pub detail: String,
+}
+
+// ---- Runner topics: messages the log sink writes that are not a layer's input or output. ----
+
+/// `/robot/description`: what a reader needs to interpret the log.
+#[derive(Serialize)]
+pub(crate) struct RobotDescription<'a> {
+    pub(crate) robot: &'a str,
+    pub(crate) root_link: &'a str,
+    pub(crate) joint_names: Vec<&'a str>,
+    pub(crate) left_sole: &'a str,
+    pub(crate) right_sole: &'a str,
+    pub(crate) control_mode: ControlMode,
+    pub(crate) plant: &'a str,
+}
+
+/// `/sim/state`: the plant's true state, motor torques and per-joint saturation.
+#[derive(Serialize)]
+pub(crate) struct SimStateMsg<'a> {
+    pub(crate) time: f64,
+    #[serde(flatten)]
+    pub(crate) state: StateRecord<'a>,
+    pub(crate) joint_torques: &'a [f64],
+    pub(crate) saturated: &'a [bool],
+}
+
+/// One foot of `/sensors/feet`.
+#[derive(Serialize)]
+pub(crate) struct FootMsg {
+    pub(crate) in_contact: bool,
+    pub(crate) force: [f64; 3],
+    pub(crate) torque: [f64; 3],
+    pub(crate) point: [f64; 3],
+}
+
+/// `/sensors/feet`: the measured foot wrenches (the ground on the foot, world orientation, about `point`).
+#[derive(Serialize)]
+pub(crate) struct FeetMsg {
+    pub(crate) time: f64,
+    pub(crate) left: FootMsg,
+    pub(crate) right: FootMsg,
+}
+
+/// `/sensors/imu`.
+#[derive(Serialize)]
+pub(crate) struct ImuMsg {
+    pub(crate) time: f64,
+    pub(crate) orientation_xyzw: [f64; 4],
+    pub(crate) angular_velocity: [f64; 3],
+    pub(crate) linear_acceleration: [f64; 3],
+}
+
+/// `/runner/tracking`: tracking errors and measured quantities at a simplified tick.
+#[derive(Serialize)]
+pub(crate) struct TrackingMsg {
+    pub(crate) time: f64,
+    pub(crate) dcm_error: f64,
+    pub(crate) com_error: f64,
+    pub(crate) zmp_error: Option<f64>,
+    pub(crate) feet_error: f64,
+    pub(crate) measured_com: [f64; 3],
+    pub(crate) measured_dcm: [f64; 2],
+    pub(crate) measured_zmp: [f64; 2],
+    pub(crate) base_height: f64,
+    pub(crate) tilt_deg: f64,
+}
+
+/// `/runner/timing`: wall-clock progress (excluded from determinism comparisons).
+#[derive(Serialize)]
+pub(crate) struct RunnerTimingMsg {
+    pub(crate) wall_time: f64,
+    pub(crate) real_time_factor: f64,
+    pub(crate) deadline_misses: u64,
+}
+
+/// One footstep of `/planner/footsteps`.
+#[derive(Serialize)]
+pub(crate) struct FootstepMsg {
+    pub(crate) foot: &'static str,
+    pub(crate) position: [f64; 3],
+    pub(crate) orientation_xyzw: [f64; 4],
+    pub(crate) activation_time: f64,
+    pub(crate) deactivation_time: Option<f64>,
+}
+
+/// `/planner/footsteps`: the contact list of a new plan.
+#[derive(Serialize)]
+pub(crate) struct FootstepsMsg {
+    pub(crate) time: f64,
+    pub(crate) footsteps: Vec<FootstepMsg>,
 }

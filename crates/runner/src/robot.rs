@@ -8,57 +8,43 @@
 use std::sync::Arc;
 
 use nalgebra::{DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
-use serde::Serialize;
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
+use stride_sim::ImuMeasurement;
+use stride_simplified::FootWrench;
 
 use crate::config::ControlMode;
 
 /// A failure of the robot interface (or of the simulator).
 #[derive(Debug, thiserror::Error)]
-#[error("robot: {0}")]
-pub struct RobotError(pub String);
-
-/// Measured contact wrench of one foot.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct FootMeasurement {
-    /// Whether the foot touches the ground.
-    pub in_contact: bool,
-    /// `[f; τ]` applied by the ground on the robot, world orientation, torque about the sole frame origin
-    /// [N; N m].
-    pub wrench: Vector6<f64>,
-    /// World position of the sole frame origin the torque is taken about \[m\].
-    pub point: Vector3<f64>,
-}
-
-impl Default for FootMeasurement {
-    fn default() -> Self {
-        Self {
-            in_contact: false,
-            wrench: Vector6::zeros(),
-            point: Vector3::zeros(),
-        }
-    }
-}
-
-/// IMU reading.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct ImuReading {
-    /// Orientation of the IMU (world_R_imu).
-    pub orientation: UnitQuaternion<f64>,
-    /// Angular velocity in the IMU frame [rad/s].
-    pub angular_velocity: Vector3<f64>,
-    /// Proper acceleration in the IMU frame [m/s²].
-    pub linear_acceleration: Vector3<f64>,
-}
-
-impl Default for ImuReading {
-    fn default() -> Self {
-        Self {
-            orientation: UnitQuaternion::identity(),
-            angular_velocity: Vector3::zeros(),
-            linear_acceleration: Vector3::zeros(),
-        }
-    }
+pub enum RobotError {
+    /// The simulator failed.
+    #[error("simulator: {0}")]
+    Sim(#[from] stride_sim::SimError),
+    /// The plant's model rejected a state.
+    #[error("plant state: {0}")]
+    State(#[from] stride_model::ModelError),
+    /// A command sized for another robot.
+    #[error("command sized for {got} joints, the robot has {expected}")]
+    CommandSize {
+        /// Joints of the robot.
+        expected: usize,
+        /// Joints in the command.
+        got: usize,
+    },
+    /// A command with a NaN or infinite joint position.
+    #[error("command with a non-finite joint position")]
+    NonFiniteCommand,
+    /// The plant's period differs from the schedule's.
+    #[error("the robot's period {robot_ns} ns differs from rates.sim_hz ({expected_ns} ns)")]
+    Period {
+        /// The robot's period \[ns\].
+        robot_ns: u64,
+        /// `1 / rates.sim_hz` \[ns\].
+        expected_ns: u64,
+    },
+    /// A robot interface outside stride (a real robot, another simulator) failed; its own words.
+    #[error("robot: {0}")]
+    Interface(String),
 }
 
 /// What the robot reports each plant period.
@@ -70,10 +56,15 @@ pub struct Measurement {
     pub state: RobotState,
     /// Measured joint torques [N m].
     pub joint_torques: DVector<f64>,
-    /// Left and right foot wrenches.
-    pub feet: [FootMeasurement; 2],
+    /// Per joint, in model order: the motor torque sat at its effort limit during the last period.
+    pub saturated: Vec<bool>,
+    /// Left and right foot: the wrench the ground applies on the foot, world orientation, torque about
+    /// the sole frame origin (`point`) [N; N m; m]. The one foot-wrench type from the plant to the layers.
+    pub feet: [FootWrench; 2],
+    /// Left and right foot touch the ground.
+    pub feet_in_contact: [bool; 2],
     /// IMU.
-    pub imu: ImuReading,
+    pub imu: ImuMeasurement,
     /// The plant's own fall detector (the runner also checks base height and tilt).
     pub fallen: bool,
 }
@@ -85,8 +76,17 @@ impl Measurement {
             time_ns: 0,
             state: RobotState::zero(model),
             joint_torques: DVector::zeros(model.dof()),
-            feet: [FootMeasurement::default(); 2],
-            imu: ImuReading::default(),
+            saturated: vec![false; model.dof()],
+            feet: [FootWrench {
+                wrench: Vector6::zeros(),
+                point: Vector3::zeros(),
+            }; 2],
+            feet_in_contact: [false; 2],
+            imu: ImuMeasurement {
+                orientation: UnitQuaternion::identity(),
+                angular_velocity: Vector3::zeros(),
+                proper_acceleration: Vector3::zeros(),
+            },
             fallen: false,
         }
     }
@@ -166,8 +166,7 @@ impl IdealPlant {
     ) -> Result<Self, RobotError> {
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_representation(VelocityRepresentation::Mixed);
-        kd.set_state(initial)
-            .map_err(|e| RobotError(e.to_string()))?;
+        kd.set_state(initial)?;
         let anchor_pose = kd.frame_pose(left_sole);
         let mut meas = Measurement::new(&model);
         meas.state = initial.clone();
@@ -181,7 +180,7 @@ impl IdealPlant {
             pending,
             meas,
             previous: initial.clone(),
-            gravity: 9.81,
+            gravity: -model.gravity().z,
             model,
         };
         plant.update_wrenches();
@@ -219,11 +218,11 @@ impl IdealPlant {
                 p
             };
             let torque = (cop - p).cross(&force);
-            self.meas.feet[i] = FootMeasurement {
-                in_contact: f > 0.0,
+            self.meas.feet[i] = FootWrench {
                 wrench: Vector6::new(force.x, force.y, force.z, torque.x, torque.y, torque.z),
                 point: p,
             };
+            self.meas.feet_in_contact[i] = f > 0.0;
         }
     }
 }
@@ -242,13 +241,14 @@ impl Robot for IdealPlant {
         &self.meas
     }
     fn command(&mut self, command: &JointCommand) -> Result<(), RobotError> {
-        if command.joint_positions.len() != self.model.dof()
-            || command.joint_positions.iter().any(|q| !q.is_finite())
-        {
-            return Err(RobotError(format!(
-                "ideal plant: expected {} finite joint positions",
-                self.model.dof()
-            )));
+        if command.joint_positions.len() != self.model.dof() {
+            return Err(RobotError::CommandSize {
+                expected: self.model.dof(),
+                got: command.joint_positions.len(),
+            });
+        }
+        if command.joint_positions.iter().any(|q| !q.is_finite()) {
+            return Err(RobotError::NonFiniteCommand);
         }
         self.pending.mode = command.mode;
         self.pending
@@ -259,7 +259,7 @@ impl Robot for IdealPlant {
     }
     fn advance(&mut self) -> Result<(), RobotError> {
         let dt = self.period_ns as f64 * 1e-9;
-        copy_state(&mut self.previous, &self.meas.state);
+        self.previous.copy_from(&self.meas.state);
         // Re-anchor when the anchored foot leaves the ground and the other one is down.
         let contacts = self.pending.contacts;
         if !contacts[self.anchor] && contacts[1 - self.anchor] {
@@ -270,9 +270,7 @@ impl Robot for IdealPlant {
         state
             .joint_positions
             .copy_from(&self.pending.joint_positions);
-        self.kd
-            .set_state(state)
-            .map_err(|e| RobotError(e.to_string()))?;
+        self.kd.set_state(state)?;
         // base_H_anchor with the new joints; world_H_base = world_H_anchor · anchor_H_base.
         let base_to_anchor = self.kd.relative_transform_from_base(self.feet[self.anchor]);
         let mut base = self.anchor_pose * base_to_anchor.inverse();
@@ -289,13 +287,11 @@ impl Robot for IdealPlant {
         let rot = base.rotation * prev.base_pose.rotation.inverse();
         let ang = rot.scaled_axis() / dt;
         state.base_velocity = Vector6::new(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z);
-        self.kd
-            .set_state(state)
-            .map_err(|e| RobotError(e.to_string()))?;
+        self.kd.set_state(state)?;
         self.meas.time_ns += self.period_ns;
         self.meas.imu.orientation = base.rotation;
         self.meas.imu.angular_velocity = base.rotation.inverse() * ang;
-        self.meas.imu.linear_acceleration =
+        self.meas.imu.proper_acceleration =
             base.rotation.inverse() * Vector3::new(0.0, 0.0, self.gravity);
         self.update_wrenches();
         Ok(())
@@ -332,34 +328,16 @@ pub fn standing_state(
     let mut state = RobotState::zero(model);
     state.joint_positions.copy_from(joint_positions);
     let mut kd = KinDyn::new(Arc::clone(model));
-    kd.set_state(&state)
-        .map_err(|e| RobotError(e.to_string()))?;
+    kd.set_state(&state)?;
     let l = kd.frame_pose(left_sole);
-    let r = kd.frame_pose(right_sole);
     // Level the left sole: base orientation such that world_R_sole = identity (yaw kept 0).
     let base_rot = l.rotation.inverse();
     state.base_pose = Isometry3::from_parts(nalgebra::Translation3::identity(), base_rot);
-    kd.set_state(&state)
-        .map_err(|e| RobotError(e.to_string()))?;
+    kd.set_state(&state)?;
     let l = kd.frame_pose(left_sole).translation.vector;
-    let r2 = kd.frame_pose(right_sole).translation.vector;
-    let _ = r;
-    let mid = (l + r2) * 0.5;
-    let lowest = l.z.min(r2.z);
+    let r = kd.frame_pose(right_sole).translation.vector;
+    let mid = (l + r) * 0.5;
+    let lowest = l.z.min(r.z);
     state.base_pose.translation.vector -= Vector3::new(mid.x, mid.y, lowest);
     Ok(state)
-}
-
-/// Copies a state into another of the same size without allocating (`clone_from` on `RobotState` would
-/// reallocate its vectors).
-pub fn copy_state(dst: &mut RobotState, src: &RobotState) {
-    dst.base_pose = src.base_pose;
-    dst.base_velocity = src.base_velocity;
-    if dst.joint_positions.len() == src.joint_positions.len() {
-        dst.joint_positions.copy_from(&src.joint_positions);
-        dst.joint_velocities.copy_from(&src.joint_velocities);
-    } else {
-        dst.joint_positions = src.joint_positions.clone();
-        dst.joint_velocities = src.joint_velocities.clone();
-    }
 }

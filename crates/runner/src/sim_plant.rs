@@ -3,11 +3,11 @@ use std::sync::Arc;
 
 use nalgebra::DVector;
 use stride_block::Block;
-use stride_model::{FrameId, KinDyn, Model, RobotState};
+use stride_model::{FrameId, KinDyn, Model};
 use stride_sim::{ActuationMode, SimConfig, SimInput, SimRobot};
 
 use crate::config::ControlMode;
-use crate::robot::{FootMeasurement, JointCommand, Measurement, Robot, RobotError};
+use crate::robot::{JointCommand, Measurement, Robot, RobotError};
 
 /// The simulated robot behind the [`Robot`] trait. The measurement is the simulator's ground-truth base
 /// state (a real robot would need a base estimator here), its encoders, the contact wrenches of the two
@@ -33,25 +33,20 @@ impl SimPlant {
         joint_positions: &DVector<f64>,
         soles: [FrameId; 2],
     ) -> Result<Self, RobotError> {
-        let err = |e: stride_sim::SimError| RobotError(format!("simulator: {e}"));
         let rate = config.rate_hz;
-        if rate == 0 {
-            return Err(RobotError("simulator rate is 0 Hz".into()));
-        }
         if mode == ControlMode::Torque {
             config.actuation.default.mode = ActuationMode::Torque;
             for j in &mut config.actuation.joints {
                 j.mode = Some(ActuationMode::Torque);
             }
         }
-        let mut sim = SimRobot::new(Arc::clone(&model), config).map_err(err)?;
-        let mut state = sim.set_standing_on_ground(joint_positions).map_err(err)?;
+        let mut sim = SimRobot::new(Arc::clone(&model), config)?;
+        let mut state = sim.set_standing_on_ground(joint_positions)?;
         // Start heading along +x, the heading being the soles' mean yaw (sole frames have x forward by
         // convention, whereas base links differ: iCub's `root_link` points x backward). A rotation about the
         // vertical keeps every contact point's height, so the simulator's placement on the ground holds.
         let mut kd = KinDyn::new(Arc::clone(&model));
-        kd.set_state(&state)
-            .map_err(|e| RobotError(format!("simulator: {e}")))?;
+        kd.set_state(&state)?;
         let heading =
             crate::stack::soles_heading(&kd.frame_pose(soles[0]), &kd.frame_pose(soles[1]));
         if heading.abs() > 1e-12 {
@@ -59,8 +54,7 @@ impl SimPlant {
             state.base_pose =
                 nalgebra::Isometry3::from_parts(nalgebra::Translation3::identity(), turn)
                     * state.base_pose;
-            kd.set_state(&state)
-                .map_err(|e| RobotError(format!("simulator: {e}")))?;
+            kd.set_state(&state)?;
         }
         // Start with the soles' mid-point above the world origin (as the ideal plant and `stride plan` do),
         // so goals are distances from the start.
@@ -69,7 +63,7 @@ impl SimPlant {
             * 0.5;
         state.base_pose.translation.x -= mid.x;
         state.base_pose.translation.y -= mid.y;
-        sim.set_initial_state(&state).map_err(err)?;
+        sim.set_initial_state(&state)?;
         let mut surfaces = [None, None];
         for (i, s) in sim.config().contact.surfaces.iter().enumerate() {
             for (k, sole) in soles.iter().enumerate() {
@@ -99,9 +93,7 @@ impl SimPlant {
     }
 
     fn refresh_from_state(&mut self) -> Result<(), RobotError> {
-        self.kd
-            .set_state(&self.meas.state)
-            .map_err(|e| RobotError(e.to_string()))?;
+        self.kd.set_state(&self.meas.state)?;
         for k in 0..2 {
             self.meas.feet[k].point = self.kd.frame_pose(self.soles[k]).translation.vector;
         }
@@ -123,19 +115,15 @@ impl SimPlant {
             .joint_velocities
             .copy_from(&out.joint_velocities);
         self.meas.joint_torques.copy_from(&out.joint_torques);
-        self.meas.imu.orientation = out.imu.orientation;
-        self.meas.imu.angular_velocity = out.imu.angular_velocity;
-        self.meas.imu.linear_acceleration = out.imu.proper_acceleration;
+        self.meas.imu = out.imu;
         self.meas.fallen = out.fallen;
+        for (k, saturated) in out.saturated.iter().enumerate() {
+            self.meas.saturated[k] = *saturated;
+        }
         for k in 0..2 {
-            self.meas.feet[k] = match self.surfaces[k].and_then(|i| out.surfaces.get(i)) {
-                Some(s) => FootMeasurement {
-                    in_contact: s.in_contact,
-                    wrench: s.wrench,
-                    point: self.meas.feet[k].point,
-                },
-                None => FootMeasurement::default(),
-            };
+            let surface = self.surfaces[k].and_then(|i| out.surfaces.get(i));
+            self.meas.feet_in_contact[k] = surface.is_some_and(|s| s.in_contact);
+            self.meas.feet[k].wrench = surface.map_or(nalgebra::Vector6::zeros(), |s| s.wrench);
         }
         self.refresh_from_state()
     }
@@ -156,8 +144,10 @@ impl Robot for SimPlant {
     }
     fn command(&mut self, command: &JointCommand) -> Result<(), RobotError> {
         let n = self.model.dof();
-        if command.joint_positions.len() != n || command.joint_torques.len() != n {
-            return Err(RobotError(format!("command sized for {n} joints expected")));
+        for got in [command.joint_positions.len(), command.joint_torques.len()] {
+            if got != n {
+                return Err(RobotError::CommandSize { expected: n, got });
+            }
         }
         self.input
             .joint_positions
@@ -169,14 +159,7 @@ impl Robot for SimPlant {
         Ok(())
     }
     fn advance(&mut self) -> Result<(), RobotError> {
-        self.sim
-            .step(&self.input)
-            .map_err(|e| RobotError(format!("simulator: {e}")))?;
+        self.sim.step(&self.input)?;
         self.read_output()
     }
-}
-
-/// The initial state the simulator placed the robot in (for the ideal plant and tests).
-pub fn initial_state(plant: &SimPlant) -> RobotState {
-    plant.meas.state.clone()
 }

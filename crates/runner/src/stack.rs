@@ -6,46 +6,28 @@
 //! [`Stack::planner_tick`] (only on events: start, new goal segment), [`Stack::simplified_tick`] and
 //! [`Stack::wbc_tick`] (each at its rate), then the command goes to the robot.
 //!
-//! Measured quantities (design.md, "Bring-up" step 3): the CoM position and velocity from the measured
-//! base state and joints through the model; the DCM `ξ = x + ẋ/ω` with the plan's ω; the ZMP from the
+//! Measured quantities: the CoM position and velocity from the measured base state and joints through
+//! the model; the DCM `ξ = x + ẋ/ω` with the plan's ω (computed once per simplified tick); the ZMP from the
 //! feet wrenches ([`stride_simplified::measured_zmp`]), falling back to the CoM's ground projection when
 //! no foot carries more than 5 % of the weight.
 
 use std::sync::Arc;
 use std::time::Duration;
 
-use nalgebra::{DVector, UnitQuaternion, Vector2, Vector3};
+use nalgebra::{UnitQuaternion, Vector2, Vector3};
 use stride_block::Block;
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
-use stride_planner::{Goal as PlannerGoal, PhaseKind, PlanSample, Planner, PlannerInput, Waypoint};
+use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
 use stride_simplified::{
-    feet_support_polygon, measured_zmp, FootRectangle, FootWrench, HorizonSample,
-    SimplifiedController, SimplifiedInput, SimplifiedOutput, SupportPolygon,
+    feet_support_polygon, measured_zmp, FootRectangle, HorizonSample, SimplifiedController,
+    SimplifiedInput, SimplifiedOutput, SupportPolygon,
 };
 use stride_wbc::{QpIk, Tsid, WbcInput};
 
 use crate::config::{ControlMode, Goal, Scenario};
+use crate::error::RunError;
 use crate::robot::{JointCommand, Measurement};
-
-/// A failure inside one layer, named.
-#[derive(Debug, thiserror::Error)]
-pub enum StackError {
-    /// The planner failed.
-    #[error("planner: {0}")]
-    Planner(#[from] stride_planner::PlannerError),
-    /// The simplified layer failed.
-    #[error("simplified layer: {0}")]
-    Simplified(#[from] stride_simplified::SimplifiedError),
-    /// The whole-body layer failed.
-    #[error("whole-body layer: {0}")]
-    Wbc(#[from] stride_wbc::WbcError),
-    /// The model rejected a state.
-    #[error("model: {0}")]
-    Model(#[from] stride_model::ModelError),
-    /// Anything else.
-    #[error("{0}")]
-    Other(String),
-}
+use crate::setup::frame_of;
 
 /// The whole-body controller of the configured control mode.
 #[allow(clippy::large_enum_variant)]
@@ -117,7 +99,7 @@ pub struct Measured {
     pub com: Vector3<f64>,
     /// CoM velocity [m/s].
     pub com_velocity: Vector3<f64>,
-    /// DCM (xy) with the plan's ω \[m\].
+    /// DCM (xy) with the plan's ω at the last simplified tick \[m\].
     pub dcm: Vector2<f64>,
     /// ZMP from the feet wrenches \[m\].
     pub zmp: Vector2<f64>,
@@ -135,14 +117,17 @@ pub struct Measured {
 /// The three layers and their wiring.
 pub struct Stack {
     model: Arc<Model>,
-    kd: KinDyn,
+    /// The runner's one kinematics workspace, set to the last measured state (the log sink's `/tf`
+    /// reads it too).
+    pub(crate) kd: KinDyn,
     soles: [FrameId; 2],
     torso: FrameId,
     /// The world's vertical in the torso frame's coordinates at the initial posture: the torso's "up"
     /// axis, whatever the frame convention of the model (z up on the bundled humanoid, y up on iCub's
     /// `chest`). The tilt is the angle of this axis from the vertical.
     torso_up: Vector3<f64>,
-    mode: ControlMode,
+    /// Gravity magnitude \[m/s²\] (the model's, along −z).
+    gravity: f64,
     foot_half_length: f64,
     foot_half_width: f64,
     /// The planner.
@@ -193,26 +178,13 @@ impl Stack {
         scenario: &Scenario,
         model: Arc<Model>,
         initial: &RobotState,
-    ) -> Result<Self, StackError> {
+    ) -> Result<Self, RunError> {
         let c = &scenario.config;
-        let frame = |name: &str, key: &str| {
-            model.frame_id(name).ok_or_else(|| {
-                StackError::Other(format!(
-                    "{}",
-                    scenario.invalid(
-                        key,
-                        format!(
-                            "the model has no frame `{name}`; expected one of its links or frames"
-                        )
-                    )
-                ))
-            })
-        };
         let soles = [
-            frame(&c.robot.left_sole, "robot.left_sole")?,
-            frame(&c.robot.right_sole, "robot.right_sole")?,
+            frame_of(scenario, &model, "robot.left_sole", &c.robot.left_sole)?,
+            frame_of(scenario, &model, "robot.right_sole", &c.robot.right_sole)?,
         ];
-        let torso = frame(&c.robot.torso_frame, "robot.torso_frame")?;
+        let torso = frame_of(scenario, &model, "robot.torso_frame", &c.robot.torso_frame)?;
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_representation(VelocityRepresentation::Mixed);
         kd.set_state(initial)?;
@@ -256,7 +228,7 @@ impl Stack {
             soles,
             torso,
             torso_up,
-            mode: c.scenario.control_mode,
+            gravity: -model.gravity().z,
             foot_half_length: c.planner.foot_length * 0.5,
             foot_half_width: c.planner.foot_width * 0.5,
             planner,
@@ -285,22 +257,12 @@ impl Stack {
         &self.model
     }
 
-    /// Sole frames (left, right).
-    pub fn soles(&self) -> [FrameId; 2] {
-        self.soles
-    }
-
-    /// The runner's kinematics workspace, set to the last measured state.
-    pub fn kin_dyn(&self) -> &KinDyn {
-        &self.kd
-    }
-
     fn polygon_of(
         soles: &[nalgebra::Isometry3<f64>; 2],
         contacts: [bool; 2],
         hl: f64,
         hw: f64,
-    ) -> Result<SupportPolygon, StackError> {
+    ) -> Result<SupportPolygon, RunError> {
         let mut feet = [FootRectangle {
             position: Vector2::zeros(),
             yaw: 0.0,
@@ -329,33 +291,21 @@ impl Stack {
         Ok(feet_support_polygon(&feet[..n])?)
     }
 
-    /// Measured CoM, DCM, ZMP, soles, tilt from the robot's measurement (first step of every tick that
-    /// runs a layer).
-    pub fn estimate(&mut self, m: &Measurement) -> Result<(), StackError> {
+    /// Measured CoM, ZMP, soles, tilt from the robot's measurement (first step of every tick that runs
+    /// a layer or logs the state). The DCM needs the plan's ω: [`Stack::measure_dcm`].
+    pub fn estimate(&mut self, m: &Measurement) -> Result<(), RunError> {
         self.kd.set_state(&m.state)?;
         let com = self.kd.com_position();
-        let vcom = self.kd.com_velocity();
-        let omega = if self.plan_sample.omega > 0.0 {
-            self.plan_sample.omega
-        } else {
-            (9.81 / com.z.max(1e-3)).sqrt()
-        };
-        let weight = self.model.total_mass() * 9.81;
-        let mut feet = [FootWrench {
-            wrench: nalgebra::Vector6::zeros(),
-            point: Vector3::zeros(),
-        }; 2];
+        let weight = self.model.total_mass() * self.gravity;
+        let mut loaded = [m.feet[0]; 2];
         let mut n = 0;
-        for f in m.feet.iter() {
-            if f.in_contact && f.wrench[2] > 0.0 {
-                feet[n] = FootWrench {
-                    wrench: f.wrench,
-                    point: f.point,
-                };
+        for (foot, in_contact) in m.feet.iter().zip(m.feet_in_contact) {
+            if in_contact && foot.wrench[2] > 0.0 {
+                loaded[n] = *foot;
                 n += 1;
             }
         }
-        let (zmp, ok) = match measured_zmp(&feet[..n], 0.0, 0.05 * weight) {
+        let (zmp, ok) = match measured_zmp(&loaded[..n], 0.0, 0.05 * weight) {
             Ok(z) => (z, true),
             Err(_) => (com.xy(), false),
         };
@@ -363,8 +313,8 @@ impl Stack {
         let up = torso.rotation * self.torso_up;
         self.measured = Measured {
             com,
-            com_velocity: vcom,
-            dcm: com.xy() + vcom.xy() / omega,
+            com_velocity: self.kd.com_velocity(),
+            dcm: self.measured.dcm,
             zmp,
             zmp_from_wrenches: ok,
             soles: [
@@ -375,6 +325,13 @@ impl Stack {
             base_height: m.state.base_pose.translation.z,
         };
         Ok(())
+    }
+
+    /// The measured DCM `ξ = x + ẋ/ω` \[m\] [Romualdi 2022, eq. 4.4.2] (b = 1/ω) with the plan's ω (the one rule for
+    /// ω), stored in [`Stack::measured`]; called by the simplified tick after sampling the plan.
+    fn measure_dcm(&mut self, omega: f64) {
+        let m = &mut self.measured;
+        m.dcm = m.com.xy() + m.com_velocity.xy() / omega;
     }
 
     /// Whether a planner event is due at `time_ns` (the first tick always is).
@@ -388,7 +345,7 @@ impl Stack {
 
     /// Runs the planner block with the due event's goal (a replan, or the first plan from the measured
     /// soles). Returns true when it ran.
-    pub fn planner_tick(&mut self, time_ns: u64) -> Result<bool, StackError> {
+    pub fn planner_tick(&mut self, time_ns: u64) -> Result<bool, RunError> {
         if !self.planner_due(time_ns) {
             return Ok(false);
         }
@@ -414,7 +371,7 @@ impl Stack {
     }
 
     /// Samples the plan at `time_ns` into [`Stack::plan_sample`].
-    pub fn sample_plan(&mut self, time_ns: u64) -> Result<(), StackError> {
+    pub fn sample_plan(&mut self, time_ns: u64) -> Result<(), RunError> {
         self.planner
             .sample(time_ns as f64 * 1e-9, &mut self.plan_sample)?;
         Ok(())
@@ -422,9 +379,10 @@ impl Stack {
 
     /// One simplified-layer tick at `time_ns` (plan sampled first). On a layer error the previous
     /// references are held and the error is returned as `Ok(Some(message))` for the event log.
-    pub fn simplified_tick(&mut self, time_ns: u64) -> Result<Option<String>, StackError> {
+    pub fn simplified_tick(&mut self, time_ns: u64) -> Result<Option<String>, RunError> {
         self.sample_plan(time_ns)?;
         let s = self.plan_sample;
+        self.measure_dcm(s.omega);
         let contacts = [s.left.in_contact, s.right.in_contact];
         let polygon = Self::polygon_of(
             &self.measured.soles,
@@ -446,16 +404,15 @@ impl Stack {
         i.planned_com_velocity = s.com_velocity.xy();
         i.measured_com_position = self.measured.com.xy();
         i.measured_com_velocity = self.measured.com_velocity.xy();
-        i.measured_dcm = self.measured.com.xy() + self.measured.com_velocity.xy() / s.omega;
+        i.measured_dcm = self.measured.dcm;
         i.measured_zmp = self.measured.zmp;
         i.support_polygon = polygon;
         i.horizon.clear();
         let n = self.simplified.horizon_samples();
         if n > 0 {
-            let plan = self
-                .planner
-                .plan()
-                .ok_or_else(|| StackError::Other("no plan before the simplified layer".into()))?;
+            let plan = self.planner.plan().ok_or(RunError::NoPlan {
+                layer: "simplified",
+            })?;
             for k in 0..n {
                 let t = time_ns as f64 * 1e-9 + k as f64 * self.simplified_period;
                 plan.sample(t, &mut self.horizon_sample);
@@ -488,11 +445,11 @@ impl Stack {
 
     /// One whole-body tick at `time_ns`: references from the plan (feet, CoM height, torso) and the
     /// simplified layer (CoM xy, desired ZMP), measured state in; [`Stack::command`] out.
-    pub fn wbc_tick(&mut self, time_ns: u64, m: &Measurement) -> Result<(), StackError> {
+    pub fn wbc_tick(&mut self, time_ns: u64, m: &Measurement) -> Result<(), RunError> {
         self.sample_plan(time_ns)?;
         let s = &self.plan_sample;
         let i = &mut self.wbc_input;
-        crate::robot::copy_state(&mut i.state, &m.state);
+        i.state.copy_from(&m.state);
         let so = &self.simplified_output;
         if self.simplified_valid {
             i.com_position = Vector3::new(so.com_position.x, so.com_position.y, s.com_position.z);
@@ -556,13 +513,7 @@ impl Stack {
                 }
             }
         }
-        let _ = self.mode;
         Ok(())
-    }
-
-    /// Current gait phase of the sampled plan.
-    pub fn phase(&self) -> PhaseKind {
-        self.plan_sample.phase
     }
 
     /// Whether the plan has ended (the robot should be standing at the goal).
@@ -571,16 +522,6 @@ impl Stack {
             let t = time_ns as f64 * 1e-9;
             t >= p.end_time && self.next_event >= self.events.len()
         })
-    }
-
-    /// The posture the whole-body layer holds, as joint positions (for logs).
-    pub fn joint_count(&self) -> usize {
-        self.model.dof()
-    }
-
-    /// A zero joint vector (helper).
-    pub fn zero_joints(&self) -> DVector<f64> {
-        DVector::zeros(self.model.dof())
     }
 }
 

@@ -88,6 +88,9 @@ pub struct ScenarioSection {
     pub control_mode: ControlMode,
     /// Simulator or ideal kinematic plant.
     pub plant: PlantKind,
+    /// Gravity acceleration \[m/s²\] along −z of the world: the one gravity of the run, set on the model
+    /// and handed to the planner, the controllers and the simulator.
+    pub gravity: f64,
 }
 
 impl Default for ScenarioSection {
@@ -98,6 +101,7 @@ impl Default for ScenarioSection {
             duration: 20.0,
             control_mode: ControlMode::Position,
             plant: PlantKind::Simulator,
+            gravity: stride_model::STANDARD_GRAVITY,
         }
     }
 }
@@ -355,21 +359,6 @@ pub struct ScenarioConfig {
     pub end: EndSection,
 }
 
-/// The dotted key a layer's validation error is about: the section plus the first backquoted or leading
-/// identifier of the message that names one of its keys (best effort; the section otherwise).
-fn layer_key(section: &str, message: &str) -> String {
-    let ident: String = message
-        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '.'))
-        .find(|w| w.contains('_') && w.chars().next().is_some_and(|c| c.is_ascii_lowercase()))
-        .unwrap_or("")
-        .to_string();
-    if ident.is_empty() {
-        section.to_string()
-    } else {
-        format!("{section}.{ident}")
-    }
-}
-
 /// Sections that choose one alternative (`[goal.pose]`, `[goal.stand]`, ...): not pre-filled from the
 /// defaults, so writing another alternative replaces the default one instead of merging with it.
 const EXCLUSIVE_SECTIONS: &[&str] = &["goal"];
@@ -512,6 +501,30 @@ impl Scenario {
         }
     }
 
+    /// A layer's validation error, located at the key its `InvalidParameter` names: `name` is a path
+    /// inside `section` (`step_length_max`, `dcm_pi.gain`) or the leaf of one; the section when the
+    /// error names no parameter or no written key matches.
+    fn layer_invalid(&self, section: &str, name: Option<&str>, message: String) -> ConfigError {
+        let key = name.map_or_else(|| section.to_string(), |n| self.layer_key(section, n));
+        self.invalid(&key, message)
+    }
+
+    /// The dotted key of parameter `name` of the layer configured in `section`.
+    fn layer_key(&self, section: &str, name: &str) -> String {
+        let full = format!("{section}.{name}");
+        if self.sources.key_location(&full).is_some() {
+            return full;
+        }
+        let leaf = format!(".{name}");
+        self.sources
+            .key_spans
+            .iter()
+            .map(|(k, _)| k)
+            .find(|k| k.starts_with(section) && k.ends_with(&leaf))
+            .cloned()
+            .unwrap_or(full)
+    }
+
     /// Range, rate and consistency checks that serde cannot express.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let c = &self.config;
@@ -538,6 +551,7 @@ impl Scenario {
             };
         finite_pos("scenario.duration", c.scenario.duration, "[s]")?;
         in_range("scenario.duration", c.scenario.duration, 0.0, 3600.0, "[s]")?;
+        finite_pos("scenario.gravity", c.scenario.gravity, "[m/s²]")?;
 
         // Rates.
         let r = &c.rates;
@@ -707,16 +721,29 @@ impl Scenario {
                 ),
             ));
         }
-        c.planner
-            .validate()
-            .map_err(|e| self.invalid(&layer_key("planner", &e.to_string()), e.to_string()))?;
-        c.simplified
-            .validate()
-            .map_err(|e| self.invalid(&layer_key("simplified", &e.to_string()), e.to_string()))?;
+        c.planner.validate().map_err(|e| {
+            let name = match &e {
+                stride_planner::PlannerError::InvalidParameter { name, .. } => Some(*name),
+                _ => None,
+            };
+            self.layer_invalid("planner", name, e.to_string())
+        })?;
+        c.simplified.validate().map_err(|e| {
+            let name = match &e {
+                stride_simplified::SimplifiedError::InvalidParameter { name, .. } => Some(*name),
+                _ => None,
+            };
+            self.layer_invalid("simplified", name, e.to_string())
+        })?;
         let mut sim = c.sim.clone();
         sim.rate_hz = r.sim_hz;
-        sim.validate()
-            .map_err(|e| self.invalid(&layer_key("sim", &e.to_string()), e.to_string()))?;
+        sim.validate().map_err(|e| {
+            let name = match &e {
+                stride_sim::SimError::InvalidConfig { parameter, .. } => Some(parameter.as_str()),
+                _ => None,
+            };
+            self.layer_invalid("sim", name, e.to_string())
+        })?;
         Ok(())
     }
 

@@ -39,6 +39,7 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "scenario.description", unit: "-", meaning: "One line saying what the scenario shows." },
     KeyDoc { key: "scenario.duration", unit: "s", meaning: "Simulated duration, 0 < value ≤ 3600; the run ends here at the latest (`--duration` overrides)." },
     KeyDoc { key: "scenario.control_mode", unit: "-", meaning: "`position` (QP-IK → joint position servos) or `torque` (TSID → joint torques)." },
+    KeyDoc { key: "scenario.gravity", unit: "m/s²", meaning: "Gravity acceleration along −z of the world, > 0: the run's one gravity, set on the model and handed to the planner, the controllers and the simulator." },
     KeyDoc { key: "scenario.plant", unit: "-", meaning: "`simulator` (stride-sim) or `ideal` (joint commands applied exactly, base from the fixed stance foot)." },
     KeyDoc { key: "robot.urdf", unit: "-", meaning: "URDF of the robot, relative to the file that sets this key; `${NAME}` is replaced by the environment variable `NAME` (unset: a configuration error), e.g. `\"${STRIDE_ICUB_MODELS_DIR}/iCubGazeboV2_7/model.urdf\"`." },
     KeyDoc { key: "robot.left_sole", unit: "-", meaning: "Frame at the centre of the left sole (a link or frame of the model)." },

@@ -1,0 +1,187 @@
+//! What the scheduler measures while the loop runs: tracking errors, solve times, joint saturation, and
+//! the end checks (fall, goal reached). The figures end up in the [`RunSummary`].
+
+use nalgebra::Vector3;
+
+use crate::config::{Goal, Scenario};
+use crate::records::TrackingMsg;
+use crate::robot::{Measurement, Robot};
+use crate::stack::{wrap_angle, Stack};
+use crate::summary::{goal_pose, mid_pose, Outcome, RunSummary, SolveTimes};
+
+/// The running figures of a run (preallocated: the loop allocates nothing).
+pub(crate) struct Tracker {
+    pub(crate) summary: RunSummary,
+    /// Whole-body solve times \[s\], one per tick.
+    pub(crate) wbc_times: Vec<f64>,
+    /// Simplified-layer solve times \[s\], one per tick.
+    pub(crate) simplified_times: Vec<f64>,
+    /// Per joint: simulated time spent at the effort limit \[s\].
+    saturated_time: Vec<f64>,
+    plant_period: f64,
+    initial_base_height: f64,
+    start_mid: [f64; 3],
+    standstill_since: Option<u64>,
+}
+
+impl Tracker {
+    /// Starts tracking at the robot's initial measurement (`stack` already estimated from it), with room
+    /// for `wbc_ticks` and `simplified_ticks` solve times.
+    pub(crate) fn new(
+        scenario: &Scenario,
+        robot: &dyn Robot,
+        stack: &Stack,
+        wbc_ticks: u64,
+        simplified_ticks: u64,
+    ) -> Self {
+        let m = robot.measurement();
+        Self {
+            summary: RunSummary::new(&scenario.config.scenario.name, robot.name()),
+            wbc_times: Vec::with_capacity(wbc_ticks as usize),
+            simplified_times: Vec::with_capacity(simplified_ticks as usize),
+            saturated_time: vec![0.0; m.saturated.len()],
+            plant_period: robot.period_ns() as f64 * 1e-9,
+            initial_base_height: m.state.base_pose.translation.z,
+            start_mid: mid_pose(&stack.measured.soles),
+            standstill_since: None,
+        }
+    }
+
+    /// Planar distance of the stance from its start \[m\].
+    pub(crate) fn distance(&self, stack: &Stack) -> f64 {
+        let mid = mid_pose(&stack.measured.soles);
+        ((mid[0] - self.start_mid[0]).powi(2) + (mid[1] - self.start_mid[1]).powi(2)).sqrt()
+    }
+
+    /// After a plant period: joint saturation.
+    pub(crate) fn plant_period(&mut self, m: &Measurement) {
+        for (time, saturated) in self.saturated_time.iter_mut().zip(&m.saturated) {
+            if *saturated {
+                *time += self.plant_period;
+            }
+        }
+    }
+
+    /// Tracking errors at a simplified tick (after the layer ran), accumulated and returned for the log.
+    pub(crate) fn track(&mut self, t: u64, stack: &Stack) -> TrackingMsg {
+        let s = &stack.plan_sample;
+        let m = &stack.measured;
+        let dcm_err = (m.dcm - s.dcm_position.xy()).norm();
+        let so = &stack.simplified_output;
+        let com_ref = Vector3::new(so.com_position.x, so.com_position.y, s.com_position.z);
+        let com_err = (m.com - com_ref).norm();
+        let zmp_err = m.zmp_from_wrenches.then(|| (m.zmp - so.desired_zmp).norm());
+        let foot_err = |k: usize, planned: &nalgebra::Isometry3<f64>| {
+            (m.soles[k].translation.vector - planned.translation.vector).norm()
+        };
+        let feet_err = foot_err(0, &s.left.pose).max(foot_err(1, &s.right.pose));
+        let summary = &mut self.summary;
+        summary.dcm_error.add(dcm_err);
+        summary.com_error.add(com_err);
+        if let Some(z) = zmp_err {
+            summary.zmp_error.add(z);
+        }
+        summary.feet_error.add(feet_err);
+        TrackingMsg {
+            time: t as f64 * 1e-9,
+            dcm_error: dcm_err,
+            com_error: com_err,
+            zmp_error: zmp_err,
+            feet_error: feet_err,
+            measured_com: m.com.into(),
+            measured_dcm: m.dcm.into(),
+            measured_zmp: m.zmp.into(),
+            base_height: m.base_height,
+            tilt_deg: m.tilt.to_degrees(),
+        }
+    }
+
+    /// The summary at the end of the run, with the stance pose `end` ([`mid_pose`]) and the loop's
+    /// wall-clock time \[s\].
+    pub(crate) fn finish(
+        mut self,
+        stack: &Stack,
+        goal: &Goal,
+        outcome: Outcome,
+        end: [f64; 3],
+        wall: f64,
+    ) -> RunSummary {
+        let model = stack.model();
+        let mut saturation: Vec<(String, f64)> = self
+            .saturated_time
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| **t > 0.0)
+            .map(|(i, t)| (model.joints()[i].name.clone(), *t))
+            .collect();
+        saturation.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let s = &mut self.summary;
+        s.outcome = outcome;
+        s.joint_saturation = saturation;
+        s.wbc_solve_time = SolveTimes::from(&mut self.wbc_times);
+        s.simplified_solve_time = SolveTimes::from(&mut self.simplified_times);
+        let counters = &stack.counters;
+        s.wbc_fallbacks = counters.wbc_fallbacks;
+        s.wbc_holds = counters.wbc_holds;
+        s.simplified_holds = counters.simplified_holds;
+        s.replans = counters.replans;
+        s.finish(self.start_mid, end, goal, wall);
+        self.summary
+    }
+}
+
+/// Fall and goal checks after the layers ran (on a fresh estimate); `fallen` is the plant's own fall
+/// detector. `None` while the run goes on.
+pub(crate) fn end_check(
+    tracker: &mut Tracker,
+    scenario: &Scenario,
+    stack: &Stack,
+    t: u64,
+    fallen: bool,
+) -> Option<Outcome> {
+    let e = &scenario.config.end;
+    let m = &stack.measured;
+    let frac = m.base_height / tracker.initial_base_height;
+    let summary = &mut tracker.summary;
+    summary.min_base_height_fraction = summary.min_base_height_fraction.min(frac);
+    summary.max_tilt_deg = summary.max_tilt_deg.max(m.tilt.to_degrees());
+    if frac < e.fall_height_fraction {
+        let reason = format!(
+            "base height {:.3} m is below {:.0} % of the initial {:.3} m",
+            m.base_height,
+            e.fall_height_fraction * 100.0,
+            tracker.initial_base_height
+        );
+        return Some(Outcome::Fell { reason });
+    }
+    if m.tilt.to_degrees() > e.fall_tilt_deg {
+        let reason = format!(
+            "torso tilt {:.1}° exceeds {:.1}°",
+            m.tilt.to_degrees(),
+            e.fall_tilt_deg
+        );
+        return Some(Outcome::Fell { reason });
+    }
+    if fallen {
+        let reason = "the simulator's fall detector fired".into();
+        return Some(Outcome::Fell { reason });
+    }
+    if !(e.stop_at_goal && stack.plan_finished(t)) {
+        return None;
+    }
+    let goal_ok = goal_pose(&scenario.config.goal).is_some_and(|g| {
+        let p = mid_pose(&m.soles);
+        let heading_error = wrap_angle(p[2] - g[2]).abs().to_degrees();
+        ((p[0] - g[0]).powi(2) + (p[1] - g[1]).powi(2)).sqrt() <= e.goal_position_tolerance
+            && heading_error <= e.goal_heading_tolerance_deg
+    });
+    if goal_ok && m.com_velocity.xy().norm() < e.standstill_speed {
+        let since = *tracker.standstill_since.get_or_insert(t);
+        if (t - since) as f64 * 1e-9 >= e.standstill_time {
+            return Some(Outcome::GoalReached);
+        }
+    } else {
+        tracker.standstill_since = None;
+    }
+    None
+}
