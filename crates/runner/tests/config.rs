@@ -175,6 +175,27 @@ fn one_key_of_a_layer_section_can_be_overridden() {
     assert!(matches!(sc.config.goal, Goal::Stand {}));
 }
 
+/// The bundled robot's whole-body tasks are written in its robot file like iCub's; the Rust defaults a user
+/// embedding stride-wbc gets are the same lists.
+#[test]
+fn bundled_robot_file_states_the_library_defaults() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let sc = Scenario::load(&root.join("configs/robots/stride_humanoid.toml")).unwrap();
+    assert!(
+        sc.sources
+            .key_location("wbc.ik.tasks")
+            .is_some_and(|l| l.path.ends_with("stride_humanoid.toml")),
+        "the task list must come from the robot file, not the built-in defaults"
+    );
+    let ik = stride_wbc::IkConfig::default_for_bundled_model();
+    assert_eq!(sc.config.wbc.ik.tasks, ik.tasks);
+    assert_eq!(sc.config.wbc.ik.feedback, ik.feedback);
+    let tsid = stride_wbc::TsidConfig::default_for_bundled_model();
+    assert_eq!(sc.config.wbc.tsid.tasks, tsid.tasks);
+    let posture = stride_wbc::bundled_posture();
+    assert_eq!(sc.config.robot.initial_joint_positions, posture);
+}
+
 #[test]
 fn include_cycles_are_rejected() {
     let s = Scratch::new("cycle");
