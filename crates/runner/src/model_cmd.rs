@@ -1,5 +1,5 @@
-//! `stride model info` and `stride model eval`: the contracts of docs/cli.md (design.md, "Contracts that
-//! other tools rely on").
+//! `stride model info` and `stride model eval`: the JSON contracts documented in docs/cli.md, which other
+//! tools rely on.
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::ExitCode;

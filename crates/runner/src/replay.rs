@@ -14,15 +14,16 @@ use stride_block::Block;
 use stride_model::Model;
 use stride_planner::{PlanSample, Planner};
 use stride_simplified::{SimplifiedController, SimplifiedInput};
-use stride_wbc::{QpIk, Tsid, WbcInput};
+use stride_wbc::WbcInput;
 
 use crate::cli::LayerName;
-use crate::config::{ControlMode, Scenario};
+use crate::config::Scenario;
 use crate::log::{read_log, LogContents, LogOptions, LogWriter};
 use crate::records::{
     simplified_output_record, IkOutputRecord, PlanSampleRecord, PlannerInputRecord,
     TsidOutputRecord, WbcInputRecord,
 };
+use crate::stack::Wbc;
 
 /// Why a replay failed.
 #[derive(Debug, thiserror::Error)]
@@ -33,6 +34,18 @@ pub enum ReplayError {
     /// The configuration.
     #[error(transparent)]
     Config(#[from] crate::config::ConfigError),
+    /// A layer could not be built.
+    #[error(transparent)]
+    Layer(#[from] crate::error::RunError),
+    /// The planner failed to sample its plan.
+    #[error("planner: {0}")]
+    Planner(#[from] stride_planner::PlannerError),
+    /// The simplified layer could not be built.
+    #[error("simplified layer: {0}")]
+    Simplified(#[from] stride_simplified::SimplifiedError),
+    /// The URDF stored in the log does not load.
+    #[error("the URDF stored in the log does not load: {0}")]
+    Model(#[from] stride_model::ModelError),
     /// The log lacks something or holds something unexpected.
     #[error("{0}")]
     Content(String),
@@ -139,9 +152,43 @@ pub fn logged_model(log: &LogContents, log_path: &Path) -> Result<Arc<Model>, Re
             log_path.display()
         ))
     })?;
-    Model::from_urdf_str(&String::from_utf8_lossy(urdf))
-        .map(Arc::new)
-        .map_err(|e| ReplayError::Content(format!("the URDF stored in the log does not load: {e}")))
+    Ok(Arc::new(Model::from_urdf_str(&String::from_utf8_lossy(
+        urdf,
+    ))?))
+}
+
+/// Compares replayed outputs with logged ones and writes them to the output log, if any.
+struct Comparison {
+    report: ReplayReport,
+    writer: Option<LogWriter>,
+    path: String,
+}
+
+impl Comparison {
+    fn add(
+        &mut self,
+        topic: &str,
+        t: u64,
+        replayed: &dyn erased::Ser,
+        logged: &[u8],
+    ) -> Result<(), ReplayError> {
+        let replayed = replayed.value();
+        let logged: serde_json::Value = parse(logged, topic)?;
+        self.path.clear();
+        diff(
+            &replayed,
+            &logged,
+            &mut self.path,
+            &mut self.report.difference,
+            t as f64 * 1e-9,
+        );
+        self.report.ticks += 1;
+        if let Some(w) = self.writer.as_mut() {
+            let id = w.topic_id(topic)?;
+            w.write(id, t, &replayed)?;
+        }
+        Ok(())
+    }
 }
 
 /// Replays `layer` of the log at `log_path`; `config` replaces the logged scenario for the layer's
@@ -153,175 +200,141 @@ pub fn replay(
     output: Option<&PathBuf>,
 ) -> Result<ReplayReport, ReplayError> {
     let log = read_log(log_path)?;
-    let logged = logged_scenario(&log, log_path)?;
     let scenario = match config {
         Some(p) => Scenario::load(p)?,
-        None => logged.clone(),
+        None => logged_scenario(&log, log_path)?,
     };
     let model = logged_model(&log, log_path)?;
-    let c = &scenario.config;
-    let mut writer = match output {
-        Some(p) => {
-            let mut w = LogWriter::create(p, &LogOptions::default())?;
-            w.attach(
-                "scenario.toml",
-                "application/toml",
-                scenario.merged_toml().into_bytes(),
-            )?;
-            if let Some(u) = log.attachments.get("model.urdf") {
-                w.attach("model.urdf", "application/xml", u.clone())?;
-            }
-            Some(w)
-        }
+    let writer = match output {
+        Some(p) => Some(output_log(p, &scenario, &log)?),
         None => None,
     };
-    let mut report = ReplayReport::default();
-    let mut path = String::new();
-    let mut compare = |report: &mut ReplayReport,
-                       writer: &mut Option<LogWriter>,
-                       topic: &str,
-                       t: u64,
-                       replayed: serde_json::Value,
-                       logged: &[u8]|
-     -> Result<(), ReplayError> {
-        let logged: serde_json::Value = parse(logged, topic)?;
-        path.clear();
-        diff(
-            &replayed,
-            &logged,
-            &mut path,
-            &mut report.difference,
-            t as f64 * 1e-9,
-        );
-        report.ticks += 1;
-        if let Some(w) = writer.as_mut() {
-            let id = w.topic_id(topic)?;
-            w.write(id, t, &replayed)?;
-        }
-        Ok(())
+    let mut cmp = Comparison {
+        report: ReplayReport::default(),
+        writer,
+        path: String::new(),
     };
-    let to_value = |v: &dyn erased::Ser| v.value();
     match layer {
-        LayerName::Planner => {
-            let mut planner = Planner::new(c.planner.clone())
-                .map_err(|e| ReplayError::Content(format!("planner: {e}")))?;
-            let mut sample = PlanSample::default();
-            for m in &log.messages {
-                match m.topic.as_str() {
-                    "/planner/input" => {
-                        let rec: PlannerInputRecord = parse(&m.data, &m.topic)?;
-                        if planner.step(&rec.to_input()).is_err() {
-                            report.layer_errors += 1;
-                        }
-                    }
-                    "/planner/references" => {
-                        planner
-                            .sample(m.time_ns as f64 * 1e-9, &mut sample)
-                            .map_err(|e| ReplayError::Content(format!("planner: {e}")))?;
-                        let v = to_value(&PlanSampleRecord::from_sample(&sample));
-                        compare(
-                            &mut report,
-                            &mut writer,
-                            "/planner/references",
-                            m.time_ns,
-                            v,
-                            &m.data,
-                        )?;
-                    }
-                    _ => {}
-                }
-            }
-        }
-        LayerName::Simplified => {
-            let period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
-            let mut ctl = SimplifiedController::new(&c.simplified, period)
-                .map_err(|e| ReplayError::Content(format!("simplified layer: {e}")))?;
-            let outputs: Vec<_> = log.topic("/simplified/output").collect();
-            for (i, m) in log.topic("/simplified/input").enumerate() {
-                // With another configuration whose MPC horizon is longer, the layer pads the logged horizon.
-                let input: SimplifiedInput = parse(&m.data, &m.topic)?;
-                if ctl.step(&input).is_err() {
-                    report.layer_errors += 1;
-                }
-                let out = simplified_output_record(ctl.output());
-                let logged = outputs.get(i).ok_or_else(|| {
-                    ReplayError::Content("fewer /simplified/output than inputs".into())
-                })?;
-                compare(
-                    &mut report,
-                    &mut writer,
-                    "/simplified/output",
-                    m.time_ns,
-                    to_value(&out),
-                    &logged.data,
-                )?;
-            }
-        }
-        LayerName::Wbc => {
-            let period = 1.0 / f64::from(c.rates.wbc_hz);
-            let outputs: Vec<_> = log.topic("/wbc/output").collect();
-            let mut input = WbcInput::new(&model);
-            let mode = c.scenario.control_mode;
-            let mut ik = None;
-            let mut tsid = None;
-            match mode {
-                ControlMode::Position => {
-                    let mut cfg = c.wbc.ik.clone();
-                    cfg.period = period;
-                    ik = Some(
-                        QpIk::new(Arc::clone(&model), cfg)
-                            .map_err(|e| ReplayError::Content(format!("QP-IK: {e}")))?,
-                    );
-                }
-                ControlMode::Torque => {
-                    let mut cfg = c.wbc.tsid.clone();
-                    cfg.period = period;
-                    tsid = Some(
-                        Tsid::new(Arc::clone(&model), cfg)
-                            .map_err(|e| ReplayError::Content(format!("TSID: {e}")))?,
-                    );
-                }
-            }
-            for (i, m) in log.topic("/wbc/input").enumerate() {
-                let rec: WbcInputRecord = parse(&m.data, &m.topic)?;
-                rec.to_input(&mut input).map_err(ReplayError::Content)?;
-                let v = if let Some(ik) = ik.as_mut() {
-                    if ik.step(&input).is_err() {
-                        report.layer_errors += 1;
-                    }
-                    to_value(&IkOutputRecord::new(ik.output()))
-                } else if let Some(ts) = tsid.as_mut() {
-                    if ts.step(&input).is_err() {
-                        report.layer_errors += 1;
-                    }
-                    to_value(&TsidOutputRecord::new(ts.output()))
-                } else {
-                    return Err(ReplayError::Content("no whole-body controller".into()));
-                };
-                let logged = outputs
-                    .get(i)
-                    .ok_or_else(|| ReplayError::Content("fewer /wbc/output than inputs".into()))?;
-                compare(
-                    &mut report,
-                    &mut writer,
-                    "/wbc/output",
-                    m.time_ns,
-                    v,
-                    &logged.data,
-                )?;
-            }
-        }
+        LayerName::Planner => replay_planner(&scenario, &log, &mut cmp)?,
+        LayerName::Simplified => replay_simplified(&scenario, &log, &mut cmp)?,
+        LayerName::Wbc => replay_wbc(&scenario, &model, &log, &mut cmp)?,
     }
-    if let Some(mut w) = writer {
+    if let Some(mut w) = cmp.writer {
         w.finish()?;
     }
-    if report.ticks == 0 {
+    if cmp.report.ticks == 0 {
         return Err(ReplayError::Content(format!(
             "{} holds no logged outputs for that layer",
             log_path.display()
         )));
     }
-    Ok(report)
+    Ok(cmp.report)
+}
+
+/// The log replayed outputs go to: the scenario used and the logged URDF attached.
+fn output_log(
+    path: &Path,
+    scenario: &Scenario,
+    log: &LogContents,
+) -> Result<LogWriter, ReplayError> {
+    let mut w = LogWriter::create(path, &LogOptions::default())?;
+    w.attach(
+        "scenario.toml",
+        "application/toml",
+        scenario.merged_toml().into_bytes(),
+    )?;
+    if let Some(u) = log.attachments.get("model.urdf") {
+        w.attach("model.urdf", "application/xml", u.clone())?;
+    }
+    Ok(w)
+}
+
+/// The planner: every logged `/planner/input` replans, every `/planner/references` samples.
+fn replay_planner(
+    scenario: &Scenario,
+    log: &LogContents,
+    cmp: &mut Comparison,
+) -> Result<(), ReplayError> {
+    let mut planner = Planner::new(scenario.config.planner.clone())?;
+    let mut sample = PlanSample::default();
+    for m in &log.messages {
+        match m.topic.as_str() {
+            "/planner/input" => {
+                let rec: PlannerInputRecord = parse(&m.data, &m.topic)?;
+                if planner.step(&rec.to_input()).is_err() {
+                    cmp.report.layer_errors += 1;
+                }
+            }
+            "/planner/references" => {
+                planner.sample(m.time_ns as f64 * 1e-9, &mut sample)?;
+                let replayed = PlanSampleRecord::from_sample(&sample);
+                cmp.add("/planner/references", m.time_ns, &replayed, &m.data)?;
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// The simplified layer on the logged `/simplified/input`s.
+fn replay_simplified(
+    scenario: &Scenario,
+    log: &LogContents,
+    cmp: &mut Comparison,
+) -> Result<(), ReplayError> {
+    let c = &scenario.config;
+    let period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
+    let mut ctl = SimplifiedController::new(&c.simplified, period)?;
+    let outputs: Vec<_> = log.topic("/simplified/output").collect();
+    for (i, m) in log.topic("/simplified/input").enumerate() {
+        // With another configuration whose MPC horizon is longer, the layer pads the logged horizon.
+        let input: SimplifiedInput = parse(&m.data, &m.topic)?;
+        if ctl.step(&input).is_err() {
+            cmp.report.layer_errors += 1;
+        }
+        let logged = outputs
+            .get(i)
+            .ok_or_else(|| ReplayError::Content("fewer /simplified/output than inputs".into()))?;
+        let replayed = simplified_output_record(ctl.output());
+        cmp.add("/simplified/output", m.time_ns, &replayed, &logged.data)?;
+    }
+    Ok(())
+}
+
+/// The whole-body layer of the scenario's control mode on the logged `/wbc/input`s.
+fn replay_wbc(
+    scenario: &Scenario,
+    model: &Arc<Model>,
+    log: &LogContents,
+    cmp: &mut Comparison,
+) -> Result<(), ReplayError> {
+    let mut wbc = Wbc::new(scenario, model)?;
+    let outputs: Vec<_> = log.topic("/wbc/output").collect();
+    let mut input = WbcInput::new(model);
+    for (i, m) in log.topic("/wbc/input").enumerate() {
+        let rec: WbcInputRecord = parse(&m.data, &m.topic)?;
+        rec.to_input(&mut input).map_err(ReplayError::Content)?;
+        let logged = outputs
+            .get(i)
+            .ok_or_else(|| ReplayError::Content("fewer /wbc/output than inputs".into()))?;
+        match &mut wbc {
+            Wbc::Ik(ik) => {
+                if ik.step(&input).is_err() {
+                    cmp.report.layer_errors += 1;
+                }
+                let replayed = IkOutputRecord::new(ik.output());
+                cmp.add("/wbc/output", m.time_ns, &replayed, &logged.data)?;
+            }
+            Wbc::Tsid(ts) => {
+                if ts.step(&input).is_err() {
+                    cmp.report.layer_errors += 1;
+                }
+                let replayed = TsidOutputRecord::new(ts.output());
+                cmp.add("/wbc/output", m.time_ns, &replayed, &logged.data)?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Type-erased serialization to a JSON value.

@@ -138,7 +138,7 @@ pub trait Robot {
     fn advance(&mut self) -> Result<(), RobotError>;
 }
 
-/// The ideal kinematic plant (design.md, "Bring-up"): commanded joint positions are applied exactly and the
+/// The ideal kinematic plant (the first bring-up step of docs/architecture.md): commanded joint positions are applied exactly and the
 /// base pose follows from keeping the anchored stance foot where it is (legged odometry). Joint and base
 /// velocities are finite differences over the plant period; foot wrenches are the static weight split so
 /// that the measured ZMP is the CoM's ground projection (clamped between the feet in double support).

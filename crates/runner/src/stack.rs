@@ -38,6 +38,26 @@ pub enum Wbc {
     Tsid(Tsid),
 }
 
+impl Wbc {
+    /// The whole-body controller of the scenario's control mode, at the period of `rates.wbc_hz`.
+    pub fn new(scenario: &Scenario, model: &Arc<Model>) -> Result<Self, RunError> {
+        let c = &scenario.config;
+        let period = 1.0 / f64::from(c.rates.wbc_hz);
+        Ok(match c.scenario.control_mode {
+            ControlMode::Position => {
+                let mut cfg = c.wbc.ik.clone();
+                cfg.period = period;
+                Wbc::Ik(QpIk::new(Arc::clone(model), cfg)?)
+            }
+            ControlMode::Torque => {
+                let mut cfg = c.wbc.tsid.clone();
+                cfg.period = period;
+                Wbc::Tsid(Tsid::new(Arc::clone(model), cfg)?)
+            }
+        })
+    }
+}
+
 /// A planner event scheduled in simulated time.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GoalEvent {
@@ -195,19 +215,7 @@ impl Stack {
         let simplified_period =
             Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
         let simplified = SimplifiedController::new(&c.simplified, simplified_period)?;
-        let wbc_period = 1.0 / f64::from(c.rates.wbc_hz);
-        let wbc = match c.scenario.control_mode {
-            ControlMode::Position => {
-                let mut cfg = c.wbc.ik.clone();
-                cfg.period = wbc_period;
-                Wbc::Ik(QpIk::new(Arc::clone(&model), cfg)?)
-            }
-            ControlMode::Torque => {
-                let mut cfg = c.wbc.tsid.clone();
-                cfg.period = wbc_period;
-                Wbc::Tsid(Tsid::new(Arc::clone(&model), cfg)?)
-            }
-        };
+        let wbc = Wbc::new(scenario, &model)?;
         let polygon = Self::polygon_of(
             &[kd.frame_pose(soles[0]), kd.frame_pose(soles[1])],
             [true, true],
