@@ -1,5 +1,6 @@
 //! [`Robot`] implementation on stride-sim.
 use std::sync::Arc;
+use std::time::Duration;
 
 use nalgebra::DVector;
 use stride_block::Block;
@@ -24,18 +25,19 @@ pub struct SimPlant {
 }
 
 impl SimPlant {
-    /// Builds the simulator with `config` (its `rate_hz` already set by the runner), places the robot
-    /// standing on the ground at `joint_positions`, and sets every joint's actuation to `mode`.
+    /// Builds the simulator with `config`, stepping by `period`, places the robot standing on the ground at
+    /// `joint_positions`, and sets every joint's actuation to `mode`.
     pub fn new(
         model: Arc<Model>,
         mut config: SimConfig,
+        period: Duration,
         mode: ControlMode,
         joint_positions: &DVector<f64>,
         soles: [FrameId; 2],
     ) -> Result<Self, RobotError> {
         let err = |e: stride_sim::SimError| RobotError(format!("simulator: {e}"));
-        let rate = config.rate_hz;
-        if rate == 0 {
+        let period_ns = u64::try_from(period.as_nanos()).unwrap_or(u64::MAX);
+        if period_ns == 0 {
             return Err(RobotError("simulator rate is 0 Hz".into()));
         }
         if mode == ControlMode::Torque {
@@ -44,7 +46,7 @@ impl SimPlant {
                 j.mode = Some(ActuationMode::Torque);
             }
         }
-        let mut sim = SimRobot::new(Arc::clone(&model), config).map_err(err)?;
+        let mut sim = SimRobot::new(Arc::clone(&model), config, period).map_err(err)?;
         let mut state = sim.set_standing_on_ground(joint_positions).map_err(err)?;
         // Start heading along +x, the heading being the soles' mean yaw (sole frames have x forward by
         // convention, whereas base links differ: iCub's `root_link` points x backward). A rotation about the
@@ -80,7 +82,7 @@ impl SimPlant {
         }
         let mut plant = Self {
             kd: KinDyn::new(Arc::clone(&model)),
-            period_ns: 1_000_000_000 / u64::from(rate),
+            period_ns,
             soles,
             surfaces,
             input: SimInput::hold(joint_positions),

@@ -4,6 +4,7 @@
 mod common;
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use nalgebra::{DVector, Vector3};
 use stride_block::Block;
@@ -16,7 +17,7 @@ use stride_sim::{
 fn standing_sim(config: SimConfig) -> (SimRobot, SimInput) {
     let model = common::humanoid();
     let q = common::bent_knees(&model, 0.2);
-    let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
+    let mut sim = SimRobot::new(Arc::clone(&model), config, common::PERIOD).unwrap();
     sim.set_standing_on_ground(&q).unwrap();
     (sim, SimInput::hold(&q))
 }
@@ -137,14 +138,12 @@ fn divergence_is_reported_and_the_last_good_state_kept() {
 #[test]
 fn bad_configurations_are_rejected_with_the_parameter() {
     let model = common::humanoid();
-    let mut c = SimConfig::default();
-    c.rate_hz = 3000;
     assert!(
-        matches!(SimRobot::new(Arc::clone(&model), c), Err(SimError::InvalidConfig { parameter, .. }) if parameter == "rate_hz")
+        matches!(SimRobot::new(Arc::clone(&model), SimConfig::default(), Duration::ZERO), Err(SimError::InvalidConfig { parameter, .. }) if parameter == "period")
     );
     let mut c = SimConfig::default();
     c.contact.surfaces[0].frame = "no_such_frame".into();
-    let err = SimRobot::new(Arc::clone(&model), c).unwrap_err();
+    let err = SimRobot::new(Arc::clone(&model), c, common::PERIOD).unwrap_err();
     assert!(err.to_string().contains("no_such_frame"), "{err}");
     let mut c = SimConfig::default();
     c.actuation.joints.push(JointActuatorOverride {
@@ -157,13 +156,13 @@ fn bad_configurations_are_rejected_with_the_parameter() {
         armature: None,
     });
     assert!(matches!(
-        SimRobot::new(Arc::clone(&model), c),
+        SimRobot::new(Arc::clone(&model), c, common::PERIOD),
         Err(SimError::UnknownJoint { .. })
     ));
     let mut c = SimConfig::default();
     c.contact.normal_stiffness = f64::NAN;
     assert!(matches!(
-        SimRobot::new(Arc::clone(&model), c),
+        SimRobot::new(Arc::clone(&model), c, common::PERIOD),
         Err(SimError::InvalidConfig { .. })
     ));
     let mut c = SimConfig::default();
@@ -174,11 +173,11 @@ fn bad_configurations_are_rejected_with_the_parameter() {
         wrench: [0.0; 6],
     });
     assert!(matches!(
-        SimRobot::new(Arc::clone(&model), c),
+        SimRobot::new(Arc::clone(&model), c, common::PERIOD),
         Err(SimError::UnknownFrame { .. })
     ));
     // A non-finite state.
-    let mut sim = SimRobot::new(Arc::clone(&model), SimConfig::default()).unwrap();
+    let mut sim = SimRobot::new(Arc::clone(&model), SimConfig::default(), common::PERIOD).unwrap();
     let mut s = RobotState::zero(&model);
     s.joint_velocities[2] = f64::NAN;
     assert!(matches!(
@@ -191,7 +190,7 @@ fn bad_configurations_are_rejected_with_the_parameter() {
 fn configs_parse_from_toml_and_reject_unknown_fields() {
     let c: SimConfig = toml::from_str(
         r#"
-rate_hz = 5000
+momentum_projection = true
 [ground]
 inclination = [0.0, 0.1]
 [contact]
@@ -212,12 +211,12 @@ wrench = [50.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 "#,
     )
     .unwrap();
-    assert_eq!(c.rate_hz, 5000);
+    assert!(c.momentum_projection);
     assert_eq!(c.contact.surfaces.len(), 1);
     assert_eq!(c.contact.surfaces[0].length, 0.20);
     assert_eq!(c.actuation.joints[0].mode, Some(ActuationMode::Torque));
-    SimRobot::new(common::humanoid(), c).unwrap();
-    assert!(toml::from_str::<SimConfig>("rate_hz = 5000\ntypo = 1").is_err());
+    SimRobot::new(common::humanoid(), c, common::PERIOD).unwrap();
+    assert!(toml::from_str::<SimConfig>("momentum_projection = true\ntypo = 1").is_err());
     assert!(toml::from_str::<SimConfig>("[contact]\nstiffness = 1.0").is_err());
     let default = SimConfig::default();
     let text = toml::to_string(&default).unwrap();
@@ -353,12 +352,11 @@ fn torque_mode_joint_is_limp() {
 fn velocity_servo_tracks_the_commanded_velocity() {
     let mut config = SimConfig::default();
     config.contact.surfaces.clear();
-    config.gravity = [0.0; 3];
     config.fall.min_base_height = -1e9;
     config.actuation.default.mode = ActuationMode::Velocity;
     config.actuation.default.kd = 50.0;
-    let model = common::humanoid();
-    let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
+    let model = common::weightless(&common::humanoid());
+    let mut sim = SimRobot::new(Arc::clone(&model), config, common::PERIOD).unwrap();
     let elbow = model.joint_index("l_elbow").unwrap();
     let mut input = SimInput::zeros(model.dof());
     input.joint_velocities[elbow] = 0.5;
