@@ -373,3 +373,84 @@ fn velocity_servo_tracks_the_commanded_velocity() {
         }
     }
 }
+
+#[test]
+fn a_torque_mode_joint_commanded_beyond_its_limit_is_saturated_every_step_with_both_integrators() {
+    for integrator in [IntegratorKind::Implicit, IntegratorKind::Explicit] {
+        let mut config = SimConfig::default();
+        let mut period = common::PERIOD;
+        config.integrator = integrator;
+        if integrator == IntegratorKind::Explicit {
+            period = common::period(10_000);
+            config.actuation.default.kp = 300.0;
+            config.actuation.default.kd = 3.0;
+        }
+        config.actuation.joints.push(JointActuatorOverride {
+            name: "l_elbow".into(),
+            mode: Some(ActuationMode::Torque),
+            kp: None,
+            kd: None,
+            effort_limit: None,
+            damping: None,
+            armature: None,
+        });
+        let model = common::humanoid();
+        let q = common::bent_knees(&model, 0.2);
+        let mut sim = SimRobot::new(Arc::clone(&model), config, period).unwrap();
+        sim.set_standing_on_ground(&q).unwrap();
+        let mut input = SimInput::hold(&q);
+        let elbow = model.joint_index("l_elbow").unwrap();
+        let limit = model.joints()[elbow].effort_limit;
+        assert!(limit.is_finite() && limit > 0.0);
+        for (torque, steps) in [(-3.0 * limit, 50), (0.5 * limit, 5), (3.0 * limit, 50)] {
+            input.joint_torques[elbow] = torque;
+            for k in 0..steps {
+                let out = sim.step(&input).unwrap();
+                let beyond = torque.abs() > limit;
+                assert_eq!(
+                    out.saturated[elbow], beyond,
+                    "{integrator:?}, {torque} N·m, step {k}"
+                );
+                let applied = if beyond {
+                    limit.copysign(torque)
+                } else {
+                    torque
+                };
+                assert_eq!(out.joint_torques[elbow], applied, "{integrator:?} step {k}");
+                // Every joint is flagged exactly when its torque sits at its limit.
+                for (j, s) in out.saturated.iter().enumerate() {
+                    let at_limit = out.joint_torques[j].abs() == model.joints()[j].effort_limit;
+                    assert_eq!(*s, at_limit, "{integrator:?} joint {j} step {k}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_position_servo_far_from_its_target_saturates_until_it_gets_close() {
+    let (mut sim, mut input) = standing_sim(SimConfig::default());
+    let model = Arc::clone(sim.model());
+    let elbow = model.joint_index("l_elbow").unwrap();
+    input.joint_positions[elbow] = 1.5; // kp · 1.5 rad = 1500 N·m ≫ 20 N·m
+    let mut saturated_steps = 0;
+    let mut last = true;
+    for k in 0..4000 {
+        let out = sim.step(&input).unwrap();
+        if k == 0 {
+            assert!(out.saturated[elbow]);
+        }
+        for (j, s) in out.saturated.iter().enumerate() {
+            // Flagged exactly when the applied torque sits at the limit, at every step.
+            let at_limit = out.joint_torques[j].abs() == model.joints()[j].effort_limit;
+            assert_eq!(*s, at_limit, "joint {} step {k}", model.joints()[j].name);
+        }
+        saturated_steps += usize::from(out.saturated[elbow]);
+        last = out.saturated[elbow];
+    }
+    assert!(saturated_steps > 1, "{saturated_steps}");
+    // Near its target the servo needs less than its limit again.
+    assert!(!last);
+    let q = sim.state().joint_positions[elbow];
+    assert!((q - 1.5).abs() < 0.05, "elbow at {q} rad");
+}
