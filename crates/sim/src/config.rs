@@ -110,11 +110,11 @@ impl Default for GroundConfig {
 /// The compliant contact law and the surfaces of the robot that touch the ground.
 ///
 /// Each surface is a rectangle sampled by a grid of points. The parameters are **area densities** of the
-/// visco-elastic contact model `ρ = k(x̄ − x) − b ẋ` [Romualdi 2022, Lemma 1]: a grid point carries the stiffness
-/// `k · l · w · weight` and the damping `b · l · w · weight`, where the weights are the trapezoidal-rule weights
-/// of the grid (they sum to one). So the total normal stiffness of a flat surface is `k l w` whatever the grid,
-/// and a fine grid converges to the wrench of [Romualdi 2022, Lemma 1]. Normal forces never pull; tangential forces follow Coulomb's
-/// law with a stick-slip spring anchored where the point touched down.
+/// visco-elastic contact model `ρ = k(x̄ − x) − b ẋ` [Romualdi 2022, Lemma 1]: a grid point carries the
+/// stiffness `k · l · w · weight` and the damping `b · l · w · weight`, where the weights are the
+/// trapezoidal-rule weights of the grid (they sum to one). So the total normal stiffness of a flat surface is
+/// `k l w` whatever the grid, and a fine grid converges to the lemma's wrench. Normal forces never pull;
+/// tangential forces follow Coulomb's law with a stick-slip spring anchored where the point touched down.
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
@@ -503,6 +503,14 @@ fn finite_nonneg(x: f64) -> bool {
 impl SimConfig {
     /// Checks the values that do not need the model (ranges, finiteness).
     pub fn validate(&self) -> Result<(), SimError> {
+        self.validate_ground_and_contact()?;
+        self.validate_actuation()?;
+        self.validate_sensors_and_pushes()?;
+        self.validate_fall_and_safety()
+    }
+
+    /// The ground plane, the contact law and the surfaces.
+    fn validate_ground_and_contact(&self) -> Result<(), SimError> {
         check(
             self.ground.height.is_finite(),
             "ground.height",
@@ -570,6 +578,11 @@ impl SimConfig {
                 "offset must be finite",
             )?;
         }
+        Ok(())
+    }
+
+    /// The default actuator and the per-joint overrides.
+    fn validate_actuation(&self) -> Result<(), SimError> {
         let a = &self.actuation;
         check_actuator(&a.default, "actuation.default")?;
         for j in &a.joints {
@@ -596,6 +609,11 @@ impl SimConfig {
                 )?;
             }
         }
+        Ok(())
+    }
+
+    /// Noise levels and pushes.
+    fn validate_sensors_and_pushes(&self) -> Result<(), SimError> {
         let n = &self.sensors.noise;
         for (v, name) in [
             (n.joint_position, "joint_position"),
@@ -626,6 +644,11 @@ impl SimConfig {
                 "wrench must be finite",
             )?;
         }
+        Ok(())
+    }
+
+    /// Fall detection and divergence thresholds.
+    fn validate_fall_and_safety(&self) -> Result<(), SimError> {
         check(
             self.fall.min_base_height.is_finite(),
             "fall.min_base_height",

@@ -114,6 +114,12 @@ impl SimRobot {
                 bound: f64::NAN,
             });
         }
+        self.check_contact_points(time)
+    }
+
+    /// A contact point deeper than `safety.max_penetration`, or with a non-finite force, fails the step.
+    fn check_contact_points(&self, time: f64) -> Result<(), SimError> {
+        let limits = &self.config.safety;
         for (i, p) in self.points.iter().enumerate() {
             if p.penetration.is_nan()
                 || p.penetration > limits.max_penetration
