@@ -74,6 +74,7 @@ pub fn build_robot(
         PlantKind::Simulator => Box::new(SimPlant::new(
             Arc::clone(model),
             scenario.sim_config(),
+            scenario.sim_period(),
             c.scenario.control_mode,
             &q0,
             soles,

@@ -1,5 +1,6 @@
 //! [`Robot`] implementation on stride-sim.
 use std::sync::Arc;
+use std::time::Duration;
 
 use nalgebra::DVector;
 use stride_block::Block;
@@ -24,23 +25,24 @@ pub struct SimPlant {
 }
 
 impl SimPlant {
-    /// Builds the simulator with `config` (its `rate_hz` already set by the runner), places the robot
-    /// standing on the ground at `joint_positions`, and sets every joint's actuation to `mode`.
+    /// Builds the simulator with `config`, stepping by `period`, places the robot standing on the ground at
+    /// `joint_positions`, and sets every joint's actuation to `mode`.
     pub fn new(
         model: Arc<Model>,
         mut config: SimConfig,
+        period: Duration,
         mode: ControlMode,
         joint_positions: &DVector<f64>,
         soles: [FrameId; 2],
     ) -> Result<Self, RobotError> {
-        let rate = config.rate_hz;
+        let period_ns = u64::try_from(period.as_nanos()).unwrap_or(u64::MAX);
         if mode == ControlMode::Torque {
             config.actuation.default.mode = ActuationMode::Torque;
             for j in &mut config.actuation.joints {
                 j.mode = Some(ActuationMode::Torque);
             }
         }
-        let mut sim = SimRobot::new(Arc::clone(&model), config)?;
+        let mut sim = SimRobot::new(Arc::clone(&model), config, period)?;
         let mut state = sim.set_standing_on_ground(joint_positions)?;
         // Start heading along +x, the heading being the soles' mean yaw (sole frames have x forward by
         // convention, whereas base links differ: iCub's `root_link` points x backward). A rotation about the
@@ -74,7 +76,7 @@ impl SimPlant {
         }
         let mut plant = Self {
             kd: KinDyn::new(Arc::clone(&model)),
-            period_ns: 1_000_000_000 / u64::from(rate),
+            period_ns,
             soles,
             surfaces,
             input: SimInput::hold(joint_positions),

@@ -297,10 +297,18 @@ fn environment_variable_expansion_rules() {
 fn explicit_layer_period_contradicting_rates_is_rejected() {
     let s = Scratch::new("period");
     s.write("r.toml", &common::robot_section());
-    let top = s.write("s.toml", "include = [\"r.toml\"]\n[sim]\nrate_hz = 1000\n");
+    let top = s.write(
+        "s.toml",
+        "include = [\"r.toml\"]\n[wbc.ik]\nperiod = 0.01\n",
+    );
+    let (_, _, _, key, message) = invalid(Scenario::load(&top).unwrap_err());
+    assert_eq!(key, "wbc.ik.period");
+    assert!(message.contains("rates.wbc_hz"), "{message}");
+    // The simulator has no rate key any more (its period is `1 / rates.sim_hz`): writing one is an unknown key.
+    let top = s.write("t.toml", "include = [\"r.toml\"]\n[sim]\nrate_hz = 1000\n");
     let (_, _, _, key, message) = invalid(Scenario::load(&top).unwrap_err());
     assert_eq!(key, "sim.rate_hz");
-    assert!(message.contains("rates.sim_hz"), "{message}");
+    assert!(message.contains("unknown field `rate_hz`"), "{message}");
 }
 
 #[test]

@@ -2,7 +2,7 @@
 #![allow(clippy::field_reassign_with_default)]
 
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::DVector;
@@ -43,10 +43,13 @@ fn bent_knees(model: &Model, a: f64) -> DVector<f64> {
     q
 }
 
-fn standing(config: SimConfig) -> (SimRobot, SimInput) {
+/// 2 kHz, the default rate.
+const PERIOD: Duration = Duration::from_micros(500);
+
+fn standing(config: SimConfig, period: Duration) -> (SimRobot, SimInput) {
     let model = humanoid();
     let q = bent_knees(&model, 0.2);
-    let mut sim = SimRobot::new(Arc::clone(&model), config).expect("sim");
+    let mut sim = SimRobot::new(Arc::clone(&model), config, period).expect("sim");
     sim.set_standing_on_ground(&q).expect("stand");
     let input = SimInput::hold(&q);
     // Let the contacts settle so that both feet are in contact.
@@ -57,16 +60,15 @@ fn standing(config: SimConfig) -> (SimRobot, SimInput) {
 }
 
 fn bench_step(c: &mut Criterion) {
-    let (mut sim, input) = standing(SimConfig::default());
+    let (mut sim, input) = standing(SimConfig::default(), PERIOD);
     c.bench_function("humanoid_step_two_feet_implicit", |b| {
         b.iter(|| sim.step(&input).map(|o| o.time).expect("step"))
     });
     let mut config = SimConfig::default();
     config.integrator = IntegratorKind::Explicit;
-    config.rate_hz = 10_000;
     config.actuation.default.kp = 300.0;
     config.actuation.default.kd = 3.0;
-    let (mut sim, input) = standing(config);
+    let (mut sim, input) = standing(config, Duration::from_micros(100));
     c.bench_function("humanoid_step_two_feet_explicit_aba", |b| {
         b.iter(|| sim.step(&input).map(|o| o.time).expect("step"))
     });
@@ -79,10 +81,10 @@ fn bench_real_time_factor(c: &mut Criterion) {
         b.iter_custom(|iters| {
             let mut total = std::time::Duration::ZERO;
             for _ in 0..iters {
-                let (mut sim, input) = standing(SimConfig::default());
+                let (mut sim, input) = standing(SimConfig::default(), PERIOD);
                 sim.set_standing_on_ground(&input.joint_positions)
                     .expect("stand");
-                let steps = 10 * sim.config().rate_hz as usize;
+                let steps = (10.0 / sim.period()).round() as usize;
                 let start = Instant::now();
                 let cpu_start = thread_cpu_seconds();
                 for _ in 0..steps {

@@ -1,9 +1,11 @@
 //! Drops the bundled humanoid (PD servos holding a knee-bent posture) on the ground and prints the trajectory
 //! as JSON on stdout (used by `tools/sim/mujoco_compare.py`).
 //!
-//! `cargo run --release -p stride-sim --example dump_trajectory -- [DROP_HEIGHT_M] [DURATION_S] [BEND_RAD] [CONFIG.toml]`
+//! `cargo run --release -p stride-sim --example dump_trajectory -- [DROP_HEIGHT_M] [DURATION_S] [BEND_RAD] [CONFIG.toml] [RATE_HZ]`
+//! (rate 2000 Hz by default).
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use nalgebra::DVector;
 use serde_json::json;
@@ -43,10 +45,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // Optional TOML file with SimConfig overrides.
         config = toml::from_str(&std::fs::read_to_string(path)?)?;
     }
-    let mut sim = SimRobot::new(Arc::clone(&model), config.clone())?;
+    let rate_hz: u64 = match args.get(5) {
+        Some(s) => s.parse()?,
+        None => 2000,
+    };
+    if rate_hz == 0 {
+        return Err("the rate must be positive".into());
+    }
+    let period = Duration::from_nanos(1_000_000_000 / rate_hz);
+    let mut sim = SimRobot::new(Arc::clone(&model), config.clone(), period)?;
     let mut state = sim.set_standing_on_ground(&q)?;
     // Lift so that the soles start `drop` above the ground (undo the static sink too).
-    let sink = model.total_mass() * 9.81 / (2.0 * config.contact.normal_stiffness * 0.20 * 0.09);
+    let sink = model.total_mass() * -model.gravity().z
+        / (2.0 * config.contact.normal_stiffness * 0.20 * 0.09);
     state.base_pose.translation.vector.z += drop + sink;
     sim.set_initial_state(&state)?;
     let input = SimInput::hold(&q);
@@ -92,7 +103,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let doc = json!({
         "simulator": "stride-sim",
-        "rate_hz": config.rate_hz,
+        "rate_hz": rate_hz,
         "kp": config.actuation.default.kp,
         "kd": config.actuation.default.kd,
         "friction": config.contact.friction_coefficient,

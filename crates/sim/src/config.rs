@@ -8,12 +8,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::SimError;
 
-/// Configuration of [`crate::SimRobot`].
+/// Configuration of [`crate::SimRobot`]. The step period is an argument of [`crate::SimRobot::new`] and
+/// gravity is the model's ([`stride_model::Model::gravity`]).
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
-/// | `rate_hz` | Hz | 2000 | simulation rate; one [`crate::SimRobot`] step advances `1/rate_hz`. `1e9 / rate_hz` must be an integer number of nanoseconds |
-/// | `gravity` | m/s² | `[0, 0, -9.81]` | gravity acceleration in the world frame |
 /// | `integrator` | – | `implicit` | [`IntegratorKind`] |
 /// | `momentum_projection` | – | `false` | correct the base velocity so that the centroidal momentum balance holds exactly each step |
 /// | `ground` | – | flat floor at z = 0 | [`GroundConfig`] |
@@ -26,10 +25,6 @@ use crate::error::SimError;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimConfig {
-    /// Simulation rate (steps per simulated second), Hz. Default 2000.
-    pub rate_hz: u32,
-    /// Gravity in the world frame, m/s². Default `[0, 0, -9.81]`.
-    pub gravity: [f64; 3],
     /// Time-stepping scheme. Default [`IntegratorKind::Implicit`].
     pub integrator: IntegratorKind,
     /// After each step, correct the base velocity so that the centroidal momentum changes by exactly
@@ -55,8 +50,6 @@ pub struct SimConfig {
 impl Default for SimConfig {
     fn default() -> Self {
         Self {
-            rate_hz: 2000,
-            gravity: [0.0, 0.0, -9.81],
             integrator: IntegratorKind::Implicit,
             momentum_projection: false,
             ground: GroundConfig::default(),
@@ -116,12 +109,12 @@ impl Default for GroundConfig {
 
 /// The compliant contact law and the surfaces of the robot that touch the ground.
 ///
-/// Each surface is a rectangle sampled by a grid of points. The parameters are **area densities** as in the
-/// visco-elastic model of Romualdi's thesis (Lemma 1, `ρ = k(x̄ − x) − b ẋ`): a grid point carries the stiffness
-/// `k · l · w · weight` and the damping `b · l · w · weight`, where the weights are the trapezoidal-rule weights
-/// of the grid (they sum to one). So the total normal stiffness of a flat surface is `k l w` whatever the grid,
-/// and a fine grid converges to Lemma 1's wrench. Normal forces never pull; tangential forces follow Coulomb's
-/// law with a stick-slip spring anchored where the point touched down.
+/// Each surface is a rectangle sampled by a grid of points. The parameters are **area densities** of the
+/// visco-elastic contact model `ρ = k(x̄ − x) − b ẋ` [Romualdi 2022, Lemma 1]: a grid point carries the
+/// stiffness `k · l · w · weight` and the damping `b · l · w · weight`, where the weights are the
+/// trapezoidal-rule weights of the grid (they sum to one). So the total normal stiffness of a flat surface is
+/// `k l w` whatever the grid, and a fine grid converges to the lemma's wrench. Normal forces never pull;
+/// tangential forces follow Coulomb's law with a stick-slip spring anchored where the point touched down.
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
@@ -508,33 +501,16 @@ fn finite_nonneg(x: f64) -> bool {
 }
 
 impl SimConfig {
-    /// The step period in nanoseconds (`1e9 / rate_hz`).
-    pub fn period_ns(&self) -> u64 {
-        if self.rate_hz == 0 {
-            0
-        } else {
-            1_000_000_000 / u64::from(self.rate_hz)
-        }
-    }
-
-    /// The step period in seconds.
-    pub fn period(&self) -> f64 {
-        self.period_ns() as f64 * 1e-9
-    }
-
-    /// Checks the values that do not need the model (ranges, finiteness, the rate).
+    /// Checks the values that do not need the model (ranges, finiteness).
     pub fn validate(&self) -> Result<(), SimError> {
-        check(self.rate_hz > 0, "rate_hz", "must be positive")?;
-        check(
-            1_000_000_000 % u64::from(self.rate_hz) == 0,
-            "rate_hz",
-            "1e9 / rate_hz must be a whole number of nanoseconds",
-        )?;
-        check(
-            self.gravity.iter().all(|g| g.is_finite()),
-            "gravity",
-            "must be finite",
-        )?;
+        self.validate_ground_and_contact()?;
+        self.validate_actuation()?;
+        self.validate_sensors_and_pushes()?;
+        self.validate_fall_and_safety()
+    }
+
+    /// The ground plane, the contact law and the surfaces.
+    fn validate_ground_and_contact(&self) -> Result<(), SimError> {
         check(
             self.ground.height.is_finite(),
             "ground.height",
@@ -602,6 +578,11 @@ impl SimConfig {
                 "offset must be finite",
             )?;
         }
+        Ok(())
+    }
+
+    /// The default actuator and the per-joint overrides.
+    fn validate_actuation(&self) -> Result<(), SimError> {
         let a = &self.actuation;
         check_actuator(&a.default, "actuation.default")?;
         for j in &a.joints {
@@ -628,6 +609,11 @@ impl SimConfig {
                 )?;
             }
         }
+        Ok(())
+    }
+
+    /// Noise levels and pushes.
+    fn validate_sensors_and_pushes(&self) -> Result<(), SimError> {
         let n = &self.sensors.noise;
         for (v, name) in [
             (n.joint_position, "joint_position"),
@@ -658,6 +644,11 @@ impl SimConfig {
                 "wrench must be finite",
             )?;
         }
+        Ok(())
+    }
+
+    /// Fall detection and divergence thresholds.
+    fn validate_fall_and_safety(&self) -> Result<(), SimError> {
         check(
             self.fall.min_base_height.is_finite(),
             "fall.min_base_height",

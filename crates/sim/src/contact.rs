@@ -1,10 +1,15 @@
-//! The ground plane and the point-contact law (normal spring-damper that never pulls, Coulomb friction with a
-//! stick-slip tangential spring).
+//! The contact model: the ground plane, the grid of points sampling each contact surface, and the law of a
+//! point (normal spring-damper that never pulls, Coulomb friction with a stick-slip tangential spring), with
+//! its linearisation for the implicit step.
 
-use nalgebra::{Matrix3, Rotation3, Vector3};
+use nalgebra::{DMatrix, Isometry3, Matrix3, Matrix6, Point3, Rotation3, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
+use stride_model::spatial::skew;
+use stride_model::{FrameId, Model};
 
 use crate::config::{ContactConfig, ContactSurfaceConfig, GroundConfig};
+use crate::error::{find_frame, SimError};
+use crate::linalg::{ang, join, lin};
 
 /// The ground: the plane through `origin` with unit `normal` (pointing out of the ground).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -145,6 +150,415 @@ pub fn surface_points(surface: &ContactSurfaceConfig, contact: &ContactConfig) -
         }
     }
     points
+}
+
+/// A contact surface resolved against the model, with its per-step data.
+#[derive(Clone, Debug)]
+pub(crate) struct Surface {
+    pub(crate) frame: FrameId,
+    pub(crate) ft_frame: Option<FrameId>,
+    pub(crate) first_point: usize,
+    pub(crate) point_count: usize,
+    /// `world_H_surface`.
+    pub(crate) pose: Isometry3<f64>,
+    /// Mixed twist `[v; ω]` of the surface frame, m/s, rad/s.
+    pub(crate) twist: Vector6<f64>,
+    /// `world_H_sensor` (the surface pose when no sensor frame is configured).
+    pub(crate) ft_pose: Isometry3<f64>,
+    /// Mixed Jacobian of the surface frame (6 × nv).
+    pub(crate) jacobian: DMatrix<f64>,
+    /// Indices of the non-zero columns of `jacobian`.
+    pub(crate) columns: Vec<usize>,
+    /// `G₆ J` over `columns` (6 × nv scratch of the implicit assembly).
+    pub(crate) scratch: DMatrix<f64>,
+    /// `J ν̇` over `columns`, m/s², rad/s².
+    pub(crate) acceleration: Vector6<f64>,
+    /// Contact wrench of the explicit step, about the surface origin, N, N·m.
+    pub(crate) wrench: Vector6<f64>,
+}
+
+impl Surface {
+    /// A surface on `frame` whose points are `first_point..first_point + point_count`, for a model with `nv`
+    /// velocity coordinates.
+    pub(crate) fn new(
+        frame: FrameId,
+        ft_frame: Option<FrameId>,
+        first_point: usize,
+        point_count: usize,
+        nv: usize,
+    ) -> Self {
+        Self {
+            frame,
+            ft_frame,
+            first_point,
+            point_count,
+            pose: Isometry3::identity(),
+            twist: Vector6::zeros(),
+            ft_pose: Isometry3::identity(),
+            jacobian: DMatrix::zeros(6, nv),
+            columns: Vec::with_capacity(nv),
+            scratch: DMatrix::zeros(6, nv),
+            acceleration: Vector6::zeros(),
+            wrench: Vector6::zeros(),
+        }
+    }
+
+    /// The index range of its points.
+    pub(crate) fn points(&self) -> std::ops::Range<usize> {
+        self.first_point..self.first_point + self.point_count
+    }
+
+    /// Records the non-zero columns of `jacobian` (the degrees of freedom that move the surface).
+    pub(crate) fn find_columns(&mut self) {
+        self.columns.clear();
+        for c in 0..self.jacobian.ncols() {
+            if self
+                .jacobian
+                .fixed_view::<6, 1>(0, c)
+                .iter()
+                .any(|x| *x != 0.0)
+            {
+                self.columns.push(c);
+            }
+        }
+    }
+}
+
+/// A contact point with its memory (the stick anchor) and its per-step data.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Point {
+    pub(crate) surface: usize,
+    /// Position in the surface frame, m.
+    pub(crate) local: Vector3<f64>,
+    pub(crate) law: PointLaw,
+    /// Where the tangential spring is attached (on the ground), while in contact.
+    pub(crate) anchor: Option<Vector3<f64>>,
+    /// World position, m.
+    pub(crate) position: Vector3<f64>,
+    /// `position − surface origin` (world), m.
+    pub(crate) arm: Vector3<f64>,
+    /// World velocity, m/s.
+    pub(crate) velocity: Vector3<f64>,
+    /// Depth below the ground plane (negative: above), m.
+    pub(crate) penetration: f64,
+    pub(crate) mode: ContactMode,
+    /// Unit tangential direction of the friction force while sliding.
+    slide_direction: Vector3<f64>,
+    /// Normal force the sliding friction is scaled with (previous iteration), N.
+    normal_force_estimate: f64,
+    /// Force at the start of the step with the current mode (`f₀`), N.
+    force_start: Vector3<f64>,
+    /// Force applied during the step, N.
+    pub(crate) force: Vector3<f64>,
+    /// Velocity at the end of the step, m/s.
+    velocity_end: Vector3<f64>,
+}
+
+impl Point {
+    /// A separated point of surface `surface`.
+    pub(crate) fn new(surface: usize, spec: &PointSpec) -> Self {
+        Self {
+            surface,
+            local: spec.local,
+            law: spec.law,
+            anchor: None,
+            position: Vector3::zeros(),
+            arm: Vector3::zeros(),
+            velocity: Vector3::zeros(),
+            penetration: 0.0,
+            mode: ContactMode::Separated,
+            slide_direction: Vector3::zeros(),
+            normal_force_estimate: 0.0,
+            force_start: Vector3::zeros(),
+            force: Vector3::zeros(),
+            velocity_end: Vector3::zeros(),
+        }
+    }
+
+    /// Position, velocity and penetration from the pose and mixed twist of its surface:
+    /// `p = H l`, `v = v_s + ω_s × (p − o_s)`.
+    pub(crate) fn place(
+        &mut self,
+        pose: &Isometry3<f64>,
+        twist: &Vector6<f64>,
+        ground: &GroundPlane,
+    ) {
+        self.position = (pose * Point3::from(self.local)).coords;
+        self.arm = self.position - pose.translation.vector;
+        self.velocity = lin(twist) + ang(twist).cross(&self.arm);
+        self.penetration = -ground.height_of(&self.position);
+    }
+
+    /// After the state was replaced: a penetrating point keeps its anchor (or sticks where it is), the others
+    /// lose it; the force is the explicit estimate at the new state.
+    pub(crate) fn restart(&mut self, ground: &GroundPlane) {
+        if self.penetration > 0.0 {
+            if self.anchor.is_none() {
+                self.anchor = Some(ground.project(&self.position));
+            }
+        } else {
+            self.anchor = None;
+        }
+        self.mode = if self.penetration > 0.0 {
+            ContactMode::Sticking
+        } else {
+            ContactMode::Separated
+        };
+        let (force, mode) = self.explicit_force(ground);
+        self.force = force;
+        self.mode = mode;
+    }
+
+    /// Explicit force from the point's state (anchor, penetration, velocity), clamped to never pull and
+    /// projected on the friction cone: `f_n = k δ − b δ̇`, `f_t = −k_t T(p − a) − b_t T v`, `|f_t| ≤ μ f_n`.
+    pub(crate) fn explicit_force(&self, ground: &GroundPlane) -> (Vector3<f64>, ContactMode) {
+        if self.penetration <= 0.0 {
+            return (Vector3::zeros(), ContactMode::Separated);
+        }
+        let n = ground.normal;
+        let law = &self.law;
+        let fn_ =
+            law.normal_stiffness * self.penetration - law.normal_damping * n.dot(&self.velocity);
+        if fn_ <= 0.0 {
+            return (Vector3::zeros(), ContactMode::Separated);
+        }
+        let anchor = self
+            .anchor
+            .unwrap_or_else(|| ground.project(&self.position));
+        let ft = -ground.tangential(&(self.position - anchor)) * law.tangential_stiffness
+            - ground.tangential(&self.velocity) * law.tangential_damping;
+        let ftn = ft.norm();
+        let limit = law.friction * fn_;
+        if ftn > limit {
+            (n * fn_ + ft * (limit / ftn), ContactMode::Sliding)
+        } else {
+            (n * fn_ + ft, ContactMode::Sticking)
+        }
+    }
+
+    /// The explicit step of the point: its force at the start of the step (anchoring it when it touches down,
+    /// dragging the anchor when it slides). Returns the force, N.
+    pub(crate) fn explicit_step(&mut self, ground: &GroundPlane) -> Vector3<f64> {
+        if self.penetration > 0.0 {
+            if self.anchor.is_none() {
+                self.anchor = Some(ground.project(&self.position));
+            }
+            self.mode = ContactMode::Sticking;
+        } else {
+            self.mode = ContactMode::Separated;
+            self.anchor = None;
+        }
+        let (f, mode) = self.explicit_force(ground);
+        self.force = f;
+        self.mode = mode;
+        self.velocity_end = self.velocity;
+        if mode == ContactMode::Sliding {
+            self.anchor = Some(
+                ground.project(&self.position)
+                    + ground.tangential(&f) / self.law.tangential_stiffness,
+            );
+        }
+        f
+    }
+
+    /// Start of an implicit step: a penetrating point sticks (anchored where it is if it just touched down),
+    /// the others are separated.
+    pub(crate) fn begin_implicit_step(&mut self, ground: &GroundPlane) {
+        if self.penetration > 0.0 {
+            self.mode = ContactMode::Sticking;
+            if self.anchor.is_none() {
+                self.anchor = Some(ground.project(&self.position));
+            }
+        } else {
+            self.mode = ContactMode::Separated;
+        }
+        self.normal_force_estimate = 0.0;
+    }
+
+    /// Force at the start of the step in the current (non-separated) mode, `f₀ = n (k δ − b n·v) + f_t`, with
+    /// the stick spring `f_t = −k_t T(p − a) − b_t T v` or the sliding friction `μ f_n ê`; kept as `force_start`.
+    fn start_force(&mut self, ground: &GroundPlane) -> Vector3<f64> {
+        let n = ground.normal;
+        let law = &self.law;
+        let vn = n.dot(&self.velocity);
+        let mut f0 = n * (law.normal_stiffness * self.penetration - law.normal_damping * vn);
+        match self.mode {
+            ContactMode::Sticking => {
+                let anchor = self.anchor.unwrap_or(self.position);
+                f0 -= ground.tangential(&(self.position - anchor)) * law.tangential_stiffness;
+                f0 -= ground.tangential(&self.velocity) * law.tangential_damping;
+            }
+            ContactMode::Sliding => {
+                f0 += self.slide_direction * (law.friction * self.normal_force_estimate);
+            }
+            ContactMode::Separated => {}
+        }
+        self.force_start = f0;
+        f0
+    }
+
+    /// After an implicit solve: the end-of-step force `f = f₀ − K v⁺ dt − D a dt` (`a` the point's acceleration
+    /// from the surface's `J ν̇`), and the mode the solution implies: a pulling point separates, a sticking
+    /// point outside the friction cone slides, a sliding point whose slip reverses sticks, a sliding point
+    /// whose normal force moved updates its estimate. Returns whether the point's mode or estimate changed.
+    pub(crate) fn settle(
+        &mut self,
+        surface_acceleration: &Vector6<f64>,
+        ground: &GroundPlane,
+        dt: f64,
+    ) -> bool {
+        if self.mode == ContactMode::Separated {
+            self.force = Vector3::zeros();
+            self.velocity_end = self.velocity;
+            return false;
+        }
+        let n = ground.normal;
+        let acc = lin(surface_acceleration) + ang(surface_acceleration).cross(&self.arm);
+        let v_end = self.velocity + acc * dt;
+        let (k, d) = self.law.matrices(self.mode, &n);
+        let f = self.force_start - k * v_end * dt - d * acc * dt;
+        self.force = f;
+        self.velocity_end = v_end;
+        let fn_end = n.dot(&f);
+        if fn_end < 0.0 {
+            self.mode = ContactMode::Separated;
+            self.force = Vector3::zeros();
+            return true;
+        }
+        match self.mode {
+            ContactMode::Sticking => self.leave_cone(&ground.tangential(&f), fn_end),
+            ContactMode::Sliding => self.stop_or_track_slip(ground, &v_end, fn_end),
+            ContactMode::Separated => false,
+        }
+    }
+
+    /// A sticking point whose tangential force `ft` exceeds the cone `μ f_n` starts sliding along `ft`.
+    fn leave_cone(&mut self, ft: &Vector3<f64>, fn_end: f64) -> bool {
+        let ftn = ft.norm();
+        if ftn > self.law.friction * fn_end * (1.0 + 1e-12) && ftn > 0.0 {
+            self.mode = ContactMode::Sliding;
+            self.slide_direction = ft / ftn;
+            self.normal_force_estimate = fn_end;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// A sliding point whose end velocity runs along the friction force (the slip stopped within the step)
+    /// sticks again with its spring on the cone; otherwise its normal force estimate follows `fn_end`
+    /// (to 1e-6 relative).
+    fn stop_or_track_slip(
+        &mut self,
+        ground: &GroundPlane,
+        v_end: &Vector3<f64>,
+        fn_end: f64,
+    ) -> bool {
+        let mu = self.law.friction;
+        let vt = ground.tangential(v_end);
+        if vt.dot(&self.slide_direction) > 1e-9 {
+            self.mode = ContactMode::Sticking;
+            self.anchor = Some(
+                ground.project(&self.position)
+                    + self.slide_direction
+                        * (mu * self.normal_force_estimate / self.law.tangential_stiffness),
+            );
+            true
+        } else if (fn_end - self.normal_force_estimate).abs()
+            > 1e-6 * (1.0 + self.normal_force_estimate)
+        {
+            self.normal_force_estimate = fn_end;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// After an accepted step: a separated point forgets its anchor, a sliding point's anchor follows the
+    /// slip so that its spring sits on the cone at the end of the step.
+    pub(crate) fn commit(&mut self, ground: &GroundPlane, dt: f64) {
+        match self.mode {
+            ContactMode::Separated => self.anchor = None,
+            ContactMode::Sticking => {}
+            ContactMode::Sliding => {
+                let end = self.position + self.velocity_end * dt;
+                self.anchor = Some(
+                    ground.project(&end)
+                        + ground.tangential(&self.force) / self.law.tangential_stiffness,
+                );
+            }
+        }
+    }
+}
+
+/// The configured contact surfaces of `model` and all their points, surface by surface.
+pub(crate) fn build_surfaces(
+    model: &Model,
+    config: &ContactConfig,
+) -> Result<(Vec<Surface>, Vec<Point>), SimError> {
+    let mut surfaces = Vec::with_capacity(config.surfaces.len());
+    let mut points = Vec::new();
+    for (si, sc) in config.surfaces.iter().enumerate() {
+        let parameter = |key: &str| format!("contact.surfaces[{}].{key}", sc.name);
+        let frame = find_frame(model, &parameter("frame"), &sc.frame)?;
+        let ft_frame = match &sc.ft_sensor {
+            Some(name) => Some(find_frame(model, &parameter("ft_sensor"), name)?),
+            None => None,
+        };
+        let specs = surface_points(sc, config);
+        surfaces.push(Surface::new(
+            frame,
+            ft_frame,
+            points.len(),
+            specs.len(),
+            model.nv(),
+        ));
+        points.extend(specs.iter().map(|spec| Point::new(si, spec)));
+    }
+    Ok((surfaces, points))
+}
+
+/// The linearised contact of one surface for the implicit step: `(K₆, D₆, W₀)` with `K₆ = Σ Pᵢᵀ Kᵢ Pᵢ`,
+/// `D₆ = Σ Pᵢᵀ Dᵢ Pᵢ`, `Pᵢ = [I, −(rᵢ×)]` (surface twist → point velocity) and `W₀ = Σ [f₀ᵢ; rᵢ × f₀ᵢ]` the
+/// wrench at the start of the step about the surface origin. `None` when every point is separated. Stores each
+/// point's `f₀`.
+pub(crate) fn linearize_surface(
+    points: &mut [Point],
+    ground: &GroundPlane,
+) -> Option<(Matrix6<f64>, Matrix6<f64>, Vector6<f64>)> {
+    let mut k6 = Matrix6::zeros();
+    let mut d6 = Matrix6::zeros();
+    let mut w0 = Vector6::zeros();
+    let mut active = false;
+    for p in points {
+        if p.mode == ContactMode::Separated {
+            continue;
+        }
+        active = true;
+        let (k, d) = p.law.matrices(p.mode, &ground.normal);
+        let f0 = p.start_force(ground);
+        let r = skew(&p.arm);
+        add_point_matrix(&mut k6, &k, &r);
+        add_point_matrix(&mut d6, &d, &r);
+        let t = p.arm.cross(&f0);
+        w0 += join(&f0, &t);
+    }
+    active.then_some((k6, d6, w0))
+}
+
+/// `m6 += Pᵀ K P` with `P = [I, −R]`, `R = (r×)`: `[K, −K R; R K, −R K R]`.
+fn add_point_matrix(m6: &mut Matrix6<f64>, k: &Matrix3<f64>, r: &Matrix3<f64>) {
+    let kr = k * r;
+    let rk = r * k;
+    let rkr = r * kr;
+    for i in 0..3 {
+        for j in 0..3 {
+            m6[(i, j)] += k[(i, j)];
+            m6[(i, j + 3)] -= kr[(i, j)];
+            m6[(i + 3, j)] += rk[(i, j)];
+            m6[(i + 3, j + 3)] -= rkr[(i, j)];
+        }
+    }
 }
 
 #[cfg(test)]

@@ -1,6 +1,6 @@
 //! Error type of the simulator.
 
-use stride_model::ModelError;
+use stride_model::{FrameId, Model, ModelError};
 
 /// Everything that can make building or stepping the simulator fail. A failed step leaves the simulator in
 /// the state it had before the step.
@@ -91,4 +91,13 @@ pub enum SimError {
     /// An error of the dynamics library.
     #[error("model: {0}")]
     Model(#[from] ModelError),
+}
+
+/// The frame `name` of `model`, or [`SimError::UnknownFrame`] naming the config `parameter`.
+pub(crate) fn find_frame(model: &Model, parameter: &str, name: &str) -> Result<FrameId, SimError> {
+    model.frame_id(name).ok_or_else(|| SimError::UnknownFrame {
+        parameter: parameter.to_string(),
+        frame: name.to_string(),
+        model: model.name().to_string(),
+    })
 }

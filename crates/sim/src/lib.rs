@@ -12,8 +12,8 @@
 //! * **Contact.** Each contact surface (a foot sole) is a rectangle sampled by a grid of points; each point is
 //!   a spring-damper along the ground normal that never pulls and a tangential stick spring anchored where
 //!   the point touched down, limited by Coulomb's cone (it slides when the cone is reached). The stiffness
-//!   and damping are area densities (N/m³, N·s/m³) as in the visco-elastic model of Romualdi's thesis
-//!   (Lemma 1), so a fine grid reproduces Lemma 1's wrench.
+//!   and damping are area densities (N/m³, N·s/m³) of the visco-elastic contact model
+//!   [Romualdi 2022, Lemma 1], so a fine grid reproduces that lemma's wrench.
 //! * **Actuation** per joint: position PD servo, velocity servo or torque, with effort limits, passive
 //!   damping and armature.
 //! * **Sensors:** encoders, six-axis wrench of each surface in its force/torque sensor frame, IMU, ground
@@ -23,12 +23,16 @@
 
 #![warn(missing_docs)]
 
+mod actuator;
 mod config;
 mod contact;
 mod error;
+mod io;
 mod linalg;
 mod noise;
+mod push;
 mod robot;
+mod sensors;
 
 pub use config::{
     ActuationConfig, ActuationMode, ContactConfig, ContactSurfaceConfig, EffortLimitPolicy,
@@ -37,8 +41,7 @@ pub use config::{
 };
 pub use contact::{surface_points, trapezoid_nodes, ContactMode, GroundPlane, PointLaw, PointSpec};
 pub use error::SimError;
+pub use io::{ContactPointState, ImuMeasurement, SimInput, SimOutput, SurfaceMeasurement};
 pub use linalg::{cholesky_in_place, cholesky_solve_in_place, TreeCholesky};
 pub use noise::GaussianNoise;
-pub use robot::{
-    ContactPointState, ImuMeasurement, SimInput, SimOutput, SimRobot, SurfaceMeasurement,
-};
+pub use robot::SimRobot;

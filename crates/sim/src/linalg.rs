@@ -1,6 +1,6 @@
 //! Small dense linear algebra that works in place (no allocation): Cholesky factorisation and solve.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector3, Vector6};
 
 /// Overwrites the lower triangle of the symmetric positive-definite matrix `a` (only its lower triangle is
 /// read) with its Cholesky factor `L` (`a = L Lᵀ`). Returns `false` if a pivot is not positive and finite.
@@ -67,7 +67,7 @@ pub fn cholesky_solve_in_place(l: &DMatrix<f64>, b: &mut DVector<f64>) {
 }
 
 /// Cholesky factorisation `H = Lᵀ L` that exploits the branch-induced sparsity of a kinematic tree's mass
-/// matrix (Featherstone, *Rigid Body Dynamics Algorithms*, §6.5 "LTL"): `H[i][j]` may be non-zero only when
+/// matrix [Featherstone 2008, §6.5] (the "LTL" factorisation): `H[i][j]` may be non-zero only when
 /// `i` is an ancestor of `j` or the reverse, and that pattern survives the factorisation (no fill-in). Adding
 /// `Jᵀ G J` for the Jacobian of one frame keeps the pattern, since the columns of such a Jacobian lie on one
 /// path from the root.
@@ -198,6 +198,21 @@ impl TreeCholesky {
             x[k] = s / a[k * n + k];
         }
     }
+}
+
+/// Linear part `[v₀, v₁, v₂]` of a `[linear; angular]` 6-vector.
+pub(crate) fn lin(v: &Vector6<f64>) -> Vector3<f64> {
+    Vector3::new(v[0], v[1], v[2])
+}
+
+/// Angular part `[v₃, v₄, v₅]` of a `[linear; angular]` 6-vector.
+pub(crate) fn ang(v: &Vector6<f64>) -> Vector3<f64> {
+    Vector3::new(v[3], v[4], v[5])
+}
+
+/// The 6-vector `[a; b]` (linear first).
+pub(crate) fn join(a: &Vector3<f64>, b: &Vector3<f64>) -> Vector6<f64> {
+    Vector6::new(a.x, a.y, a.z, b.x, b.y, b.z)
 }
 
 #[cfg(test)]

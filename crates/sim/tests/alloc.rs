@@ -21,10 +21,11 @@ fn stepping_does_not_allocate() {
         (IntegratorKind::Implicit, true),
     ] {
         let mut config = SimConfig::default();
+        let mut period = common::PERIOD;
         config.integrator = integrator;
         config.momentum_projection = projection;
         if integrator == IntegratorKind::Explicit {
-            config.rate_hz = 10_000;
+            period = common::period(10_000);
             config.actuation.default.kp = 300.0;
             config.actuation.default.kd = 3.0;
         }
@@ -36,7 +37,7 @@ fn stepping_does_not_allocate() {
             duration: 1.0,
             wrench: [20.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         });
-        let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
+        let mut sim = SimRobot::new(Arc::clone(&model), config, period).unwrap();
         sim.set_standing_on_ground(&q).unwrap();
         let mut input = SimInput::hold(&q);
         // Saturate one joint too.

@@ -25,11 +25,11 @@ fn humanoid_stands_with_momentum_projection() {
 fn stand(config: SimConfig) {
     let model = common::humanoid();
     let q = common::bent_knees(&model, 0.2);
-    let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
+    let mut sim = SimRobot::new(Arc::clone(&model), config, common::PERIOD).unwrap();
     sim.set_standing_on_ground(&q).unwrap();
     let input = SimInput::hold(&q);
     let feet_start: Vec<Vector3<f64>> = sim.contact_points().iter().map(|p| p.position).collect();
-    let rate = sim.config().rate_hz as usize;
+    let rate = (1.0 / sim.period()).round() as usize;
     let mut max_drift: f64 = 0.0;
     let mut solves = 0;
     for k in 0..10 * rate {

@@ -4,6 +4,7 @@
 mod common;
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use nalgebra::{DVector, Vector3};
 use stride_block::Block;
@@ -16,7 +17,7 @@ use stride_sim::{
 fn standing_sim(config: SimConfig) -> (SimRobot, SimInput) {
     let model = common::humanoid();
     let q = common::bent_knees(&model, 0.2);
-    let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
+    let mut sim = SimRobot::new(Arc::clone(&model), config, common::PERIOD).unwrap();
     sim.set_standing_on_ground(&q).unwrap();
     (sim, SimInput::hold(&q))
 }
@@ -137,14 +138,12 @@ fn divergence_is_reported_and_the_last_good_state_kept() {
 #[test]
 fn bad_configurations_are_rejected_with_the_parameter() {
     let model = common::humanoid();
-    let mut c = SimConfig::default();
-    c.rate_hz = 3000;
     assert!(
-        matches!(SimRobot::new(Arc::clone(&model), c), Err(SimError::InvalidConfig { parameter, .. }) if parameter == "rate_hz")
+        matches!(SimRobot::new(Arc::clone(&model), SimConfig::default(), Duration::ZERO), Err(SimError::InvalidConfig { parameter, .. }) if parameter == "period")
     );
     let mut c = SimConfig::default();
     c.contact.surfaces[0].frame = "no_such_frame".into();
-    let err = SimRobot::new(Arc::clone(&model), c).unwrap_err();
+    let err = SimRobot::new(Arc::clone(&model), c, common::PERIOD).unwrap_err();
     assert!(err.to_string().contains("no_such_frame"), "{err}");
     let mut c = SimConfig::default();
     c.actuation.joints.push(JointActuatorOverride {
@@ -157,13 +156,13 @@ fn bad_configurations_are_rejected_with_the_parameter() {
         armature: None,
     });
     assert!(matches!(
-        SimRobot::new(Arc::clone(&model), c),
+        SimRobot::new(Arc::clone(&model), c, common::PERIOD),
         Err(SimError::UnknownJoint { .. })
     ));
     let mut c = SimConfig::default();
     c.contact.normal_stiffness = f64::NAN;
     assert!(matches!(
-        SimRobot::new(Arc::clone(&model), c),
+        SimRobot::new(Arc::clone(&model), c, common::PERIOD),
         Err(SimError::InvalidConfig { .. })
     ));
     let mut c = SimConfig::default();
@@ -174,11 +173,11 @@ fn bad_configurations_are_rejected_with_the_parameter() {
         wrench: [0.0; 6],
     });
     assert!(matches!(
-        SimRobot::new(Arc::clone(&model), c),
+        SimRobot::new(Arc::clone(&model), c, common::PERIOD),
         Err(SimError::UnknownFrame { .. })
     ));
     // A non-finite state.
-    let mut sim = SimRobot::new(Arc::clone(&model), SimConfig::default()).unwrap();
+    let mut sim = SimRobot::new(Arc::clone(&model), SimConfig::default(), common::PERIOD).unwrap();
     let mut s = RobotState::zero(&model);
     s.joint_velocities[2] = f64::NAN;
     assert!(matches!(
@@ -191,7 +190,7 @@ fn bad_configurations_are_rejected_with_the_parameter() {
 fn configs_parse_from_toml_and_reject_unknown_fields() {
     let c: SimConfig = toml::from_str(
         r#"
-rate_hz = 5000
+momentum_projection = true
 [ground]
 inclination = [0.0, 0.1]
 [contact]
@@ -212,12 +211,12 @@ wrench = [50.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 "#,
     )
     .unwrap();
-    assert_eq!(c.rate_hz, 5000);
+    assert!(c.momentum_projection);
     assert_eq!(c.contact.surfaces.len(), 1);
     assert_eq!(c.contact.surfaces[0].length, 0.20);
     assert_eq!(c.actuation.joints[0].mode, Some(ActuationMode::Torque));
-    SimRobot::new(common::humanoid(), c).unwrap();
-    assert!(toml::from_str::<SimConfig>("rate_hz = 5000\ntypo = 1").is_err());
+    SimRobot::new(common::humanoid(), c, common::PERIOD).unwrap();
+    assert!(toml::from_str::<SimConfig>("momentum_projection = true\ntypo = 1").is_err());
     assert!(toml::from_str::<SimConfig>("[contact]\nstiffness = 1.0").is_err());
     let default = SimConfig::default();
     let text = toml::to_string(&default).unwrap();
@@ -353,12 +352,11 @@ fn torque_mode_joint_is_limp() {
 fn velocity_servo_tracks_the_commanded_velocity() {
     let mut config = SimConfig::default();
     config.contact.surfaces.clear();
-    config.gravity = [0.0; 3];
     config.fall.min_base_height = -1e9;
     config.actuation.default.mode = ActuationMode::Velocity;
     config.actuation.default.kd = 50.0;
-    let model = common::humanoid();
-    let mut sim = SimRobot::new(Arc::clone(&model), config).unwrap();
+    let model = common::weightless(&common::humanoid());
+    let mut sim = SimRobot::new(Arc::clone(&model), config, common::PERIOD).unwrap();
     let elbow = model.joint_index("l_elbow").unwrap();
     let mut input = SimInput::zeros(model.dof());
     input.joint_velocities[elbow] = 0.5;
@@ -374,4 +372,85 @@ fn velocity_servo_tracks_the_commanded_velocity() {
             assert!(v.abs() < 1e-2, "joint {j}: {v}");
         }
     }
+}
+
+#[test]
+fn a_torque_mode_joint_commanded_beyond_its_limit_is_saturated_every_step_with_both_integrators() {
+    for integrator in [IntegratorKind::Implicit, IntegratorKind::Explicit] {
+        let mut config = SimConfig::default();
+        let mut period = common::PERIOD;
+        config.integrator = integrator;
+        if integrator == IntegratorKind::Explicit {
+            period = common::period(10_000);
+            config.actuation.default.kp = 300.0;
+            config.actuation.default.kd = 3.0;
+        }
+        config.actuation.joints.push(JointActuatorOverride {
+            name: "l_elbow".into(),
+            mode: Some(ActuationMode::Torque),
+            kp: None,
+            kd: None,
+            effort_limit: None,
+            damping: None,
+            armature: None,
+        });
+        let model = common::humanoid();
+        let q = common::bent_knees(&model, 0.2);
+        let mut sim = SimRobot::new(Arc::clone(&model), config, period).unwrap();
+        sim.set_standing_on_ground(&q).unwrap();
+        let mut input = SimInput::hold(&q);
+        let elbow = model.joint_index("l_elbow").unwrap();
+        let limit = model.joints()[elbow].effort_limit;
+        assert!(limit.is_finite() && limit > 0.0);
+        for (torque, steps) in [(-3.0 * limit, 50), (0.5 * limit, 5), (3.0 * limit, 50)] {
+            input.joint_torques[elbow] = torque;
+            for k in 0..steps {
+                let out = sim.step(&input).unwrap();
+                let beyond = torque.abs() > limit;
+                assert_eq!(
+                    out.saturated[elbow], beyond,
+                    "{integrator:?}, {torque} N·m, step {k}"
+                );
+                let applied = if beyond {
+                    limit.copysign(torque)
+                } else {
+                    torque
+                };
+                assert_eq!(out.joint_torques[elbow], applied, "{integrator:?} step {k}");
+                // Every joint is flagged exactly when its torque sits at its limit.
+                for (j, s) in out.saturated.iter().enumerate() {
+                    let at_limit = out.joint_torques[j].abs() == model.joints()[j].effort_limit;
+                    assert_eq!(*s, at_limit, "{integrator:?} joint {j} step {k}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_position_servo_far_from_its_target_saturates_until_it_gets_close() {
+    let (mut sim, mut input) = standing_sim(SimConfig::default());
+    let model = Arc::clone(sim.model());
+    let elbow = model.joint_index("l_elbow").unwrap();
+    input.joint_positions[elbow] = 1.5; // kp · 1.5 rad = 1500 N·m ≫ 20 N·m
+    let mut saturated_steps = 0;
+    let mut last = true;
+    for k in 0..4000 {
+        let out = sim.step(&input).unwrap();
+        if k == 0 {
+            assert!(out.saturated[elbow]);
+        }
+        for (j, s) in out.saturated.iter().enumerate() {
+            // Flagged exactly when the applied torque sits at the limit, at every step.
+            let at_limit = out.joint_torques[j].abs() == model.joints()[j].effort_limit;
+            assert_eq!(*s, at_limit, "joint {} step {k}", model.joints()[j].name);
+        }
+        saturated_steps += usize::from(out.saturated[elbow]);
+        last = out.saturated[elbow];
+    }
+    assert!(saturated_steps > 1, "{saturated_steps}");
+    // Near its target the servo needs less than its limit again.
+    assert!(!last);
+    let q = sim.state().joint_positions[elbow];
+    assert!((q - 1.5).abs() < 0.05, "elbow at {q} rad");
 }

@@ -712,15 +712,6 @@ impl Scenario {
                 ));
             }
         }
-        if self.sources.key_location("sim.rate_hz").is_some() && c.sim.rate_hz != r.sim_hz {
-            return Err(self.invalid(
-                "sim.rate_hz",
-                format!(
-                    "{} Hz contradicts rates.sim_hz = {} Hz; remove this key (the runner sets it) or set it to {} [Hz]",
-                    c.sim.rate_hz, r.sim_hz, r.sim_hz
-                ),
-            ));
-        }
         c.planner.validate().map_err(|e| {
             let name = match &e {
                 stride_planner::PlannerError::InvalidParameter { name, .. } => Some(*name),
@@ -735,9 +726,7 @@ impl Scenario {
             };
             self.layer_invalid("simplified", name, e.to_string())
         })?;
-        let mut sim = c.sim.clone();
-        sim.rate_hz = r.sim_hz;
-        sim.validate().map_err(|e| {
+        c.sim.validate().map_err(|e| {
             let name = match &e {
                 stride_sim::SimError::InvalidConfig { parameter, .. } => Some(parameter.as_str()),
                 _ => None,
@@ -759,15 +748,13 @@ impl Scenario {
         Ok(())
     }
 
-    /// Writes the keys the runner derives from `[rates]` (`wbc.ik.period`, `wbc.tsid.period`,
-    /// `sim.rate_hz`) into the configuration and the merged document, so both state the effective values.
+    /// Writes the keys the runner derives from `[rates]` (`wbc.ik.period`, `wbc.tsid.period`) into the
+    /// configuration and the merged document, so both state the effective values.
     fn apply_derived(&mut self) {
         let c = &mut self.config;
         let period = 1.0 / f64::from(c.rates.wbc_hz);
         c.wbc.ik.period = period;
         c.wbc.tsid.period = period;
-        c.sim.rate_hz = c.rates.sim_hz;
-        let sim_hz = c.rates.sim_hz;
         if let Some(toml::Value::Table(w)) = self.merged.get_mut("wbc") {
             for k in ["ik", "tsid"] {
                 if let Some(toml::Value::Table(t)) = w.get_mut(k) {
@@ -775,16 +762,16 @@ impl Scenario {
                 }
             }
         }
-        if let Some(toml::Value::Table(s)) = self.merged.get_mut("sim") {
-            s.insert("rate_hz".into(), toml::Value::Integer(i64::from(sim_hz)));
-        }
     }
 
-    /// The simulator configuration with the runner's rate applied.
+    /// The simulator configuration.
     pub fn sim_config(&self) -> stride_sim::SimConfig {
-        let mut sim = self.config.sim.clone();
-        sim.rate_hz = self.config.rates.sim_hz;
-        sim
+        self.config.sim.clone()
+    }
+
+    /// The simulator's step period, `1 / rates.sim_hz` (a whole number of nanoseconds: validated).
+    pub fn sim_period(&self) -> std::time::Duration {
+        std::time::Duration::from_nanos(1_000_000_000 / u64::from(self.config.rates.sim_hz))
     }
 
     /// The merged configuration as TOML text (what logs store).

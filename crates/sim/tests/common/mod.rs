@@ -2,10 +2,27 @@
 #![allow(dead_code)]
 
 use std::sync::Arc;
+use std::time::Duration;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector3};
 use stride_model::{KinDyn, Model, RobotState};
 use stride_sim::{ContactSurfaceConfig, SimConfig};
+
+/// The default step period of the tests, 500 µs (2 kHz).
+pub const PERIOD: Duration = Duration::from_micros(500);
+
+/// The step period of a rate in Hz (whole nanoseconds).
+pub fn period(rate_hz: u32) -> Duration {
+    Duration::from_nanos(1_000_000_000 / u64::from(rate_hz))
+}
+
+/// `model` with no gravity.
+pub fn weightless(model: &Model) -> Arc<Model> {
+    let mut m = model.clone();
+    m.set_gravity(Vector3::zeros())
+        .expect("zero gravity is finite");
+    Arc::new(m)
+}
 
 /// The bundled humanoid.
 pub fn humanoid() -> Arc<Model> {

@@ -1,0 +1,306 @@
+//! The two time-stepping schemes of [`SimRobot`]: the linearly implicit step with its contact-mode and
+//! saturation re-solves, the explicit step on the articulated-body algorithm, and the optional momentum
+//! projection.
+//!
+//! Both are semi-implicit Euler: `ν⁺ = ν + dt ν̇`, then the configuration with `ν⁺`. The implicit scheme
+//! evaluates the servos, passive damping and contact spring-dampers at the end of the step, linearised, which
+//! gives `(M + dt D + dt² K) ν̇ = τ − h + Σ Jᵀ (W₀ − dt K₆ V)` with `M` the composite-rigid-body mass matrix
+//! [Featherstone 2008, ch. 6]; the explicit one evaluates every force at the start of the step and uses the
+//! articulated-body algorithm [Featherstone 2008, ch. 7].
+
+use nalgebra::{Matrix6, Vector3, Vector6};
+use stride_model::{ExternalWrench, VelocityRepresentation};
+
+use super::SimRobot;
+use crate::config::IntegratorKind;
+use crate::contact::linearize_surface;
+use crate::error::SimError;
+use crate::io::SimInput;
+use crate::linalg::{ang, join, lin};
+
+/// How a step's linear solves went.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Solve {
+    /// Number of linear solves.
+    pub(super) solves: usize,
+    /// The re-solve cap stopped the step with contact modes or saturations still changing.
+    pub(super) cap_hit: bool,
+}
+
+impl SimRobot {
+    /// Generalized force `Σ Jᵀ w` of the pushes active at the current time (into `external_forces`), and the
+    /// list of external wrenches for the explicit path (into `wrenches`).
+    pub(super) fn apply_pushes(&mut self) -> Result<(), SimError> {
+        self.external_forces.fill(0.0);
+        for p in &self.pushes {
+            if !p.is_active(self.time_ns) {
+                continue;
+            }
+            match self.config.integrator {
+                IntegratorKind::Implicit => {
+                    self.kd.frame_jacobian(p.frame, &mut self.push_jacobian)?;
+                    self.external_forces
+                        .gemv_tr(1.0, &self.push_jacobian, &p.wrench, 1.0);
+                }
+                IntegratorKind::Explicit => {
+                    self.wrenches.push(ExternalWrench {
+                        frame: p.frame,
+                        wrench: p.wrench,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// One implicit step: fills `acceleration`, point forces and motor torques. Solves again while the
+    /// solution changes a contact mode or a saturation, at most `max_solves` times.
+    pub(super) fn solve_implicit(&mut self, input: &SimInput) -> Result<Solve, SimError> {
+        self.kd.mass_matrix(&mut self.mass)?;
+        self.kd.bias_forces(&mut self.bias)?;
+        for s in &mut self.surfaces {
+            self.kd.frame_jacobian(s.frame, &mut s.jacobian)?;
+            s.find_columns();
+        }
+        for p in &mut self.points {
+            p.begin_implicit_step(&self.ground);
+        }
+        self.saturated.fill(false);
+        let mut solves = 0;
+        loop {
+            self.assemble_joints(input);
+            self.assemble_contacts();
+            if !self.factorization.factor(&mut self.system) {
+                return Err(SimError::NotPositiveDefinite {
+                    time: self.time_ns as f64 * 1e-9,
+                });
+            }
+            self.acceleration.copy_from(&self.rhs);
+            self.factorization
+                .solve(&self.system, &mut self.acceleration);
+            solves += 1;
+            let changed = self.update_modes(input);
+            if !changed || solves >= self.max_solves {
+                return Ok(Solve {
+                    solves,
+                    cap_hit: changed,
+                });
+            }
+        }
+    }
+
+    /// Starts `(M + dt D + dt² K) ν̇ = rhs` with the mass matrix and the joints: each servo adds
+    /// `armature + dt (kd + d) + dt² kp` to its diagonal and its torque at the start of the step
+    /// `τ_ff + kp (q_ref − q − dt q̇) + kd (q̇_ref − q̇) − d q̇` to `rhs` (a saturated joint: its fixed
+    /// torque, no gains); `rhs` also gets the pushes and `−h`.
+    fn assemble_joints(&mut self, input: &SimInput) {
+        let dt = self.dt;
+        let nb = 6;
+        self.system.copy_from(&self.mass);
+        self.rhs.copy_from(&self.external_forces);
+        self.rhs -= &self.bias;
+        let q = &self.state.joint_positions;
+        let qd = &self.state.joint_velocities;
+        for (j, a) in self.actuators.iter().enumerate() {
+            let (mut kp, mut kd) = a.gains();
+            let motor = if self.saturated[j] {
+                kp = 0.0;
+                kd = 0.0;
+                self.motor_torques[j]
+            } else {
+                a.torque(
+                    input.joint_torques[j],
+                    input.joint_positions[j] - q[j] - dt * qd[j],
+                    input.joint_velocities[j] - qd[j],
+                )
+            };
+            let i = nb + j;
+            self.system[(i, i)] += a.armature + dt * (kd + a.damping) + dt * dt * kp;
+            self.rhs[i] += motor - a.damping * qd[j];
+        }
+    }
+
+    /// Adds each touching surface's `Jᵀ (dt D₆ + dt² K₆) J` to the system and `Jᵀ (W₀ − dt K₆ V)` to `rhs`, over
+    /// the non-zero columns of `J` only (the joints that move the surface), which keeps the branch-induced
+    /// sparsity of the mass matrix.
+    fn assemble_contacts(&mut self) {
+        let dt = self.dt;
+        for s in &mut self.surfaces {
+            let Some((k6, d6, w0)) = linearize_surface(&mut self.points[s.points()], &self.ground)
+            else {
+                continue;
+            };
+            let g6 = k6 * (dt * dt) + d6 * dt;
+            let w = w0 - k6 * s.twist * dt;
+            for &c in &s.columns {
+                let col = s.jacobian.fixed_view::<6, 1>(0, c);
+                s.scratch
+                    .fixed_view_mut::<6, 1>(0, c)
+                    .copy_from(&(g6 * col));
+                self.rhs[c] += col.dot(&w);
+            }
+            for &c in &s.columns {
+                let gc = s.scratch.fixed_view::<6, 1>(0, c);
+                for &r in &s.columns {
+                    self.system[(r, c)] += s.jacobian.fixed_view::<6, 1>(0, r).dot(&gc);
+                }
+            }
+        }
+    }
+
+    /// After a solve: end-of-step motor torques and contact forces; switches the saturations and contact modes
+    /// that the solution violates. Returns whether anything changed (then the step is solved again).
+    fn update_modes(&mut self, input: &SimInput) -> bool {
+        let mut changed = self.saturate_joints(input);
+        for s in &mut self.surfaces {
+            s.acceleration = Vector6::zeros();
+            for &c in &s.columns {
+                s.acceleration += s.jacobian.fixed_view::<6, 1>(0, c) * self.acceleration[c];
+            }
+        }
+        for p in &mut self.points {
+            let acceleration = self.surfaces[p.surface].acceleration;
+            changed |= p.settle(&acceleration, &self.ground, self.dt);
+        }
+        changed
+    }
+
+    /// The servo torques at the end of the step, `τ_ff + kp (q_ref − q − dt q̇⁺) + kd (q̇_ref − q̇⁺)`; a joint
+    /// beyond its effort limit is saturated (its torque fixed at the limit). Returns whether one saturated.
+    fn saturate_joints(&mut self, input: &SimInput) -> bool {
+        let dt = self.dt;
+        let mut changed = false;
+        let q = &self.state.joint_positions;
+        let qd = &self.state.joint_velocities;
+        for (j, a) in self.actuators.iter().enumerate() {
+            if self.saturated[j] {
+                continue;
+            }
+            let v_end = qd[j] + dt * self.acceleration[6 + j];
+            let t = a.torque(
+                input.joint_torques[j],
+                input.joint_positions[j] - q[j] - dt * v_end,
+                input.joint_velocities[j] - v_end,
+            );
+            if t.abs() > a.limit {
+                self.saturated[j] = true;
+                self.motor_torques[j] = a.limit.copysign(t);
+                changed = true;
+            } else {
+                self.motor_torques[j] = t;
+            }
+        }
+        changed
+    }
+
+    /// One explicit step: servo torques (saturated) and contact forces at the start of the step, then the
+    /// articulated-body algorithm for `ν̇`.
+    pub(super) fn solve_explicit(&mut self, input: &SimInput) -> Result<Solve, SimError> {
+        let q = &self.state.joint_positions;
+        let qd = &self.state.joint_velocities;
+        for (j, a) in self.actuators.iter().enumerate() {
+            let mut t = a.torque(
+                input.joint_torques[j],
+                input.joint_positions[j] - q[j],
+                input.joint_velocities[j] - qd[j],
+            );
+            self.saturated[j] = t.abs() > a.limit;
+            if self.saturated[j] {
+                t = a.limit.copysign(t);
+            }
+            self.motor_torques[j] = t;
+        }
+        for s in &mut self.surfaces {
+            s.wrench = Vector6::zeros();
+        }
+        for p in &mut self.points {
+            let f = p.explicit_step(&self.ground);
+            let s = &mut self.surfaces[p.surface];
+            s.wrench += join(&f, &p.arm.cross(&f));
+        }
+        for s in &self.surfaces {
+            if s.wrench != Vector6::zeros() {
+                self.wrenches.push(ExternalWrench {
+                    frame: s.frame,
+                    wrench: s.wrench,
+                });
+            }
+        }
+        // Joint torques for ABA: motor minus passive damping.
+        for j in 0..self.model.dof() {
+            self.joint_torque_buffer[j] = self.motor_torques[j] - self.actuators[j].damping * qd[j];
+        }
+        self.kd.forward_dynamics(
+            &self.joint_torque_buffer,
+            &self.wrenches,
+            &mut self.acceleration,
+        )?;
+        Ok(Solve {
+            solves: 1,
+            cap_hit: false,
+        })
+    }
+
+    /// `next_state` from the state and `acceleration`: `ν⁺ = ν + dt ν̇`, the configuration integrated with
+    /// `ν⁺` (base on SO(3)), then the momentum projection when `momentum_start` (`(h, c)` at the start of the
+    /// step) is given, and the divergence checks.
+    pub(super) fn integrate(
+        &mut self,
+        momentum_start: Option<(Vector6<f64>, Vector3<f64>)>,
+    ) -> Result<(), SimError> {
+        let dt = self.dt;
+        self.next_state.copy_from(&self.state);
+        for i in 0..6 {
+            self.next_state.base_velocity[i] += dt * self.acceleration[i];
+        }
+        for j in 0..self.model.dof() {
+            self.next_state.joint_velocities[j] += dt * self.acceleration[6 + j];
+        }
+        let momentum_target = momentum_start.map(|(h, c)| h + dt * self.external_wrench_about(&c));
+        self.next_state
+            .integrate(&self.model, VelocityRepresentation::Mixed, dt)?;
+        if let Some(h) = momentum_target {
+            self.project_momentum(&h)?;
+        }
+        self.check_divergence()
+    }
+
+    /// Total external wrench of the step (gravity, contact forces, active pushes) about the point `c`, world
+    /// orientation, with the geometry at the start of the step (the dynamics workspace must still hold it).
+    fn external_wrench_about(&self, c: &Vector3<f64>) -> Vector6<f64> {
+        let mut force = self.gravity * self.model.total_mass();
+        let mut torque = Vector3::zeros();
+        for p in &self.points {
+            force += p.force;
+            torque += (p.position - c).cross(&p.force);
+        }
+        for p in &self.pushes {
+            if p.is_active(self.time_ns) {
+                let f = lin(&p.wrench);
+                let o = self.kd.frame_pose(p.frame).translation.vector;
+                force += f;
+                torque += ang(&p.wrench) + (o - c).cross(&f);
+            }
+        }
+        join(&force, &torque)
+    }
+
+    /// Sets the base velocity of `next_state` so that its centroidal momentum equals `target`
+    /// (`A_b ν_b = h − A_s q̇`, the joint velocities kept). Leaves the dynamics workspace at `next_state`.
+    fn project_momentum(&mut self, target: &Vector6<f64>) -> Result<(), SimError> {
+        self.kd.set_state(&self.next_state)?;
+        self.kd
+            .centroidal_momentum_matrix(&mut self.momentum_matrix)?;
+        let mut rhs = *target;
+        for (j, v) in self.next_state.joint_velocities.iter().enumerate() {
+            rhs -= self.momentum_matrix.fixed_view::<6, 1>(0, 6 + j) * *v;
+        }
+        let base: Matrix6<f64> = self.momentum_matrix.fixed_view::<6, 6>(0, 0).into_owned();
+        if let Some(v) = base.lu().solve(&rhs) {
+            if v.iter().all(|x| x.is_finite()) {
+                self.next_state.base_velocity = v;
+            }
+        }
+        Ok(())
+    }
+}
