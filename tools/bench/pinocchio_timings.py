@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
-"""Time Pinocchio on the URDFs and states stride-model is benchmarked and tested on.
+"""Time Pinocchio on the URDFs and states stride-model is timed on (tools/bench/vs-pinocchio).
 
-For each model it loads the URDF with a free-flyer root, takes the joint positions / velocities / torques of the
-states of crates/model/tests/fixtures/<model>.json (joints mapped by name), and times, per call:
+For each model it loads the URDF with a free-flyer root and takes the 20 states of
+crates/model/tests/fixtures/<model>.json (joints mapped by name; base velocity in the body representation,
+Pinocchio's; `nu_dot` and `joint_torques` as the inputs of rnea and aba), the states stride's
+`cargo run --release -p stride-model --example cpu_timings` reads, and times, per call:
 
   set_state  forwardKinematics(q, v) (joint placements and velocities: what stride's KinDyn::set_state does)
   fk         framesForwardKinematics (placements of every joint and frame)
@@ -12,15 +14,19 @@ states of crates/model/tests/fixtures/<model>.json (joints mapped by name), and 
   aba        aba (forward dynamics)
   cmm        computeCentroidalMap (centroidal momentum matrix)
 
-Each algorithm is run in a loop over the states (cycling) for --repeat rounds of --calls calls; the reported
-time is the best round's mean, in microseconds. The Python call overhead (about 0.2-0.4 us per call) is
-included and also measured alone ("overhead": a call of a trivial Pinocchio function) so it can be judged.
+The protocol is stride's: the states are cycled through in order; one untimed warm-up pass of calls/10
+calls, then --rounds rounds of --calls calls; per round, the wall-clock time (time.perf_counter_ns, or
+std::chrono::steady_clock in the harness) and the thread's CPU time (time.thread_time_ns, or
+clock_gettime(CLOCK_THREAD_CPUTIME_ID) in the harness) divided by the calls; each clock's figure is its best
+round, in microseconds.
 
-With --harness BIN the same algorithms are timed by the C++ program pinocchio_bench.cpp (linked against the
+With --harness BIN the algorithms are timed by the C++ program pinocchio_bench.cpp (linked against the
 wheel's libpinocchio_default), on the same model (passed through Model.saveToBinary) and states, without the
-Python overhead.
+Python call overhead. Without it they are timed by Python loops, which include the call overhead (about
+0.2-0.4 us per call), also measured alone ("overhead": a call of a trivial Pinocchio function).
 
-Output: one JSON object {"<model>/<algorithm>": microseconds, ...} on stdout (or --out FILE).
+Output: one line per algorithm, "<model>/<algorithm> <wall us> <cpu us>" (the format of cpu_timings), on
+stdout or in --out FILE.
 """
 
 import argparse
@@ -48,54 +54,53 @@ def model_path(name):
 
 
 def states_for(model, name):
-    """(q, v, a, tau) in Pinocchio order for the fixture states of `name` (random if there is no fixture)."""
+    """(q, v, a, tau) in Pinocchio order for the fixture states of `name`."""
     fixture = os.path.join(ROOT, "crates", "model", "tests", "fixtures", name + ".json")
+    if not os.path.exists(fixture):
+        sys.exit("pinocchio_timings: no fixture %s (stride is timed on the fixture states only)" % fixture)
+    with open(fixture) as f:
+        fx = json.load(f)
+    idx_q = [model.joints[model.getJointId(j)].idx_q for j in fx["joint_names"]]
+    idx_v = [model.joints[model.getJointId(j)].idx_v for j in fx["joint_names"]]
     out = []
-    if os.path.exists(fixture):
-        with open(fixture) as f:
-            fx = json.load(f)
-        idx_q = [model.joints[model.getJointId(j)].idx_q for j in fx["joint_names"]]
-        idx_v = [model.joints[model.getJointId(j)].idx_v for j in fx["joint_names"]]
-        for st in fx["states"]:
-            q = pin.neutral(model)
-            q[:3] = st["base_position"]
-            q[3:7] = st["base_orientation_xyzw"]
-            q[3:7] /= np.linalg.norm(q[3:7])
-            q[idx_q] = st["joint_positions"]
-            v = np.zeros(model.nv)
-            v[:6] = st["base_velocity"]["body"]
-            v[idx_v] = st["joint_velocities"]
-            a = np.zeros(model.nv)
-            a[:6] = st["nu_dot"][:6]
-            a[idx_v] = st["nu_dot"][6:]
-            tau = np.zeros(model.nv)
-            tau[idx_v] = st["joint_torques"]
-            out.append((q, v, a, tau))
-    else:
-        rng = np.random.default_rng(0)
-        for _ in range(20):
-            q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
-            out.append((q, rng.uniform(-1, 1, model.nv), rng.uniform(-1, 1, model.nv), rng.uniform(-1, 1, model.nv)))
+    for st in fx["states"]:
+        q = pin.neutral(model)
+        q[:3] = st["base_position"]
+        q[3:7] = st["base_orientation_xyzw"]
+        q[3:7] /= np.linalg.norm(q[3:7])
+        q[idx_q] = st["joint_positions"]
+        v = np.zeros(model.nv)
+        v[:6] = st["base_velocity"]["body"]
+        v[idx_v] = st["joint_velocities"]
+        a = np.zeros(model.nv)
+        a[:6] = st["nu_dot"][:6]
+        a[idx_v] = st["nu_dot"][6:]
+        tau = np.zeros(model.nv)
+        tau[idx_v] = st["joint_torques"]
+        out.append((q, v, a, tau))
     return out
 
 
-def time_loop(fn, states, calls, repeat):
+def time_loop(fn, states, calls, rounds):
     n = len(states)
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter_ns()
+    for k in range(calls // 10):
+        fn(*states[k % n])
+    wall, cpu = float("inf"), float("inf")
+    for _ in range(rounds):
+        c0, t0 = time.thread_time_ns(), time.perf_counter_ns()
         for k in range(calls):
             fn(*states[k % n])
-        dt = (time.perf_counter_ns() - t0) / calls / 1000.0
-        best = min(best, dt)
-    return best
+        t1, c1 = time.perf_counter_ns(), time.thread_time_ns()
+        wall = min(wall, (t1 - t0) / calls / 1000.0)
+        cpu = min(cpu, (c1 - c0) / calls / 1000.0)
+    return wall, cpu
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--models", nargs="*", default=["stride_humanoid", "iCubGazeboV2_7"])
     ap.add_argument("--calls", type=int, default=20000)
-    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--out")
     ap.add_argument("--harness", metavar="BIN",
                     help="time with the C++ harness pinocchio_bench (built from pinocchio_bench.cpp) instead of "
@@ -123,12 +128,12 @@ def main():
                         f.write(" ".join(repr(float(x)) for x in np.concatenate([q, v, a, tau])) + "\n")
                 out = subprocess.run(
                     [args.harness, name, os.path.join(tmp, name + ".bin"), os.path.join(tmp, name + ".states"),
-                     str(args.calls)],
+                     str(args.calls), str(args.rounds)],
                     check=True, capture_output=True, text=True,
                 )
             for line in out.stdout.splitlines():
-                key, us = line.split()
-                results[key] = float(us)
+                key, wall, cpu = line.split()
+                results[key] = (float(wall), float(cpu))
             print(out.stderr.strip(), file=sys.stderr)
             continue
         if args.dump:
@@ -150,17 +155,16 @@ def main():
             "cmm": lambda q, v, a, tau: pin.computeCentroidalMap(m, d, q),
         }
         for algo, fn in algos.items():
-            results["%s/%s" % (name, algo)] = time_loop(fn, states, args.calls, args.repeat)
+            results["%s/%s" % (name, algo)] = time_loop(fn, states, args.calls, args.rounds)
         print("pinocchio_timings: %s nq=%d nv=%d frames=%d" % (name, m.nq, m.nv, m.nframes), file=sys.stderr)
     if args.dump:
         return
-    text = json.dumps(results, indent=1, sort_keys=True)
+    text = "".join("%s %.4f %.4f\n" % (key, wall, cpu) for key, (wall, cpu) in results.items())
     if args.out:
         with open(args.out, "w") as f:
-            f.write(text + "\n")
+            f.write(text)
     else:
-        print(text)
-
+        sys.stdout.write(text)
 
 if __name__ == "__main__":
     main()

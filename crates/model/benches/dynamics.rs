@@ -1,8 +1,10 @@
-//! Timings of the main algorithms on the bundled humanoid and, when `STRIDE_ICUB_MODELS_DIR` is set, on
-//! iCubGazeboV2_7 (free flyer + 32 joints, the model of the Pinocchio figures in docs/model.md).
+//! Criterion timings (wall clock) of the main algorithms on the bundled humanoid and, when
+//! `STRIDE_ICUB_MODELS_DIR` is set, on iCubGazeboV2_7 (free flyer + 32 joints).
 //!
 //! Every timed call includes `set_state` (forward kinematics, velocities, world inertias), like Pinocchio's
-//! algorithms include their own forward pass. States cycle through 100 random states.
+//! algorithms include their own forward pass. States cycle through 100 random states. The comparison with
+//! Pinocchio does not use this bench: `tools/bench/vs-pinocchio` times `examples/cpu_timings.rs`, which
+//! reads the same fixture states as the Pinocchio side and applies the same statistic.
 
 use std::hint::black_box;
 use std::path::PathBuf;

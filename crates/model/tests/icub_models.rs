@@ -1,7 +1,8 @@
 //! Every official URDF of the `icub-models` package loads (including those with `<texture/>` elements that
 //! urdf-rs rejects as they stand) and gives a consistent model. The URDFs are not committed: set
-//! `STRIDE_ICUB_MODELS_DIR` to the package's `share/iCub/robots` directory. Without it the test is skipped
-//! with a printed reason (under CI, `CI` set, a missing variable is an error).
+//! `STRIDE_ICUB_MODELS_DIR` to the package's `share/iCub/robots` directory. The rule of
+//! [`stride_testkit::icub_models_dir`] applies: without the variable the test is skipped with a printed
+//! reason (an error under CI, `CI` set); with it, a folder without the models is an error.
 
 mod common;
 
@@ -10,8 +11,8 @@ use std::sync::Arc;
 use nalgebra::{DMatrix, DVector};
 use stride_model::{KinDyn, Model};
 
-/// Total masses (kg) listed for icub-models 3.2.0 in shared/research/deps-and-perf.md §4.2 (sum of the
-/// URDF masses, computed independently of this crate).
+/// Total masses (kg) of icub-models 3.2.0: the sum of each URDF's `<inertial><mass>` values, computed
+/// independently of this crate.
 const EXPECTED_MASS: &[(&str, f64)] = &[
     ("iCubGazeboV2_7", 33.062),
     ("iCubGazeboV2_5", 33.062),
@@ -25,12 +26,7 @@ const EXPECTED_MASS: &[(&str, f64)] = &[
 
 #[test]
 fn every_icub_model_loads() {
-    let Some(dir) = std::env::var_os("STRIDE_ICUB_MODELS_DIR") else {
-        let reason = "skipping: STRIDE_ICUB_MODELS_DIR is not set (the share/iCub/robots directory of `pip install icub-models`)";
-        if std::env::var_os("CI").is_some() {
-            panic!("{reason}; CI must run it");
-        }
-        eprintln!("{reason}");
+    let Some(dir) = stride_testkit::icub_models_dir("every_icub_model_loads") else {
         return;
     };
     let mut entries: Vec<_> = std::fs::read_dir(&dir)

@@ -9,10 +9,10 @@
 //!
 //! The official iCub URDFs are not committed: the tests find them in `$STRIDE_ICUB_MODELS_DIR/<model>/model.urdf`
 //! (the `share/iCub/robots` directory of the `icub-models` package, printed by
-//! `tools/reference/icub-models-dir.sh`). Without the variable they are skipped with a printed reason, except
-//! under CI (`CI` set), where a missing directory is an error.
+//! `tools/reference/icub-models-dir.sh`), by the rule of [`stride_testkit::icub_model_urdf`]: without the variable
+//! they are skipped with a printed reason (an error under CI, `CI` set); with it, a missing model is an error.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use nalgebra::{
@@ -39,37 +39,17 @@ fn load_fixture(name: &str) -> Value {
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("cannot parse {}: {e}", path.display()))
 }
 
-/// Where the URDF of a fixture is, or `None` (with the reason printed) when it is an iCub model and
-/// `STRIDE_ICUB_MODELS_DIR` is not set.
-fn urdf_path(fx: &Value) -> Option<PathBuf> {
+/// Where the URDF of a fixture is: in the repository, or an official iCub model found by
+/// [`stride_testkit::icub_model_urdf`] for the test named `test` (`None`, the skip printed, when
+/// `STRIDE_ICUB_MODELS_DIR` is unset; a failure when it is set and the model is missing).
+fn urdf_path(test: &str, fx: &Value) -> Option<PathBuf> {
     if let Some(rel) = fx["urdf"].as_str() {
         return Some(manifest_dir().join("..").join("..").join(rel));
     }
     let icub = fx["icub_model"]
         .as_str()
         .expect("fixture has neither urdf nor icub_model");
-    match std::env::var_os("STRIDE_ICUB_MODELS_DIR") {
-        Some(dir) => {
-            let path = Path::new(&dir).join(icub).join("model.urdf");
-            assert!(
-                path.is_file(),
-                "STRIDE_ICUB_MODELS_DIR is set but {} does not exist",
-                path.display()
-            );
-            Some(path)
-        }
-        None => {
-            let reason = format!(
-                "skipping the {icub} reference test: STRIDE_ICUB_MODELS_DIR is not set \
-                 (export STRIDE_ICUB_MODELS_DIR=$(bash tools/reference/icub-models-dir.sh))"
-            );
-            if std::env::var_os("CI").is_some() {
-                panic!("{reason}; CI must run it");
-            }
-            eprintln!("{reason}");
-            None
-        }
-    }
+    stride_testkit::icub_model_urdf(test, icub)
 }
 
 fn vec_of(v: &Value) -> Vec<f64> {
@@ -277,9 +257,12 @@ fn rotation_of(pose: &Isometry3<f64>) -> Matrix3<f64> {
     *pose.rotation.to_rotation_matrix().matrix()
 }
 
-fn check_model(name: &str) {
+/// Compares the model of fixture `name` with the fixture, in the test named `test`.
+fn check_model(test: &str, name: &str) {
     let fx = load_fixture(name);
-    let Some(path) = urdf_path(&fx) else { return };
+    let Some(path) = urdf_path(test, &fx) else {
+        return;
+    };
     let model = Model::from_urdf_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let model = Arc::new(model);
     let mut report = Report::new(name);
@@ -534,22 +517,22 @@ fn check_model(name: &str) {
 
 #[test]
 fn reference_stride_humanoid() {
-    check_model("stride_humanoid");
+    check_model("reference_stride_humanoid", "stride_humanoid");
 }
 
 #[test]
 fn reference_icub_gazebo_v2_7() {
-    check_model("iCubGazeboV2_7");
+    check_model("reference_icub_gazebo_v2_7", "iCubGazeboV2_7");
 }
 
 #[test]
 fn reference_icub_genova04() {
-    check_model("iCubGenova04");
+    check_model("reference_icub_genova04", "iCubGenova04");
 }
 
 #[test]
 fn reference_icub_lisboa01() {
-    check_model("iCubLisboa01");
+    check_model("reference_icub_lisboa01", "iCubLisboa01");
 }
 
 /// The fixtures themselves are consistent with the conventions the tests rely on: the three base velocities
