@@ -204,29 +204,6 @@ fn velocity_commands_replan_online_and_the_robot_follows() {
     assert!(real[0] > 0.8, "walked only {:.3} m forward", real[0]);
 }
 
-/// Whether the official iCub models are available (`STRIDE_ICUB_MODELS_DIR`, as CI exports it); prints why
-/// the test is skipped otherwise.
-fn icub_models_available(test: &str) -> bool {
-    match std::env::var_os("STRIDE_ICUB_MODELS_DIR") {
-        Some(dir) => {
-            let urdf = Path::new(&dir).join("iCubGazeboV2_7").join("model.urdf");
-            assert!(
-                urdf.exists(),
-                "STRIDE_ICUB_MODELS_DIR is set but {} does not exist",
-                urdf.display()
-            );
-            true
-        }
-        None => {
-            eprintln!(
-                "{test}: skipped, STRIDE_ICUB_MODELS_DIR is not set (the official iCub URDFs are not committed; \
-                 `bash tools/reference/icub-models-dir.sh` prints the folder)"
-            );
-            false
-        }
-    }
-}
-
 /// The official iCub model walks the default scenario's 2 m: checks the frame-convention handling too (the
 /// run starts at heading 0 although iCub's `root_link` points backward, and its chest, y up, is upright).
 fn assert_icub_walked_two_metres(name: &str, s: &RunSummary) {
@@ -252,7 +229,8 @@ fn assert_icub_walked_two_metres(name: &str, s: &RunSummary) {
 #[test]
 fn icub_walks_two_metres_in_position_control() {
     let name = "walk_straight_icub.toml";
-    if !icub_models_available(name) {
+    let test = "icub_walks_two_metres_in_position_control";
+    if stride_testkit::icub_model_urdf(test, "iCubGazeboV2_7").is_none() {
         return;
     }
     let s = run(name);
@@ -262,7 +240,8 @@ fn icub_walks_two_metres_in_position_control() {
 #[test]
 fn icub_walks_two_metres_in_torque_control() {
     let name = "walk_straight_icub_torque.toml";
-    if !icub_models_available(name) {
+    let test = "icub_walks_two_metres_in_torque_control";
+    if stride_testkit::icub_model_urdf(test, "iCubGazeboV2_7").is_none() {
         return;
     }
     let s = run(name);
