@@ -16,7 +16,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dense::DenseQp;
-use crate::solver::{QpSolver, QpStatus, SolverOutput};
+use crate::solver::{QpSolver, SolverOutput};
+use crate::status::QpStatus;
 
 /// Settings of the active-set backend.
 ///

@@ -258,7 +258,7 @@ pub fn replay(
             }
         }
         LayerName::Wbc => {
-            let period = 1.0 / f64::from(c.rates.wbc_hz);
+            let period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.wbc_hz));
             let outputs: Vec<_> = log.topic("/wbc/output").collect();
             let mut input = WbcInput::new(&model);
             let mode = c.scenario.control_mode;
@@ -266,18 +266,14 @@ pub fn replay(
             let mut tsid = None;
             match mode {
                 ControlMode::Position => {
-                    let mut cfg = c.wbc.ik.clone();
-                    cfg.period = period;
                     ik = Some(
-                        QpIk::new(Arc::clone(&model), cfg)
+                        QpIk::new(Arc::clone(&model), c.wbc.ik.clone(), period)
                             .map_err(|e| ReplayError::Content(format!("QP-IK: {e}")))?,
                     );
                 }
                 ControlMode::Torque => {
-                    let mut cfg = c.wbc.tsid.clone();
-                    cfg.period = period;
                     tsid = Some(
-                        Tsid::new(Arc::clone(&model), cfg)
+                        Tsid::new(Arc::clone(&model), c.wbc.tsid.clone(), period)
                             .map_err(|e| ReplayError::Content(format!("TSID: {e}")))?,
                     );
                 }

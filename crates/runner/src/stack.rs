@@ -223,18 +223,16 @@ impl Stack {
         let simplified_period =
             Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
         let simplified = SimplifiedController::new(&c.simplified, simplified_period)?;
-        let wbc_period = 1.0 / f64::from(c.rates.wbc_hz);
+        let wbc_period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.wbc_hz));
         let wbc = match c.scenario.control_mode {
             ControlMode::Position => {
-                let mut cfg = c.wbc.ik.clone();
-                cfg.period = wbc_period;
-                Wbc::Ik(QpIk::new(Arc::clone(&model), cfg)?)
+                Wbc::Ik(QpIk::new(Arc::clone(&model), c.wbc.ik.clone(), wbc_period)?)
             }
-            ControlMode::Torque => {
-                let mut cfg = c.wbc.tsid.clone();
-                cfg.period = wbc_period;
-                Wbc::Tsid(Tsid::new(Arc::clone(&model), cfg)?)
-            }
+            ControlMode::Torque => Wbc::Tsid(Tsid::new(
+                Arc::clone(&model),
+                c.wbc.tsid.clone(),
+                wbc_period,
+            )?),
         };
         let polygon = Self::polygon_of(
             &[kd.frame_pose(soles[0]), kd.frame_pose(soles[1])],

@@ -1,25 +1,25 @@
 //! Kinematic whole-body QP (QP-IK, thesis 7.1.16): decision variable `ν = [base twist (mixed); ṡ]`.
 
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use nalgebra::{DVector, Vector6};
 use stride_block::Block;
 use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
 
-use crate::bridge::{QpBridge, VariableLayout};
-use crate::config::{IkConfig, IkFeedback, Priority, TaskConfig};
+use crate::bridge::{residual, QpBridge, VariableLayout};
+use crate::config::{IkConfig, IkFeedback, Priority, TaskConfig, Weight};
 use crate::error::WbcError;
 use crate::io::{IkOutput, SolveReport, TaskResidual, WbcInput};
 use crate::tasks::{
-    check_gain, expand_weight, joint_limits, position_limit_bounds, AngularMomentumVelocityTask,
-    ComVelocityTask, FrameTask, JointRegularizationTask, Level, TaskBlock,
+    check_gain, joint_limits, position_limit_bounds, AngularMomentumVelocityTask, ComVelocityTask,
+    FrameTask, JointRegularizationTask, Level,
 };
 
 /// What a config entry became.
 #[derive(Debug, Clone, Copy)]
 enum Slot {
-    /// A row block (index into `blocks`).
+    /// A stride-qp task (its index in the bridge).
     Block(usize),
     /// Joint position limits (variable bounds).
     PositionLimits,
@@ -38,13 +38,14 @@ enum Slot {
 pub struct QpIk {
     model: Arc<Model>,
     config: IkConfig,
+    /// Control period (s).
+    period: f64,
     kd: KinDyn,
     frame_tasks: Vec<FrameTask>,
     com_tasks: Vec<ComVelocityTask>,
     momentum_tasks: Vec<AngularMomentumVelocityTask>,
     joint_tasks: Vec<JointRegularizationTask>,
     slots: Vec<Slot>,
-    blocks: Vec<TaskBlock>,
     position_limits: Option<(Vec<f64>, Vec<f64>, f64)>,
     velocity_limits: Option<Vec<f64>>,
     lower: DVector<f64>,
@@ -57,26 +58,29 @@ pub struct QpIk {
 }
 
 impl QpIk {
-    /// Builds the controller (all allocation happens here).
+    /// Builds the controller running every `period` (the integration step and the default look-ahead of
+    /// the joint position limits). All allocation happens here.
     ///
-    /// Errors: unknown frames/joints, invalid gains or weights, task types the QP-IK does not support
-    /// (TSID-only tasks), or a QP that stride-qp rejects.
-    pub fn new(model: Arc<Model>, config: IkConfig) -> Result<Self, WbcError> {
-        if !(config.period.is_finite() && config.period > 0.0) {
+    /// Errors: a zero period, unknown frames/joints, invalid gains or weights (a weight on a hard task),
+    /// task types the QP-IK does not support (TSID-only tasks), or a QP that stride-qp rejects.
+    pub fn new(model: Arc<Model>, config: IkConfig, period: Duration) -> Result<Self, WbcError> {
+        let period = period.as_secs_f64();
+        if period <= 0.0 {
             return Err(WbcError::InvalidConfig {
                 task: "<qp-ik>".into(),
                 key: "period",
-                reason: format!("{} must be > 0", config.period),
+                reason: format!("{period} s must be > 0"),
             });
         }
         let n = model.dof();
         let nv = model.nv();
+        let layout = VariableLayout::new(&[("base_velocity", 6), ("joint_velocities", n)])?;
         let mut frame_tasks = Vec::new();
         let mut com_tasks = Vec::new();
         let mut momentum_tasks = Vec::new();
         let mut joint_tasks = Vec::new();
         let mut slots = Vec::new();
-        let mut blocks: Vec<TaskBlock> = Vec::new();
+        let mut blocks = Vec::new();
         let mut position_limits = None;
         let mut velocity_limits = None;
         let (lo, hi, vmax, _) = joint_limits(&model);
@@ -89,16 +93,9 @@ impl QpIk {
                     reason: "duplicate task name".into(),
                 });
             }
-            let eq_block =
-                |rows: usize, priority: Priority, weight| -> Result<TaskBlock, WbcError> {
-                    let hard = priority == Priority::Hard;
-                    let w = if hard {
-                        vec![1.0; rows]
-                    } else {
-                        expand_weight(task.name(), weight, rows)?
-                    };
-                    Ok(TaskBlock::equality(task.name(), rows, nv, hard, w))
-                };
+            let eq_block = |rows: usize, priority: Priority, weight| {
+                layout.equality(task.name(), rows, priority, weight)
+            };
             match task {
                 TaskConfig::Se3(c) => {
                     let mut t = FrameTask::from_se3(&model, c, Level::Velocity)?;
@@ -133,17 +130,15 @@ impl QpIk {
                     let mut t = JointRegularizationTask::new(&model, c, Level::Velocity)?;
                     t.block = blocks.len();
                     slots.push(Slot::Block(blocks.len()));
-                    let w = if t.hard {
-                        vec![1.0; n]
+                    blocks.push(if t.hard {
+                        layout.hard(&c.name, n)
                     } else {
-                        t.weights.clone()
-                    };
-                    blocks.push(TaskBlock::equality(&c.name, n, nv, t.hard, w));
+                        layout.soft(&c.name, n, Weight::PerRow(t.weights.clone()))
+                    });
                     joint_tasks.push(t);
                 }
                 TaskConfig::JointPositionLimits(c) => {
-                    position_limits =
-                        Some(position_limit_bounds(c, config.period, &lo, &hi, &model)?);
+                    position_limits = Some(position_limit_bounds(c, period, &lo, &hi, &model)?);
                     slots.push(Slot::PositionLimits);
                 }
                 TaskConfig::JointVelocityLimits(c) => {
@@ -160,8 +155,7 @@ impl QpIk {
                 }
             }
         }
-        let layout = VariableLayout::new(&[("base_velocity", 6), ("joint_velocities", n)])?;
-        let bridge = QpBridge::new(layout, &blocks, &config.qp, config.eliminate_equalities)?;
+        let bridge = QpBridge::new(layout, blocks, &config.qp, config.eliminate_equalities)?;
         let residuals = config
             .tasks
             .iter()
@@ -196,7 +190,6 @@ impl QpIk {
             momentum_tasks,
             joint_tasks,
             slots,
-            blocks,
             position_limits,
             velocity_limits,
             lower: DVector::from_element(nv, f64::NEG_INFINITY),
@@ -208,6 +201,7 @@ impl QpIk {
             output,
             model,
             config,
+            period,
         })
     }
 
@@ -248,23 +242,19 @@ impl QpIk {
             .position(|t| t.name() == task)
             .ok_or_else(|| WbcError::InvalidInput(format!("no task `{task}`")))?;
         let b = match self.slots[k] {
-            Slot::Block(b) if !self.blocks[b].hard => b,
+            Slot::Block(b) if !self.bridge.task(b).is_hard() => b,
             _ => {
                 return Err(WbcError::InvalidInput(format!(
                     "task `{task}` is not a soft task"
                 )))
             }
         };
-        self.bridge.set_weights(b, weights)?;
-        let block = &mut self.blocks[b];
-        for i in 0..block.rows() {
-            block.weight[i] = if weights.len() == 1 {
-                weights[0]
-            } else {
-                weights[i]
-            };
-        }
-        Ok(())
+        self.bridge.set_weights(b, weights)
+    }
+
+    /// The control period given to [`QpIk::new`] (s).
+    pub fn period(&self) -> f64 {
+        self.period
     }
 
     /// The last output.
@@ -296,20 +286,20 @@ impl QpIk {
     fn fill(&mut self, input: &WbcInput) -> Result<(), WbcError> {
         self.kd.set_state(&self.state)?;
         for t in &mut self.frame_tasks {
-            t.update(&self.kd, input, &mut self.blocks[t.block])?;
+            t.update(&self.kd, input, self.bridge.rows_mut(t.block))?;
         }
         for t in &mut self.com_tasks {
-            t.update(&mut self.kd, input, &mut self.blocks[t.block])?;
+            t.update(&mut self.kd, input, self.bridge.rows_mut(t.block))?;
         }
         for t in &mut self.momentum_tasks {
-            t.update(&mut self.kd, input, &mut self.blocks[t.block])?;
+            t.update(&mut self.kd, input, self.bridge.rows_mut(t.block))?;
         }
         for t in &self.joint_tasks {
             t.update(
                 input,
                 &self.state.joint_positions,
                 &self.state.joint_velocities,
-                &mut self.blocks[t.block],
+                self.bridge.rows_mut(t.block),
             );
         }
         let n = self.model.dof();
@@ -350,7 +340,7 @@ impl QpIk {
         let n = self.model.dof();
         for (k, slot) in self.slots.iter().enumerate() {
             let r = match slot {
-                Slot::Block(b) => self.blocks[*b].residual(&self.x),
+                Slot::Block(b) => residual(self.bridge.task(*b), &self.x),
                 Slot::PositionLimits | Slot::VelocityLimits => {
                     let mut s = 0.0;
                     for i in 0..n {
@@ -465,9 +455,7 @@ impl Block for QpIk {
             self.initialized = true;
         }
         self.fill(input)?;
-        let report = self
-            .bridge
-            .solve(&self.blocks, &self.lower, &self.upper, &mut self.x);
+        let report = self.bridge.solve(&self.lower, &self.upper, &mut self.x);
         let n = self.model.dof();
         self.output.report = report;
         if report.held {
@@ -481,11 +469,8 @@ impl Block for QpIk {
             for i in 0..n {
                 self.state.joint_velocities[i] = self.x[6 + i];
             }
-            self.state.integrate(
-                &self.model,
-                VelocityRepresentation::Mixed,
-                self.config.period,
-            )?;
+            self.state
+                .integrate(&self.model, VelocityRepresentation::Mixed, self.period)?;
             self.output
                 .joint_positions
                 .copy_from(&self.state.joint_positions);

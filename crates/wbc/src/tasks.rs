@@ -1,6 +1,6 @@
 //! The task library. Every task writes rows `A x = b` (equality) or `l ≤ A x ≤ u` (inequality) over the
-//! full decision vector `x` of its controller into a preallocated [`TaskBlock`]; the controller hands the
-//! blocks to stride-qp. Nothing here allocates after construction.
+//! full decision vector `x` of its controller straight into the storage of its stride-qp task
+//! ([`stride_qp::TaskDataMut`]). Nothing here allocates after construction.
 //!
 //! Velocity-level tasks (QP-IK, `x = ν`) and acceleration-level tasks (TSID, `x = [ν̇; f…]`) share the
 //! same Jacobians; [`Level`] selects the right-hand side.
@@ -10,9 +10,11 @@ use std::collections::BTreeMap;
 use nalgebra::{DMatrix, DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
 use stride_model::{FrameId, KinDyn, Model};
 
+use stride_qp::TaskDataMut;
+
 use crate::config::{
     ComTaskConfig, Frame3TaskConfig, FrameReferenceSource, JointRegularizationTaskConfig, Priority,
-    ReferenceOffset, Se3TaskConfig, Weight,
+    ReferenceOffset, Se3TaskConfig,
 };
 use crate::error::WbcError;
 use crate::io::WbcInput;
@@ -23,105 +25,6 @@ use crate::math::orientation_error;
 pub(crate) enum Level {
     Velocity,
     Acceleration,
-}
-
-/// Equality or inequality rows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum RowKind {
-    Equality,
-    Inequality,
-}
-
-/// Preallocated rows of one task over the full decision vector.
-#[derive(Debug, Clone)]
-pub(crate) struct TaskBlock {
-    /// Task name (config).
-    pub name: String,
-    /// Equality or inequality.
-    pub kind: RowKind,
-    /// Hard constraint (always true for inequalities).
-    pub hard: bool,
-    /// Soft weights (one per row).
-    pub weight: DVector<f64>,
-    /// Rows × nx.
-    pub a: DMatrix<f64>,
-    /// Equality right-hand side.
-    pub b: DVector<f64>,
-    /// Inequality lower side.
-    pub lower: DVector<f64>,
-    /// Inequality upper side.
-    pub upper: DVector<f64>,
-}
-
-impl TaskBlock {
-    pub fn equality(name: &str, rows: usize, nx: usize, hard: bool, weight: Vec<f64>) -> Self {
-        TaskBlock {
-            name: name.to_owned(),
-            kind: RowKind::Equality,
-            hard,
-            weight: DVector::from_vec(weight),
-            a: DMatrix::zeros(rows, nx),
-            b: DVector::zeros(rows),
-            lower: DVector::zeros(0),
-            upper: DVector::zeros(0),
-        }
-    }
-
-    pub fn inequality(name: &str, rows: usize, nx: usize) -> Self {
-        TaskBlock {
-            name: name.to_owned(),
-            kind: RowKind::Inequality,
-            hard: true,
-            weight: DVector::zeros(rows),
-            a: DMatrix::zeros(rows, nx),
-            b: DVector::zeros(0),
-            lower: DVector::from_element(rows, f64::NEG_INFINITY),
-            upper: DVector::from_element(rows, f64::INFINITY),
-        }
-    }
-
-    pub fn rows(&self) -> usize {
-        self.a.nrows()
-    }
-
-    /// `‖A x − b‖` (equality) or the norm of the bound violation (inequality). No allocation.
-    pub fn residual(&self, x: &DVector<f64>) -> f64 {
-        let mut sum = 0.0;
-        for i in 0..self.a.nrows() {
-            let mut ax = 0.0;
-            for j in 0..self.a.ncols() {
-                ax += self.a[(i, j)] * x[j];
-            }
-            let r = match self.kind {
-                RowKind::Equality => ax - self.b[i],
-                RowKind::Inequality => {
-                    (self.lower[i] - ax).max(0.0) + (ax - self.upper[i]).max(0.0)
-                }
-            };
-            sum += r * r;
-        }
-        sum.sqrt()
-    }
-}
-
-pub(crate) fn expand_weight(
-    task: &str,
-    weight: &Weight,
-    rows: usize,
-) -> Result<Vec<f64>, WbcError> {
-    let w = weight.expand(rows).ok_or_else(|| WbcError::InvalidConfig {
-        task: task.to_owned(),
-        key: "weight",
-        reason: format!("expected a scalar or {rows} values"),
-    })?;
-    if let Some(bad) = w.iter().find(|v| !v.is_finite() || **v < 0.0) {
-        return Err(WbcError::InvalidConfig {
-            task: task.to_owned(),
-            key: "weight",
-            reason: format!("{bad} is not finite and >= 0"),
-        });
-    }
-    Ok(w)
 }
 
 pub(crate) fn check_gain(task: &str, key: &'static str, value: f64) -> Result<(), WbcError> {
@@ -376,7 +279,7 @@ impl FrameTask {
         &mut self,
         kd: &KinDyn,
         input: &WbcInput,
-        block: &mut TaskBlock,
+        block: TaskDataMut<'_>,
     ) -> Result<(), WbcError> {
         let r = self.reference(kd, input);
         kd.frame_jacobian(self.frame, &mut self.jacobian)?;
@@ -467,7 +370,7 @@ impl ComVelocityTask {
         &mut self,
         kd: &mut KinDyn,
         input: &WbcInput,
-        block: &mut TaskBlock,
+        block: TaskDataMut<'_>,
     ) -> Result<(), WbcError> {
         kd.com_jacobian(&mut self.jacobian)?;
         let com = kd.com_position();
@@ -508,7 +411,7 @@ impl AngularMomentumVelocityTask {
         &mut self,
         kd: &mut KinDyn,
         input: &WbcInput,
-        block: &mut TaskBlock,
+        block: TaskDataMut<'_>,
     ) -> Result<(), WbcError> {
         kd.centroidal_momentum_matrix(&mut self.cmm)?;
         let nv = self.cmm.ncols();
@@ -542,21 +445,31 @@ impl JointRegularizationTask {
     ) -> Result<Self, WbcError> {
         check_gain(&c.name, "kp", c.kp)?;
         check_gain(&c.name, "kd", c.kd)?;
-        check_gain(&c.name, "weight", c.weight)?;
+        let hard = c.priority == Priority::Hard;
+        if hard && (c.weight.is_some() || !c.joint_weights.is_empty()) {
+            return Err(WbcError::InvalidConfig {
+                task: c.name.clone(),
+                key: "weight",
+                reason: "a hard task has no weight: remove `weight`/`joint_weights` or set \
+                         `priority = \"soft\"`"
+                    .into(),
+            });
+        }
+        let weight = c.weight.unwrap_or(1.0);
+        check_gain(&c.name, "weight", weight)?;
         let n = model.dof();
         let posture = joint_map(model, &c.name, &c.posture, 0.0)?;
-        for (j, w) in &c.joint_weights {
+        for w in c.joint_weights.values() {
             check_gain(&c.name, "joint_weights", *w)?;
-            let _ = j;
         }
-        let weights = joint_map(model, &c.name, &c.joint_weights, c.weight)?;
+        let weights = joint_map(model, &c.name, &c.joint_weights, weight)?;
         debug_assert_eq!(posture.len(), n);
         Ok(JointRegularizationTask {
             kp: c.kp,
             kd: c.kd,
             posture: DVector::from_vec(posture),
             weights,
-            hard: c.priority == Priority::Hard,
+            hard,
             level,
             block: usize::MAX,
         })
@@ -567,7 +480,7 @@ impl JointRegularizationTask {
         input: &WbcInput,
         s: &DVector<f64>,
         ds: &DVector<f64>,
-        block: &mut TaskBlock,
+        block: TaskDataMut<'_>,
     ) {
         let n = s.len();
         let posture = match &input.posture {

@@ -8,22 +8,23 @@
 //! without a hard ZMP row), each with its own warm start; a tick fills and solves only the one it needs.
 
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector3, Vector6};
 use stride_block::Block;
 use stride_model::{FrameId, KinDyn, Model, VelocityRepresentation};
 
-use crate::bridge::{QpBridge, VariableLayout};
-use crate::config::{ContactTaskConfig, Foot, Priority, TaskConfig, TsidConfig};
+use crate::bridge::{check_weight, priority_weight, residual, QpBridge, VariableLayout};
+use crate::config::{ContactTaskConfig, Foot, Priority, TaskConfig, TsidConfig, Weight};
 use crate::error::WbcError;
 use crate::ik::{check_references, check_state};
 use crate::io::{SolveReport, TaskResidual, TsidOutput, WbcInput};
 use crate::math::skew;
 use crate::tasks::{
-    check_gain, expand_weight, frame_id, joint_limits, position_limit_bounds, FrameTask,
-    JointRegularizationTask, Level, TaskBlock,
+    check_gain, frame_id, joint_limits, position_limit_bounds, FrameTask, JointRegularizationTask,
+    Level,
 };
+use stride_qp::{TaskDataMut, TaskKind, TaskSpec};
 
 /// Maximum number of contacts (2^k QPs are prebuilt).
 pub const MAX_CONTACTS: usize = 4;
@@ -201,9 +202,8 @@ enum TsidTask {
 struct Variant {
     /// Contact index → column offset of its wrench in x.
     offsets: [Option<usize>; MAX_CONTACTS],
-    /// Config task index → block indices (a contact task has two: constraint and feasibility).
+    /// Config task index → stride-qp task indices (a contact task has two: constraint and feasibility).
     slots: Vec<Vec<usize>>,
-    blocks: Vec<TaskBlock>,
     bridge: QpBridge,
     lower: DVector<f64>,
     upper: DVector<f64>,
@@ -214,6 +214,8 @@ struct Variant {
 pub struct Tsid {
     model: Arc<Model>,
     config: TsidConfig,
+    /// Control period (s).
+    period: f64,
     kd: KinDyn,
     tasks: Vec<TsidTask>,
     frame_tasks: Vec<FrameTask>,
@@ -238,24 +240,19 @@ pub struct Tsid {
 }
 
 impl Tsid {
-    /// Builds the controller and its QPs (all allocation happens here).
+    /// Builds the controller and its QPs, running every `period` (load ramps, default limit
+    /// look-ahead), under the model's gravity ([`Model::gravity`]). All allocation happens here.
     ///
-    /// Errors: unknown frames/joints, invalid values, no `floating_base_dynamics` task, more than
-    /// `MAX_CONTACTS` contacts, or a QP that stride-qp rejects.
-    pub fn new(model: Arc<Model>, config: TsidConfig) -> Result<Self, WbcError> {
+    /// Errors: a zero period, unknown frames/joints, invalid values (a weight on a hard task), no
+    /// `floating_base_dynamics` task, more than `MAX_CONTACTS` contacts, or a QP that stride-qp rejects.
+    pub fn new(model: Arc<Model>, config: TsidConfig, period: Duration) -> Result<Self, WbcError> {
         let ctl = "<tsid>";
-        if !(config.period.is_finite() && config.period > 0.0) {
+        let period = period.as_secs_f64();
+        if period <= 0.0 {
             return Err(WbcError::InvalidConfig {
                 task: ctl.into(),
                 key: "period",
-                reason: format!("{} must be > 0", config.period),
-            });
-        }
-        if !config.gravity.iter().all(|v| v.is_finite()) {
-            return Err(WbcError::InvalidConfig {
-                task: ctl.into(),
-                key: "gravity",
-                reason: "must be finite".into(),
+                reason: format!("{period} s must be > 0"),
             });
         }
         let n = model.dof();
@@ -267,15 +264,14 @@ impl Tsid {
         let mut contacts = Vec::new();
         let mut position_limits = None;
         let mut velocity_limits = None;
-        let mut torque_weight = vec![0.0; n];
         let mut wrench_weight = [0.0; 6];
-        let mut zmp_weight = vec![0.0; 2];
+        let mut zmp_weight = None;
         let mut zmp_hard = false;
         let mut has_zmp = false;
         let mut has_dynamics = false;
         let mut names = std::collections::BTreeSet::new();
         // hard/soft flags per config task (for residual reports) and soft weights
-        let mut eq_weights: Vec<Option<(bool, Vec<f64>)>> = Vec::new();
+        let mut eq_weights: Vec<Option<(bool, Weight)>> = Vec::new();
         for task in &config.tasks {
             if !names.insert(task.name().to_owned()) {
                 return Err(WbcError::InvalidConfig {
@@ -285,11 +281,12 @@ impl Tsid {
                 });
             }
             let weights = |rows: usize, priority: Priority, w| -> Result<_, WbcError> {
-                Ok(if priority == Priority::Hard {
-                    Some((true, vec![1.0; rows]))
-                } else {
-                    Some((false, expand_weight(task.name(), w, rows)?))
-                })
+                Ok(Some(
+                    match priority_weight(task.name(), rows, priority, w)? {
+                        None => (true, Weight::default()),
+                        Some(w) => (false, w),
+                    },
+                ))
             };
             match task {
                 TaskConfig::FloatingBaseDynamics(_) => {
@@ -302,7 +299,7 @@ impl Tsid {
                     }
                     has_dynamics = true;
                     tasks.push(TsidTask::Dynamics);
-                    eq_weights.push(Some((true, vec![1.0; 6])));
+                    eq_weights.push(Some((true, Weight::default())));
                 }
                 TaskConfig::Se3(c) => {
                     let t = FrameTask::from_se3(&model, c, Level::Acceleration)?;
@@ -342,25 +339,18 @@ impl Tsid {
                 }
                 TaskConfig::JointRegularization(c) => {
                     let t = JointRegularizationTask::new(&model, c, Level::Acceleration)?;
-                    let w = if t.hard {
-                        vec![1.0; n]
-                    } else {
-                        t.weights.clone()
-                    };
-                    eq_weights.push(Some((t.hard, w)));
+                    eq_weights.push(Some((t.hard, Weight::PerRow(t.weights.clone()))));
                     tasks.push(TsidTask::Joint(joint_tasks.len()));
                     joint_tasks.push(t);
                 }
                 TaskConfig::JointPositionLimits(c) => {
-                    position_limits =
-                        Some(position_limit_bounds(c, config.period, &lo, &hi, &model)?);
+                    position_limits = Some(position_limit_bounds(c, period, &lo, &hi, &model)?);
                     eq_weights.push(None);
                     tasks.push(TsidTask::PositionLimits);
                 }
                 TaskConfig::JointVelocityLimits(c) => {
                     check_gain(&c.name, "scale", c.scale)?;
-                    velocity_limits =
-                        Some((vmax.iter().map(|v| v * c.scale).collect(), config.period));
+                    velocity_limits = Some((vmax.iter().map(|v| v * c.scale).collect(), period));
                     eq_weights.push(None);
                     tasks.push(TsidTask::VelocityLimits);
                 }
@@ -377,19 +367,21 @@ impl Tsid {
                             reason: format!("at most {MAX_CONTACTS} contacts"),
                         });
                     }
-                    eq_weights.push(Some((true, vec![1.0; 6])));
+                    eq_weights.push(Some((true, Weight::default())));
                     tasks.push(TsidTask::Contact(contacts.len()));
                     contacts.push(Contact::new(&model, c)?);
                 }
                 TaskConfig::WrenchRegularization(c) => {
-                    let w = expand_weight(&c.name, &c.weight, 6)?;
-                    wrench_weight.copy_from_slice(&w);
+                    check_weight(&c.name, &c.weight, 6)?;
+                    for (r, w) in wrench_weight.iter_mut().enumerate() {
+                        *w = c.weight.row(r);
+                    }
                     eq_weights.push(None);
                     tasks.push(TsidTask::WrenchRegularization);
                 }
                 TaskConfig::TorqueRegularization(c) => {
-                    torque_weight = expand_weight(&c.name, &c.weight, n)?;
-                    eq_weights.push(Some((false, torque_weight.clone())));
+                    check_weight(&c.name, &c.weight, n)?;
+                    eq_weights.push(Some((false, c.weight.clone())));
                     tasks.push(TsidTask::TorqueRegularization);
                 }
                 TaskConfig::Zmp(c) => {
@@ -402,11 +394,7 @@ impl Tsid {
                     }
                     has_zmp = true;
                     zmp_hard = c.priority == Priority::Hard;
-                    zmp_weight = if zmp_hard {
-                        vec![1.0; 2]
-                    } else {
-                        expand_weight(&c.name, &c.weight, 2)?
-                    };
+                    zmp_weight = priority_weight(&c.name, 2, c.priority, &c.weight)?;
                     eq_weights.push(None);
                     tasks.push(TsidTask::Zmp);
                 }
@@ -438,15 +426,22 @@ impl Tsid {
                     }
                 }
                 let loaded = mask != 0;
-                let mut blocks = Vec::new();
+                let var_refs: Vec<(&str, usize)> =
+                    vars.iter().map(|(s, z)| (s.as_str(), *z)).collect();
+                let layout = VariableLayout::new(&var_refs)?;
+                let mut blocks: Vec<TaskSpec> = Vec::new();
                 let mut slots = Vec::new();
                 for (ti, task) in tasks.iter().enumerate() {
                     let name = config.tasks[ti].name();
                     let mut s = Vec::new();
-                    let eq = |blocks: &mut Vec<TaskBlock>, s: &mut Vec<usize>, rows: usize| {
+                    let eq = |blocks: &mut Vec<TaskSpec>, s: &mut Vec<usize>, rows: usize| {
                         if let Some((hard, w)) = &eq_weights[ti] {
                             s.push(blocks.len());
-                            blocks.push(TaskBlock::equality(name, rows, nx, *hard, w.clone()));
+                            blocks.push(if *hard {
+                                layout.hard(name, rows)
+                            } else {
+                                layout.soft(name, rows, w.clone())
+                            });
                         }
                     };
                     match *task {
@@ -475,16 +470,15 @@ impl Tsid {
                         TsidTask::PositionLimits | TsidTask::VelocityLimits => {}
                         TsidTask::TorqueLimits { .. } => {
                             s.push(blocks.len());
-                            blocks.push(TaskBlock::inequality(name, n, nx));
+                            blocks.push(layout.inequality(name, n));
                         }
                         TsidTask::Contact(c) => {
                             if mask & (1 << c) != 0 {
                                 eq(&mut blocks, &mut s, 6);
                                 s.push(blocks.len());
-                                blocks.push(TaskBlock::inequality(
+                                blocks.push(layout.inequality(
                                     &format!("{name}_feasibility"),
                                     contacts[c].feasibility_rows(),
-                                    nx,
                                 ));
                             }
                         }
@@ -493,36 +487,26 @@ impl Tsid {
                                 let rows = 6 * mask.count_ones() as usize;
                                 let w: Vec<f64> = (0..rows).map(|r| wrench_weight[r % 6]).collect();
                                 s.push(blocks.len());
-                                blocks.push(TaskBlock::equality(name, rows, nx, false, w));
+                                blocks.push(layout.soft(name, rows, Weight::PerRow(w)));
                             }
                         }
                         TsidTask::Zmp => {
                             if zmp && loaded {
                                 s.push(blocks.len());
-                                blocks.push(TaskBlock::equality(
-                                    name,
-                                    2,
-                                    nx,
-                                    zmp_hard,
-                                    zmp_weight.clone(),
-                                ));
+                                blocks.push(match &zmp_weight {
+                                    None => layout.hard(name, 2),
+                                    Some(w) => layout.soft(name, 2, w.clone()),
+                                });
                             }
                         }
                     }
                     slots.push(s);
                 }
-                let var_refs: Vec<(&str, usize)> =
-                    vars.iter().map(|(s, z)| (s.as_str(), *z)).collect();
-                let bridge = QpBridge::new(
-                    VariableLayout::new(&var_refs)?,
-                    &blocks,
-                    &config.qp,
-                    config.eliminate_equalities,
-                )?;
+                let bridge =
+                    QpBridge::new(layout, blocks, &config.qp, config.eliminate_equalities)?;
                 variants.push(Variant {
                     offsets,
                     slots,
-                    blocks,
                     bridge,
                     lower: DVector::from_element(nx, f64::NEG_INFINITY),
                     upper: DVector::from_element(nx, f64::INFINITY),
@@ -548,8 +532,7 @@ impl Tsid {
             .collect();
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_representation(VelocityRepresentation::Mixed);
-        let gravity = Vector3::from_column_slice(&config.gravity);
-        kd.set_gravity(gravity);
+        let gravity = model.gravity();
         let output = TsidOutput {
             joint_torques: DVector::zeros(n),
             accelerations: DVector::zeros(nv),
@@ -582,6 +565,7 @@ impl Tsid {
             initialized: false,
             model,
             config,
+            period,
         })
     }
 
@@ -616,26 +600,26 @@ impl Tsid {
         let mut found = false;
         for variant in &mut self.variants {
             for &b in &variant.slots[k] {
-                let block = &mut variant.blocks[b];
-                if block.hard || block.kind != crate::tasks::RowKind::Equality {
+                let t = variant.bridge.task(b);
+                if t.is_hard() || t.kind() != TaskKind::Equality {
                     return Err(WbcError::InvalidInput(format!(
                         "task `{task}` is not a soft task"
                     )));
                 }
-                let rows = block.rows();
+                let rows = t.rows();
                 if !wrench && weights.len() != 1 && weights.len() != rows {
                     return Err(WbcError::InvalidInput(format!(
                         "task `{task}`: 1 or {rows} weights"
                     )));
                 }
                 for i in 0..rows {
-                    block.weight[i] = match weights.len() {
+                    let w = match weights.len() {
                         1 => weights[0],
                         _ if wrench => weights[i % 6],
                         _ => weights[i],
                     };
+                    variant.bridge.set_row_weight(b, i, w)?;
                 }
-                variant.bridge.set_weights(b, block.weight.as_slice())?;
                 found = true;
             }
         }
@@ -700,7 +684,7 @@ impl Tsid {
             match *task {
                 TsidTask::Dynamics => {
                     // M_b ν̇ − Σ J_{c,b}ᵀ f_c = −h_b
-                    let b = &mut variant.blocks[slots[0]];
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
                     b.a.view_mut((0, 0), (6, nv))
                         .copy_from(&self.mass_matrix.view((0, 0), (6, nv)));
                     for (c, contact) in self.contacts.iter().enumerate() {
@@ -717,11 +701,11 @@ impl Tsid {
                     }
                 }
                 TsidTask::Frame(f) => {
-                    let b = &mut variant.blocks[slots[0]];
-                    self.frame_tasks[f].update(&self.kd, input, b)?;
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
+                    self.frame_tasks[f].update(&self.kd, input, b.reborrow())?;
                 }
                 TsidTask::Com { kp, kd, rows } => {
-                    let b = &mut variant.blocks[slots[0]];
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
                     let acc = input.com_acceleration
                         + kd * (input.com_velocity - self.com_velocity)
                         + kp * (input.com_position - self.com_position);
@@ -741,7 +725,7 @@ impl Tsid {
                     }
                 }
                 TsidTask::AngularMomentum { kp } => {
-                    let b = &mut variant.blocks[slots[0]];
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
                     let h = self.momentum.fixed_rows::<3>(3).into_owned();
                     let rhs = kp * (input.angular_momentum - h);
                     for (c, contact) in self.contacts.iter().enumerate() {
@@ -758,17 +742,17 @@ impl Tsid {
                     }
                 }
                 TsidTask::Joint(j) => {
-                    let b = &mut variant.blocks[slots[0]];
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
                     self.joint_tasks[j].update(
                         input,
                         &input.state.joint_positions,
                         &input.state.joint_velocities,
-                        b,
+                        b.reborrow(),
                     );
                 }
                 TsidTask::PositionLimits | TsidTask::VelocityLimits => {}
                 TsidTask::TorqueLimits { scale } => {
-                    let b = &mut variant.blocks[slots[0]];
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
                     fill_torque_rows(&self.mass_matrix, &self.contacts, &variant.offsets, b);
                     for i in 0..n {
                         let lim = scale * self.effort[i];
@@ -777,7 +761,7 @@ impl Tsid {
                     }
                 }
                 TsidTask::TorqueRegularization => {
-                    let b = &mut variant.blocks[slots[0]];
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
                     fill_torque_rows(&self.mass_matrix, &self.contacts, &variant.offsets, b);
                     for i in 0..n {
                         b.b[i] = -self.bias_forces[6 + i];
@@ -787,7 +771,7 @@ impl Tsid {
                     let contact = &self.contacts[c];
                     let off = variant.offsets[c].unwrap_or(0);
                     // contact constraint: J ν̇ = −J̇ν − K_d v − K_p e
-                    let b = &mut variant.blocks[slots[0]];
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
                     b.a.view_mut((0, 0), (6, nv)).copy_from(&contact.jacobian);
                     let mut e = Vector6::zeros();
                     e.fixed_rows_mut::<3>(0).copy_from(
@@ -803,7 +787,7 @@ impl Tsid {
                             -contact.bias[r] - contact.kd * contact.velocity[r] + contact.kp * e[r];
                     }
                     // feasibility: A blockdiag(Rᵀ, Rᵀ) f ≤ 0, then the normal force row
-                    let b = &mut variant.blocks[slots[1]];
+                    let b = &mut variant.bridge.rows_mut(slots[1]);
                     let rt = contact
                         .pose
                         .rotation
@@ -834,7 +818,7 @@ impl Tsid {
                     b.upper[rows] = upper;
                 }
                 TsidTask::WrenchRegularization => {
-                    let b = &mut variant.blocks[slots[0]];
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
                     let mut k = 0;
                     for (c, contact) in self.contacts.iter().enumerate() {
                         if let Some(off) = variant.offsets[c] {
@@ -852,7 +836,7 @@ impl Tsid {
                     }
                 }
                 TsidTask::Zmp => {
-                    let b = &mut variant.blocks[slots[0]];
+                    let b = &mut variant.bridge.rows_mut(slots[0]);
                     let zmp = input.desired_zmp.unwrap_or_default();
                     // ground height: mean of the loaded contacts' heights
                     let mut z0 = 0.0;
@@ -953,7 +937,7 @@ impl Tsid {
         for (k, slots) in variant.slots.iter().enumerate() {
             let mut s = 0.0;
             for &b in slots {
-                let r = variant.blocks[b].residual(x);
+                let r = residual(variant.bridge.task(b), x);
                 s += r * r;
             }
             self.output.residuals[k].residual = match self.tasks[k] {
@@ -978,7 +962,7 @@ fn fill_torque_rows(
     mass: &DMatrix<f64>,
     contacts: &[Contact],
     offsets: &[Option<usize>; MAX_CONTACTS],
-    b: &mut TaskBlock,
+    b: &mut TaskDataMut<'_>,
 ) {
     let nv = mass.ncols();
     let n = nv - 6;
@@ -1005,7 +989,7 @@ impl Block for Tsid {
         check_state(&self.model, &input.state)?;
         check_references(&self.model, input)?;
         self.compute_dynamics(input)?;
-        let period = self.config.period;
+        let period = self.period;
         for contact in &mut self.contacts {
             let flag = match contact.foot {
                 Foot::Left => input.left_in_contact,
@@ -1024,12 +1008,9 @@ impl Block for Tsid {
         let vi = self.variant_index(input.desired_zmp.is_some());
         self.fill(vi, input)?;
         let variant = &mut self.variants[vi];
-        let report = variant.bridge.solve(
-            &variant.blocks,
-            &variant.lower,
-            &variant.upper,
-            &mut variant.x,
-        );
+        let report = variant
+            .bridge
+            .solve(&variant.lower, &variant.upper, &mut variant.x);
         self.last_variant = Some(vi);
         self.output.report = report;
         if report.held {

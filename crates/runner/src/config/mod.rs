@@ -310,7 +310,7 @@ impl Default for EndSection {
 }
 
 /// `[wbc]`: the whole-body controllers; `ik` is used in position mode, `tsid` in torque mode. Their
-/// `period` is set by the runner from `rates.wbc_hz` (writing a different one is an error).
+/// period is `1 / rates.wbc_hz`, given to their constructors by the runner.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WbcSection {
@@ -681,23 +681,7 @@ impl Scenario {
                 ));
             }
         }
-        // Layer periods are derived from [rates]; an explicit, different value is a contradiction.
-        let wbc_period = 1.0 / f64::from(r.wbc_hz);
-        for (key, period) in [
-            ("wbc.ik.period", c.wbc.ik.period),
-            ("wbc.tsid.period", c.wbc.tsid.period),
-        ] {
-            if self.sources.key_location(key).is_some() && (period - wbc_period).abs() > 1e-12 {
-                return Err(self.invalid(
-                    key,
-                    format!(
-                        "{period} s contradicts rates.wbc_hz = {} Hz; remove this key (the runner sets it) or \
-                         set it to {wbc_period} [s]",
-                        r.wbc_hz
-                    ),
-                ));
-            }
-        }
+        // The simulator's rate is derived from [rates]; an explicit, different value is a contradiction.
         if self.sources.key_location("sim.rate_hz").is_some() && c.sim.rate_hz != r.sim_hz {
             return Err(self.invalid(
                 "sim.rate_hz",
@@ -732,22 +716,13 @@ impl Scenario {
         Ok(())
     }
 
-    /// Writes the keys the runner derives from `[rates]` (`wbc.ik.period`, `wbc.tsid.period`,
-    /// `sim.rate_hz`) into the configuration and the merged document, so both state the effective values.
+    /// Writes the key the runner derives from `[rates]` (`sim.rate_hz`) into the configuration and the
+    /// merged document, so both state the effective value. (The whole-body controllers get their period
+    /// from `rates.wbc_hz` as a constructor argument.)
     fn apply_derived(&mut self) {
         let c = &mut self.config;
-        let period = 1.0 / f64::from(c.rates.wbc_hz);
-        c.wbc.ik.period = period;
-        c.wbc.tsid.period = period;
         c.sim.rate_hz = c.rates.sim_hz;
         let sim_hz = c.rates.sim_hz;
-        if let Some(toml::Value::Table(w)) = self.merged.get_mut("wbc") {
-            for k in ["ik", "tsid"] {
-                if let Some(toml::Value::Table(t)) = w.get_mut(k) {
-                    t.insert("period".into(), toml::Value::Float(period));
-                }
-            }
-        }
         if let Some(toml::Value::Table(s)) = self.merged.get_mut("sim") {
             s.insert("rate_hz".into(), toml::Value::Integer(i64::from(sim_hz)));
         }
