@@ -61,7 +61,7 @@ fn small() -> QpProblem {
     let sum = qp.task_id("sum").unwrap();
     qp.task_mut(track).a_mut().fill_with_identity();
     qp.task_mut(track).b_mut().copy_from_slice(&[1.0, 2.0]);
-    let mut d = qp.task_mut(sum).data_mut();
+    let d = qp.task_mut(sum).data_mut();
     d.a.fill(1.0);
     d.b[0] = 1.0;
     qp

@@ -11,6 +11,7 @@ use crate::bridge::{residual, QpBridge, VariableLayout};
 use crate::config::{IkConfig, IkFeedback, Priority, TaskConfig, Weight};
 use crate::error::WbcError;
 use crate::io::{IkOutput, SolveReport, TaskResidual, WbcInput};
+use crate::tasks::joint::velocity_bounds;
 use crate::tasks::{
     check_gain, joint_limits, position_limit_bounds, AngularMomentumVelocityTask, ComVelocityTask,
     FrameTask, JointRegularizationTask, Level,
@@ -302,37 +303,13 @@ impl QpIk {
                 self.bridge.rows_mut(t.block),
             );
         }
-        let n = self.model.dof();
-        for i in 0..n {
-            let mut l = f64::NEG_INFINITY;
-            let mut u = f64::INFINITY;
-            if let Some((lo, hi, dt)) = &self.position_limits {
-                let s = self.state.joint_positions[i];
-                l = (lo[i] - s) / dt;
-                u = (hi[i] - s) / dt;
-            }
-            if let Some(v) = &self.velocity_limits {
-                l = l.max(-v[i]);
-                u = u.min(v[i]);
-            }
-            if l > u {
-                // outside the position range and slower than needed to come back: move back at the
-                // velocity limit (never an inconsistent bound pair)
-                if let Some(v) = &self.velocity_limits {
-                    if u < -v[i] {
-                        l = -v[i];
-                        u = -v[i];
-                    } else {
-                        l = v[i];
-                        u = v[i];
-                    }
-                } else {
-                    l = u;
-                }
-            }
-            self.lower[6 + i] = l;
-            self.upper[6 + i] = u;
-        }
+        velocity_bounds(
+            &self.position_limits,
+            &self.velocity_limits,
+            &self.state.joint_positions,
+            &mut self.lower,
+            &mut self.upper,
+        );
         Ok(())
     }
 
