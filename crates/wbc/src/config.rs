@@ -503,7 +503,7 @@ impl TaskConfig {
     }
 }
 
-/// How the kinematic QP evaluates its feedback terms (thesis §7.1.3).
+/// How the kinematic QP evaluates its feedback terms [Romualdi 2022, §7.1.3].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum IkFeedback {
@@ -516,7 +516,7 @@ pub enum IkFeedback {
     Measured,
 }
 
-/// Kinematic QP-IK configuration (thesis 7.1.16). The control period (integration step, default limit
+/// Kinematic QP-IK configuration [Romualdi 2022, eq. 7.1.16]. The control period (integration step, default limit
 /// look-ahead) is an argument of [`crate::QpIk::new`], not a key.
 ///
 /// | key | unit | default | meaning |
@@ -545,7 +545,7 @@ fn yes() -> bool {
     true
 }
 
-/// Torque TSID configuration (thesis 7.2.31). The control period (load ramps, limit look-ahead) is an
+/// Torque TSID configuration [Romualdi 2022, eq. 7.2.31]. The control period (load ramps, limit look-ahead) is an
 /// argument of [`crate::Tsid::new`]; gravity is the model's ([`stride_model::Model::gravity`]).
 ///
 /// | key | unit | default | meaning |
@@ -599,8 +599,8 @@ fn arm_weights(value: f64) -> BTreeMap<String, f64> {
 }
 
 impl IkConfig {
-    /// The thesis's QP-IK (7.1.16) for `models/stride_humanoid.urdf`, with the gains of the iCub
-    /// walking controller (anchors §1.1): feet SE(3) hard (K_p 7 / 5), CoM hard (K 1… here 2 for a 500 Hz
+    /// The QP-IK of [Romualdi 2022, eq. 7.1.16] for `models/stride_humanoid.urdf`, with the gains of the iCub
+    /// walking controller: feet SE(3) hard (K_p 7 / 5), CoM hard (K 1… here 2 for a 500 Hz
     /// loop), chest SO(3) soft (K 5, weight 5), pelvis (`root_link`) SO(3) soft (K 5, weight 50), posture soft (K 5, weights 1 torso/legs, 2 arms), joint
     /// position and velocity limits.
     pub fn default_for_bundled_model() -> Self {
@@ -719,7 +719,7 @@ pub const BUNDLED_TSID_COM_KP: f64 = 25.0;
 pub const BUNDLED_TSID_COM_KD: f64 = 5.0;
 
 impl TsidConfig {
-    /// The thesis's TSID (7.2.31) for `models/stride_humanoid.urdf`: floating-base dynamics, feet
+    /// The TSID of [Romualdi 2022, eq. 7.2.31] for `models/stride_humanoid.urdf`: floating-base dynamics, feet
     /// SE(3) hard (swing tracking; contact constraint when loaded), linear momentum (CoM) hard, chest SO(3),
     /// posture, wrench and torque regularization soft, ZMP soft, torque/position/velocity limits and
     /// contact wrench feasibility hard.

@@ -1,4 +1,4 @@
-//! Kinematic whole-body QP (QP-IK, thesis 7.1.16): decision variable `ν = [base twist (mixed); ṡ]`.
+//! Kinematic whole-body QP (QP-IK) [Romualdi 2022, eq. 7.1.16]: decision variable `ν = [base twist (mixed); ṡ]`.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -30,8 +30,8 @@ enum Slot {
 
 /// The kinematic QP-IK block. See the crate docs and docs/wbc.md.
 ///
-/// Each [`Block::step`]: evaluates the task errors at the integrated state (position control, thesis
-/// §7.1.3) or at the measured one, solves for ν, integrates the internal state on SE(3) × Rⁿ with
+/// Each [`Block::step`]: evaluates the task errors at the integrated state (position control,
+/// [Romualdi 2022, §7.1.3]) or at the measured one, solves for ν, integrates the internal state on SE(3) × Rⁿ with
 /// [`RobotState::integrate`] (mixed representation) and returns the integrated joint positions. A failed
 /// solve falls back to the relaxed problem (hard tasks as heavily weighted soft ones, as stride-qp
 /// documents); if that fails too the last valid joint positions are held with zero velocity, the

@@ -21,7 +21,7 @@ pub fn so3_log(rotation: &UnitQuaternion<f64>) -> Vector3<f64> {
     v * (angle / s)
 }
 
-/// Orientation error `Log(R_ref Rᵀ)` expressed in the world frame (thesis 7.1.8).
+/// Orientation error `Log(R_ref Rᵀ)` expressed in the world frame [Romualdi 2022, eq. 7.1.8].
 pub fn orientation_error(
     reference: &UnitQuaternion<f64>,
     current: &UnitQuaternion<f64>,

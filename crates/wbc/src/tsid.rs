@@ -1,4 +1,4 @@
-//! Torque whole-body QP (TSID, thesis 7.2.31).
+//! Torque whole-body QP (TSID) [Romualdi 2022, eq. 7.2.31].
 //!
 //! Decision vector of the QP: `x = [ν̇; f_c for every loaded contact c]`. The joint torques are
 //! eliminated through the joint rows of the floating-base dynamics, `τ = M_s ν̇ + h_s − Σ J_{c,s}ᵀ f_c`,
