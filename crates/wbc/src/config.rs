@@ -534,7 +534,7 @@ pub struct IkConfig {
     /// stride-qp settings (backend, regularization, fallback, relaxation weight, backend settings).
     #[serde(default)]
     pub qp: QpSettings,
-    /// Eliminate the hard equality tasks by a null-space parametrization before calling stride-qp.
+    /// Solve stride-qp's null-space reduced problem first (hard equalities eliminated), else the full one.
     #[serde(default = "yes")]
     pub eliminate_equalities: bool,
     /// Tasks.
@@ -559,7 +559,7 @@ pub struct TsidConfig {
     /// stride-qp settings (backend, regularization, fallback, relaxation weight, backend settings).
     #[serde(default)]
     pub qp: QpSettings,
-    /// Eliminate the hard equality tasks by a null-space parametrization before calling stride-qp.
+    /// Solve stride-qp's null-space reduced problem first (hard equalities eliminated), else the full one.
     #[serde(default = "yes")]
     pub eliminate_equalities: bool,
     /// Tasks.
