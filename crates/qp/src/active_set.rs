@@ -16,7 +16,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dense::DenseQp;
-use crate::solver::{QpSolver, QpStatus, SolverOutput};
+use crate::solver::{QpSolver, SolverOutput};
+use crate::status::QpStatus;
 
 /// Settings of the active-set backend.
 ///
@@ -320,6 +321,19 @@ impl ActiveSetSolver {
     /// multiplier is ≥ 0 and no inactive constraint is violated — the KKT conditions then hold — and no
     /// J/R factors are needed.
     fn try_guess(&mut self, qp: &DenseQp) -> bool {
+        if !self.guess_active_set(qp) {
+            return false;
+        }
+        let reduced = self.guess_free_variables(qp);
+        if reduced && !self.factor_free_hessian(qp) {
+            return false;
+        }
+        self.guess_primal(qp, reduced) && self.guess_multipliers(qp)
+    }
+
+    /// The guess's active set: every equality, then the previous active set's entries that still apply;
+    /// false when it has more than `n` entries.
+    fn guess_active_set(&mut self, qp: &DenseQp) -> bool {
         let n = self.n;
         let nrow = self.me + self.mi;
         let nslots = nrow + n;
@@ -345,6 +359,14 @@ impl ActiveSetSolver {
             self.active.push(Active { slot, sign });
             self.is_active[slot] = true;
         }
+        true
+    }
+
+    /// Fixes the variables whose bound is active at that bound (in `x`), lists the others in `free`;
+    /// returns whether any is fixed.
+    fn guess_free_variables(&mut self, qp: &DenseQp) -> bool {
+        let n = self.n;
+        let nrow = self.me + self.mi;
         // x starts with the fixed (bound) values; free variables are listed in `free`
         self.free.clear();
         for jdx in 0..n {
@@ -360,38 +382,52 @@ impl ActiveSetSolver {
                 self.free.push(jdx);
             }
         }
+        self.free.len() < n
+    }
+
+    /// Cholesky factor of `H_FF` (the free variables' Hessian) into `hff`; false when not positive
+    /// definite.
+    fn factor_free_hessian(&mut self, qp: &DenseQp) -> bool {
+        let n = self.n;
         let nf = self.free.len();
-        let reduced = nf < n;
-        if reduced {
-            // Cholesky of H_FF (right-looking, column-major nf × nf in `hff`)
-            let max_diag = (0..n).fold(0.0f64, |m, j| m.max(qp.h[(j, j)].abs()));
-            let pivot_min = 1e-14 * max_diag.max(f64::MIN_POSITIVE);
-            for (c, &jc) in self.free.iter().enumerate() {
-                for (r, &jr) in self.free.iter().enumerate() {
-                    self.hff[r + c * nf] = 0.5 * (qp.h[(jr, jc)] + qp.h[(jc, jr)]);
-                }
+        // Cholesky of H_FF (right-looking, column-major nf × nf in `hff`)
+        let max_diag = (0..n).fold(0.0f64, |m, j| m.max(qp.h[(j, j)].abs()));
+        let pivot_min = 1e-14 * max_diag.max(f64::MIN_POSITIVE);
+        for (c, &jc) in self.free.iter().enumerate() {
+            for (r, &jr) in self.free.iter().enumerate() {
+                self.hff[r + c * nf] = 0.5 * (qp.h[(jr, jc)] + qp.h[(jc, jr)]);
             }
-            let l = &mut self.hff[..nf * nf];
-            for c in 0..nf {
-                let piv = l[c + c * nf];
-                if piv.is_nan() || piv <= pivot_min {
-                    return false;
-                }
-                let s = piv.sqrt();
-                for v in &mut l[c + c * nf..(c + 1) * nf] {
-                    *v /= s;
-                }
-                for k in c + 1..nf {
-                    let f = l[k + c * nf];
-                    if f != 0.0 {
-                        let (left, right) = l.split_at_mut(k * nf);
-                        for (a, b) in right[k..nf].iter_mut().zip(&left[c * nf + k..c * nf + nf]) {
-                            *a -= f * b;
-                        }
+        }
+        let l = &mut self.hff[..nf * nf];
+        for c in 0..nf {
+            let piv = l[c + c * nf];
+            if piv.is_nan() || piv <= pivot_min {
+                return false;
+            }
+            let s = piv.sqrt();
+            for v in &mut l[c + c * nf..(c + 1) * nf] {
+                *v /= s;
+            }
+            for k in c + 1..nf {
+                let f = l[k + c * nf];
+                if f != 0.0 {
+                    let (left, right) = l.split_at_mut(k * nf);
+                    for (a, b) in right[k..nf].iter_mut().zip(&left[c * nf + k..c * nf + nf]) {
+                        *a -= f * b;
                     }
                 }
             }
         }
+        true
+    }
+
+    /// The primal point of the guess: the minimum of the cost on the free variables subject to the active
+    /// rows (range-space method on `L_F`, Householder QR of `L_F⁻¹ N_F`); false on a dependent or
+    /// non-finite system.
+    fn guess_primal(&mut self, qp: &DenseQp, reduced: bool) -> bool {
+        let n = self.n;
+        let nrow = self.me + self.mi;
+        let nf = self.free.len();
         let l: &[f64] = if reduced {
             &self.hff[..nf * nf]
         } else {
@@ -502,6 +538,14 @@ impl ActiveSetSolver {
         if !self.x[..n].iter().all(|v| v.is_finite()) {
             return false;
         }
+        true
+    }
+
+    /// The multipliers of the guess (rows from the QR solve, bounds from stationarity); true when they
+    /// are dual feasible and no constraint is violated.
+    fn guess_multipliers(&mut self, qp: &DenseQp) -> bool {
+        let n = self.n;
+        let nrow = self.me + self.mi;
         // multipliers in active order: rows from z, bounds from stationarity
         // (H x + g − Σ_rows u_k n⁺_k)_j = u_j · sign_j
         let mut row_k = 0;

@@ -11,8 +11,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::dense::DenseQp;
 use crate::error::QpError;
-use crate::solver::{QpSolver, QpStatus, SolverOutput};
+use crate::solver::{QpSolver, SolverOutput};
 use crate::sparse::{SparseQp, SparseSolution};
+use crate::status::QpStatus;
 
 /// Settings of the clarabel backend.
 ///

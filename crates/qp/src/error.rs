@@ -1,6 +1,6 @@
 //! Error type of the crate.
 
-use crate::solver::QpStatus;
+use crate::status::QpStatus;
 
 /// Everything that can go wrong when building or solving a QP with this crate.
 ///
@@ -57,6 +57,14 @@ pub enum QpError {
     /// Inequality tasks are always hard constraints.
     #[error("task `{task}` is an inequality and cannot be soft (inequalities are always hard)")]
     SoftInequality {
+        /// The task name.
+        task: String,
+    },
+    /// A hard task was given a weight (hard tasks are constraints: only soft tasks have weights).
+    #[error(
+        "task `{task}` is hard and cannot have a weight (remove the weight or make the task soft)"
+    )]
+    WeightOnHardTask {
         /// The task name.
         task: String,
     },

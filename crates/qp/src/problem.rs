@@ -1,9 +1,8 @@
 //! Problems assembled from named variables and prioritised tasks.
 
-use std::ops::Range;
 use std::time::{Duration, Instant};
 
-use nalgebra::{DMatrix, DMatrixViewMut, DVector, DVectorViewMut};
+use nalgebra::{DVector, DVectorViewMut};
 use serde::{Deserialize, Serialize};
 
 use crate::active_set::{ActiveSetSettings, ActiveSetSolver};
@@ -11,7 +10,10 @@ use crate::clarabel_backend::{ClarabelSettings, ClarabelSolver};
 use crate::dense::DenseQp;
 use crate::error::QpError;
 use crate::kkt::{check_kkt, KktReport};
-use crate::solver::{QpSolver, QpStatus, SolverOutput};
+use crate::nullspace::NullSpace;
+use crate::solver::{QpSolver, SolverOutput};
+use crate::status::QpStatus;
+use crate::task::{Task, TaskId, TaskKind, TaskSpec};
 use crate::variables::{VarId, VariableSet};
 
 /// Which backend a [`QpProblem`] uses.
@@ -113,384 +115,6 @@ impl QpSettings {
     }
 }
 
-/// Equality (`A x = b`) or two-sided inequality (`l ≤ A x ≤ u`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum TaskKind {
-    /// `A x = b`: a hard constraint or a soft cost `½‖W^{1/2}(A x − b)‖²`.
-    Equality,
-    /// `l ≤ A x ≤ u` (sides may be ±∞): always a hard constraint.
-    Inequality,
-}
-
-/// Declaration of a task: its name, kind, the variables it spans (its columns, in this order), its number of
-/// rows and its priority.
-#[derive(Clone, Debug, PartialEq)]
-pub struct TaskSpec {
-    /// Unique name (used in errors and logs).
-    pub name: String,
-    /// Equality or inequality.
-    pub kind: TaskKind,
-    /// Variables whose columns the task's matrix spans, in order.
-    pub variables: Vec<VarId>,
-    /// Number of rows.
-    pub rows: usize,
-    /// Hard constraint (`true`) or weighted cost (`false`).
-    pub hard: bool,
-    /// Row weights for a soft task: one entry (applied to all rows) or one per row; ≥ 0.
-    pub weight: Vec<f64>,
-}
-
-impl TaskSpec {
-    /// A hard equality task `A x = b` with `rows` rows over `variables`.
-    pub fn equality(name: &str, variables: &[VarId], rows: usize) -> Self {
-        Self {
-            name: name.to_owned(),
-            kind: TaskKind::Equality,
-            variables: variables.to_vec(),
-            rows,
-            hard: true,
-            weight: vec![1.0],
-        }
-    }
-
-    /// A (hard) inequality task `l ≤ A x ≤ u` with `rows` rows over `variables`; sides start at ±∞.
-    pub fn inequality(name: &str, variables: &[VarId], rows: usize) -> Self {
-        Self {
-            name: name.to_owned(),
-            kind: TaskKind::Inequality,
-            variables: variables.to_vec(),
-            rows,
-            hard: true,
-            weight: vec![1.0],
-        }
-    }
-
-    /// Makes the task soft with the same weight on every row.
-    pub fn soft(mut self, weight: f64) -> Self {
-        self.hard = false;
-        self.weight = vec![weight];
-        self
-    }
-
-    /// Makes the task soft with one weight per row.
-    pub fn soft_weights(mut self, weights: &[f64]) -> Self {
-        self.hard = false;
-        self.weight = weights.to_vec();
-        self
-    }
-
-    /// Makes the task hard.
-    pub fn hard(mut self) -> Self {
-        self.hard = true;
-        self
-    }
-}
-
-/// Handle of a task inside a [`QpProblem`] (index in declaration order).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct TaskId(pub usize);
-
-/// A task's preallocated data, written every tick through [`QpProblem::task_mut`].
-///
-/// Its matrix `A` has `rows` rows and one column per scalar of the task's variables, concatenated in the order
-/// the spec listed them (use [`Task::var_block_mut`] to address the columns of one variable).
-#[derive(Clone, Debug)]
-pub struct Task {
-    name: String,
-    kind: TaskKind,
-    vars: Vec<VarId>,
-    /// (range in x, offset in the task's columns)
-    blocks: Vec<(Range<usize>, usize)>,
-    width: usize,
-    a: DMatrix<f64>,
-    b: DVector<f64>,
-    lower: DVector<f64>,
-    upper: DVector<f64>,
-    hard: bool,
-    weight: DVector<f64>,
-    aw: DMatrix<f64>,
-    bw: DVector<f64>,
-    hk: DMatrix<f64>,
-    gk: DVector<f64>,
-    xk: DVector<f64>,
-    ax: DVector<f64>,
-    nz: Vec<usize>,
-}
-
-impl Task {
-    fn new(spec: &TaskSpec, vars: &VariableSet) -> Result<Self, QpError> {
-        if spec.rows == 0 || spec.variables.is_empty() {
-            return Err(QpError::EmptyTask {
-                task: spec.name.clone(),
-            });
-        }
-        let mut blocks = Vec::new();
-        let mut width = 0;
-        for (k, &v) in spec.variables.iter().enumerate() {
-            if !vars.contains(v) {
-                return Err(QpError::UnknownVariable {
-                    task: spec.name.clone(),
-                    id: v.index(),
-                });
-            }
-            if spec.variables[..k].contains(&v) {
-                return Err(QpError::RepeatedVariable {
-                    task: spec.name.clone(),
-                    variable: vars.name(v).to_owned(),
-                });
-            }
-            blocks.push((vars.range(v), width));
-            width += vars.size(v);
-        }
-        if spec.kind == TaskKind::Inequality && !spec.hard {
-            return Err(QpError::SoftInequality {
-                task: spec.name.clone(),
-            });
-        }
-        let rows = spec.rows;
-        let mut task = Self {
-            name: spec.name.clone(),
-            kind: spec.kind,
-            vars: spec.variables.clone(),
-            blocks,
-            width,
-            a: DMatrix::zeros(rows, width),
-            b: DVector::zeros(rows),
-            lower: DVector::from_element(rows, f64::NEG_INFINITY),
-            upper: DVector::from_element(rows, f64::INFINITY),
-            hard: spec.hard,
-            weight: DVector::from_element(rows, 1.0),
-            aw: DMatrix::zeros(rows, width),
-            bw: DVector::zeros(rows),
-            hk: DMatrix::zeros(width, width),
-            gk: DVector::zeros(width),
-            xk: DVector::zeros(width),
-            ax: DVector::zeros(rows),
-            nz: Vec::with_capacity(width),
-        };
-        task.set_weights(&spec.weight)?;
-        Ok(task)
-    }
-
-    /// Task name.
-    pub fn name(&self) -> &str {
-        &self.name
-    }
-    /// Equality or inequality.
-    pub fn kind(&self) -> TaskKind {
-        self.kind
-    }
-    /// Number of rows.
-    pub fn rows(&self) -> usize {
-        self.a.nrows()
-    }
-    /// Number of columns (sum of the sizes of the task's variables).
-    pub fn width(&self) -> usize {
-        self.width
-    }
-    /// Variables spanned by the task, in column order.
-    pub fn variables(&self) -> &[VarId] {
-        &self.vars
-    }
-    /// Whether the task is a hard constraint.
-    pub fn is_hard(&self) -> bool {
-        self.hard
-    }
-    /// Task matrix `A` (rows × width).
-    pub fn a(&self) -> &DMatrix<f64> {
-        &self.a
-    }
-    /// Mutable task matrix `A`.
-    pub fn a_mut(&mut self) -> &mut DMatrix<f64> {
-        &mut self.a
-    }
-    /// The columns of `A` that multiply variable `var`, or `None` if the task does not span it.
-    pub fn var_block_mut(&mut self, var: VarId) -> Option<DMatrixViewMut<'_, f64>> {
-        let k = self.vars.iter().position(|&v| v == var)?;
-        let (range, offset) = &self.blocks[k];
-        let len = range.len();
-        let offset = *offset;
-        Some(self.a.columns_mut(offset, len))
-    }
-    /// Target `b` of an equality task.
-    pub fn b(&self) -> &DVector<f64> {
-        &self.b
-    }
-    /// Mutable target `b` (equality tasks; ignored for inequalities).
-    pub fn b_mut(&mut self) -> &mut DVector<f64> {
-        &mut self.b
-    }
-    /// Lower sides `l` of an inequality task (−∞ = none).
-    pub fn lower(&self) -> &DVector<f64> {
-        &self.lower
-    }
-    /// Mutable lower sides (inequality tasks; ignored for equalities).
-    pub fn lower_mut(&mut self) -> &mut DVector<f64> {
-        &mut self.lower
-    }
-    /// Upper sides `u` of an inequality task (+∞ = none).
-    pub fn upper(&self) -> &DVector<f64> {
-        &self.upper
-    }
-    /// Mutable upper sides (inequality tasks; ignored for equalities).
-    pub fn upper_mut(&mut self) -> &mut DVector<f64> {
-        &mut self.upper
-    }
-    /// Row weights (used when the task is soft).
-    pub fn weights(&self) -> &DVector<f64> {
-        &self.weight
-    }
-    /// Sets the same weight on every row (finite, ≥ 0).
-    pub fn set_weight(&mut self, weight: f64) -> Result<(), QpError> {
-        if !(weight >= 0.0 && weight.is_finite()) {
-            return Err(QpError::InvalidWeight {
-                task: self.name.clone(),
-                row: 0,
-                value: weight,
-            });
-        }
-        self.weight.fill(weight);
-        Ok(())
-    }
-    /// Sets the row weights: one entry for all rows, or one per row (finite, ≥ 0).
-    pub fn set_weights(&mut self, weights: &[f64]) -> Result<(), QpError> {
-        let rows = self.rows();
-        if weights.len() != 1 && weights.len() != rows {
-            return Err(QpError::WeightSize {
-                task: self.name.clone(),
-                expected: rows,
-                got: weights.len(),
-            });
-        }
-        for (row, &w) in weights.iter().enumerate() {
-            if !(w >= 0.0 && w.is_finite()) {
-                return Err(QpError::InvalidWeight {
-                    task: self.name.clone(),
-                    row,
-                    value: w,
-                });
-            }
-        }
-        if weights.len() == 1 {
-            self.weight.fill(weights[0]);
-        } else {
-            self.weight.copy_from_slice(weights);
-        }
-        Ok(())
-    }
-    /// Switches an equality task between hard and soft at run time (allocation-free). Inequalities must stay
-    /// hard.
-    pub fn set_hard(&mut self, hard: bool) -> Result<(), QpError> {
-        if self.kind == TaskKind::Inequality && !hard {
-            return Err(QpError::SoftInequality {
-                task: self.name.clone(),
-            });
-        }
-        self.hard = hard;
-        Ok(())
-    }
-
-    fn gather(&mut self, x: &DVector<f64>) {
-        for (range, offset) in &self.blocks {
-            for (k, i) in range.clone().enumerate() {
-                self.xk[offset + k] = x[i];
-            }
-        }
-    }
-
-    /// Residual at `x`: `‖A x − b‖₂` for equalities, the 2-norm of the side violations for inequalities;
-    /// also returns the ∞-norm.
-    fn residual(&mut self, x: &DVector<f64>) -> (f64, f64) {
-        self.gather(x);
-        self.ax.gemv(1.0, &self.a, &self.xk, 0.0);
-        let mut sq = 0.0;
-        let mut inf: f64 = 0.0;
-        for i in 0..self.rows() {
-            let r = match self.kind {
-                TaskKind::Equality => (self.ax[i] - self.b[i]).abs(),
-                TaskKind::Inequality => (self.lower[i] - self.ax[i])
-                    .max(self.ax[i] - self.upper[i])
-                    .max(0.0),
-            };
-            sq += r * r;
-            inf = inf.max(r);
-        }
-        (sq.sqrt(), inf)
-    }
-
-    /// Adds `½‖W^{1/2}(A x − b)‖²` (with `weight_override` on every row if given) to `H`, `g`.
-    fn add_cost(
-        &mut self,
-        h: &mut DMatrix<f64>,
-        g: &mut DVector<f64>,
-        weight_override: Option<f64>,
-    ) {
-        for i in 0..self.rows() {
-            let w = weight_override.unwrap_or(self.weight[i]).sqrt();
-            for c in 0..self.width {
-                self.aw[(i, c)] = w * self.a[(i, c)];
-            }
-            self.bw[i] = w * self.b[i];
-        }
-        // AᵀWA: dense product, or a row-by-row sum over the nonzeros when A is sparse (selection matrices,
-        // identities, contact blocks), which is much cheaper for posture / regularisation tasks.
-        let nnz = self.aw.iter().filter(|v| **v != 0.0).count();
-        if 4 * nnz >= self.aw.len() {
-            self.hk.gemm_tr(1.0, &self.aw, &self.aw, 0.0);
-        } else {
-            self.hk.fill(0.0);
-            for i in 0..self.rows() {
-                self.nz.clear();
-                for c in 0..self.width {
-                    if self.aw[(i, c)] != 0.0 {
-                        self.nz.push(c);
-                    }
-                }
-                for (k, &c1) in self.nz.iter().enumerate() {
-                    let v1 = self.aw[(i, c1)];
-                    for &c2 in &self.nz[k..] {
-                        let v = v1 * self.aw[(i, c2)];
-                        self.hk[(c1, c2)] += v;
-                        if c1 != c2 {
-                            self.hk[(c2, c1)] += v;
-                        }
-                    }
-                }
-            }
-        }
-        self.gk.gemv_tr(-1.0, &self.aw, &self.bw, 0.0);
-        for (ra, oa) in &self.blocks {
-            for (rb, ob) in &self.blocks {
-                for (cb, jb) in rb.clone().enumerate() {
-                    for (ca, ia) in ra.clone().enumerate() {
-                        h[(ia, jb)] += self.hk[(oa + ca, ob + cb)];
-                    }
-                }
-            }
-            for (ca, ia) in ra.clone().enumerate() {
-                g[ia] += self.gk[oa + ca];
-            }
-        }
-    }
-
-    /// Writes the task rows into `m` (rows `row0..`), zero outside the task's columns.
-    fn write_rows(&self, m: &mut DMatrix<f64>, row0: usize) {
-        for i in 0..self.rows() {
-            for c in 0..m.ncols() {
-                m[(row0 + i, c)] = 0.0;
-            }
-        }
-        for (range, offset) in &self.blocks {
-            for (k, col) in range.clone().enumerate() {
-                for i in 0..self.rows() {
-                    m[(row0 + i, col)] = self.a[(i, offset + k)];
-                }
-            }
-        }
-    }
-}
-
 /// Which problem produced the returned solution.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -499,6 +123,9 @@ pub enum SolvePath {
     Nominal,
     /// The fallback: hard equality tasks relaxed into soft ones with `relaxation_weight`.
     Relaxed,
+    /// The null-space reduced problem (hard equalities eliminated, see
+    /// [`QpProblem::enable_null_space`]); its solution is exact for the problem as specified.
+    NullSpace,
 }
 
 /// Result of [`QpProblem::solve`], overwritten in place every tick.
@@ -516,7 +143,8 @@ pub struct QpSolution {
     pub iterations: usize,
     /// Wall time of `solve` (assembly + backend(s) + residuals).
     pub solve_time: Duration,
-    /// Objective value of the solved problem at `x`.
+    /// Objective value of the solved problem at `x` (on [`SolvePath::NullSpace`], of the reduced problem:
+    /// the soft costs up to a constant, with the regularisation on the null-space coordinates).
     pub objective: f64,
     /// Per task (by [`TaskId`]): `‖A x − b‖₂` for equalities, 2-norm of side violations for inequalities.
     pub task_residuals: Vec<f64>,
@@ -571,6 +199,8 @@ pub struct QpProblem {
     out: SolverOutput,
     out_relaxed: SolverOutput,
     solution: QpSolution,
+    null_space: Option<Box<NullSpace>>,
+    used_null_space: bool,
 }
 
 impl QpProblem {
@@ -655,7 +285,37 @@ impl QpProblem {
             out,
             out_relaxed,
             solution,
+            null_space: None,
+            used_null_space: false,
         })
+    }
+
+    /// Adds the null-space solve path: every [`QpProblem::solve`] first eliminates the hard equality tasks
+    /// (`x = x_p + N z`, see the `nullspace` module) and solves the smaller equality-free problem over `z`
+    /// with the same backend; the full problem (and its relaxed fallback) is solved only when that is
+    /// not possible (rank-deficient hard rows, a task switched between hard and soft since this call) or
+    /// fails (e.g. infeasible inequalities). The solution is the full problem's, to the backend's
+    /// tolerance.
+    ///
+    /// Only with the active-set backend (the fast path; clarabel, the reference, always solves the full
+    /// problem) and when there is at least one and fewer than `n` hard equality rows. Returns whether the
+    /// path was added. Allocates the reduced problem here; solves stay allocation-free.
+    pub fn enable_null_space(&mut self) -> Result<bool, QpError> {
+        if self.settings.backend != Backend::ActiveSet {
+            return Ok(false);
+        }
+        self.null_space = NullSpace::new(&self.tasks, self.n(), &self.settings)?.map(Box::new);
+        Ok(self.null_space.is_some())
+    }
+
+    /// The problem the last [`QpProblem::solve`] solved: the null-space reduced one (one variable,
+    /// `null_space_coordinates`) when the solution took [`SolvePath::NullSpace`], else `self`. For
+    /// inspecting its data, dense form and KKT residuals.
+    pub fn last_solved(&self) -> &QpProblem {
+        match (&self.null_space, self.used_null_space) {
+            (Some(ns), true) => &ns.problem,
+            _ => self,
+        }
     }
 
     /// The variables.
@@ -679,6 +339,9 @@ impl QpProblem {
             });
         }
         self.settings.regularization = rho;
+        if let Some(ns) = &mut self.null_space {
+            ns.problem.set_regularization(rho)?;
+        }
         Ok(())
     }
     /// Name of the nominal backend.
@@ -735,11 +398,13 @@ impl QpProblem {
     pub fn solution(&self) -> &QpSolution {
         &self.solution
     }
-    /// The dense QP solved last (the relaxed one when the fallback path was taken).
+    /// The dense QP solved last (the relaxed one when the fallback path was taken, the reduced one's
+    /// on the null-space path).
     pub fn dense_qp(&self) -> &DenseQp {
         match self.solution.path {
             SolvePath::Nominal => &self.nominal,
             SolvePath::Relaxed => &self.relaxed,
+            SolvePath::NullSpace => self.last_solved().dense_qp(),
         }
     }
     /// The raw backend output (with multipliers) of the last solve, matching [`QpProblem::dense_qp`].
@@ -747,6 +412,7 @@ impl QpProblem {
         match self.solution.path {
             SolvePath::Nominal => &self.out,
             SolvePath::Relaxed => &self.out_relaxed,
+            SolvePath::NullSpace => self.last_solved().solver_output(),
         }
     }
     /// KKT residuals of the last solve (see [`KktReport`]).
@@ -757,6 +423,9 @@ impl QpProblem {
     pub fn reset_warm_start(&mut self) {
         self.solver.reset();
         self.relaxed_solver.reset();
+        if let Some(ns) = &mut self.null_space {
+            ns.problem.reset_warm_start();
+        }
     }
 
     /// Writes the dense QP from the tasks (nominal, or with hard equality tasks relaxed).
@@ -812,6 +481,24 @@ impl QpProblem {
     /// (with `x = 0`). Allocation-free after the first call.
     pub fn solve(&mut self) -> Result<&QpSolution, QpError> {
         let start = Instant::now();
+        self.used_null_space = false;
+        if let Some(ns) = self.null_space.as_deref_mut() {
+            if let Some((status, iterations)) =
+                ns.solve(&self.tasks, &self.lb, &self.ub, &mut self.solution.x)
+            {
+                self.used_null_space = true;
+                let reduced = ns.problem.solution();
+                let sol = &mut self.solution;
+                sol.status = status;
+                sol.nominal_status = status;
+                sol.path = SolvePath::NullSpace;
+                sol.iterations = iterations;
+                sol.warm_started = reduced.warm_started;
+                sol.objective = reduced.objective;
+                self.write_residuals(start);
+                return Ok(&self.solution);
+            }
+        }
         self.assemble(false);
         self.solver.solve(&self.nominal, &mut self.out);
         let nominal_status = self.out.status;
@@ -841,7 +528,7 @@ impl QpProblem {
         }
         let (x_src, objective, warm) = match path {
             SolvePath::Nominal => (&self.out.x, self.out.objective, self.out.warm_started),
-            SolvePath::Relaxed => (
+            SolvePath::Relaxed | SolvePath::NullSpace => (
                 &self.out_relaxed.x,
                 self.out_relaxed.objective,
                 self.out_relaxed.warm_started,
@@ -860,6 +547,20 @@ impl QpProblem {
         sol.path = path;
         sol.iterations = iterations;
         sol.warm_started = warm;
+        self.write_residuals(start);
+        if status.is_success() {
+            Ok(&self.solution)
+        } else {
+            Err(QpError::SolveFailed {
+                nominal: nominal_status,
+                relaxed: relaxed_status,
+            })
+        }
+    }
+
+    /// Task residuals, hard-constraint violation and solve time of the solution.
+    fn write_residuals(&mut self, start: Instant) {
+        let sol = &mut self.solution;
         let mut hard_violation: f64 = 0.0;
         for (k, task) in self.tasks.iter_mut().enumerate() {
             let (r2, rinf) = task.residual(&sol.x);
@@ -875,13 +576,5 @@ impl QpProblem {
         }
         sol.hard_violation = hard_violation;
         sol.solve_time = start.elapsed();
-        if status.is_success() {
-            Ok(&self.solution)
-        } else {
-            Err(QpError::SolveFailed {
-                nominal: nominal_status,
-                relaxed: relaxed_status,
-            })
-        }
     }
 }

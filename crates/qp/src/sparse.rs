@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use crate::dense::DenseQp;
 use crate::error::QpError;
-use crate::solver::QpStatus;
+use crate::status::QpStatus;
 
 /// A QP in triplet form:
 ///

@@ -16,7 +16,8 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::QpError;
-use crate::problem::{QpProblem, QpSettings, TaskId, TaskSpec};
+use crate::problem::{QpProblem, QpSettings};
+use crate::task::{TaskId, TaskSpec};
 use crate::variables::{VarId, VariableSet};
 
 /// A small deterministic generator (SplitMix64), so this module needs no `rand` dependency.

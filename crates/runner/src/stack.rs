@@ -42,17 +42,13 @@ impl Wbc {
     /// The whole-body controller of the scenario's control mode, at the period of `rates.wbc_hz`.
     pub fn new(scenario: &Scenario, model: &Arc<Model>) -> Result<Self, RunError> {
         let c = &scenario.config;
-        let period = 1.0 / f64::from(c.rates.wbc_hz);
+        let period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.wbc_hz));
         Ok(match c.scenario.control_mode {
             ControlMode::Position => {
-                let mut cfg = c.wbc.ik.clone();
-                cfg.period = period;
-                Wbc::Ik(QpIk::new(Arc::clone(model), cfg)?)
+                Wbc::Ik(QpIk::new(Arc::clone(model), c.wbc.ik.clone(), period)?)
             }
             ControlMode::Torque => {
-                let mut cfg = c.wbc.tsid.clone();
-                cfg.period = period;
-                Wbc::Tsid(Tsid::new(Arc::clone(model), cfg)?)
+                Wbc::Tsid(Tsid::new(Arc::clone(model), c.wbc.tsid.clone(), period)?)
             }
         })
     }

@@ -169,7 +169,12 @@ fn bench(c: &mut Criterion) {
             // controlled robot standing still would
             config.feedback = stride_wbc::IkFeedback::Measured;
             adapt(config.tasks.iter_mut(), robot);
-            let mut ik = QpIk::new(Arc::clone(&robot.model), config).expect("IK builds");
+            let mut ik = QpIk::new(
+                Arc::clone(&robot.model),
+                config,
+                std::time::Duration::from_millis(2),
+            )
+            .expect("IK builds");
             ik.step(&input).unwrap();
             c.bench_function(&format!("qp_ik/{}/{tag}", robot.name), |b| {
                 b.iter(|| ik.step(&input).unwrap().report.iterations)
@@ -183,7 +188,12 @@ fn bench(c: &mut Criterion) {
             let mut config = TsidConfig::default_for_bundled_model();
             config.qp.backend = backend;
             adapt(config.tasks.iter_mut(), robot);
-            let mut tsid = Tsid::new(Arc::clone(&robot.model), config).expect("TSID builds");
+            let mut tsid = Tsid::new(
+                Arc::clone(&robot.model),
+                config,
+                std::time::Duration::from_millis(1),
+            )
+            .expect("TSID builds");
             tsid.step(&input).unwrap();
             c.bench_function(&format!("tsid/{}/{tag}", robot.name), |b| {
                 b.iter(|| tsid.step(&input).unwrap().report.iterations)

@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
-pub use stride_qp::{Backend, QpSettings};
+pub use stride_qp::{Backend, QpSettings, Weight};
 
 /// Priority of an equality task.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -17,33 +17,6 @@ pub enum Priority {
     /// A weighted least-squares cost `‖A x − b‖²_W`.
     #[default]
     Soft,
-}
-
-/// A task weight: one number for every row, or one per row (after masking).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
-pub enum Weight {
-    /// The same weight on every row.
-    Scalar(f64),
-    /// One weight per (masked) row.
-    PerRow(Vec<f64>),
-}
-
-impl Default for Weight {
-    fn default() -> Self {
-        Weight::Scalar(1.0)
-    }
-}
-
-impl Weight {
-    /// Weight of row `i` of a task with `rows` rows; `None` when a per-row list has the wrong length.
-    pub fn expand(&self, rows: usize) -> Option<Vec<f64>> {
-        match self {
-            Weight::Scalar(w) => Some(vec![*w; rows]),
-            Weight::PerRow(v) if v.len() == rows => Some(v.clone()),
-            Weight::PerRow(_) => None,
-        }
-    }
 }
 
 /// Where a frame task takes its reference from (fields of the controller input).
@@ -92,7 +65,7 @@ fn one() -> f64 {
 /// | `kd_linear`, `kd_angular` | 1/s | 0 | derivative gains (TSID only) |
 /// | `mask` | – | all true | rows kept: `[x, y, z, rx, ry, rz]` (world axes) |
 /// | `priority` | – | `soft` | `hard` or `soft` |
-/// | `weight` | – | 1 | soft weight (scalar or per kept row) |
+/// | `weight` | – | 1 | soft weight (scalar or per kept row); an error on a hard task |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Se3TaskConfig {
@@ -120,9 +93,9 @@ pub struct Se3TaskConfig {
     /// Hard or soft.
     #[serde(default)]
     pub priority: Priority,
-    /// Soft weight.
-    #[serde(default)]
-    pub weight: Weight,
+    /// Soft weight (scalar or per kept row; default 1). Setting it on a hard task is an error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<Weight>,
 }
 
 /// How an orientation task relates its reference to the frame (`reference_offset` of an `so3` task).
@@ -169,9 +142,9 @@ pub struct Frame3TaskConfig {
     /// Hard or soft.
     #[serde(default)]
     pub priority: Priority,
-    /// Soft weight.
-    #[serde(default)]
-    pub weight: Weight,
+    /// Soft weight (scalar or per kept row; default 1). Setting it on a hard task is an error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<Weight>,
 }
 
 /// CoM tracking: IK `J_com ν = ẋ_ref + K_p (x_ref − x)` (7.1.4); TSID linear momentum rate
@@ -184,7 +157,7 @@ pub struct Frame3TaskConfig {
 /// | `kd` | 1/s (TSID) | 0 |
 /// | `mask` | – | `[true, true, true]` |
 /// | `priority` | – | `soft` |
-/// | `weight` | – | 1 |
+/// | `weight` | – | 1 (soft only: an error on a hard task) |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ComTaskConfig {
@@ -202,9 +175,9 @@ pub struct ComTaskConfig {
     /// Hard or soft.
     #[serde(default)]
     pub priority: Priority,
-    /// Soft weight.
-    #[serde(default)]
-    pub weight: Weight,
+    /// Soft weight (scalar or per kept row; default 1). Setting it on a hard task is an error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<Weight>,
 }
 
 /// Centroidal angular momentum about the CoM: IK `J_CMM,ω ν = h_ref + K_p ∫…` (here `h_ref`, 7.1.5);
@@ -216,7 +189,7 @@ pub struct ComTaskConfig {
 /// | `name` | – | required |
 /// | `kp` | 1/s (TSID) | 0 |
 /// | `priority` | – | `soft` |
-/// | `weight` | – | 1 |
+/// | `weight` | – | 1 (soft only: an error on a hard task) |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AngularMomentumTaskConfig {
@@ -228,9 +201,9 @@ pub struct AngularMomentumTaskConfig {
     /// Hard or soft.
     #[serde(default)]
     pub priority: Priority,
-    /// Soft weight.
-    #[serde(default)]
-    pub weight: Weight,
+    /// Soft weight (scalar or per kept row; default 1). Setting it on a hard task is an error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<Weight>,
 }
 
 /// Joint regularization / tracking: IK `ṡ = ṡ_ref + K_p (s_ref − s)` (7.1.12); TSID
@@ -243,7 +216,7 @@ pub struct AngularMomentumTaskConfig {
 /// | `kp` | 1/s (IK), 1/s² (TSID) | 0 |
 /// | `kd` | 1/s (TSID) | 0 |
 /// | `posture` | rad by joint name | empty (all 0) |
-/// | `weight` | – | 1 (every joint) |
+/// | `weight` | – | 1 (every joint; soft only: an error on a hard task) |
 /// | `joint_weights` | by joint name | empty (overrides `weight`) |
 /// | `priority` | – | `soft` |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -260,9 +233,10 @@ pub struct JointRegularizationTaskConfig {
     /// Reference posture by joint name (rad).
     #[serde(default)]
     pub posture: BTreeMap<String, f64>,
-    /// Weight of every joint not in `joint_weights`.
-    #[serde(default = "one")]
-    pub weight: f64,
+    /// Weight of every joint not in `joint_weights` (soft tasks; default 1). Setting it, or
+    /// `joint_weights`, on a hard task is an error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<f64>,
     /// Per-joint weights.
     #[serde(default)]
     pub joint_weights: BTreeMap<String, f64>,
@@ -449,9 +423,9 @@ pub struct ZmpTaskConfig {
     /// Hard or soft.
     #[serde(default)]
     pub priority: Priority,
-    /// Soft weight.
-    #[serde(default)]
-    pub weight: Weight,
+    /// Soft weight (scalar or per kept row; default 1). Setting it on a hard task is an error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight: Option<Weight>,
 }
 
 /// One entry of a controller's task list; the TOML key `type` selects the variant.
@@ -529,7 +503,7 @@ impl TaskConfig {
     }
 }
 
-/// How the kinematic QP evaluates its feedback terms (thesis §7.1.3).
+/// How the kinematic QP evaluates its feedback terms [Romualdi 2022, §7.1.3].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum IkFeedback {
@@ -542,11 +516,11 @@ pub enum IkFeedback {
     Measured,
 }
 
-/// Kinematic QP-IK configuration (thesis 7.1.16).
+/// Kinematic QP-IK configuration [Romualdi 2022, eq. 7.1.16]. The control period (integration step, default limit
+/// look-ahead) is an argument of [`crate::QpIk::new`], not a key.
 ///
 /// | key | unit | default | meaning |
 /// |---|---|---|---|
-/// | `period` | s | 0.002 | control period: integration step and limit look-ahead |
 /// | `feedback` | – | `integrated` | `integrated` (position control) or `measured` |
 /// | `qp` | – | stride-qp defaults | `backend` (`active_set` / `clarabel`), `regularization`, `fallback`, `relaxation_weight`, … |
 /// | `eliminate_equalities` | – | true | solve the null-space reduced QP (no hard equalities) first; the full QP only when that fails |
@@ -554,16 +528,13 @@ pub enum IkFeedback {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct IkConfig {
-    /// Control period (s).
-    #[serde(default = "default_ik_period")]
-    pub period: f64,
     /// Feedback source.
     #[serde(default)]
     pub feedback: IkFeedback,
     /// stride-qp settings (backend, regularization, fallback, relaxation weight, backend settings).
     #[serde(default)]
     pub qp: QpSettings,
-    /// Eliminate the hard equality tasks by a null-space parametrization before calling stride-qp.
+    /// Solve stride-qp's null-space reduced problem first (hard equalities eliminated), else the full one.
     #[serde(default = "yes")]
     pub eliminate_equalities: bool,
     /// Tasks.
@@ -574,43 +545,25 @@ fn yes() -> bool {
     true
 }
 
-fn default_ik_period() -> f64 {
-    0.002
-}
-fn default_tsid_period() -> f64 {
-    0.001
-}
-
-/// Torque TSID configuration (thesis 7.2.31).
+/// Torque TSID configuration [Romualdi 2022, eq. 7.2.31]. The control period (load ramps, limit look-ahead) is an
+/// argument of [`crate::Tsid::new`]; gravity is the model's ([`stride_model::Model::gravity`]).
 ///
 /// | key | unit | default | meaning |
 /// |---|---|---|---|
-/// | `period` | s | 0.001 | control period: ramps and limit look-ahead |
-/// | `gravity` | m/s² | [0, 0, -9.81] | gravity vector |
 /// | `qp` | – | stride-qp defaults | `backend` (`active_set` / `clarabel`), `regularization`, `fallback`, `relaxation_weight`, … |
 /// | `eliminate_equalities` | – | true | solve the null-space reduced QP (no hard equalities) first; the full QP only when that fails |
 /// | `tasks` | – | see `default_for_bundled_model` | task list |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TsidConfig {
-    /// Control period (s).
-    #[serde(default = "default_tsid_period")]
-    pub period: f64,
-    /// Gravity (m/s²).
-    #[serde(default = "default_gravity")]
-    pub gravity: [f64; 3],
     /// stride-qp settings (backend, regularization, fallback, relaxation weight, backend settings).
     #[serde(default)]
     pub qp: QpSettings,
-    /// Eliminate the hard equality tasks by a null-space parametrization before calling stride-qp.
+    /// Solve stride-qp's null-space reduced problem first (hard equalities eliminated), else the full one.
     #[serde(default = "yes")]
     pub eliminate_equalities: bool,
     /// Tasks.
     pub tasks: Vec<TaskConfig>,
-}
-
-fn default_gravity() -> [f64; 3] {
-    [0.0, 0.0, -9.81]
 }
 
 /// Default posture of the bundled model (rad), slightly crouched, arms off the torso.
@@ -646,13 +599,12 @@ fn arm_weights(value: f64) -> BTreeMap<String, f64> {
 }
 
 impl IkConfig {
-    /// The thesis's QP-IK (7.1.16) for `models/stride_humanoid.urdf`, with the gains of the iCub
-    /// walking controller (anchors §1.1): feet SE(3) hard (K_p 7 / 5), CoM hard (K 1… here 2 for a 500 Hz
+    /// The QP-IK of [Romualdi 2022, eq. 7.1.16] for `models/stride_humanoid.urdf`, with the gains of the iCub
+    /// walking controller: feet SE(3) hard (K_p 7 / 5), CoM hard (K 1… here 2 for a 500 Hz
     /// loop), chest SO(3) soft (K 5, weight 5), pelvis (`root_link`) SO(3) soft (K 5, weight 50), posture soft (K 5, weights 1 torso/legs, 2 arms), joint
     /// position and velocity limits.
     pub fn default_for_bundled_model() -> Self {
         IkConfig {
-            period: default_ik_period(),
             feedback: IkFeedback::Integrated,
             qp: QpSettings::default(),
             eliminate_equalities: true,
@@ -667,7 +619,7 @@ impl IkConfig {
                     kd_angular: 0.0,
                     mask: [true; 6],
                     priority: Priority::Hard,
-                    weight: Weight::Scalar(1.0),
+                    weight: None,
                 }),
                 TaskConfig::Se3(Se3TaskConfig {
                     name: "right_foot".into(),
@@ -679,7 +631,7 @@ impl IkConfig {
                     kd_angular: 0.0,
                     mask: [true; 6],
                     priority: Priority::Hard,
-                    weight: Weight::Scalar(1.0),
+                    weight: None,
                 }),
                 TaskConfig::Com(ComTaskConfig {
                     name: "com".into(),
@@ -687,7 +639,7 @@ impl IkConfig {
                     kd: 0.0,
                     mask: [true; 3],
                     priority: Priority::Hard,
-                    weight: Weight::Scalar(1.0),
+                    weight: None,
                 }),
                 TaskConfig::So3(Frame3TaskConfig {
                     name: "torso".into(),
@@ -698,7 +650,7 @@ impl IkConfig {
                     kd: 0.0,
                     mask: [true; 3],
                     priority: Priority::Soft,
-                    weight: Weight::Scalar(5.0),
+                    weight: Some(Weight::Scalar(5.0)),
                 }),
                 // Keeping the pelvis upright matters on a real (dynamic) plant: without it the QP lets the
                 // root link roll and pitch by up to 8-9° in single support, the torso joints compensate,
@@ -713,14 +665,14 @@ impl IkConfig {
                     kd: 0.0,
                     mask: [true; 3],
                     priority: Priority::Soft,
-                    weight: Weight::Scalar(50.0),
+                    weight: Some(Weight::Scalar(50.0)),
                 }),
                 TaskConfig::JointRegularization(JointRegularizationTaskConfig {
                     name: "posture".into(),
                     kp: 5.0,
                     kd: 0.0,
                     posture: bundled_posture(),
-                    weight: 1.0,
+                    weight: None,
                     joint_weights: arm_weights(2.0),
                     priority: Priority::Soft,
                 }),
@@ -767,7 +719,7 @@ pub const BUNDLED_TSID_COM_KP: f64 = 25.0;
 pub const BUNDLED_TSID_COM_KD: f64 = 5.0;
 
 impl TsidConfig {
-    /// The thesis's TSID (7.2.31) for `models/stride_humanoid.urdf`: floating-base dynamics, feet
+    /// The TSID of [Romualdi 2022, eq. 7.2.31] for `models/stride_humanoid.urdf`: floating-base dynamics, feet
     /// SE(3) hard (swing tracking; contact constraint when loaded), linear momentum (CoM) hard, chest SO(3),
     /// posture, wrench and torque regularization soft, ZMP soft, torque/position/velocity limits and
     /// contact wrench feasibility hard.
@@ -788,7 +740,7 @@ impl TsidConfig {
                 kd_angular: 40.0,
                 mask: [true; 6],
                 priority: Priority::Hard,
-                weight: Weight::Scalar(1.0),
+                weight: None,
             })
         };
         let contact = |name: &str, frame: &str, foot| {
@@ -809,8 +761,6 @@ impl TsidConfig {
             })
         };
         TsidConfig {
-            period: default_tsid_period(),
-            gravity: default_gravity(),
             qp: QpSettings::default(),
             eliminate_equalities: true,
             tasks: vec![
@@ -827,7 +777,7 @@ impl TsidConfig {
                     kd: BUNDLED_TSID_COM_KD,
                     mask: [true; 3],
                     priority: Priority::Hard,
-                    weight: Weight::Scalar(1.0),
+                    weight: None,
                 }),
                 TaskConfig::So3(Frame3TaskConfig {
                     name: "torso".into(),
@@ -838,14 +788,14 @@ impl TsidConfig {
                     kd: 20.0,
                     mask: [true; 3],
                     priority: Priority::Soft,
-                    weight: Weight::Scalar(10.0),
+                    weight: Some(Weight::Scalar(10.0)),
                 }),
                 TaskConfig::JointRegularization(JointRegularizationTaskConfig {
                     name: "posture".into(),
                     kp: 100.0,
                     kd: 20.0,
                     posture: bundled_posture(),
-                    weight: 1.0,
+                    weight: None,
                     joint_weights: arm_weights(2.0),
                     priority: Priority::Soft,
                 }),
@@ -860,7 +810,7 @@ impl TsidConfig {
                 TaskConfig::Zmp(ZmpTaskConfig {
                     name: "zmp".into(),
                     priority: Priority::Soft,
-                    weight: Weight::Scalar(1e-3),
+                    weight: Some(Weight::Scalar(1e-3)),
                 }),
                 TaskConfig::JointTorqueLimits(JointTorqueLimitsTaskConfig {
                     name: "joint_torque_limits".into(),

@@ -1,25 +1,26 @@
-//! Kinematic whole-body QP (QP-IK, thesis 7.1.16): decision variable `ν = [base twist (mixed); ṡ]`.
+//! Kinematic whole-body QP (QP-IK) [Romualdi 2022, eq. 7.1.16]: decision variable `ν = [base twist (mixed); ṡ]`.
 
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use nalgebra::{DVector, Vector6};
 use stride_block::Block;
 use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
 
-use crate::bridge::{QpBridge, VariableLayout};
-use crate::config::{IkConfig, IkFeedback, Priority, TaskConfig};
+use crate::bridge::{residual, QpBridge, VariableLayout};
+use crate::config::{IkConfig, IkFeedback, Priority, TaskConfig, Weight};
 use crate::error::WbcError;
 use crate::io::{IkOutput, SolveReport, TaskResidual, WbcInput};
+use crate::tasks::joint::velocity_bounds;
 use crate::tasks::{
-    check_gain, expand_weight, joint_limits, position_limit_bounds, AngularMomentumVelocityTask,
-    ComVelocityTask, FrameTask, JointRegularizationTask, Level, TaskBlock,
+    check_gain, joint_limits, position_limit_bounds, AngularMomentumVelocityTask, ComVelocityTask,
+    FrameTask, JointRegularizationTask, Level,
 };
 
 /// What a config entry became.
 #[derive(Debug, Clone, Copy)]
 enum Slot {
-    /// A row block (index into `blocks`).
+    /// A stride-qp task (its index in the bridge).
     Block(usize),
     /// Joint position limits (variable bounds).
     PositionLimits,
@@ -29,8 +30,8 @@ enum Slot {
 
 /// The kinematic QP-IK block. See the crate docs and docs/wbc.md.
 ///
-/// Each [`Block::step`]: evaluates the task errors at the integrated state (position control, thesis
-/// §7.1.3) or at the measured one, solves for ν, integrates the internal state on SE(3) × Rⁿ with
+/// Each [`Block::step`]: evaluates the task errors at the integrated state (position control,
+/// [Romualdi 2022, §7.1.3]) or at the measured one, solves for ν, integrates the internal state on SE(3) × Rⁿ with
 /// [`RobotState::integrate`] (mixed representation) and returns the integrated joint positions. A failed
 /// solve falls back to the relaxed problem (hard tasks as heavily weighted soft ones, as stride-qp
 /// documents); if that fails too the last valid joint positions are held with zero velocity, the
@@ -38,13 +39,14 @@ enum Slot {
 pub struct QpIk {
     model: Arc<Model>,
     config: IkConfig,
+    /// Control period (s).
+    period: f64,
     kd: KinDyn,
     frame_tasks: Vec<FrameTask>,
     com_tasks: Vec<ComVelocityTask>,
     momentum_tasks: Vec<AngularMomentumVelocityTask>,
     joint_tasks: Vec<JointRegularizationTask>,
     slots: Vec<Slot>,
-    blocks: Vec<TaskBlock>,
     position_limits: Option<(Vec<f64>, Vec<f64>, f64)>,
     velocity_limits: Option<Vec<f64>>,
     lower: DVector<f64>,
@@ -57,26 +59,29 @@ pub struct QpIk {
 }
 
 impl QpIk {
-    /// Builds the controller (all allocation happens here).
+    /// Builds the controller running every `period` (the integration step and the default look-ahead of
+    /// the joint position limits). All allocation happens here.
     ///
-    /// Errors: unknown frames/joints, invalid gains or weights, task types the QP-IK does not support
-    /// (TSID-only tasks), or a QP that stride-qp rejects.
-    pub fn new(model: Arc<Model>, config: IkConfig) -> Result<Self, WbcError> {
-        if !(config.period.is_finite() && config.period > 0.0) {
+    /// Errors: a zero period, unknown frames/joints, invalid gains or weights (a weight on a hard task),
+    /// task types the QP-IK does not support (TSID-only tasks), or a QP that stride-qp rejects.
+    pub fn new(model: Arc<Model>, config: IkConfig, period: Duration) -> Result<Self, WbcError> {
+        let period = period.as_secs_f64();
+        if period <= 0.0 {
             return Err(WbcError::InvalidConfig {
                 task: "<qp-ik>".into(),
                 key: "period",
-                reason: format!("{} must be > 0", config.period),
+                reason: format!("{period} s must be > 0"),
             });
         }
         let n = model.dof();
         let nv = model.nv();
+        let layout = VariableLayout::new(&[("base_velocity", 6), ("joint_velocities", n)])?;
         let mut frame_tasks = Vec::new();
         let mut com_tasks = Vec::new();
         let mut momentum_tasks = Vec::new();
         let mut joint_tasks = Vec::new();
         let mut slots = Vec::new();
-        let mut blocks: Vec<TaskBlock> = Vec::new();
+        let mut blocks = Vec::new();
         let mut position_limits = None;
         let mut velocity_limits = None;
         let (lo, hi, vmax, _) = joint_limits(&model);
@@ -89,16 +94,9 @@ impl QpIk {
                     reason: "duplicate task name".into(),
                 });
             }
-            let eq_block =
-                |rows: usize, priority: Priority, weight| -> Result<TaskBlock, WbcError> {
-                    let hard = priority == Priority::Hard;
-                    let w = if hard {
-                        vec![1.0; rows]
-                    } else {
-                        expand_weight(task.name(), weight, rows)?
-                    };
-                    Ok(TaskBlock::equality(task.name(), rows, nv, hard, w))
-                };
+            let eq_block = |rows: usize, priority: Priority, weight| {
+                layout.equality(task.name(), rows, priority, weight)
+            };
             match task {
                 TaskConfig::Se3(c) => {
                     let mut t = FrameTask::from_se3(&model, c, Level::Velocity)?;
@@ -133,17 +131,15 @@ impl QpIk {
                     let mut t = JointRegularizationTask::new(&model, c, Level::Velocity)?;
                     t.block = blocks.len();
                     slots.push(Slot::Block(blocks.len()));
-                    let w = if t.hard {
-                        vec![1.0; n]
+                    blocks.push(if t.hard {
+                        layout.hard(&c.name, n)
                     } else {
-                        t.weights.clone()
-                    };
-                    blocks.push(TaskBlock::equality(&c.name, n, nv, t.hard, w));
+                        layout.soft(&c.name, n, Weight::PerRow(t.weights.clone()))
+                    });
                     joint_tasks.push(t);
                 }
                 TaskConfig::JointPositionLimits(c) => {
-                    position_limits =
-                        Some(position_limit_bounds(c, config.period, &lo, &hi, &model)?);
+                    position_limits = Some(position_limit_bounds(c, period, &lo, &hi, &model)?);
                     slots.push(Slot::PositionLimits);
                 }
                 TaskConfig::JointVelocityLimits(c) => {
@@ -160,8 +156,7 @@ impl QpIk {
                 }
             }
         }
-        let layout = VariableLayout::new(&[("base_velocity", 6), ("joint_velocities", n)])?;
-        let bridge = QpBridge::new(layout, &blocks, &config.qp, config.eliminate_equalities)?;
+        let bridge = QpBridge::new(layout, blocks, &config.qp, config.eliminate_equalities)?;
         let residuals = config
             .tasks
             .iter()
@@ -196,7 +191,6 @@ impl QpIk {
             momentum_tasks,
             joint_tasks,
             slots,
-            blocks,
             position_limits,
             velocity_limits,
             lower: DVector::from_element(nv, f64::NEG_INFINITY),
@@ -208,6 +202,7 @@ impl QpIk {
             output,
             model,
             config,
+            period,
         })
     }
 
@@ -248,23 +243,19 @@ impl QpIk {
             .position(|t| t.name() == task)
             .ok_or_else(|| WbcError::InvalidInput(format!("no task `{task}`")))?;
         let b = match self.slots[k] {
-            Slot::Block(b) if !self.blocks[b].hard => b,
+            Slot::Block(b) if !self.bridge.task(b).is_hard() => b,
             _ => {
                 return Err(WbcError::InvalidInput(format!(
                     "task `{task}` is not a soft task"
                 )))
             }
         };
-        self.bridge.set_weights(b, weights)?;
-        let block = &mut self.blocks[b];
-        for i in 0..block.rows() {
-            block.weight[i] = if weights.len() == 1 {
-                weights[0]
-            } else {
-                weights[i]
-            };
-        }
-        Ok(())
+        self.bridge.set_weights(b, weights)
+    }
+
+    /// The control period given to [`QpIk::new`] (s).
+    pub fn period(&self) -> f64 {
+        self.period
     }
 
     /// The last output.
@@ -296,53 +287,29 @@ impl QpIk {
     fn fill(&mut self, input: &WbcInput) -> Result<(), WbcError> {
         self.kd.set_state(&self.state)?;
         for t in &mut self.frame_tasks {
-            t.update(&self.kd, input, &mut self.blocks[t.block])?;
+            t.update(&self.kd, input, self.bridge.rows_mut(t.block))?;
         }
         for t in &mut self.com_tasks {
-            t.update(&mut self.kd, input, &mut self.blocks[t.block])?;
+            t.update(&mut self.kd, input, self.bridge.rows_mut(t.block))?;
         }
         for t in &mut self.momentum_tasks {
-            t.update(&mut self.kd, input, &mut self.blocks[t.block])?;
+            t.update(&mut self.kd, input, self.bridge.rows_mut(t.block))?;
         }
         for t in &self.joint_tasks {
             t.update(
                 input,
                 &self.state.joint_positions,
                 &self.state.joint_velocities,
-                &mut self.blocks[t.block],
+                self.bridge.rows_mut(t.block),
             );
         }
-        let n = self.model.dof();
-        for i in 0..n {
-            let mut l = f64::NEG_INFINITY;
-            let mut u = f64::INFINITY;
-            if let Some((lo, hi, dt)) = &self.position_limits {
-                let s = self.state.joint_positions[i];
-                l = (lo[i] - s) / dt;
-                u = (hi[i] - s) / dt;
-            }
-            if let Some(v) = &self.velocity_limits {
-                l = l.max(-v[i]);
-                u = u.min(v[i]);
-            }
-            if l > u {
-                // outside the position range and slower than needed to come back: move back at the
-                // velocity limit (never an inconsistent bound pair)
-                if let Some(v) = &self.velocity_limits {
-                    if u < -v[i] {
-                        l = -v[i];
-                        u = -v[i];
-                    } else {
-                        l = v[i];
-                        u = v[i];
-                    }
-                } else {
-                    l = u;
-                }
-            }
-            self.lower[6 + i] = l;
-            self.upper[6 + i] = u;
-        }
+        velocity_bounds(
+            &self.position_limits,
+            &self.velocity_limits,
+            &self.state.joint_positions,
+            &mut self.lower,
+            &mut self.upper,
+        );
         Ok(())
     }
 
@@ -350,7 +317,7 @@ impl QpIk {
         let n = self.model.dof();
         for (k, slot) in self.slots.iter().enumerate() {
             let r = match slot {
-                Slot::Block(b) => self.blocks[*b].residual(&self.x),
+                Slot::Block(b) => residual(self.bridge.task(*b), &self.x),
                 Slot::PositionLimits | Slot::VelocityLimits => {
                     let mut s = 0.0;
                     for i in 0..n {
@@ -465,9 +432,7 @@ impl Block for QpIk {
             self.initialized = true;
         }
         self.fill(input)?;
-        let report = self
-            .bridge
-            .solve(&self.blocks, &self.lower, &self.upper, &mut self.x);
+        let report = self.bridge.solve(&self.lower, &self.upper, &mut self.x);
         let n = self.model.dof();
         self.output.report = report;
         if report.held {
@@ -481,11 +446,8 @@ impl Block for QpIk {
             for i in 0..n {
                 self.state.joint_velocities[i] = self.x[6 + i];
             }
-            self.state.integrate(
-                &self.model,
-                VelocityRepresentation::Mixed,
-                self.config.period,
-            )?;
+            self.state
+                .integrate(&self.model, VelocityRepresentation::Mixed, self.period)?;
             self.output
                 .joint_positions
                 .copy_from(&self.state.joint_positions);

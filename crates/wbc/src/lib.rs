@@ -1,5 +1,5 @@
 //! `stride-wbc`: the whole-body QP layer of stride — a task library, the kinematic QP-IK
-//! (thesis 002 eq. 7.1.16) and the torque TSID (eq. 7.2.31), both on stride-qp.
+//! [Romualdi 2022, eq. 7.1.16] and the torque TSID [Romualdi 2022, eq. 7.2.31], both on stride-qp.
 //!
 //! * [`QpIk`]: decision variable ν (mixed base twist + joint velocities); hard feet SE(3) and CoM, soft
 //!   torso orientation and posture, joint position/velocity limits as bounds; integrates its own state
@@ -8,7 +8,9 @@
 //!   through the joint rows of the floating-base dynamics); outputs joint torques, accelerations and
 //!   planned contact wrenches; contact changes ramp the normal-force bound.
 //!
-//! Both are built from a [`IkConfig`] / [`TsidConfig`] (TOML, a list of typed tasks) and implement
+//! Both draw their rows from one task library (`tasks/`, one file per task family, written straight into
+//! stride-qp's task storage) and are built from a [`IkConfig`] / [`TsidConfig`] (TOML, a list of typed
+//! tasks; a soft task's [`Weight`] is stride-qp's) and the control period, and implement
 //! [`stride_block::Block`] with [`WbcInput`] as input. Failed QPs fall back to the relaxed problem
 //! (hard equalities as heavily weighted costs) and, if that also fails, hold the last valid command;
 //! the output says which. See docs/wbc.md for the formulation choices and measured numbers.

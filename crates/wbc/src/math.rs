@@ -1,6 +1,6 @@
 //! Small SO(3) helpers shared by the tasks.
 
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// Logarithm of a rotation, `Log(R) ∈ R³` (axis times angle, angle in [0, π]).
 ///
@@ -21,7 +21,7 @@ pub fn so3_log(rotation: &UnitQuaternion<f64>) -> Vector3<f64> {
     v * (angle / s)
 }
 
-/// Orientation error `Log(R_ref Rᵀ)` expressed in the world frame (thesis 7.1.8).
+/// Orientation error `Log(R_ref Rᵀ)` expressed in the world frame [Romualdi 2022, eq. 7.1.8].
 pub fn orientation_error(
     reference: &UnitQuaternion<f64>,
     current: &UnitQuaternion<f64>,
@@ -29,10 +29,8 @@ pub fn orientation_error(
     so3_log(&(reference * current.inverse()))
 }
 
-/// Skew-symmetric matrix with `skew(a) b = a × b`.
-pub fn skew(a: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0)
-}
+/// Skew-symmetric matrix with `skew(a) b = a × b` (stride-model's).
+pub use stride_model::spatial::skew;
 
 #[cfg(test)]
 mod tests {

@@ -20,7 +20,12 @@ fn ik_and_tsid_ticks_allocate_nothing() {
     let mut input = references_at(&model, &state);
     input.com_position.x += 0.01;
 
-    let mut ik = QpIk::new(Arc::clone(&model), IkConfig::default_for_bundled_model()).unwrap();
+    let mut ik = QpIk::new(
+        Arc::clone(&model),
+        IkConfig::default_for_bundled_model(),
+        std::time::Duration::from_millis(2),
+    )
+    .unwrap();
     ik.step(&input).unwrap();
     let (_, n) = ALLOC.allocations_during(|| {
         for _ in 0..20 {
@@ -29,7 +34,12 @@ fn ik_and_tsid_ticks_allocate_nothing() {
     });
     assert_eq!(n, 0, "QP-IK ticks allocated {n} times");
 
-    let mut tsid = Tsid::new(Arc::clone(&model), TsidConfig::default_for_bundled_model()).unwrap();
+    let mut tsid = Tsid::new(
+        Arc::clone(&model),
+        TsidConfig::default_for_bundled_model(),
+        std::time::Duration::from_millis(1),
+    )
+    .unwrap();
     tsid.step(&input).unwrap();
     let (_, n) = ALLOC.allocations_during(|| {
         for _ in 0..20 {
@@ -56,6 +66,6 @@ fn clarabel_ticks_are_reported_not_asserted() {
     let input = references_at(&model, &state);
     let mut c = IkConfig::default_for_bundled_model();
     c.qp.backend = Backend::Clarabel;
-    let mut ik = QpIk::new(Arc::clone(&model), c).unwrap();
+    let mut ik = QpIk::new(Arc::clone(&model), c, std::time::Duration::from_millis(2)).unwrap();
     assert!(ik.step(&input).unwrap().report.status.is_success());
 }

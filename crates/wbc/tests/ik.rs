@@ -4,6 +4,7 @@
 mod common;
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use common::*;
 use nalgebra::DVector;
@@ -12,10 +13,14 @@ use stride_model::{KinDyn, Model, VelocityRepresentation};
 use stride_qp::{Backend, QpStatus};
 use stride_wbc::{IkConfig, QpIk, TaskConfig, WbcInput};
 
+/// Period of the tests' controllers (s), except where a test says otherwise.
+const PERIOD: Duration = Duration::from_millis(10);
+/// The runner's default WBC period (500 Hz).
+const PERIOD_500HZ: Duration = Duration::from_millis(2);
+
 /// Test config: the bundled default with faster gains (the convergence rate per step is `1 − K dt`).
-fn test_config(period: f64, gain: f64) -> IkConfig {
+fn test_config(gain: f64) -> IkConfig {
     let mut c = IkConfig::default_for_bundled_model();
-    c.period = period;
     for t in &mut c.tasks {
         match t {
             TaskConfig::Se3(s) => {
@@ -74,7 +79,7 @@ fn converges_from_random_postures_to_random_reachable_targets() {
         let q0 = random_posture(&model, &mut rng, 0.25, 0.05);
         input.state = standing_state(&model, &q0);
 
-        let mut ik = QpIk::new(Arc::clone(&model), test_config(0.01, 10.0)).unwrap();
+        let mut ik = QpIk::new(Arc::clone(&model), test_config(10.0), PERIOD).unwrap();
         let mut converged_at = None;
         for step in 0..max_steps {
             let out = ik.step(&input).unwrap();
@@ -115,14 +120,14 @@ fn joint_limits_hold_when_the_target_needs_more_than_the_range() {
     let mut input = references_at(&model, &state);
     // CoM far down: needs more knee flexion than the range allows (CoM soft so the QP stays feasible)
     input.com_position.z -= 0.5;
-    let mut config = test_config(0.01, 10.0);
+    let mut config = test_config(10.0);
     for t in &mut config.tasks {
         if let TaskConfig::Com(c) = t {
             c.priority = stride_wbc::Priority::Soft;
-            c.weight = stride_wbc::Weight::Scalar(100.0);
+            c.weight = Some(stride_wbc::Weight::Scalar(100.0));
         }
     }
-    let mut ik = QpIk::new(Arc::clone(&model), config).unwrap();
+    let mut ik = QpIk::new(Arc::clone(&model), config, PERIOD).unwrap();
     let mut reached_a_limit = false;
     let (lo, hi) = limits(&model);
     for _ in 0..300 {
@@ -151,9 +156,9 @@ fn hard_tasks_are_satisfied_exactly_and_velocity_mode_reproduces_reference_rates
     // zero errors, non-zero reference velocities of the feet and the CoM
     input.left_foot.velocity = nalgebra::Vector6::new(0.1, 0.0, 0.05, 0.0, 0.0, 0.2);
     input.com_velocity = nalgebra::Vector3::new(0.05, 0.01, 0.0);
-    let mut config = test_config(0.002, 10.0);
+    let mut config = test_config(10.0);
     config.feedback = stride_wbc::IkFeedback::Measured;
-    let mut ik = QpIk::new(Arc::clone(&model), config).unwrap();
+    let mut ik = QpIk::new(Arc::clone(&model), config, PERIOD_500HZ).unwrap();
     let out = ik.step(&input).unwrap().clone();
     assert_eq!(out.report.status, QpStatus::Solved);
     let mut nu = DVector::zeros(model.nv());
@@ -190,12 +195,12 @@ fn clarabel_and_active_set_agree_on_ik_ticks() {
         let input_target = references_at(&model, &standing_state(&model, &q_target));
         let mut input = input_target.clone();
         input.state = standing_state(&model, &random_posture(&model, &mut rng, 0.2, 0.05));
-        let mut a = test_config(0.01, 10.0);
+        let mut a = test_config(10.0);
         a.qp.backend = Backend::ActiveSet;
         let mut c = a.clone();
         c.qp.backend = Backend::Clarabel;
-        let mut ik_a = QpIk::new(Arc::clone(&model), a).unwrap();
-        let mut ik_c = QpIk::new(Arc::clone(&model), c).unwrap();
+        let mut ik_a = QpIk::new(Arc::clone(&model), a, PERIOD).unwrap();
+        let mut ik_c = QpIk::new(Arc::clone(&model), c, PERIOD).unwrap();
         for _ in 0..3 {
             let oa = ik_a.step(&input).unwrap().clone();
             let oc = ik_c.step(&input).unwrap().clone();
@@ -220,7 +225,7 @@ fn unreachable_feet_fall_back_to_the_relaxed_problem_without_nan() {
     // feet 3 m apart: the joint-limit bounds make the hard feet + CoM rows infeasible at once
     input.left_foot.pose.translation.vector.y += 1.5;
     input.right_foot.pose.translation.vector.y -= 1.5;
-    let mut ik = QpIk::new(Arc::clone(&model), test_config(0.01, 100.0)).unwrap();
+    let mut ik = QpIk::new(Arc::clone(&model), test_config(100.0), PERIOD).unwrap();
     let out = ik.step(&input).unwrap();
     assert_eq!(out.report.status, QpStatus::Infeasible);
     assert!(
@@ -247,9 +252,9 @@ fn a_failed_tick_holds_the_last_valid_command() {
     let q = common::default_posture(&model);
     let state = standing_state(&model, &q);
     let input = references_at(&model, &state);
-    let mut config = test_config(0.01, 10.0);
+    let mut config = test_config(10.0);
     config.qp.fallback = false;
-    let mut ik = QpIk::new(Arc::clone(&model), config).unwrap();
+    let mut ik = QpIk::new(Arc::clone(&model), config, PERIOD).unwrap();
     let good = ik.step(&input).unwrap().joint_positions.clone();
     let mut bad = input.clone();
     bad.left_foot.pose.translation.vector.y += 1.5;
@@ -263,7 +268,6 @@ fn a_failed_tick_holds_the_last_valid_command() {
 #[test]
 fn config_parses_from_toml_and_rejects_unknown_types_and_keys() {
     let text = r#"
-period = 0.01
 feedback = "integrated"
 
 [qp]
@@ -307,7 +311,7 @@ name = "limits"
     let config: IkConfig = toml::from_str(text).unwrap();
     assert_eq!(config.tasks.len(), 5);
     let model = bundled_model();
-    QpIk::new(Arc::clone(&model), config).unwrap();
+    QpIk::new(Arc::clone(&model), config, PERIOD).unwrap();
 
     let unknown_type = text.replace("type = \"com\"", "type = \"centre_of_mass\"");
     assert!(toml::from_str::<IkConfig>(&unknown_type).is_err());
@@ -316,20 +320,32 @@ name = "limits"
 
     // model-level errors carry names
     let bad_frame = text.replace("frame = \"l_sole\"", "frame = \"l_foot_sole\"");
-    let err = QpIk::new(Arc::clone(&model), toml::from_str(&bad_frame).unwrap())
-        .err()
-        .unwrap();
+    let err = QpIk::new(
+        Arc::clone(&model),
+        toml::from_str(&bad_frame).unwrap(),
+        PERIOD,
+    )
+    .err()
+    .unwrap();
     assert!(err.to_string().contains("l_foot_sole"), "{err}");
     let bad_joint = text.replace("l_knee = 0.5", "l_kne = 0.5");
-    let err = QpIk::new(Arc::clone(&model), toml::from_str(&bad_joint).unwrap())
-        .err()
-        .unwrap();
+    let err = QpIk::new(
+        Arc::clone(&model),
+        toml::from_str(&bad_joint).unwrap(),
+        PERIOD,
+    )
+    .err()
+    .unwrap();
     assert!(err.to_string().contains("l_kne"), "{err}");
     // TSID-only task in the IK
     let tsid_task = format!("{text}\n[[tasks]]\ntype = \"joint_torque_limits\"\nname = \"tau\"\n");
-    let err = QpIk::new(Arc::clone(&model), toml::from_str(&tsid_task).unwrap())
-        .err()
-        .unwrap();
+    let err = QpIk::new(
+        Arc::clone(&model),
+        toml::from_str(&tsid_task).unwrap(),
+        PERIOD,
+    )
+    .err()
+    .unwrap();
     assert!(err.to_string().contains("joint_torque_limits"), "{err}");
     // the defaults serialize and parse back identically
     let default = IkConfig::default_for_bundled_model();
@@ -348,11 +364,11 @@ fn null_space_elimination_gives_the_full_problem_solution() {
         );
         let mut input = target.clone();
         input.state = standing_state(&model, &random_posture(&model, &mut rng, 0.2, 0.05));
-        let reduced_config = test_config(0.01, 10.0);
+        let reduced_config = test_config(10.0);
         let mut full_config = reduced_config.clone();
         full_config.eliminate_equalities = false;
-        let mut reduced = QpIk::new(Arc::clone(&model), reduced_config).unwrap();
-        let mut full = QpIk::new(Arc::clone(&model), full_config).unwrap();
+        let mut reduced = QpIk::new(Arc::clone(&model), reduced_config, PERIOD).unwrap();
+        let mut full = QpIk::new(Arc::clone(&model), full_config, PERIOD).unwrap();
         let a = reduced.step(&input).unwrap().clone();
         let b = full.step(&input).unwrap().clone();
         assert_eq!(reduced.qp_problem().n(), model.nv() - 15);
@@ -376,7 +392,7 @@ fn redundant_hard_tasks_are_solved_by_both_backends_alike() {
     );
     let mut input = target.clone();
     input.state = standing_state(&model, &random_posture(&model, &mut rng, 0.2, 0.05));
-    let mut config = test_config(0.01, 10.0);
+    let mut config = test_config(10.0);
     let duplicate = config
         .tasks
         .iter()
@@ -392,7 +408,7 @@ fn redundant_hard_tasks_are_solved_by_both_backends_alike() {
         let mut c = config.clone();
         c.qp.backend = backend;
         c.qp.clarabel.tolerance = 1e-12;
-        let mut ik = QpIk::new(Arc::clone(&model), c).unwrap();
+        let mut ik = QpIk::new(Arc::clone(&model), c, PERIOD).unwrap();
         let out = ik.step(&input).unwrap().clone();
         assert!(
             out.report.status.is_success(),
@@ -410,7 +426,7 @@ fn redundant_hard_tasks_are_solved_by_both_backends_alike() {
     let d = (&outputs[0].joint_velocities - &outputs[1].joint_velocities).amax();
     assert!(d < 1e-6, "backends differ by {d}");
     // and the same answer as without the duplicate
-    let mut ik = QpIk::new(Arc::clone(&model), test_config(0.01, 10.0)).unwrap();
+    let mut ik = QpIk::new(Arc::clone(&model), test_config(10.0), PERIOD).unwrap();
     let plain = ik.step(&input).unwrap();
     assert!((&plain.joint_velocities - &outputs[0].joint_velocities).amax() < 1e-6);
 }
@@ -424,9 +440,9 @@ fn soft_weights_change_at_run_time() {
     // torso reference tilted: torso task and posture task compete
     input.torso.orientation =
         nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.2, 0.0) * input.torso.orientation;
-    let mut config = test_config(0.01, 10.0);
+    let mut config = test_config(10.0);
     config.feedback = stride_wbc::IkFeedback::Measured;
-    let mut ik = QpIk::new(Arc::clone(&model), config.clone()).unwrap();
+    let mut ik = QpIk::new(Arc::clone(&model), config.clone(), PERIOD).unwrap();
     let before = ik.step(&input).unwrap().joint_velocities.clone();
     ik.set_task_weight("torso", &[500.0]).unwrap();
     let after = ik.step(&input).unwrap().joint_velocities.clone();
@@ -435,11 +451,11 @@ fn soft_weights_change_at_run_time() {
     for t in &mut config.tasks {
         if let TaskConfig::So3(c) = t {
             if c.name == "torso" {
-                c.weight = stride_wbc::Weight::Scalar(500.0);
+                c.weight = Some(stride_wbc::Weight::Scalar(500.0));
             }
         }
     }
-    let mut reference = QpIk::new(Arc::clone(&model), config).unwrap();
+    let mut reference = QpIk::new(Arc::clone(&model), config, PERIOD).unwrap();
     let expected = reference.step(&input).unwrap().joint_velocities.clone();
     assert!((&after - &expected).amax() < 1e-9);
     assert!((&after - &before).amax() > 1e-3);
@@ -469,8 +485,8 @@ fn a_step_with_the_default_config_tracks_feet_and_com_references() {
     let start = references_at(&model, &state);
     let mut input = start.clone();
     let config = IkConfig::default_for_bundled_model();
-    let dt = config.period;
-    let mut ik = QpIk::new(Arc::clone(&model), config).unwrap();
+    let dt = PERIOD_500HZ.as_secs_f64();
+    let mut ik = QpIk::new(Arc::clone(&model), config, PERIOD_500HZ).unwrap();
     let com0 = start.com_position;
     let left = start.left_foot.pose.translation.vector;
     let right0 = start.right_foot.pose.translation.vector;
@@ -516,7 +532,7 @@ fn a_step_with_the_default_config_tracks_feet_and_com_references() {
 /// The `torso` and `pelvis` tasks with `reference_offset`, the `pelvis` task removed (it would compare
 /// different references between the two controllers of the test).
 fn offset_config(offset: stride_wbc::ReferenceOffset) -> IkConfig {
-    let mut c = test_config(0.01, 10.0);
+    let mut c = test_config(10.0);
     c.feedback = stride_wbc::IkFeedback::Measured;
     c.tasks.retain(|t| t.name() != "pelvis");
     for t in &mut c.tasks {
@@ -548,9 +564,18 @@ fn initial_reference_offset_keeps_the_frames_initial_orientation_relative_to_the
     let reference0 = UnitQuaternion::from_euler_angles(0.0, 0.0, 0.4);
     let offset = reference0.inverse() * chest;
     input.torso.orientation = reference0;
-    let mut with_offset =
-        QpIk::new(Arc::clone(&model), offset_config(ReferenceOffset::Initial)).unwrap();
-    let mut plain = QpIk::new(Arc::clone(&model), offset_config(ReferenceOffset::None)).unwrap();
+    let mut with_offset = QpIk::new(
+        Arc::clone(&model),
+        offset_config(ReferenceOffset::Initial),
+        PERIOD,
+    )
+    .unwrap();
+    let mut plain = QpIk::new(
+        Arc::clone(&model),
+        offset_config(ReferenceOffset::None),
+        PERIOD,
+    )
+    .unwrap();
     // First tick: the offset is recorded, so the torso task's reference is the chest's own orientation,
     // which is what the plain controller gets as an absolute reference.
     let first = with_offset.step(&input).unwrap().joint_velocities.clone();
@@ -599,7 +624,7 @@ reference_offset = "initial"
 kp = 1.0
 "#;
     let config: IkConfig = toml::from_str(text).unwrap();
-    let err = QpIk::new(bundled_model(), config).err().unwrap();
+    let err = QpIk::new(bundled_model(), config, PERIOD).err().unwrap();
     let text = err.to_string();
     assert!(
         text.contains("reference_offset") && text.contains("hand"),
@@ -614,4 +639,50 @@ kp = 1.0
         &so3.tasks[0],
         TaskConfig::So3(c) if c.reference_offset == stride_wbc::ReferenceOffset::None
     ));
+}
+
+#[test]
+fn a_weight_on_a_hard_task_is_a_configuration_error_naming_the_task() {
+    let text = r#"
+[[tasks]]
+type = "com"
+name = "centre"
+kp = 2.0
+priority = "hard"
+weight = 3.0
+
+[[tasks]]
+type = "so3"
+name = "torso"
+frame = "chest"
+reference = "torso"
+kp = 5.0
+weight = [5.0, 5.0, 1.0]
+"#;
+    let model = bundled_model();
+    let config: IkConfig = toml::from_str(text).unwrap();
+    let err = QpIk::new(Arc::clone(&model), config, PERIOD).err().unwrap();
+    assert!(
+        matches!(&err, stride_wbc::WbcError::InvalidConfig { task, key: "weight", .. } if task == "centre"),
+        "{err}"
+    );
+    // without the weight the same hard task builds; soft tasks keep scalar and per-row weights
+    let config: IkConfig = toml::from_str(&text.replace("weight = 3.0\n", "")).unwrap();
+    QpIk::new(Arc::clone(&model), config, PERIOD).unwrap();
+    // a hard posture task with a weight is rejected too
+    let posture = format!(
+        "{}\n[[tasks]]\ntype = \"joint_regularization\"\nname = \"posture\"\npriority = \"hard\"\nweight = 2.0\n",
+        text.replace("weight = 3.0\n", "")
+    );
+    let err = QpIk::new(
+        Arc::clone(&model),
+        toml::from_str(&posture).unwrap(),
+        PERIOD,
+    )
+    .err()
+    .unwrap();
+    assert!(err.to_string().contains("posture"), "{err}");
+    // a zero period is an error
+    let config: IkConfig = toml::from_str(&text.replace("weight = 3.0\n", "")).unwrap();
+    assert!(QpIk::new(Arc::clone(&model), config, Duration::ZERO).is_err());
 }

@@ -115,7 +115,12 @@ fn record() {
         input.state = standing_state(&model, &random_posture(&model, &mut rng, 0.2, 0.05));
         let mut config = IkConfig::default_for_bundled_model();
         config.eliminate_equalities = eliminate;
-        let mut ik = QpIk::new(Arc::clone(&model), config).unwrap();
+        let mut ik = QpIk::new(
+            Arc::clone(&model),
+            config,
+            std::time::Duration::from_millis(2),
+        )
+        .unwrap();
         for k in 0..3 {
             ik.step(&input).unwrap();
             out.push(Fixture::from_qp(
@@ -130,7 +135,12 @@ fn record() {
         input.desired_zmp = Some(Vector2::new(0.005, 0.0));
         let mut config = TsidConfig::default_for_bundled_model();
         config.eliminate_equalities = eliminate;
-        let mut tsid = Tsid::new(Arc::clone(&model), config).unwrap();
+        let mut tsid = Tsid::new(
+            Arc::clone(&model),
+            config,
+            std::time::Duration::from_millis(1),
+        )
+        .unwrap();
         tsid.step(&input).unwrap();
         out.push(Fixture::from_qp(
             &format!("tsid_double_support_zmp_{tag}"),

@@ -314,7 +314,7 @@ impl Default for EndSection {
 }
 
 /// `[wbc]`: the whole-body controllers; `ik` is used in position mode, `tsid` in torque mode. Their
-/// `period` is set by the runner from `rates.wbc_hz` (writing a different one is an error).
+/// period is `1 / rates.wbc_hz`, given to their constructors by the runner.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WbcSection {
@@ -475,14 +475,13 @@ impl Scenario {
                 );
             }
         }
-        let mut scenario = Self {
+        let scenario = Self {
             config: value,
             sources,
             merged,
             urdf_path,
         };
         scenario.validate()?;
-        scenario.apply_derived();
         Ok(scenario)
     }
 
@@ -695,23 +694,6 @@ impl Scenario {
                 ));
             }
         }
-        // Layer periods are derived from [rates]; an explicit, different value is a contradiction.
-        let wbc_period = 1.0 / f64::from(r.wbc_hz);
-        for (key, period) in [
-            ("wbc.ik.period", c.wbc.ik.period),
-            ("wbc.tsid.period", c.wbc.tsid.period),
-        ] {
-            if self.sources.key_location(key).is_some() && (period - wbc_period).abs() > 1e-12 {
-                return Err(self.invalid(
-                    key,
-                    format!(
-                        "{period} s contradicts rates.wbc_hz = {} Hz; remove this key (the runner sets it) or \
-                         set it to {wbc_period} [s]",
-                        r.wbc_hz
-                    ),
-                ));
-            }
-        }
         c.planner.validate().map_err(|e| {
             let name = match &e {
                 stride_planner::PlannerError::InvalidParameter { name, .. } => Some(*name),
@@ -746,22 +728,6 @@ impl Scenario {
             }
         }
         Ok(())
-    }
-
-    /// Writes the keys the runner derives from `[rates]` (`wbc.ik.period`, `wbc.tsid.period`) into the
-    /// configuration and the merged document, so both state the effective values.
-    fn apply_derived(&mut self) {
-        let c = &mut self.config;
-        let period = 1.0 / f64::from(c.rates.wbc_hz);
-        c.wbc.ik.period = period;
-        c.wbc.tsid.period = period;
-        if let Some(toml::Value::Table(w)) = self.merged.get_mut("wbc") {
-            for k in ["ik", "tsid"] {
-                if let Some(toml::Value::Table(t)) = w.get_mut(k) {
-                    t.insert("period".into(), toml::Value::Float(period));
-                }
-            }
-        }
     }
 
     /// The simulator configuration.

@@ -50,7 +50,7 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "rates.planner_mode", unit: "-", meaning: "`event` (plan at start and on each new goal segment) or `periodic` (also at `planner_hz`)." },
     KeyDoc { key: "rates.planner_hz", unit: "Hz", meaning: "Planner rate in `periodic` mode; divides `base_hz`." },
     KeyDoc { key: "rates.simplified_hz", unit: "Hz", meaning: "Simplified-layer rate (about 100 Hz); divides `base_hz`, ≤ `wbc_hz`." },
-    KeyDoc { key: "rates.wbc_hz", unit: "Hz", meaning: "Whole-body layer rate (500–1000 Hz); divides `base_hz`, ≤ `sim_hz`. Sets `wbc.ik.period` and `wbc.tsid.period`." },
+    KeyDoc { key: "rates.wbc_hz", unit: "Hz", meaning: "Whole-body layer rate (500–1000 Hz); divides `base_hz`, ≤ `sim_hz`. Sets the period of the QP-IK and the TSID." },
     KeyDoc { key: "rates.sim_hz", unit: "Hz", meaning: "Plant rate (2–5 kHz for the simulator); divides `base_hz`. The simulator's step period is `1 / sim_hz`." },
     KeyDoc { key: "goal.pose.x", unit: "m", meaning: "`[goal.pose]`: goal x in the world frame (the robot starts near the origin, facing +x)." },
     KeyDoc { key: "goal.pose.y", unit: "m", meaning: "Goal y." },
@@ -231,8 +231,8 @@ pub fn render(
          and not pre-filled (the default is `[goal.pose] x = 2`). Every table rejects unknown keys. Errors name the file, line, column and key and say what \
          is expected. `stride check <CONFIG>` validates a scenario without running it.\n\n\
          Rates are in Hz and must divide `rates.base_hz` exactly; `base_hz` must divide 10⁹ so the base period \
-         is a whole number of nanoseconds. The layers' own period keys (`wbc.ik.period`, `wbc.tsid.period`) are \
-         set by the runner from `[rates]`; writing a different value is an error.\n\n\
+         is a whole number of nanoseconds. The layers get their periods from `[rates]` (`rates.wbc_hz` for the \
+         QP-IK and the TSID, `rates.sim_hz` for the simulator); no layer section has a period key.\n\n\
          Keys marked `[]` belong to the entries of an array of tables (`[[...]]`); their default is per entry \
          (see the defaults printed by the code, e.g. the tasks of `stride_wbc::IkConfig::default_for_bundled_model`).\n\n",
     );

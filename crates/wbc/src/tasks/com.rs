@@ -1,0 +1,127 @@
+//! The centre of mass. QP-IK: `J_com ν = ẋ* + K_p (x* − x)` [Romualdi 2022, eq. 7.1.4] (rows in m/s,
+//! `K_p` in 1/s). TSID: the linear momentum rate through the contact forces,
+//! `Σ_c f_c = m (ẍ* + K_d (ẋ* − ẋ) + K_p (x* − x)) − m g` [Romualdi 2022, eq. 7.2.4, 7.2.7] (rows in N,
+//! `K_p` in 1/s², `K_d` in 1/s).
+
+use nalgebra::{DMatrix, Vector3};
+use stride_model::{KinDyn, Model};
+use stride_qp::TaskDataMut;
+
+use super::{check_gain, TsidContext};
+use crate::config::ComTaskConfig;
+use crate::error::WbcError;
+use crate::io::WbcInput;
+
+/// CoM tracking (velocity level: `J_com ν = ẋ_ref + K_p (x_ref − x)`).
+#[derive(Debug, Clone)]
+pub(crate) struct ComVelocityTask {
+    pub name: String,
+    kp: f64,
+    rows: Vec<usize>,
+    jacobian: DMatrix<f64>,
+    pub block: usize,
+}
+
+impl ComVelocityTask {
+    pub fn new(model: &Model, c: &ComTaskConfig) -> Result<Self, WbcError> {
+        check_gain(&c.name, "kp", c.kp)?;
+        let rows: Vec<usize> = (0..3).filter(|&i| c.mask[i]).collect();
+        if rows.is_empty() {
+            return Err(WbcError::InvalidConfig {
+                task: c.name.clone(),
+                key: "mask",
+                reason: "masks every row".into(),
+            });
+        }
+        Ok(ComVelocityTask {
+            name: c.name.clone(),
+            kp: c.kp,
+            rows,
+            jacobian: DMatrix::zeros(3, model.nv()),
+            block: usize::MAX,
+        })
+    }
+
+    pub fn row_count(&self) -> usize {
+        self.rows.len()
+    }
+
+    pub fn update(
+        &mut self,
+        kd: &mut KinDyn,
+        input: &WbcInput,
+        block: TaskDataMut<'_>,
+    ) -> Result<(), WbcError> {
+        kd.com_jacobian(&mut self.jacobian)?;
+        let com = kd.com_position();
+        let rhs: Vector3<f64> = input.com_velocity + self.kp * (input.com_position - com);
+        let nv = self.jacobian.ncols();
+        for (k, &row) in self.rows.iter().enumerate() {
+            for j in 0..nv {
+                block.a[(k, j)] = self.jacobian[(row, j)];
+            }
+            block.b[k] = rhs[row];
+        }
+        Ok(())
+    }
+
+    /// `‖(x_ref − x)[mask]‖`.
+    pub fn error_norm(&self, kd: &KinDyn, input: &WbcInput) -> f64 {
+        let e = input.com_position - kd.com_position();
+        self.rows.iter().map(|&i| e[i] * e[i]).sum::<f64>().sqrt()
+    }
+}
+
+/// TSID linear momentum rate (the CoM task of the TSID): one row per kept axis `r`,
+/// `Σ_c f_{c,r} = m (ẍ*_r + K_d (ẋ*_r − ẋ_r) + K_p (x*_r − x_r)) − m g_r` (N).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ComMomentumTask {
+    kp: f64,
+    kd: f64,
+    rows: [bool; 3],
+}
+
+impl ComMomentumTask {
+    pub fn new(c: &ComTaskConfig) -> Result<Self, WbcError> {
+        check_gain(&c.name, "kp", c.kp)?;
+        check_gain(&c.name, "kd", c.kd)?;
+        if !c.mask.iter().any(|m| *m) {
+            return Err(WbcError::InvalidConfig {
+                task: c.name.clone(),
+                key: "mask",
+                reason: "masks every row".into(),
+            });
+        }
+        Ok(ComMomentumTask {
+            kp: c.kp,
+            kd: c.kd,
+            rows: c.mask,
+        })
+    }
+
+    pub fn row_count(&self) -> usize {
+        self.rows.iter().filter(|m| **m).count()
+    }
+
+    /// Fills the rows over the force columns of the loaded contacts.
+    pub fn fill(&self, input: &WbcInput, s: &TsidContext, b: &mut TaskDataMut) {
+        let m = s.mass;
+        let acc = input.com_acceleration
+            + self.kd * (input.com_velocity - s.com_velocity)
+            + self.kp * (input.com_position - s.com_position);
+        let rhs = m * acc - m * s.gravity;
+        let mut k = 0;
+        for r in 0..3 {
+            if !self.rows[r] {
+                continue;
+            }
+            for c in 0..s.contacts.len() {
+                if let Some(off) = s.offsets[c] {
+                    b.a[(k, off + r)] = 1.0;
+                }
+            }
+            b.b[k] = rhs[r];
+            k += 1;
+        }
+    }
+}
