@@ -16,6 +16,7 @@
 #![warn(missing_docs)]
 
 mod active_set;
+mod banded;
 mod clarabel_backend;
 mod dense;
 mod error;
@@ -27,6 +28,7 @@ pub mod testing;
 mod variables;
 
 pub use active_set::{ActiveSetSettings, ActiveSetSolver, StartKind};
+pub use banded::{BandMatrix, BandedOutcome, BandedQp, BandedQpError, BandedSettings};
 pub use clarabel_backend::{ClarabelSettings, ClarabelSolver, ClarabelSparseSolver};
 pub use dense::DenseQp;
 pub use error::QpError;

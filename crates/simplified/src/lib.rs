@@ -47,7 +47,6 @@
 //! [`DcmPredictiveController`], [`ZmpComController`]; the bare laws [`dcm_instantaneous_law`] and
 //! [`zmp_com_law`] are exposed for analysis.
 
-mod banded;
 mod block;
 mod dcm_instantaneous;
 mod dcm_predictive;
