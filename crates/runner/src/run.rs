@@ -965,7 +965,7 @@ pub fn run_with_robot(
                     let out = simplified_output_record(&lp.stack.simplified_output);
                     w.write(topics.simplified_output, t, &out)
                         .map_err(|e| e.to_string())?;
-                    let st = lp.stack.simplified_output.diagnostics.mpc.solve_time;
+                    let st = lp.stack.simplified_output.diagnostics.solve_time;
                     w.write(
                         topics.simplified_timing,
                         t,
@@ -977,7 +977,7 @@ pub fn run_with_robot(
                     .map_err(|e| e.to_string())?;
                 }
                 lp.simplified_times
-                    .push(lp.stack.simplified_output.diagnostics.mpc.solve_time);
+                    .push(lp.stack.simplified_output.diagnostics.solve_time);
                 if let Some(msg) = held {
                     lp.event(
                         t,

@@ -1,7 +1,7 @@
 //! The simplified-model control layer as a [`stride_block::Block`]: a DCM controller (instantaneous or
 //! predictive, chosen in the config) followed by the ZMP-CoM controller.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
@@ -150,6 +150,9 @@ pub struct SimplifiedDiagnostics {
     pub thesis_gain_conditions_met: bool,
     /// MPC diagnostics (status `not_run` with the instantaneous controller).
     pub mpc: MpcDiagnostics,
+    /// Wall-clock time of this tick of the running controllers \[s\]: the DCM controller (PI or MPC,
+    /// whichever runs) plus the ZMP-CoM controller, with the input checks.
+    pub solve_time: f64,
 }
 
 /// What one tick of the layer produces: references for the whole-body controller.
@@ -270,6 +273,7 @@ impl stride_block::Block for SimplifiedController {
     /// One tick. On error (non-finite input, empty MPC horizon, MPC failure) nothing changes and
     /// [`SimplifiedController::output`] still holds the last valid references: callers hold them.
     fn step(&mut self, input: &SimplifiedInput) -> Result<&SimplifiedOutput> {
+        let start = Instant::now();
         Self::validate_input(input)?;
         let mut diagnostics = SimplifiedDiagnostics {
             controller: self.config.dcm_controller,
@@ -321,6 +325,7 @@ impl stride_block::Block for SimplifiedController {
         diagnostics.zmp_com_gains = Some(com.gains);
         diagnostics.gain_blend_progress = com.blend_progress;
         diagnostics.thesis_gain_conditions_met = com.thesis_conditions_met;
+        diagnostics.solve_time = start.elapsed().as_secs_f64();
         self.output = SimplifiedOutput {
             time: input.time,
             valid: true,

@@ -27,7 +27,8 @@
 //!     input with [`SimplifiedInput::new`]`(controller.horizon_samples(), polygon)`, no allocation after).
 //!   * `Output` = [`SimplifiedOutput`]: desired ZMP (always inside the support polygon), CoM position,
 //!     velocity and acceleration references, and [`SimplifiedDiagnostics`] (DCM error, integral term,
-//!     projection flag, gains, MPC status/iterations/solve time).
+//!     projection flag, gains, MPC status/iterations/solve time, and `solve_time`: the wall-clock time
+//!     of the tick of whichever DCM controller runs, PI or MPC, plus the ZMP-CoM controller).
 //! * **Bad input**: a non-finite input or an empty horizon returns an error and changes nothing; [`SimplifiedController::output`] keeps the last valid references (hold them). Support
 //!   polygons are validated when built ([`SupportPolygon::convex_hull`] rejects empty/degenerate sets),
 //!   so an invalid polygon cannot reach `step`. A horizon shorter than `N + 1` samples (plan ending) is
