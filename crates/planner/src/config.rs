@@ -59,7 +59,6 @@ impl PlanVerification {
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
 /// | `com_height` | m | 0.53 | constant CoM height above the ground (LIPM), gives ω = √(g/h); in (0, 10] |
-/// | `gravity` | m/s² | 9.81 | gravity magnitude |
 /// | `step_duration_min` | s | 0.8 | min time between two touch-downs (10.1.11) |
 /// | `step_duration_nominal` | s | 1.0 | duration of the closing steps once the unicycle stopped |
 /// | `step_duration_max` | s | 1.2 | max time between two touch-downs (10.1.11) |
@@ -99,8 +98,6 @@ impl PlanVerification {
 pub struct PlannerConfig {
     /// Constant CoM height above the ground \[m\], in (0, 10].
     pub com_height: f64,
-    /// Gravity magnitude \[m/s²\].
-    pub gravity: f64,
     /// Minimum step duration (touch-down to touch-down) \[s\].
     pub step_duration_min: f64,
     /// Duration of the closing steps placed after the unicycle stopped \[s\].
@@ -175,7 +172,6 @@ impl Default for PlannerConfig {
     fn default() -> Self {
         Self {
             com_height: 0.53,
-            gravity: 9.81,
             step_duration_min: 0.8,
             step_duration_nominal: 1.0,
             step_duration_max: 1.2,
@@ -231,6 +227,17 @@ fn check(
     }
 }
 
+/// Checks the gravity magnitude the planner is built with \[m/s²\]: finite and > 0.
+pub(crate) fn check_gravity(gravity_m_s2: f64) -> Result<(), PlannerError> {
+    if gravity_m_s2.is_finite() && gravity_m_s2 > 0.0 {
+        Ok(())
+    } else {
+        Err(PlannerError::InvalidGravity {
+            value: gravity_m_s2,
+        })
+    }
+}
+
 /// Largest accepted `com_height` \[m\]: ω = √(g/h) ≈ 0.99 rad/s there; far larger heights make the DCM
 /// plan's closed forms (terms in 1/ω³) lose every digit.
 pub const MAX_COM_HEIGHT: f64 = 10.0;
@@ -247,7 +254,6 @@ impl PlannerConfig {
                 "must lie in (0, {MAX_COM_HEIGHT}] m (beyond, ω·T is so small that the LIPM plan is ill-conditioned)"
             ),
         )?;
-        check("gravity", c.gravity, c.gravity > 0.0, "must be > 0")?;
         check(
             "step_duration_min",
             c.step_duration_min,
@@ -444,9 +450,9 @@ impl PlannerConfig {
         Ok(())
     }
 
-    /// LIPM natural frequency ω = √(g/h) \[1/s\].
-    pub fn omega(&self) -> f64 {
-        (self.gravity / self.com_height).sqrt()
+    /// LIPM natural frequency ω = √(g/h) \[1/s\] for the gravity magnitude `gravity_m_s2` \[m/s²\].
+    pub fn omega(&self, gravity_m_s2: f64) -> f64 {
+        (gravity_m_s2 / self.com_height).sqrt()
     }
 
     /// Forward speed limit of the unicycle \[m/s\]: factor · √(l_max² − w²)/t_min.

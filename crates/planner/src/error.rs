@@ -17,6 +17,13 @@ pub enum PlannerError {
         /// What the valid range is.
         reason: String,
     },
+    /// The gravity magnitude given to [`crate::Planner::new`] or [`crate::plan_from_standing`] is not
+    /// finite and positive.
+    #[error("invalid gravity magnitude {value} m/s²: must be finite and > 0")]
+    InvalidGravity {
+        /// The rejected value \[m/s²\].
+        value: f64,
+    },
     /// The goal is malformed (NaN, empty waypoint list, negative duration, ...).
     #[error("invalid goal `{name}`: {reason}")]
     InvalidGoal {

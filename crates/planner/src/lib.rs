@@ -11,10 +11,11 @@
 //! * [`Goal`]: `Stand`, `Pose { x, y, yaw }`, `Waypoints { points }`, `Velocity { forward, lateral, yaw_rate,
 //!   duration }`; internally tagged (`type = "pose"` etc.) so it can be written in TOML. Only the last
 //!   waypoint's heading is enforced.
-//! * [`plan_from_standing`]`(config, t0, &left_sole, &right_sole, &goal) -> Result<Plan, PlannerError>`: a whole
-//!   plan from standing (initial double support of `initial_double_support_duration`, ends standing with
+//! * [`plan_from_standing`]`(config, gravity, t0, &left_sole, &right_sole, &goal) -> Result<Plan, PlannerError>`:
+//!   a whole plan from standing (initial double support of `initial_double_support_duration`, ends standing with
 //!   parallel feet, DCM on the feet mid-point).
-//! * [`Planner`]: `new(config)`, `start(t0, &left, &right, &goal) -> &Plan`, `replan(t, &goal) -> merge time`
+//! * [`Planner`]: `new(config, gravity_m_s2)` (the scenario's gravity magnitude, > 0: ω = √(g/h) follows
+//!   from it; it is not a config field), `start(t0, &left, &right, &goal) -> &Plan`, `replan(t, &goal) -> merge time`
 //!   (merge point inside a double support; the past is kept), `sample(t, &mut PlanSample)`, `plan()`. It
 //!   implements [`stride_block::Block`] with [`PlannerInput`] `{ time, goal: Option<Goal>, left_sole,
 //!   right_sole }` → [`PlanSample`]: the first tick starts a plan from the measured soles, a tick carrying a

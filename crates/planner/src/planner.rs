@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use nalgebra::{Isometry3, Vector2};
 
-use crate::config::{DcmInterpolation, PlannerConfig};
+use crate::config::{check_gravity, DcmInterpolation, PlannerConfig};
 use crate::contacts::{ContactList, Foot, Phase, PhaseKind, PlannedContact};
 use crate::dcm::{
     bump_coefficients, dcm_particular, dcm_particular_scalar, eval_cubic_scalar, eval_cubic_value,
@@ -67,16 +67,19 @@ fn check_time(name: &'static str, t: f64) -> Result<(), PlannerError> {
 }
 
 /// Plans from standing: both feet on the ground at `left`/`right` (sole frames, world), CoM at rest above
-/// their mid-point, at time `t0` \[s\]. The plan starts with `initial_double_support_duration` of weight
-/// shifting and ends standing with parallel feet and the DCM on their mid-point.
+/// their mid-point, at time `t0` \[s\], under gravity of magnitude `gravity_m_s2` \[m/s²\] (finite,
+/// > 0). The plan starts with `initial_double_support_duration` of weight shifting and ends standing
+/// with parallel feet and the DCM on their mid-point.
 pub fn plan_from_standing(
     config: &PlannerConfig,
+    gravity_m_s2: f64,
     t0: f64,
     left: &Isometry3<f64>,
     right: &Isometry3<f64>,
     goal: &Goal,
 ) -> Result<Plan, PlannerError> {
     config.validate()?;
+    check_gravity(gravity_m_s2)?;
     goal.validate()?;
     check_time("t0", t0)?;
     for (name, h) in [("left_sole", left), ("right_sole", right)] {
@@ -134,12 +137,16 @@ pub fn plan_from_standing(
         ground: 0.5 * (left.translation.z + right.translation.z),
         first_swing: None,
     };
-    build_plan(config, &start, goal)
+    build_plan(config, config.omega(gravity_m_s2), &start, goal)
 }
 
 /// Builds a plan from a start state (fresh or merge).
-fn build_plan(cfg: &PlannerConfig, start: &StartState, goal: &Goal) -> Result<Plan, PlannerError> {
-    let omega = cfg.omega();
+fn build_plan(
+    cfg: &PlannerConfig,
+    omega: f64,
+    start: &StartState,
+    goal: &Goal,
+) -> Result<Plan, PlannerError> {
     let f = cfg.double_support_fraction;
     let path = unicycle_path(cfg, start.anchor, goal)?;
     let (l2, r2) = (
@@ -552,16 +559,22 @@ fn thesis_segments(
 #[derive(Clone, Debug)]
 pub struct Planner {
     config: PlannerConfig,
+    /// Gravity magnitude \[m/s²\] (validated).
+    gravity: f64,
     plan: Option<Plan>,
     output: PlanSample,
 }
 
 impl Planner {
-    /// Validates the configuration.
-    pub fn new(config: PlannerConfig) -> Result<Self, PlannerError> {
+    /// A planner for `config` under gravity of magnitude `gravity_m_s2` \[m/s²\] (the scenario's one
+    /// gravity; ω = √(g/h) of the plans follows from it). Validates both: `InvalidParameter` for the
+    /// config, `InvalidGravity` unless the gravity is finite and > 0.
+    pub fn new(config: PlannerConfig, gravity_m_s2: f64) -> Result<Self, PlannerError> {
         config.validate()?;
+        check_gravity(gravity_m_s2)?;
         Ok(Self {
             config,
+            gravity: gravity_m_s2,
             plan: None,
             output: PlanSample::default(),
         })
@@ -570,6 +583,11 @@ impl Planner {
     /// The configuration.
     pub fn config(&self) -> &PlannerConfig {
         &self.config
+    }
+
+    /// The gravity magnitude the planner was built with \[m/s²\].
+    pub fn gravity(&self) -> f64 {
+        self.gravity
     }
 
     /// The current plan, if any.
@@ -585,7 +603,7 @@ impl Planner {
         right: &Isometry3<f64>,
         goal: &Goal,
     ) -> Result<&Plan, PlannerError> {
-        let plan = plan_from_standing(&self.config, t0, left, right, goal)?;
+        let plan = plan_from_standing(&self.config, self.gravity, t0, left, right, goal)?;
         self.verify(&plan)?;
         Ok(self.plan.insert(plan))
     }
@@ -697,7 +715,7 @@ impl Planner {
             ground: plan.ground_height,
             first_swing,
         };
-        let new = build_plan(cfg, &start, goal)?;
+        let new = build_plan(cfg, cfg.omega(self.gravity), &start, goal)?;
         let merged = merge(plan, new, m);
         self.verify(&merged)?;
         self.plan = Some(merged);

@@ -8,7 +8,7 @@ use stride_planner::{plan_from_standing, Goal, PlanOutcome, PlannerConfig, Waypo
 fn run(goal: Goal) -> stride_planner::Plan {
     let cfg = PlannerConfig::default();
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-    let plan = plan_from_standing(&cfg, 0.0, &l, &r, &goal).expect("plan");
+    let plan = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &goal).expect("plan");
     check_all(&cfg, &plan, true);
     plan
 }
@@ -126,7 +126,7 @@ fn replanning_with_the_same_goal_keeps_the_footsteps() {
         y: 0.0,
         yaw: 0.0,
     };
-    let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
+    let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
     let old = planner.start(0.0, &l, &r, &goal).unwrap().clone();
     let m = planner.replan(4.0, &goal).unwrap();
     let new = planner.plan().unwrap();
@@ -147,7 +147,7 @@ fn replanning_with_the_same_goal_keeps_the_footsteps() {
 fn replanning_to_a_new_goal() {
     let cfg = PlannerConfig::default();
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-    let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
+    let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
     planner
         .start(
             0.0,
@@ -197,7 +197,7 @@ fn block_interface() {
     use stride_planner::{Planner, PlannerInput};
     let cfg = PlannerConfig::default();
     let (l, r) = standing(1.0, 2.0, 0.5, cfg.nominal_width);
-    let mut block = Planner::new(cfg.clone()).unwrap();
+    let mut block = Planner::new(cfg.clone(), GRAVITY).unwrap();
     let mut input = PlannerInput {
         time: Duration::from_secs(3),
         goal: None,
@@ -273,7 +273,7 @@ fn stopping_mid_walk() {
         ),
     ] {
         for t in [2.0, 3.3, 4.1, 5.0, 6.7] {
-            let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
+            let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
             planner
                 .start(
                     0.0,
@@ -323,7 +323,7 @@ fn min_width_equal_to_nominal_width_walks_at_full_speed() {
             ..PlannerConfig::default()
         };
         let (l, r) = standing(0.0, 0.0, 0.0, start_width);
-        let plan = plan_from_standing(&cfg, 0.0, &l, &r, &goal).expect("plan");
+        let plan = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &goal).expect("plan");
         check_all(&cfg, &plan, true);
         assert_eq!(plan.outcome, PlanOutcome::Complete);
         plan

@@ -203,7 +203,7 @@ pub fn replay(
     let to_value = |v: &dyn erased::Ser| v.value();
     match layer {
         LayerName::Planner => {
-            let mut planner = Planner::new(c.planner.clone())
+            let mut planner = Planner::new(c.planner.clone(), stride_model::STANDARD_GRAVITY)
                 .map_err(|e| ReplayError::Content(format!("planner: {e}")))?;
             let mut sample = PlanSample::default();
             for m in &log.messages {
