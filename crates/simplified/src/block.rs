@@ -64,6 +64,11 @@ impl SimplifiedConfig {
     }
 }
 
+/// The `omega` of a fresh [`SimplifiedInput`] \[s⁻¹\]: a valid value (`√(9.81 / 0.5)`, a 0.5 m LIPM)
+/// until the caller writes the plan's `ω`; the layer has no gravity of its own (the plan's `ω` carries
+/// it).
+pub const PLACEHOLDER_OMEGA: f64 = 4.429_446_918_070_020_4;
+
 /// Everything one tick of the layer needs (plain data; 2D vectors are world x, y in metres).
 ///
 /// Build it once with [`SimplifiedInput::new`] (which allocates the horizon buffer) and refill it every
@@ -101,12 +106,12 @@ pub struct SimplifiedInput {
 }
 
 impl SimplifiedInput {
-    /// An input with zero vectors, `omega` = sqrt(9.81/0.5), the given support polygon and a horizon
+    /// An input with zero vectors, `omega` = [`PLACEHOLDER_OMEGA`], the given support polygon and a horizon
     /// buffer of `horizon_capacity` samples (use [`SimplifiedController::horizon_samples`]).
     pub fn new(horizon_capacity: usize, support_polygon: SupportPolygon) -> Self {
         Self {
             time: Duration::ZERO,
-            omega: (crate::lipm::STANDARD_GRAVITY / 0.5).sqrt(),
+            omega: PLACEHOLDER_OMEGA,
             walking: false,
             planned_dcm_position: Vector2::zeros(),
             planned_dcm_velocity: Vector2::zeros(),

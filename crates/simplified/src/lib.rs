@@ -59,7 +59,7 @@ mod zmp_com;
 
 pub use block::{
     DcmControllerKind, SimplifiedConfig, SimplifiedController, SimplifiedDiagnostics,
-    SimplifiedInput, SimplifiedOutput,
+    SimplifiedInput, SimplifiedOutput, PLACEHOLDER_OMEGA,
 };
 pub use dcm_instantaneous::{
     dcm_instantaneous_law, DcmInstantaneousConfig, DcmInstantaneousController,
@@ -70,10 +70,7 @@ pub use dcm_predictive::{
     MpcDiagnostics, MpcProblemView, MpcSolverKind, MpcStatus, ZmpRateReference,
 };
 pub use error::{Result, SimplifiedError};
-pub use lipm::{
-    dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization,
-    STANDARD_GRAVITY,
-};
+pub use lipm::{dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization};
 pub use polygon::{
     feet_support_polygon, FootRectangle, SupportPolygon, MAX_HULL_POINTS, MAX_POLYGON_VERTICES,
     MIN_POLYGON_AREA,

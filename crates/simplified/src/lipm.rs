@@ -12,9 +12,6 @@ use nalgebra::{Matrix2, Vector2};
 
 use crate::error::{check_finite, check_finite2, check_positive, Result, SimplifiedError};
 
-/// Standard gravity \[m/s²\], the default magnitude used by the configs of this crate.
-pub const STANDARD_GRAVITY: f64 = 9.81;
-
 /// Natural frequency `ω = sqrt(g / h)` \[s⁻¹\] of the LIPM.
 ///
 /// | parameter | unit | meaning |
