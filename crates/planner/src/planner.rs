@@ -67,8 +67,8 @@ fn check_time(name: &'static str, t: f64) -> Result<(), PlannerError> {
 }
 
 /// Plans from standing: both feet on the ground at `left`/`right` (sole frames, world), CoM at rest above
-/// their mid-point, at time `t0` \[s\], under gravity of magnitude `gravity_m_s2` \[m/s²\] (finite,
-/// > 0). The plan starts with `initial_double_support_duration` of weight shifting and ends standing
+/// their mid-point, at time `t0` \[s\], under gravity of magnitude `gravity_m_s2` \[m/s²\] (finite
+/// and positive). The plan starts with `initial_double_support_duration` of weight shifting and ends standing
 /// with parallel feet and the DCM on their mid-point.
 pub fn plan_from_standing(
     config: &PlannerConfig,
