@@ -245,6 +245,13 @@ pub const MAX_COM_HEIGHT: f64 = 10.0;
 impl PlannerConfig {
     /// Checks every field; the error names the first offending parameter.
     pub fn validate(&self) -> Result<(), PlannerError> {
+        self.validate_timing()?;
+        self.validate_feet()?;
+        self.validate_unicycle()
+    }
+
+    /// The CoM height and the step and double-support durations.
+    fn validate_timing(&self) -> Result<(), PlannerError> {
         let c = self;
         check(
             "com_height",
@@ -291,6 +298,12 @@ impl PlannerConfig {
             c.final_double_support_duration > 0.0,
             "must be > 0",
         )?;
+        Ok(())
+    }
+
+    /// The sole rectangle, the step geometry and the swing.
+    fn validate_feet(&self) -> Result<(), PlannerError> {
+        let c = self;
         check(
             "foot_length",
             c.foot_length,
@@ -355,6 +368,12 @@ impl PlannerConfig {
             c.landing_velocity <= 0.0,
             "must be <= 0 (downwards)",
         )?;
+        Ok(())
+    }
+
+    /// The speed limits, the unicycle, the footstep search, replanning and the DCM options.
+    fn validate_unicycle(&self) -> Result<(), PlannerError> {
+        let c = self;
         check(
             "backward_speed_factor",
             c.backward_speed_factor,

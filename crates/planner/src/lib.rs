@@ -55,6 +55,7 @@
 //!   α of (10.2.3) is implied by the final double support rather than set.
 //! * Swing feet: minimum-jerk quintics (D.3.6) with an apex knot for the height, minimum-jerk geodesic on SO(3).
 
+mod build;
 pub mod config;
 pub mod contacts;
 pub mod dcm;
