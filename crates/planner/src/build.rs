@@ -439,7 +439,7 @@ fn contacts_and_swings(
     (contacts, swings)
 }
 
-/// DCM cubic of (10.1.23) on [0, T] from (ξ_a, ξ̇_a) to (ξ_b, ξ̇_b), as a segment (ZMP = ξ − ξ̇/ω).
+/// DCM cubic of [Romualdi 2022, eq. 10.1.23] on [0, T] from (ξ_a, ξ̇_a) to (ξ_b, ξ̇_b), as a segment (ZMP = ξ − ξ̇/ω).
 fn dcm_cubic_segment(
     start: f64,
     duration: f64,
@@ -463,7 +463,7 @@ fn dcm_cubic_segment(
     DcmSegment::new(start, Some(duration), z, omega)
 }
 
-/// The thesis' DCM plan (10.1.16)–(10.1.23), (10.2.1)–(10.2.3): single-support exponentials from the
+/// The thesis' DCM plan [Romualdi 2022, eqs. 10.1.16–10.1.23, 10.2.1–10.2.3]: single-support exponentials from the
 /// backward recursion with the last-step condition `ξ_eos = α x_last + (1 − α) x_stance`, exponentials
 /// switching in the middle of each double support, double supports replaced by DCM cubics matching position and
 /// velocity of the neighbouring exponentials, the first from the start state, the last to the feet mid-point at

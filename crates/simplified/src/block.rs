@@ -19,10 +19,10 @@ use crate::zmp_com::{ZmpComConfig, ZmpComController, ZmpComGains};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum DcmControllerKind {
-    /// The PI law (10.2.17) with projection onto the support polygon.
+    /// The PI law [Romualdi 2022, eq. 10.2.17] with projection onto the support polygon.
     #[default]
     Instantaneous,
-    /// The MPC (10.2.23).
+    /// The MPC [Romualdi 2022, eq. 10.2.23].
     Predictive,
 }
 

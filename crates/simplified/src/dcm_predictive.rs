@@ -1,23 +1,23 @@
-//! DCM predictive controller (thesis (10.2.19)–(10.2.24), after Krause et al. 2012): an MPC over a
+//! DCM predictive controller [Romualdi 2022, eqs. 10.2.19–10.2.24], after [Krause 2012]: an MPC over a
 //! horizon (default 2 s) that picks a piecewise-constant ZMP sequence keeping the predicted DCM on the
 //! plan, with the ZMP of each stage inside the support polygon of the planned contact sequence.
 //!
 //! # Formulation
 //!
-//! Prediction model (10.2.19), exact ZOH with the layer period `T`: `ξ_{k+1} = F ξ_k + G z_k`,
+//! Prediction model [Romualdi 2022, eq. 10.2.19], exact ZOH with the layer period `T`: `ξ_{k+1} = F ξ_k + G z_k`,
 //! `F = e^{ωT}`, `G = 1 − e^{ωT}`, `ξ_0 = ξ̄` (measured DCM). Cost, summed over the `N` stages:
 //!
 //! `½ Λ_ξ Σ_{k=1..N} ‖ξ_k − ξ_ref,k‖² + ½ Λ_z Σ_{k=0..N−1} ‖(z_k − z_{k−1}) − (ẑ_k − ẑ_{k−1})‖²`
 //!
-//! with `z_{−1}` the previous tick's desired ZMP (10.2.23e) and `ẑ` the planned ZMP. With
+//! with `z_{−1}` the previous tick's desired ZMP [Romualdi 2022, eq. 10.2.23e] and `ẑ` the planned ZMP. With
 //! `zmp_rate_reference = "plan"` (default) the ZMP rate is penalised relative to the planned rate, so a
 //! consistent plan is an exact fixed point of the MPC (zero cost); `"zero"` penalises the absolute rate as
-//! printed in (10.2.21) (smoother, but it then lags the plan at every ZMP transfer). Constraints
-//! (10.2.22): `A_k z_k ≤ b_k`, the H-representation of the support polygon of stage `k`.
+//! printed in [Romualdi 2022, eq. 10.2.21] (smoother, but it then lags the plan at every ZMP transfer). Constraints
+//! [Romualdi 2022, eq. 10.2.22]: `A_k z_k ≤ b_k`, the H-representation of the support polygon of stage `k`.
 //!
 //! # Solution method (structure exploited)
 //!
-//! The thesis condenses onto the ZMP sequence (10.2.24), which gives a dense Hessian and, because the
+//! The thesis condenses onto the ZMP sequence [Romualdi 2022, eq. 10.2.24], which gives a dense Hessian and, because the
 //! DCM is unstable (`F^N = e^{ωNT}` ≈ 5·10³ over 2 s), a badly conditioned one. Instead, the map
 //! `z_k = (ξ_{k+1} − F ξ_k)/G` is inverted: the decision variables are the predicted DCMs
 //! `ξ_1 … ξ_N` (2N unknowns, same optimum since the change of variables is bijective). The tracking
@@ -55,7 +55,7 @@ pub enum ZmpRateReference {
     /// Penalise `(z_k − z_{k−1}) − (ẑ_k − ẑ_{k−1})`: the plan is an exact fixed point.
     #[default]
     Plan,
-    /// Penalise `z_k − z_{k−1}` as printed in (10.2.21).
+    /// Penalise `z_k − z_{k−1}` as printed in [Romualdi 2022, eq. 10.2.21].
     Zero,
 }
 

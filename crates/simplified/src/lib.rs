@@ -1,13 +1,16 @@
-//! `stride-simplified`: the simplified-model control layer (thesis 002 ch. 4 and §10.2.3).
+//! `stride-simplified`: the simplified-model control layer [Romualdi 2022, ch. 4 and §10.2.3].
 //!
 //! It keeps the robot's divergent component of motion (DCM) on the plan by choosing a desired ZMP, and
 //! turns that into CoM references for the whole-body layer:
 //!
 //! ```text
 //! plan (DCM, ZMP, CoM) + measured (DCM, ZMP, CoM) ─► DCM controller ─► desired ZMP ─► ZMP-CoM ─► CoM refs
-//!                                                   (instantaneous PI (10.2.17)      (10.2.25), gains
-//!                                                    or predictive MPC (10.2.23))     scheduled walk/stand
+//!                                                   (instantaneous PI      (gains scheduled
+//!                                                    or predictive MPC)     walk/stand)
 //! ```
+//!
+//! The instantaneous PI law is [Romualdi 2022, eq. 10.2.17], the predictive MPC
+//! [Romualdi 2022, eq. 10.2.23], the ZMP-CoM controller [Romualdi 2022, eq. 10.2.25].
 //!
 //! # What the runner uses
 //!
@@ -39,7 +42,7 @@
 //!
 //! # Helpers
 //!
-//! [`natural_frequency`], [`dcm_from_com`], [`zmp_from_dcm`] (`p = ξ − ξ̇/ω`, erratum 9),
+//! [`natural_frequency`], [`dcm_from_com`], [`zmp_from_dcm`] (`p = ξ − ξ̇/ω`; the thesis prints `ξ − ω ξ̇`, see [`zmp_from_dcm`]),
 //! [`dcm_velocity`], [`LipmDiscretization`] (exact ZOH LIPM/DCM transition for any `dt`),
 //! [`measured_zmp`] (global ZMP from the feet wrenches), [`SupportPolygon`] (hull, point-in-polygon,
 //! projection, half-planes), [`FootRectangle`] and [`feet_support_polygon`].
