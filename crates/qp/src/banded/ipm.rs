@@ -200,14 +200,30 @@ impl BandedQp {
 
     /// Solves the QP; on return `x`, `slack`, `multiplier` hold the solution. Returns the outcome and
     /// the number of iterations.
+    ///
+    /// The unconstrained minimiser `−P⁻¹q` (factor of `P` reused while `P` is unchanged) is returned at
+    /// once when it satisfies every row; otherwise Mehrotra's predictor–corrector iterates from the
+    /// warm start, if armed, or from a shifted infeasible start [Nocedal 2006, §16.6; Mehrotra 1992].
     pub fn solve(&mut self, settings: &BandedSettings) -> (BandedOutcome, u32) {
-        let n = self.n();
         let m = self.row_count;
-        // Unconstrained minimiser, with the factor of P kept while P does not change.
+        let Some(min_slack) = self.unconstrained_minimiser() else {
+            return (BandedOutcome::NumericalError, 0);
+        };
+        if m == 0 || min_slack >= 0.0 {
+            self.multiplier[..m].iter_mut().for_each(|v| *v = 0.0);
+            return (BandedOutcome::Unconstrained, 0);
+        }
+        self.initial_iterate(min_slack);
+        self.iterate(settings)
+    }
+
+    /// `x = −P⁻¹q` (factorising `P` only when it changed) and the rows' slacks there; returns the
+    /// smallest slack, or `None` when `P` is not positive definite or `x` is not finite.
+    fn unconstrained_minimiser(&mut self) -> Option<f64> {
         if !self.hessian_factor_current {
             self.hessian_factor.copy_from(&self.hessian);
             if !self.hessian_factor.cholesky_in_place() {
-                return (BandedOutcome::NumericalError, 0);
+                return None;
             }
             self.hessian_factor_current = true;
         }
@@ -216,7 +232,7 @@ impl BandedQp {
         }
         self.hessian_factor.cholesky_solve(&mut self.x);
         if self.x.iter().any(|v| !v.is_finite()) {
-            return (BandedOutcome::NumericalError, 0);
+            return None;
         }
         let mut min_slack = f64::INFINITY;
         for g in &self.groups[..self.group_count] {
@@ -227,10 +243,14 @@ impl BandedQp {
                 min_slack = min_slack.min(s);
             }
         }
-        if m == 0 || min_slack >= 0.0 {
-            self.multiplier[..m].iter_mut().for_each(|v| *v = 0.0);
-            return (BandedOutcome::Unconstrained, 0);
-        }
+        Some(min_slack)
+    }
+
+    /// The first iterate of a constrained solve: the armed warm start (consumed here) with slacks and
+    /// multipliers pushed into the interior, or the unconstrained minimiser with its slacks shifted by
+    /// `1.5 × |min_slack|` and unit multipliers.
+    fn initial_iterate(&mut self, min_slack: f64) {
+        let m = self.row_count;
         if std::mem::take(&mut self.warm_start) {
             // Warm start: the given point, slacks and multipliers pushed into the interior.
             self.x.copy_from_slice(&self.start_x);
@@ -251,6 +271,12 @@ impl BandedQp {
                 self.multiplier[i] = 1.0;
             }
         }
+    }
+
+    /// The predictor–corrector iterations from the current iterate until the stopping rules hold.
+    fn iterate(&mut self, settings: &BandedSettings) -> (BandedOutcome, u32) {
+        let n = self.n();
+        let m = self.row_count;
         let scale_gradient = self
             .gradient
             .iter()

@@ -216,9 +216,10 @@ impl BandedQp {
         }
     }
 
-    /// Arms a warm start for the next solve (only that one) and returns its buffers to fill: the
-    /// start point `x` (length `n`) and the start multipliers of the rows (length
-    /// [`BandedQp::row_count`]); slacks and multipliers are pushed into the interior by the solve.
+    /// Arms a warm start and returns its buffers to fill: the start point `x` (length `n`) and the
+    /// start multipliers of the rows (length [`BandedQp::row_count`]); slacks and multipliers are
+    /// pushed into the interior by the solve. The next solve that iterates consumes it; a solve whose
+    /// unconstrained minimiser is feasible returns before reading it and leaves it armed.
     #[inline]
     pub fn warm_start_mut(&mut self) -> (&mut [f64], &mut [f64]) {
         self.warm_start = true;
