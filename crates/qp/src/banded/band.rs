@@ -117,6 +117,7 @@ impl BandMatrix {
 
     /// `y = A x` for the symmetric matrix (row by row: the lower band of row `i` and the column
     /// below the diagonal, read from the next `BAND` rows; no read-modify-write chains).
+    #[inline]
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
         let n = self.n.min(x.len()).min(y.len());
         for i in 0..n {
@@ -151,6 +152,7 @@ impl BandMatrix {
     /// unscaled column, so the serial chain from one pivot to the next is one division, one product and
     /// one subtraction; the square root and the scaling of the column to `L(·, j)` are off that chain,
     /// and the fifteen window updates are independent of each other.
+    #[inline]
     pub fn cholesky_in_place(&mut self) -> bool {
         let n = self.n;
         for j in 0..n {
@@ -204,6 +206,7 @@ impl BandMatrix {
     /// Both substitutions keep the `BAND` values in flight in a local window (registers once the
     /// fixed-length loops are unrolled), so the serial chain has no store-to-load round trip; the last
     /// `BAND` rows, where the band is cut by the end of the matrix, run a general loop.
+    #[inline]
     pub fn cholesky_solve(&self, b: &mut [f64]) {
         let n = self.n.min(b.len());
         let body = n.saturating_sub(BAND);
