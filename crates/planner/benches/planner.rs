@@ -5,6 +5,9 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::hint::black_box;
 use stride_planner::{plan_from_standing, Goal, PlanSample, Planner, PlannerConfig};
 
+/// Gravity magnitude \[m/s²\].
+const GRAVITY: f64 = 9.81;
+
 fn feet(width: f64) -> (Isometry3<f64>, Isometry3<f64>) {
     let s =
         |y: f64| Isometry3::from_parts(Translation3::new(0.0, y, 0.0), UnitQuaternion::identity());
@@ -20,28 +23,32 @@ fn benches(c: &mut Criterion) {
         y: 0.0,
         yaw: 0.0,
     };
-    let steps = plan_from_standing(&cfg, 0.0, &l, &r, &ten)
+    let steps = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &ten)
         .unwrap()
         .step_count();
     eprintln!("'plan 10 steps' plans {steps} steps");
     c.bench_function("plan_10_steps", |b| {
-        b.iter(|| plan_from_standing(&cfg, 0.0, black_box(&l), &r, black_box(&ten)).unwrap())
+        b.iter(|| {
+            plan_from_standing(&cfg, GRAVITY, 0.0, black_box(&l), &r, black_box(&ten)).unwrap()
+        })
     });
     let walk = Goal::Pose {
         x: 10.0,
         y: 0.0,
         yaw: 0.0,
     };
-    let p = plan_from_standing(&cfg, 0.0, &l, &r, &walk).unwrap();
+    let p = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &walk).unwrap();
     eprintln!(
         "'plan 10 m' plans {} steps over {:.1} s",
         p.step_count(),
         p.end_time
     );
     c.bench_function("plan_10m_walk", |b| {
-        b.iter(|| plan_from_standing(&cfg, 0.0, black_box(&l), &r, black_box(&walk)).unwrap())
+        b.iter(|| {
+            plan_from_standing(&cfg, GRAVITY, 0.0, black_box(&l), &r, black_box(&walk)).unwrap()
+        })
     });
-    let mut planner = Planner::new(cfg.clone()).unwrap();
+    let mut planner = Planner::new(cfg.clone(), GRAVITY).unwrap();
     planner
         .start(
             0.0,

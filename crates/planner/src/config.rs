@@ -23,7 +23,7 @@ pub enum DcmInterpolation {
     /// Plan the ZMP (smooth move between the stance soles) and solve the DCM exactly: the ZMP stays in the
     /// support polygon by construction (default).
     ZmpFirst,
-    /// The thesis' method (10.1.21)–(10.1.23): DCM cubics between single-support exponentials, last-step
+    /// The thesis' method [Romualdi 2022, eqs. 10.1.21–10.1.23]: DCM cubics between single-support exponentials, last-step
     /// condition with `last_step_dcm_alpha`; the resulting ZMP is checked against the support polygon.
     DcmCubic,
 }
@@ -53,24 +53,23 @@ impl PlanVerification {
     }
 }
 
-/// All parameters of the trajectory layer. Defaults are iCub-v2.7-like (see `anchors-walking-stacks.md` §1.1,
-/// §1.3 and the thesis digest §7).
+/// All parameters of the trajectory layer. Defaults are iCub-v2.7-like (the values of the iCub walking
+/// experiments of [Romualdi 2022, ch. 10] and of the robotology walking-controllers).
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
 /// | `com_height` | m | 0.53 | constant CoM height above the ground (LIPM), gives ω = √(g/h); in (0, 10] |
-/// | `gravity` | m/s² | 9.81 | gravity magnitude |
-/// | `step_duration_min` | s | 0.8 | min time between two touch-downs (10.1.11) |
+/// | `step_duration_min` | s | 0.8 | min time between two touch-downs [Romualdi 2022, eq. 10.1.11] |
 /// | `step_duration_nominal` | s | 1.0 | duration of the closing steps once the unicycle stopped |
-/// | `step_duration_max` | s | 1.2 | max time between two touch-downs (10.1.11) |
+/// | `step_duration_max` | s | 1.2 | max time between two touch-downs [Romualdi 2022, eq. 10.1.11] |
 /// | `double_support_fraction` | – | 0.35 | share of each step spent in double support, in (0, 1) |
 /// | `initial_double_support_duration` | s | 1.0 | first double support of a plan started from standing |
 /// | `final_double_support_duration` | s | 1.0 | last double support, ZMP/DCM move to the feet mid-point |
-/// | `step_length_min` | m | 0.0 | min distance between the feet at touch-down (10.1.12) |
-/// | `step_length_max` | m | 0.22 | max distance between the feet at touch-down (10.1.12), width included |
+/// | `step_length_min` | m | 0.0 | min distance between the feet at touch-down [Romualdi 2022, eq. 10.1.12] |
+/// | `step_length_max` | m | 0.22 | max distance between the feet at touch-down [Romualdi 2022, eq. 10.1.12], width included |
 /// | `nominal_width` | m | 0.16 | lateral distance of the feet from each other on the unicycle axle |
 /// | `min_width` | m | 0.14 | min lateral distance of the left foot in the right-foot frame |
-/// | `max_yaw_per_step` | rad | 0.26 | max relative yaw between the feet (10.1.13), ≈ 15° |
+/// | `max_yaw_per_step` | rad | 0.26 | max relative yaw between the feet [Romualdi 2022, eq. 10.1.13], ≈ 15° |
 /// | `swing_height` | m | 0.03 | apex height of the swing foot above the higher of its two footholds |
 /// | `swing_apex_fraction` | – | 0.5 | apex time as a fraction of the swing, in (0, 1) |
 /// | `landing_velocity` | m/s | 0.0 | vertical swing-foot velocity at touch-down (≤ 0) |
@@ -81,9 +80,9 @@ impl PlanVerification {
 /// | `linear_saturation_factor` | – | 0.9 | forward speed limit = factor · √(l_max² − w²)/t_min |
 /// | `angular_saturation_factor` | – | 0.7 | yaw-rate limit = factor · max_yaw_per_step / t_min |
 /// | `reference_speed_fraction` | – | 0.9 | speed of the reference point along a path, fraction of the limits |
-/// | `unicycle_gain` | 1/s | 10.0 | K of the feedback-linearising unicycle controller (10.1.6) |
+/// | `unicycle_gain` | 1/s | 10.0 | K of the feedback-linearising unicycle controller [Romualdi 2022, eq. 10.1.6] |
 /// | `reference_point` | m | [0.1, 0.0] | controlled point F in the unicycle frame (x must be > 0) |
-/// | `time_weight` | s² | 2.5 | K_t of the step cost K_t/Δt² + K_x Δx² (10.1.10) |
+/// | `time_weight` | s² | 2.5 | K_t of the step cost K_t/Δt² + K_x Δx² [Romualdi 2022, eq. 10.1.10] |
 /// | `position_weight` | 1/m² | 1.0 | K_x of the step cost |
 /// | `unicycle_dt` | s | 0.01 | integration and impact-time sampling period of the unicycle |
 /// | `horizon` | s | 120.0 | longest unicycle motion planned at once; beyond it the plan is a prefix |
@@ -92,15 +91,13 @@ impl PlanVerification {
 /// | `merge_point_fraction` | – | 0.4 | where inside a double support a new plan is merged, in [0, 1) |
 /// | `verify_plans` | – | `"debug_builds"` | when the [`crate::Planner`] checks each new or merged plan with [`crate::Plan::verify`]: `"never"`, `"debug_builds"` (like `debug_assert!`) or `"always"` (sampled every 10 ms: about 2 ms for a 68-step plan, 3.5× the planning time) |
 /// | `first_swing_foot` | – | `auto` | `auto`, `left` or `right` |
-/// | `dcm_interpolation` | – | `zmp_first` | `zmp_first` or `dcm_cubic` (thesis (10.1.23)) |
-/// | `last_step_dcm_alpha` | – | 0.2 | α_LS of (10.2.3), in [0, 1] (only for `dcm_cubic`) |
+/// | `dcm_interpolation` | – | `zmp_first` | `zmp_first` or `dcm_cubic` [Romualdi 2022, eq. 10.1.23] |
+/// | `last_step_dcm_alpha` | – | 0.2 | α_LS of [Romualdi 2022, eq. 10.2.3], in [0, 1] (only for `dcm_cubic`) |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerConfig {
     /// Constant CoM height above the ground \[m\], in (0, 10].
     pub com_height: f64,
-    /// Gravity magnitude \[m/s²\].
-    pub gravity: f64,
     /// Minimum step duration (touch-down to touch-down) \[s\].
     pub step_duration_min: f64,
     /// Duration of the closing steps placed after the unicycle stopped \[s\].
@@ -167,7 +164,7 @@ pub struct PlannerConfig {
     pub first_swing_foot: FirstSwingFoot,
     /// Double-support DCM method.
     pub dcm_interpolation: DcmInterpolation,
-    /// Last-step DCM weight α_LS (10.2.3), in [0, 1].
+    /// Last-step DCM weight α_LS [Romualdi 2022, eq. 10.2.3], in [0, 1].
     pub last_step_dcm_alpha: f64,
 }
 
@@ -175,7 +172,6 @@ impl Default for PlannerConfig {
     fn default() -> Self {
         Self {
             com_height: 0.53,
-            gravity: 9.81,
             step_duration_min: 0.8,
             step_duration_nominal: 1.0,
             step_duration_max: 1.2,
@@ -231,6 +227,17 @@ fn check(
     }
 }
 
+/// Checks the gravity magnitude the planner is built with \[m/s²\]: finite and > 0.
+pub(crate) fn check_gravity(gravity_m_s2: f64) -> Result<(), PlannerError> {
+    if gravity_m_s2.is_finite() && gravity_m_s2 > 0.0 {
+        Ok(())
+    } else {
+        Err(PlannerError::InvalidGravity {
+            value: gravity_m_s2,
+        })
+    }
+}
+
 /// Largest accepted `com_height` \[m\]: ω = √(g/h) ≈ 0.99 rad/s there; far larger heights make the DCM
 /// plan's closed forms (terms in 1/ω³) lose every digit.
 pub const MAX_COM_HEIGHT: f64 = 10.0;
@@ -238,6 +245,13 @@ pub const MAX_COM_HEIGHT: f64 = 10.0;
 impl PlannerConfig {
     /// Checks every field; the error names the first offending parameter.
     pub fn validate(&self) -> Result<(), PlannerError> {
+        self.validate_timing()?;
+        self.validate_feet()?;
+        self.validate_unicycle()
+    }
+
+    /// The CoM height and the step and double-support durations.
+    fn validate_timing(&self) -> Result<(), PlannerError> {
         let c = self;
         check(
             "com_height",
@@ -247,7 +261,6 @@ impl PlannerConfig {
                 "must lie in (0, {MAX_COM_HEIGHT}] m (beyond, ω·T is so small that the LIPM plan is ill-conditioned)"
             ),
         )?;
-        check("gravity", c.gravity, c.gravity > 0.0, "must be > 0")?;
         check(
             "step_duration_min",
             c.step_duration_min,
@@ -285,6 +298,12 @@ impl PlannerConfig {
             c.final_double_support_duration > 0.0,
             "must be > 0",
         )?;
+        Ok(())
+    }
+
+    /// The sole rectangle, the step geometry and the swing.
+    fn validate_feet(&self) -> Result<(), PlannerError> {
+        let c = self;
         check(
             "foot_length",
             c.foot_length,
@@ -349,6 +368,12 @@ impl PlannerConfig {
             c.landing_velocity <= 0.0,
             "must be <= 0 (downwards)",
         )?;
+        Ok(())
+    }
+
+    /// The speed limits, the unicycle, the footstep search, replanning and the DCM options.
+    fn validate_unicycle(&self) -> Result<(), PlannerError> {
+        let c = self;
         check(
             "backward_speed_factor",
             c.backward_speed_factor,
@@ -444,9 +469,9 @@ impl PlannerConfig {
         Ok(())
     }
 
-    /// LIPM natural frequency ω = √(g/h) \[1/s\].
-    pub fn omega(&self) -> f64 {
-        (self.gravity / self.com_height).sqrt()
+    /// LIPM natural frequency ω = √(g/h) \[1/s\] for the gravity magnitude `gravity_m_s2` \[m/s²\].
+    pub fn omega(&self, gravity_m_s2: f64) -> f64 {
+        (gravity_m_s2 / self.com_height).sqrt()
     }
 
     /// Forward speed limit of the unicycle \[m/s\]: factor · √(l_max² − w²)/t_min.

@@ -1,17 +1,17 @@
 //! DCM / ZMP / CoM plan as closed-form segments.
 //!
 //! Each segment `k` covers `[t0, t0 + T)` (the last one is unbounded) and has a ZMP that is a cubic
-//! polynomial `Z(τ)` in local time τ = t − t0. The DCM is the exact solution of `ξ̇ = ω(ξ − Z)` (10.1.15):
+//! polynomial `Z(τ)` in local time τ = t − t0. The DCM is the exact solution of `ξ̇ = ω(ξ − Z)` [Romualdi 2022, eq. 10.1.15]:
 //!
 //! `ξ(τ) = P(τ) + c e^{ωτ}`, with `P = Z + Z'/ω + Z''/ω² + Z'''/ω³` (so that `P − P'/ω = Z`),
 //!
-//! and the CoM is the exact solution of `ẋ = −ω(x − ξ)` (4.4.14a):
+//! and the CoM is the exact solution of `ẋ = −ω(x − ξ)` [Romualdi 2022, eq. 4.4.14a]:
 //!
 //! `x(τ) = Q(τ) + (c/2) e^{ωτ} + b e^{−ωτ}`, with `Q = Z + Z''/ω²` (so that `Q + Q'/ω = P`),
 //!
 //! hence `ẍ = ω²(x − Z)` holds exactly (LIPM). In single support Z is constant, `P = Z` and the DCM is the
-//! thesis exponential (10.1.16)/(10.1.18). `c` comes from a backward pass (DCM at the segment end, as the
-//! recursion (10.1.17)), `b` from a forward pass (CoM continuity).
+//! thesis exponential [Romualdi 2022, eqs. 10.1.16, 10.1.18]. `c` comes from a backward pass (DCM at the segment end, as the
+//! recursion [Romualdi 2022, eq. 10.1.17]), `b` from a forward pass (CoM continuity).
 
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
@@ -151,7 +151,7 @@ impl DcmSegment {
     }
 
     /// The `growth` coefficient that makes the DCM reach `dcm_end` at the end of the segment (zero for the
-    /// unbounded segment): the backward recursion (10.1.17).
+    /// unbounded segment): the backward recursion [Romualdi 2022, eq. 10.1.17].
     pub fn growth_for_end_dcm(&self, dcm_end: Vector2<f64>, omega: f64) -> Vector2<f64> {
         match self.duration {
             Some(d) => {

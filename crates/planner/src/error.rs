@@ -1,5 +1,7 @@
-//! Error values of the planner. Every variant names the parameter or the input that is wrong.
+//! Error values of the planner: [`PlannerError`] (every variant names the parameter or the input that
+//! is wrong) and the [`InvariantViolation`] a plan's run-time verification reports.
 
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 /// Why the planner refused to plan, replan or sample.
@@ -14,6 +16,13 @@ pub enum PlannerError {
         value: f64,
         /// What the valid range is.
         reason: String,
+    },
+    /// The gravity magnitude given to [`crate::Planner::new`] or [`crate::plan_from_standing`] is not
+    /// finite and positive.
+    #[error("invalid gravity magnitude {value} m/s²: must be finite and > 0")]
+    InvalidGravity {
+        /// The rejected value \[m/s²\].
+        value: f64,
     },
     /// The goal is malformed (NaN, empty waypoint list, negative duration, ...).
     #[error("invalid goal `{name}`: {reason}")]
@@ -77,7 +86,7 @@ pub enum PlannerError {
     /// [`crate::PlannerConfig::verify_plans`]): a planner defect, never the user's input. The previous plan is
     /// kept.
     #[error("the new plan failed verification: {0} (a planner defect: please report it with the config and goal)")]
-    InvariantViolated(#[from] crate::verify::InvariantViolation),
+    InvariantViolated(#[from] InvariantViolation),
     /// `replan`/`sample` called before `start`.
     #[error("the planner has no plan yet: call `start` first")]
     NoPlan,
@@ -93,4 +102,69 @@ pub enum PlannerError {
         /// The budget.
         limit: usize,
     },
+}
+
+/// The invariants [`crate::Plan::verify`] checks (see the table of [`crate::verify`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Invariant {
+    /// Every number of the plan is finite.
+    Finite,
+    /// Sole distance at touch-down within the step-length bounds.
+    StepLength,
+    /// Sole lateral distance at touch-down at least `min_width`, left foot on the left.
+    StepWidth,
+    /// Relative sole yaw at touch-down within `max_yaw_per_step`.
+    StepYaw,
+    /// The soles do not intersect at touch-down.
+    FeetOverlap,
+    /// Touch-down to touch-down time within the step-duration bounds.
+    StepDuration,
+    /// ZMP inside the support polygon.
+    ZmpInSupport,
+    /// DCM definition, DCM dynamics and LIPM hold.
+    DcmDynamics,
+    /// DCM, CoM, their velocities and the ZMP are continuous.
+    Continuity,
+    /// Swings start and end on their contacts with the planned velocities.
+    SwingBoundary,
+    /// The plan ends standing with the DCM on the ZMP.
+    FinalState,
+}
+
+impl Invariant {
+    /// The snake_case name used in the module table and in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Invariant::Finite => "finite",
+            Invariant::StepLength => "step_length",
+            Invariant::StepWidth => "step_width",
+            Invariant::StepYaw => "step_yaw",
+            Invariant::FeetOverlap => "feet_overlap",
+            Invariant::StepDuration => "step_duration",
+            Invariant::ZmpInSupport => "zmp_in_support",
+            Invariant::DcmDynamics => "dcm_dynamics",
+            Invariant::Continuity => "continuity",
+            Invariant::SwingBoundary => "swing_boundary",
+            Invariant::FinalState => "final_state",
+        }
+    }
+}
+
+impl std::fmt::Display for Invariant {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A violated plan invariant.
+#[derive(Clone, Debug, PartialEq, Error)]
+#[error("plan invariant `{invariant}` violated at t = {time:.4} s: {detail}")]
+pub struct InvariantViolation {
+    /// Which invariant.
+    pub invariant: Invariant,
+    /// Plan time \[s\] of the first violation found.
+    pub time: f64,
+    /// The numbers involved.
+    pub detail: String,
 }

@@ -1,4 +1,4 @@
-//! `stride-planner`: the trajectory layer of stride (thesis 002, ch. 10.1–10.2, appendices D–E).
+//! `stride-planner`: the trajectory layer of stride [Romualdi 2022, §10.1–§10.2, App. D–E].
 //!
 //! A goal becomes contacts and references that the lower layers track:
 //! unicycle footstep planner → contact lists (feet poses and timings) → DCM plan (closed-form segments) → CoM,
@@ -11,10 +11,11 @@
 //! * [`Goal`]: `Stand`, `Pose { x, y, yaw }`, `Waypoints { points }`, `Velocity { forward, lateral, yaw_rate,
 //!   duration }`; internally tagged (`type = "pose"` etc.) so it can be written in TOML. Only the last
 //!   waypoint's heading is enforced.
-//! * [`plan_from_standing`]`(config, t0, &left_sole, &right_sole, &goal) -> Result<Plan, PlannerError>`: a whole
-//!   plan from standing (initial double support of `initial_double_support_duration`, ends standing with
+//! * [`plan_from_standing`]`(config, gravity, t0, &left_sole, &right_sole, &goal) -> Result<Plan, PlannerError>`:
+//!   a whole plan from standing (initial double support of `initial_double_support_duration`, ends standing with
 //!   parallel feet, DCM on the feet mid-point).
-//! * [`Planner`]: `new(config)`, `start(t0, &left, &right, &goal) -> &Plan`, `replan(t, &goal) -> merge time`
+//! * [`Planner`]: `new(config, gravity_m_s2)` (the scenario's gravity magnitude, > 0: ω = √(g/h) follows
+//!   from it; it is not a config field), `start(t0, &left, &right, &goal) -> &Plan`, `replan(t, &goal) -> merge time`
 //!   (merge point inside a double support; the past is kept), `sample(t, &mut PlanSample)`, `plan()`. It
 //!   implements [`stride_block::Block`] with [`PlannerInput`] `{ time, goal: Option<Goal>, left_sole,
 //!   right_sole }` → [`PlanSample`]: the first tick starts a plan from the measured soles, a tick carrying a
@@ -22,7 +23,7 @@
 //! * [`Plan`]: serde-serialisable (log/replay). [`Plan::sample`]`(t, &mut PlanSample)` fills DCM position/
 //!   velocity, ZMP, CoM position/velocity/acceleration, ω, both feet (pose, mixed twist and acceleration,
 //!   contact flag), the gait phase and the support polygon (fixed capacity) — O(log n), no allocation.
-//!   [`Plan::report`]`(dt) -> PlanReport` is exactly the JSON object of `stride plan --json` (design.md):
+//!   [`Plan::report`]`(dt) -> PlanReport` is exactly the JSON object of `stride plan --json` (docs/cli.md):
 //!   `serde_json::to_string(&plan.report(dt)?)`.
 //! * [`Plan::verify`]`(config, dt) -> Result<VerifyReport, InvariantViolation>`: the plan's invariants (step
 //!   bounds, ZMP in the support polygon, LIPM, continuity, swing boundaries, final state) checked at run time;
@@ -35,25 +36,26 @@
 //!
 //! # Method (and where it differs from the thesis)
 //!
-//! * Unicycle (10.1.1) driven by the feedback-linearising controller (10.1.6) on a point F ahead of it, tracking
+//! * Unicycle [Romualdi 2022, eq. 10.1.1] driven by the feedback-linearising controller [Romualdi 2022, eq. 10.1.6] on a point F ahead of it, tracking
 //!   a reference made of straight lines (walk) and arcs (turn in place) built from the goal; velocity goals
-//!   drive the unicycle directly (with an extra lateral velocity, as the anchors' direct controller). Speed
+//!   drive the unicycle directly (with an extra lateral velocity, as in the robotology walking-controllers' direct unicycle control). Speed
 //!   limits come from the step limits.
-//! * Greedy footstep search (digest §7.2): each unicycle sample is a candidate touch-down; the cheapest feasible
+//! * Greedy footstep search [Romualdi 2022, eqs. 10.1.10–10.1.13]: each unicycle sample is a candidate touch-down; the cheapest feasible
 //!   candidate `K_t/Δt² + K_x Δx²` under duration, length, width and relative-yaw bounds is taken; the walk
 //!   ends with both feet parallel at the nominal width.
 //! * DCM: the ZMP is planned first — constant on the stance foot in single support (so the DCM is the thesis
-//!   exponential (10.1.16)), a smooth cubic move between the two stance points in double support — and the
+//!   exponential [Romualdi 2022, eq. 10.1.16]), a smooth cubic move between the two stance points in double support — and the
 //!   DCM/CoM are the exact closed-form solutions of ξ̇ = ω(ξ − ZMP) and ẋ = −ω(x − ξ) (see [`dcm`]). The
-//!   thesis instead interpolates the DCM by a cubic in double support (10.1.23) (available as
-//!   [`DcmInterpolation::DcmCubic`], with the last-step α of (10.2.3) and a support-polygon check); that does not
+//!   thesis instead interpolates the DCM by a cubic in double support [Romualdi 2022, eq. 10.1.23] (available as
+//!   [`DcmInterpolation::DcmCubic`], with the last-step α of [Romualdi 2022, eq. 10.2.3] and a support-polygon check); that does not
 //!   keep the ZMP in the support polygon by construction, planning the ZMP does (it moves on the segment joining two points
 //!   inside the two soles). The DCM is C¹ (ZMP continuous), ends exactly on the final ZMP, and the initial
 //!   double support carries a ZMP bump u(1−u)² that makes the DCM start exactly at the measured/merged state
-//!   (the role of (10.2.1)); that ZMP is checked against the support polygon. In this default mode the last-step
-//!   α of (10.2.3) is implied by the final double support rather than set.
-//! * Swing feet: minimum-jerk quintics (D.3.6) with an apex knot for the height, minimum-jerk geodesic on SO(3).
+//!   (the role of [Romualdi 2022, eq. 10.2.1]); that ZMP is checked against the support polygon. In this default mode the last-step
+//!   α of [Romualdi 2022, eq. 10.2.3] is implied by the final double support rather than set.
+//! * Swing feet: minimum-jerk quintics [Romualdi 2022, eq. D.3.6] with an apex knot for the height, minimum-jerk geodesic on SO(3).
 
+mod build;
 pub mod config;
 pub mod contacts;
 pub mod dcm;

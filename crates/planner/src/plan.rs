@@ -264,7 +264,7 @@ impl Plan {
     }
 
     /// Samples the whole plan every `dt` seconds from `start_time` to `end_time` (inclusive) into the JSON
-    /// shape of `stride plan --json` (design.md). Allocates; meant for tools, not for control loops.
+    /// shape of `stride plan --json` (docs/cli.md). Allocates; meant for tools, not for control loops.
     pub fn report(&self, dt: f64) -> Result<PlanReport, PlannerError> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(PlannerError::InvalidTime {

@@ -1,4 +1,4 @@
-//! Swing-foot trajectories (thesis §10.2.2, App. D–E): minimum-jerk quintics on R³ (with an apex knot for
+//! Swing-foot trajectories [Romualdi 2022, §10.2.2, App. D–E]: minimum-jerk quintics on R³ (with an apex knot for
 //! the height) and a minimum-jerk geodesic on SO(3).
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
@@ -9,7 +9,7 @@ use crate::contacts::Foot;
 /// Coefficients a0..a5 of a quintic in local time τ.
 pub type Quintic = [f64; 6];
 
-/// Quintic through (x0, v0, a0) at τ = 0 and (x1, v1, a1) at τ = δ (thesis (D.3.6)).
+/// Quintic through (x0, v0, a0) at τ = 0 and (x1, v1, a1) at τ = δ [Romualdi 2022, eq. D.3.6].
 pub fn quintic(x0: f64, v0: f64, a0: f64, x1: f64, v1: f64, a1: f64, delta: f64) -> Quintic {
     let d = delta;
     let d2 = d * d;
@@ -114,7 +114,7 @@ pub struct SwingShape {
 /// Height: two quintics joined at the apex (`apex_time`, height `apex_height`, zero vertical velocity),
 /// with the apex acceleration chosen so that the jerk is continuous there; lift-off velocity 0, touch-down
 /// vertical velocity `landing_velocity`, zero accelerations at both ends. Orientation: the SO(3) geodesic
-/// `R(t) = Exp(s(t) Log(R_end R_startᵀ)) R_start` with the minimum-jerk blend s (thesis (10.2.12), (10.2.16)).
+/// `R(t) = Exp(s(t) Log(R_end R_startᵀ)) R_start` with the minimum-jerk blend s [Romualdi 2022, eqs. 10.2.12, 10.2.16].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SwingTrajectory {
     /// Which foot swings.

@@ -1,13 +1,13 @@
-//! Unicycle model, its feedback-linearising controller and the greedy footstep search (thesis §10.1.1–
-//! §10.1.14, digest §7.1–7.2).
+//! Unicycle model, its feedback-linearising controller and the greedy footstep search
+//! [Romualdi 2022, eqs. 10.1.1–10.1.14].
 //!
 //! The unicycle `ȯ = R(θ)[v; v_lat]`, `θ̇ = ω` (v_lat is only used by velocity commands; the thesis unicycle has
-//! v_lat = 0) is driven either directly (velocity goals) or by the controller (10.1.6)
+//! v_lat = 0) is driven either directly (velocity goals) or by the controller [Romualdi 2022, eq. 10.1.6]
 //! `u = B(θ)⁻¹ (ẋ_F* − K (x_F − x_F*))` that makes a point F rigidly attached ahead of the unicycle track a
 //! reference trajectory `x_F*(t)` built from the goal (straight lines between waypoints, arcs for turning in
 //! place). The commands are saturated to the speed limits derived from the step limits. Feet are the wheels
-//! (10.1.7): `o_L/R = o + R(θ)[0; ±w/2]`, yaw θ. Each unicycle sample is a candidate touch-down instant; the
-//! search picks, for each step, the candidate minimising `K_t/Δt² + K_x Δx²` (10.1.10) under (10.1.11)–(10.1.13).
+//! [Romualdi 2022, eq. 10.1.7]: `o_L/R = o + R(θ)[0; ±w/2]`, yaw θ. Each unicycle sample is a candidate touch-down instant; the
+//! search picks, for each step, the candidate minimising `K_t/Δt² + K_x Δx²` [Romualdi 2022, eq. 10.1.10] under [Romualdi 2022, eqs. 10.1.11–10.1.13].
 
 use nalgebra::Vector2;
 
@@ -444,7 +444,7 @@ pub(crate) struct StepPlan {
     pub duration: f64,
 }
 
-/// Whether a pair of feet satisfies the step constraints (10.1.12)–(10.1.13) plus the width constraint.
+/// Whether a pair of feet satisfies the step constraints [Romualdi 2022, eqs. 10.1.12–10.1.13] plus the width constraint.
 /// Which step constraints a pair of feet violates (no allocation; formatted only for error messages).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Violation {
@@ -544,7 +544,8 @@ pub(crate) fn choose_first_swing(cfg: &PlannerConfig, path: &UnicyclePath) -> Fo
     }
 }
 
-/// Greedy footstep search along the unicycle path (digest §7.2, steps 1–5).
+/// Greedy footstep search along the unicycle path [Romualdi 2022, eqs. 10.1.10–10.1.13]: for each
+/// step, the cheapest feasible unicycle sample.
 pub(crate) fn search_footsteps(
     cfg: &PlannerConfig,
     path: &UnicyclePath,

@@ -30,6 +30,8 @@ use crate::contacts::Foot;
 use crate::geometry::{wrap_angle, Pose2, SupportPolygon};
 use crate::plan::{Plan, PlanSample};
 
+pub use crate::error::{Invariant, InvariantViolation};
+
 /// Tolerance on lengths and angles of the step checks \[m, rad, s\].
 const STEP_TOLERANCE: f64 = 1e-9;
 /// Tolerance on the sampled LIPM identities and the ZMP-in-polygon test \[m\].
@@ -40,71 +42,6 @@ const CONTINUITY_TOLERANCE: f64 = 1e-8;
 const FINAL_DCM_TOLERANCE: f64 = 1e-3;
 /// Largest number of samples [`Plan::verify`] takes (the sampling period is widened beyond it).
 const MAX_SAMPLES: f64 = 1.0e6;
-
-/// The invariants [`Plan::verify`] checks (see the module table).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Invariant {
-    /// Every number of the plan is finite.
-    Finite,
-    /// Sole distance at touch-down within the step-length bounds.
-    StepLength,
-    /// Sole lateral distance at touch-down at least `min_width`, left foot on the left.
-    StepWidth,
-    /// Relative sole yaw at touch-down within `max_yaw_per_step`.
-    StepYaw,
-    /// The soles do not intersect at touch-down.
-    FeetOverlap,
-    /// Touch-down to touch-down time within the step-duration bounds.
-    StepDuration,
-    /// ZMP inside the support polygon.
-    ZmpInSupport,
-    /// DCM definition, DCM dynamics and LIPM hold.
-    DcmDynamics,
-    /// DCM, CoM, their velocities and the ZMP are continuous.
-    Continuity,
-    /// Swings start and end on their contacts with the planned velocities.
-    SwingBoundary,
-    /// The plan ends standing with the DCM on the ZMP.
-    FinalState,
-}
-
-impl Invariant {
-    /// The snake_case name used in the module table and in messages.
-    pub fn name(self) -> &'static str {
-        match self {
-            Invariant::Finite => "finite",
-            Invariant::StepLength => "step_length",
-            Invariant::StepWidth => "step_width",
-            Invariant::StepYaw => "step_yaw",
-            Invariant::FeetOverlap => "feet_overlap",
-            Invariant::StepDuration => "step_duration",
-            Invariant::ZmpInSupport => "zmp_in_support",
-            Invariant::DcmDynamics => "dcm_dynamics",
-            Invariant::Continuity => "continuity",
-            Invariant::SwingBoundary => "swing_boundary",
-            Invariant::FinalState => "final_state",
-        }
-    }
-}
-
-impl std::fmt::Display for Invariant {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// A violated plan invariant.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("plan invariant `{invariant}` violated at t = {time:.4} s: {detail}")]
-pub struct InvariantViolation {
-    /// Which invariant.
-    pub invariant: Invariant,
-    /// Plan time \[s\] of the first violation found.
-    pub time: f64,
-    /// The numbers involved.
-    pub detail: String,
-}
 
 /// What a successful [`Plan::verify`] measured: margins, for logs and tuning.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

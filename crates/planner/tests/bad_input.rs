@@ -20,7 +20,7 @@ fn param_of(e: PlannerError) -> String {
 
 fn plan_err(cfg: &PlannerConfig, goal: &Goal) -> String {
     let (l, r) = standing(0.0, 0.0, 0.0, 0.16);
-    param_of(plan_from_standing(cfg, 0.0, &l, &r, goal).unwrap_err())
+    param_of(plan_from_standing(cfg, GRAVITY, 0.0, &l, &r, goal).unwrap_err())
 }
 
 #[test]
@@ -42,7 +42,6 @@ fn bad_parameters_are_named() {
         ("com_height", Box::new(|c| c.com_height = f64::NAN)),
         // ω ≈ 1e-4 rad/s: the closed forms (1/ω³ terms) lose every digit (found by never_panics_or_nans)
         ("com_height", Box::new(|c| c.com_height = 1e9)),
-        ("gravity", Box::new(|c| c.gravity = 0.0)),
         (
             "double_support_fraction",
             Box::new(|c| c.double_support_fraction = 1.0),
@@ -65,8 +64,36 @@ fn bad_parameters_are_named() {
         let mut cfg = PlannerConfig::default();
         edit(&mut cfg);
         assert_eq!(plan_err(&cfg, &goal), name);
-        assert_eq!(param_of(Planner::new(cfg).unwrap_err()), name);
+        assert_eq!(param_of(Planner::new(cfg, GRAVITY).unwrap_err()), name);
     }
+}
+
+/// Gravity is a constructor input, not a config field: a non-finite or non-positive magnitude is
+/// refused by both entry points with its value.
+#[test]
+fn bad_gravity_is_refused() {
+    let cfg = PlannerConfig::default();
+    let (l, r) = standing(0.0, 0.0, 0.0, 0.16);
+    for g in [0.0, -9.81, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        for e in [
+            Planner::new(cfg.clone(), g).unwrap_err(),
+            plan_from_standing(&cfg, g, 0.0, &l, &r, &Goal::Stand).unwrap_err(),
+        ] {
+            match e {
+                PlannerError::InvalidGravity { value } => {
+                    assert!(value.to_bits() == g.to_bits(), "{value} for {g}")
+                }
+                other => panic!("gravity {g}: {other:?}"),
+            }
+        }
+    }
+    let planner = Planner::new(cfg.clone(), 3.71).unwrap();
+    assert_eq!(planner.gravity(), 3.71);
+    // ω follows the gravity given: √(g/h)
+    let plan = plan_from_standing(&cfg, 3.71, 0.0, &l, &r, &Goal::Stand).unwrap();
+    assert_eq!(plan.omega, (3.71 / cfg.com_height).sqrt());
+    // a config that still names gravity is refused (deny_unknown_fields)
+    assert!(toml::from_str::<PlannerConfig>("gravity = 9.81").is_err());
 }
 
 #[test]
@@ -143,7 +170,7 @@ fn bad_start_is_named() {
     };
     // crossed feet
     let (l, r) = standing(0.0, 0.0, 0.0, 0.16);
-    let e = plan_from_standing(&cfg, 0.0, &r, &l, &goal).unwrap_err();
+    let e = plan_from_standing(&cfg, GRAVITY, 0.0, &r, &l, &goal).unwrap_err();
     assert!(
         matches!(
             e,
@@ -157,7 +184,7 @@ fn bad_start_is_named() {
     // NaN pose
     let mut bad = l;
     bad.translation.x = f64::NAN;
-    let e = plan_from_standing(&cfg, 0.0, &bad, &r, &goal).unwrap_err();
+    let e = plan_from_standing(&cfg, GRAVITY, 0.0, &bad, &r, &goal).unwrap_err();
     assert!(
         matches!(
             e,
@@ -169,10 +196,10 @@ fn bad_start_is_named() {
         "{e}"
     );
     // NaN time
-    let e = plan_from_standing(&cfg, f64::NAN, &l, &r, &goal).unwrap_err();
+    let e = plan_from_standing(&cfg, GRAVITY, f64::NAN, &l, &r, &goal).unwrap_err();
     assert_eq!(param_of(e), "t0");
     // replanning without a plan
-    let mut p = Planner::new(cfg).unwrap();
+    let mut p = Planner::new(cfg, GRAVITY).unwrap();
     assert_eq!(p.replan(1.0, &goal).unwrap_err(), PlannerError::NoPlan);
 }
 
@@ -216,6 +243,7 @@ fn horizon_gives_feasible_prefix() {
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
     let plan = plan_from_standing(
         &cfg,
+        GRAVITY,
         0.0,
         &l,
         &r,
@@ -268,7 +296,7 @@ proptest! {
         }
         let (l, r) = standing(0.0, 0.0, 0.0, 0.16);
         let goal = Goal::Pose { x: gx, y: gy, yaw: 0.3 };
-        if let Ok(plan) = plan_from_standing(&cfg, 0.0, &l, &r, &goal) {
+        if let Ok(plan) = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &goal) {
             let mut t = plan.start_time;
             while t < plan.end_time + 1.0 {
                 let s = sample(&plan, t);
@@ -312,7 +340,7 @@ fn far_goals_give_prefixes() {
             }],
         },
     ] {
-        let plan = plan_from_standing(&cfg, 0.0, &l, &r, &goal).unwrap();
+        let plan = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &goal).unwrap();
         assert!(
             matches!(plan.outcome, PlanOutcome::HorizonReached { .. }),
             "{:?}",
@@ -346,6 +374,7 @@ fn sampling_at_extreme_times_is_finite() {
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
     let plan = plan_from_standing(
         &cfg,
+        GRAVITY,
         2.0,
         &l,
         &r,

@@ -11,8 +11,8 @@ use stride_planner::{plan_from_standing, Foot, Goal, PhaseKind, PlannerConfig, P
 #[test]
 fn omega_and_doubling_time() {
     let cfg = PlannerConfig::default();
-    assert!((cfg.omega() - 4.3023).abs() < 1e-4);
-    assert!((2f64.ln() / cfg.omega() - 0.161).abs() < 1e-3);
+    assert!((cfg.omega(GRAVITY) - 4.3023).abs() < 1e-4);
+    assert!((2f64.ln() / cfg.omega(GRAVITY) - 0.161).abs() < 1e-3);
 }
 
 /// 17.2 #10: x(t) = p + (x0 − p) cosh ωt + (ẋ0/ω) sinh ωt and ξ(t) = p + e^{ωt}(ξ0 − p); numbers from the digest.
@@ -64,10 +64,11 @@ fn com_converges_to_constant_dcm() {
 #[test]
 fn single_support_is_exponential_dcm_and_lipm() {
     let cfg = PlannerConfig::default();
-    let w = cfg.omega();
+    let w = cfg.omega(GRAVITY);
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
     let plan = plan_from_standing(
         &cfg,
+        GRAVITY,
         0.0,
         &l,
         &r,
@@ -114,6 +115,7 @@ fn straight_walk_has_equal_middle_steps() {
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
     let plan = plan_from_standing(
         &cfg,
+        GRAVITY,
         0.0,
         &l,
         &r,
@@ -162,6 +164,7 @@ fn quintic_and_geodesic() {
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
     let plan = plan_from_standing(
         &cfg,
+        GRAVITY,
         0.0,
         &l,
         &r,
@@ -204,6 +207,7 @@ fn thesis_dcm_cubic_option() {
         let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
         let plan = plan_from_standing(
             &cfg,
+            GRAVITY,
             0.0,
             &l,
             &r,

@@ -15,7 +15,7 @@ static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAlloca
 fn sampling_and_stepping_do_not_allocate() {
     let cfg = PlannerConfig::default();
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-    let mut planner = Planner::new(cfg).unwrap();
+    let mut planner = Planner::new(cfg, GRAVITY).unwrap();
     let goal = Goal::Waypoints {
         points: vec![
             stride_planner::Waypoint {

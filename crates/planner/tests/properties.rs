@@ -98,14 +98,14 @@ proptest! {
             }
             g => g,
         };
-        let plan = plan_from_standing(&cfg, t0, &l, &r, &goal);
+        let plan = plan_from_standing(&cfg, GRAVITY, t0, &l, &r, &goal);
         let plan = match plan {
             Ok(p) => p,
             Err(e) => panic!("planning failed: {e}"),
         };
         check_all(&cfg, &plan, true);
         // bit-identical determinism
-        let again = plan_from_standing(&cfg, t0, &l, &r, &goal).unwrap();
+        let again = plan_from_standing(&cfg, GRAVITY, t0, &l, &r, &goal).unwrap();
         prop_assert_eq!(serde_json::to_string(&plan).unwrap(), serde_json::to_string(&again).unwrap());
         prop_assert!(plan == again);
     }
@@ -114,7 +114,7 @@ proptest! {
     fn replanning_keeps_the_past_and_is_continuous(cfg in config_strategy(), goal1 in goal_strategy(),
                                                     goal2 in goal_strategy(), frac in 0.0f64..1.0) {
         let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-        let mut planner = Planner::new(cfg.clone()).unwrap();
+        let mut planner = Planner::new(cfg.clone(), GRAVITY).unwrap();
         let old = planner.start(0.0, &l, &r, &goal1).unwrap().clone();
         let t = old.start_time + frac * (old.end_time - old.start_time + 1.0);
         let m = match planner.replan(t, &goal2) {
@@ -159,7 +159,7 @@ proptest! {
             ..cfg
         };
         let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-        match plan_from_standing(&cfg, 0.0, &l, &r, &goal) {
+        match plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &goal) {
             Ok(plan) => check_all(&cfg, &plan, true),
             Err(PlannerError::ZmpOutsideSupport { .. }) => {}
             Err(e) => panic!("planning failed: {e}"),
@@ -176,7 +176,7 @@ proptest! {
                           gaps in proptest::collection::vec(0.05f64..3.0, 6)) {
         let cfg = PlannerConfig { horizon: 30.0, ..PlannerConfig::default() };
         let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-        let mut planner = Planner::new(cfg.clone()).unwrap();
+        let mut planner = Planner::new(cfg.clone(), GRAVITY).unwrap();
         planner.start(0.0, &l, &r, &goals[0]).unwrap();
         let mut t = 0.0;
         for (g, gap) in goals.iter().skip(1).zip(gaps.iter()) {

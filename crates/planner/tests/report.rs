@@ -18,6 +18,7 @@ fn report_matches_the_json_contract() {
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
     let plan = plan_from_standing(
         &cfg,
+        GRAVITY,
         0.0,
         &l,
         &r,
@@ -79,7 +80,7 @@ fn report_matches_the_json_contract() {
     );
     // quaternion order x, y, z, w for a 90° yaw
     let (l, r) = standing(0.0, 0.0, std::f64::consts::FRAC_PI_2, cfg.nominal_width);
-    let p2 = plan_from_standing(&cfg, 0.0, &l, &r, &Goal::Stand).unwrap();
+    let p2 = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &Goal::Stand).unwrap();
     let q = p2.report(0.5).unwrap().footsteps[0].orientation_xyzw;
     let h = std::f64::consts::FRAC_1_SQRT_2;
     assert!(
@@ -97,6 +98,7 @@ fn plans_round_trip_through_json_bit_identically() {
     let (l, r) = standing(0.3, -0.2, 0.4, cfg.nominal_width);
     let plan = plan_from_standing(
         &cfg,
+        GRAVITY,
         1.5,
         &l,
         &r,

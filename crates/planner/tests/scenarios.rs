@@ -8,7 +8,7 @@ use stride_planner::{plan_from_standing, Goal, PlanOutcome, PlannerConfig, Waypo
 fn run(goal: Goal) -> stride_planner::Plan {
     let cfg = PlannerConfig::default();
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-    let plan = plan_from_standing(&cfg, 0.0, &l, &r, &goal).expect("plan");
+    let plan = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &goal).expect("plan");
     check_all(&cfg, &plan, true);
     plan
 }
@@ -88,25 +88,117 @@ fn velocity_command() {
     assert!(yaw > 0.2, "{yaw}");
 }
 
+/// Where a plan ends and how it gets there: the final feet mid-point and yaw, the final DCM, and the
+/// extreme sole yaw and the monotonicity of the touch-downs along `direction` (unit, world xy).
+struct Motion {
+    end: (f64, f64, f64),
+    dcm_end: (f64, f64),
+    max_abs_sole_yaw: f64,
+    /// Largest step of a touch-down against `direction` compared with the previous touch-down of the
+    /// same foot \[m\] (0 when every foot only moves forward along `direction`).
+    largest_step_back: f64,
+}
+
+fn motion(plan: &stride_planner::Plan, direction: (f64, f64)) -> Motion {
+    let dcm = sample(plan, plan.end_time + 1.0).dcm_position;
+    let mut max_abs_sole_yaw: f64 = 0.0;
+    let mut largest_step_back: f64 = 0.0;
+    for list in [&plan.left_contacts, &plan.right_contacts] {
+        for pair in list.contacts.windows(2) {
+            let (a, b) = (&pair[0].pose.translation, &pair[1].pose.translation);
+            let along = (b.x - a.x) * direction.0 + (b.y - a.y) * direction.1;
+            largest_step_back = largest_step_back.max(-along);
+        }
+        for c in &list.contacts {
+            max_abs_sole_yaw = max_abs_sole_yaw.max(yaw_of(&c.pose).abs());
+        }
+    }
+    Motion {
+        end: final_mid(plan),
+        dcm_end: (dcm.x, dcm.y),
+        max_abs_sole_yaw,
+        largest_step_back,
+    }
+}
+
+/// Lateral and backward commands move the feet and the DCM the way asked (left, right, backwards),
+/// without turning, by about the commanded speed (saturated at the planner's limits) times the
+/// duration, every touch-down progressing in that direction.
 #[test]
 fn lateral_and_backward_velocity() {
-    run(Goal::Velocity {
-        forward: 0.0,
-        lateral: 0.05,
-        yaw_rate: 0.0,
-        duration: Some(6.0),
-    });
-    run(Goal::Velocity {
-        forward: -0.1,
-        lateral: 0.0,
-        yaw_rate: 0.0,
-        duration: Some(6.0),
-    });
-    run(Goal::Pose {
+    let cfg = PlannerConfig::default();
+    let lateral_speed = 0.05_f64.min(cfg.max_lateral_speed());
+    let backward_speed = 0.1_f64.min(cfg.max_backward_speed());
+    let duration = 6.0;
+    for (forward, lateral, direction, speed) in [
+        (0.0, 0.05, (0.0, 1.0), lateral_speed),
+        (0.0, -0.05, (0.0, -1.0), lateral_speed),
+        (-0.1, 0.0, (-1.0, 0.0), backward_speed),
+    ] {
+        let plan = run(Goal::Velocity {
+            forward,
+            lateral,
+            yaw_rate: 0.0,
+            duration: Some(duration),
+        });
+        let m = motion(&plan, direction);
+        let (x, y, yaw) = m.end;
+        let along = x * direction.0 + y * direction.1;
+        let across = -x * direction.1 + y * direction.0;
+        let commanded = speed * duration;
+        assert!(
+            (along - commanded).abs() < 0.2 * commanded,
+            "({forward}, {lateral}): moved {along} m along the command, expected about {commanded} m"
+        );
+        assert!(
+            across.abs() < 0.1 * commanded,
+            "({forward}, {lateral}): drifted {across} m"
+        );
+        assert!(
+            yaw.abs() < 0.01,
+            "({forward}, {lateral}): turned by {yaw} rad"
+        );
+        assert!(
+            m.max_abs_sole_yaw < 0.01,
+            "({forward}, {lateral}): a sole turned by {}",
+            m.max_abs_sole_yaw
+        );
+        assert!(
+            m.largest_step_back < 1e-3,
+            "({forward}, {lateral}): a foot stepped {} m against the command",
+            m.largest_step_back
+        );
+        // the DCM ends on the final feet mid-point, i.e. it moved with them
+        assert!(
+            (m.dcm_end.0 - x).abs() < 1e-3 && (m.dcm_end.1 - y).abs() < 1e-3,
+            "{:?} vs ({x}, {y})",
+            m.dcm_end
+        );
+    }
+    // a goal 0.3 m behind (closer than backward_max_distance) is reached walking backwards
+    assert!(0.3 < cfg.backward_max_distance);
+    let plan = run(Goal::Pose {
         x: -0.3,
         y: 0.0,
         yaw: 0.0,
     });
+    let m = motion(&plan, (-1.0, 0.0));
+    let (x, y, yaw) = m.end;
+    assert!(
+        (x + 0.3).abs() < 0.01 && y.abs() < 0.01 && yaw.abs() < 0.01,
+        "{x} {y} {yaw}"
+    );
+    assert!(
+        m.max_abs_sole_yaw < 0.01,
+        "a sole turned by {}",
+        m.max_abs_sole_yaw
+    );
+    assert!(
+        m.largest_step_back < 1e-3,
+        "a foot stepped {} m forwards",
+        m.largest_step_back
+    );
+    assert!((m.dcm_end.0 - x).abs() < 1e-3 && (m.dcm_end.1 - y).abs() < 1e-3);
 }
 
 #[test]
@@ -126,7 +218,7 @@ fn replanning_with_the_same_goal_keeps_the_footsteps() {
         y: 0.0,
         yaw: 0.0,
     };
-    let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
+    let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
     let old = planner.start(0.0, &l, &r, &goal).unwrap().clone();
     let m = planner.replan(4.0, &goal).unwrap();
     let new = planner.plan().unwrap();
@@ -147,7 +239,7 @@ fn replanning_with_the_same_goal_keeps_the_footsteps() {
 fn replanning_to_a_new_goal() {
     let cfg = PlannerConfig::default();
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-    let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
+    let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
     planner
         .start(
             0.0,
@@ -197,7 +289,7 @@ fn block_interface() {
     use stride_planner::{Planner, PlannerInput};
     let cfg = PlannerConfig::default();
     let (l, r) = standing(1.0, 2.0, 0.5, cfg.nominal_width);
-    let mut block = Planner::new(cfg.clone()).unwrap();
+    let mut block = Planner::new(cfg.clone(), GRAVITY).unwrap();
     let mut input = PlannerInput {
         time: Duration::from_secs(3),
         goal: None,
@@ -273,7 +365,7 @@ fn stopping_mid_walk() {
         ),
     ] {
         for t in [2.0, 3.3, 4.1, 5.0, 6.7] {
-            let mut planner = stride_planner::Planner::new(cfg.clone()).unwrap();
+            let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
             planner
                 .start(
                     0.0,
@@ -323,7 +415,7 @@ fn min_width_equal_to_nominal_width_walks_at_full_speed() {
             ..PlannerConfig::default()
         };
         let (l, r) = standing(0.0, 0.0, 0.0, start_width);
-        let plan = plan_from_standing(&cfg, 0.0, &l, &r, &goal).expect("plan");
+        let plan = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &goal).expect("plan");
         check_all(&cfg, &plan, true);
         assert_eq!(plan.outcome, PlanOutcome::Complete);
         plan

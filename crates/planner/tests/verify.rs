@@ -17,7 +17,7 @@ fn config() -> PlannerConfig {
 fn plan(goal: Goal) -> Plan {
     let cfg = config();
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-    plan_from_standing(&cfg, 0.0, &l, &r, &goal).expect("plan")
+    plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &goal).expect("plan")
 }
 
 fn straight() -> Plan {
@@ -195,7 +195,7 @@ fn the_planner_verifies_its_plans_when_asked() {
         ..config()
     };
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
-    let mut planner = Planner::new(cfg.clone()).expect("config");
+    let mut planner = Planner::new(cfg.clone(), GRAVITY).expect("config");
     planner
         .start(
             0.0,

@@ -20,6 +20,7 @@
 #![warn(missing_docs)]
 
 mod active_set;
+mod banded;
 mod clarabel_backend;
 mod dense;
 mod error;
@@ -35,6 +36,7 @@ mod variables;
 mod weight;
 
 pub use active_set::{ActiveSetSettings, ActiveSetSolver, StartKind};
+pub use banded::{BandMatrix, BandedOutcome, BandedQp, BandedQpError, BandedSettings};
 pub use clarabel_backend::{ClarabelSettings, ClarabelSolver, ClarabelSparseSolver};
 pub use dense::DenseQp;
 pub use error::QpError;

@@ -85,7 +85,8 @@ pub fn plan(path: &Path, json: bool, dt: Option<f64>) -> Result<ExitCode, CliErr
     kd.set_state(&state).map_err(err)?;
     let (lp, rp) = (kd.frame_pose(l), kd.frame_pose(r));
     let events = crate::stack::goal_events(&c.goal);
-    let mut planner = stride_planner::Planner::new(c.planner.clone()).map_err(err)?;
+    let mut planner =
+        stride_planner::Planner::new(c.planner.clone(), c.scenario.gravity).map_err(err)?;
     let first = events
         .first()
         .map_or(stride_planner::Goal::Stand, |e| e.goal.clone());

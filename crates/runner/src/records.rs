@@ -404,12 +404,13 @@ impl<'a> TsidOutputRecord<'a> {
     }
 }
 
-/// `/simplified/output`: the layer's output with the MPC solve time zeroed.
+/// `/simplified/output`: the layer's output with the solve times zeroed.
 pub fn simplified_output_record(
     o: &stride_simplified::SimplifiedOutput,
 ) -> stride_simplified::SimplifiedOutput {
     let mut r = *o;
     r.diagnostics.mpc.solve_time = 0.0;
+    r.diagnostics.solve_time = 0.0;
     r
 }
 

@@ -255,7 +255,8 @@ fn replay_planner(
     log: &LogContents,
     cmp: &mut Comparison,
 ) -> Result<(), ReplayError> {
-    let mut planner = Planner::new(scenario.config.planner.clone())?;
+    let c = &scenario.config;
+    let mut planner = Planner::new(c.planner.clone(), c.scenario.gravity)?;
     let mut sample = PlanSample::default();
     for m in &log.messages {
         match m.topic.as_str() {

@@ -295,7 +295,7 @@ impl<'a> Loop<'a> {
 
     fn simplified(&mut self, t: u64) -> Result<(), RunError> {
         let held = self.stack.simplified_tick(t)?;
-        let time = self.stack.simplified_output.diagnostics.mpc.solve_time;
+        let time = self.stack.simplified_output.diagnostics.solve_time;
         self.tracker.simplified_times.push(time);
         if let Some(log) = self.log.as_mut() {
             log.simplified(t, &self.stack, time)?;

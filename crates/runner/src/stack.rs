@@ -207,7 +207,7 @@ impl Stack {
         // The initial posture is upright by construction (soles flat on the ground): the torso's up axis is
         // the world vertical seen from the torso frame there.
         let torso_up = kd.frame_pose(torso).rotation.inverse() * Vector3::z();
-        let planner = Planner::new(c.planner.clone())?;
+        let planner = Planner::new(c.planner.clone(), -model.gravity().z)?;
         let simplified_period =
             Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
         let simplified = SimplifiedController::new(&c.simplified, simplified_period)?;

@@ -1,7 +1,7 @@
 //! The simplified-model control layer as a [`stride_block::Block`]: a DCM controller (instantaneous or
 //! predictive, chosen in the config) followed by the ZMP-CoM controller.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
@@ -19,10 +19,10 @@ use crate::zmp_com::{ZmpComConfig, ZmpComController, ZmpComGains};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum DcmControllerKind {
-    /// The PI law (10.2.17) with projection onto the support polygon.
+    /// The PI law [Romualdi 2022, eq. 10.2.17] with projection onto the support polygon.
     #[default]
     Instantaneous,
-    /// The MPC (10.2.23).
+    /// The MPC [Romualdi 2022, eq. 10.2.23].
     Predictive,
 }
 
@@ -64,6 +64,11 @@ impl SimplifiedConfig {
     }
 }
 
+/// The `omega` of a fresh [`SimplifiedInput`] \[s⁻¹\]: a valid value (`√(9.81 / 0.5)`, a 0.5 m LIPM)
+/// until the caller writes the plan's `ω`; the layer has no gravity of its own (the plan's `ω` carries
+/// it).
+pub const PLACEHOLDER_OMEGA: f64 = 4.429_446_918_070_020_4;
+
 /// Everything one tick of the layer needs (plain data; 2D vectors are world x, y in metres).
 ///
 /// Build it once with [`SimplifiedInput::new`] (which allocates the horizon buffer) and refill it every
@@ -101,12 +106,12 @@ pub struct SimplifiedInput {
 }
 
 impl SimplifiedInput {
-    /// An input with zero vectors, `omega` = sqrt(9.81/0.5), the given support polygon and a horizon
+    /// An input with zero vectors, `omega` = [`PLACEHOLDER_OMEGA`], the given support polygon and a horizon
     /// buffer of `horizon_capacity` samples (use [`SimplifiedController::horizon_samples`]).
     pub fn new(horizon_capacity: usize, support_polygon: SupportPolygon) -> Self {
         Self {
             time: Duration::ZERO,
-            omega: (crate::lipm::STANDARD_GRAVITY / 0.5).sqrt(),
+            omega: PLACEHOLDER_OMEGA,
             walking: false,
             planned_dcm_position: Vector2::zeros(),
             planned_dcm_velocity: Vector2::zeros(),
@@ -150,6 +155,9 @@ pub struct SimplifiedDiagnostics {
     pub thesis_gain_conditions_met: bool,
     /// MPC diagnostics (status `not_run` with the instantaneous controller).
     pub mpc: MpcDiagnostics,
+    /// Wall-clock time of this tick of the running controllers \[s\]: the DCM controller (PI or MPC,
+    /// whichever runs) plus the ZMP-CoM controller, with the input checks.
+    pub solve_time: f64,
 }
 
 /// What one tick of the layer produces: references for the whole-body controller.
@@ -270,6 +278,7 @@ impl stride_block::Block for SimplifiedController {
     /// One tick. On error (non-finite input, empty MPC horizon, MPC failure) nothing changes and
     /// [`SimplifiedController::output`] still holds the last valid references: callers hold them.
     fn step(&mut self, input: &SimplifiedInput) -> Result<&SimplifiedOutput> {
+        let start = Instant::now();
         Self::validate_input(input)?;
         let mut diagnostics = SimplifiedDiagnostics {
             controller: self.config.dcm_controller,
@@ -321,6 +330,7 @@ impl stride_block::Block for SimplifiedController {
         diagnostics.zmp_com_gains = Some(com.gains);
         diagnostics.gain_blend_progress = com.blend_progress;
         diagnostics.thesis_gain_conditions_met = com.thesis_conditions_met;
+        diagnostics.solve_time = start.elapsed().as_secs_f64();
         self.output = SimplifiedOutput {
             time: input.time,
             valid: true,

@@ -1,4 +1,4 @@
-//! DCM instantaneous controller (thesis (10.2.17)): a proportional–integral law on the DCM error giving
+//! DCM instantaneous controller [Romualdi 2022, eq. 10.2.17]: a proportional–integral law on the DCM error giving
 //! the desired ZMP, with the desired ZMP projected onto the support polygon and an anti-windup integral.
 
 use nalgebra::Vector2;
@@ -54,7 +54,7 @@ impl DcmInstantaneousConfig {
     }
 }
 
-/// The control law (10.2.17) without projection:
+/// The control law [Romualdi 2022, eq. 10.2.17] without projection:
 /// `p* = ξ_ref − ξ̇_ref/ω + kp (ξ − ξ_ref) + ki ∫(ξ − ξ_ref) dt`.
 ///
 /// `error_integral` is `∫(ξ − ξ_ref) dt` \[m·s\]. Exposed so that tests can exercise gains the

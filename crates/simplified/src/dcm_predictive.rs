@@ -1,37 +1,38 @@
-//! DCM predictive controller (thesis (10.2.19)–(10.2.24), after Krause et al. 2012): an MPC over a
+//! DCM predictive controller [Romualdi 2022, eqs. 10.2.19–10.2.24], after [Krause 2012]: an MPC over a
 //! horizon (default 2 s) that picks a piecewise-constant ZMP sequence keeping the predicted DCM on the
 //! plan, with the ZMP of each stage inside the support polygon of the planned contact sequence.
 //!
 //! # Formulation
 //!
-//! Prediction model (10.2.19), exact ZOH with the layer period `T`: `ξ_{k+1} = F ξ_k + G z_k`,
+//! Prediction model [Romualdi 2022, eq. 10.2.19], exact ZOH with the layer period `T`: `ξ_{k+1} = F ξ_k + G z_k`,
 //! `F = e^{ωT}`, `G = 1 − e^{ωT}`, `ξ_0 = ξ̄` (measured DCM). Cost, summed over the `N` stages:
 //!
 //! `½ Λ_ξ Σ_{k=1..N} ‖ξ_k − ξ_ref,k‖² + ½ Λ_z Σ_{k=0..N−1} ‖(z_k − z_{k−1}) − (ẑ_k − ẑ_{k−1})‖²`
 //!
-//! with `z_{−1}` the previous tick's desired ZMP (10.2.23e) and `ẑ` the planned ZMP. With
+//! with `z_{−1}` the previous tick's desired ZMP [Romualdi 2022, eq. 10.2.23e] and `ẑ` the planned ZMP. With
 //! `zmp_rate_reference = "plan"` (default) the ZMP rate is penalised relative to the planned rate, so a
 //! consistent plan is an exact fixed point of the MPC (zero cost); `"zero"` penalises the absolute rate as
-//! printed in (10.2.21) (smoother, but it then lags the plan at every ZMP transfer). Constraints
-//! (10.2.22): `A_k z_k ≤ b_k`, the H-representation of the support polygon of stage `k`.
+//! printed in [Romualdi 2022, eq. 10.2.21] (smoother, but it then lags the plan at every ZMP transfer). Constraints
+//! [Romualdi 2022, eq. 10.2.22]: `A_k z_k ≤ b_k`, the H-representation of the support polygon of stage `k`.
 //!
 //! # Solution method (structure exploited)
 //!
-//! The thesis condenses onto the ZMP sequence (10.2.24), which gives a dense Hessian and, because the
+//! The thesis condenses onto the ZMP sequence [Romualdi 2022, eq. 10.2.24], which gives a dense Hessian and, because the
 //! DCM is unstable (`F^N = e^{ωNT}` ≈ 5·10³ over 2 s), a badly conditioned one. Instead, the map
 //! `z_k = (ξ_{k+1} − F ξ_k)/G` is inverted: the decision variables are the predicted DCMs
 //! `ξ_1 … ξ_N` (2N unknowns, same optimum since the change of variables is bijective). The tracking
 //! cost is then diagonal, the rate cost pentadiagonal per axis, and each polygon row touches two
 //! consecutive stages, so every Newton matrix `P + Cᵀ diag(λ/s) C` is banded (half-bandwidth 5) and is
-//! factorised in `O(N)`. A primal–dual Mehrotra interior-point method runs on this banded system
-//! (`solver = "banded_interior_point"`, default); when the unconstrained minimiser is feasible it is
-//! returned at once (status `Unconstrained`, exact). `solver = "clarabel"` solves the same QP with
-//! clarabel (sparse, reference; allocates every tick).
+//! factorised in `O(N)`. stride-qp's primal–dual Mehrotra interior-point method
+//! ([`stride_qp::BandedQp`]) runs on this banded system (`solver = "banded_interior_point"`, default);
+//! when the unconstrained minimiser is feasible it is returned at once (status `Unconstrained`,
+//! exact). `solver = "clarabel"` solves the same QP with clarabel (sparse, reference; allocates every
+//! tick).
 //!
 //! Reused across ticks: all memory, the band structure, `P` and its Cholesky factor (they depend only
 //! on `ω T` and the weights: rebuilt when `ω` changes), so an unconstrained tick costs one banded
 //! solve. The constraint rows are stored per stage as half-planes on that stage's ZMP
-//! `z_k = a ξ_{k+1} + c ξ_k` (`banded::PointGroup`), so products with `C` and the Newton update
+//! `z_k = a ξ_{k+1} + c ξ_k` ([`stride_qp::BandedQp::push_group`]), so products with `C` and the Newton update
 //! `Cᵀ diag(λ/s) C` cost a few flops per polygon edge. A warm start from the previous solution shifted
 //! by one stage is available (`warm_start`, off by default: it lowers the mean iteration count but not
 //! the worst tick, see the config table). Nothing is allocated by `step` with the banded solver.
@@ -41,7 +42,8 @@ use std::time::Instant;
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
-use crate::banded::{BandedQp, HalfPlaneRow, IpmOutcome, IpmSettings, PointGroup};
+use stride_qp::{BandedOutcome, BandedQp, BandedSettings, ClarabelSettings, ClarabelSparseSolver};
+
 use crate::error::{check_positive, Result, SimplifiedError};
 use crate::lipm::{check_omega, check_point, LipmDiscretization};
 use crate::polygon::{SupportPolygon, MAX_POLYGON_VERTICES};
@@ -53,7 +55,7 @@ pub enum ZmpRateReference {
     /// Penalise `(z_k − z_{k−1}) − (ẑ_k − ẑ_{k−1})`: the plan is an exact fixed point.
     #[default]
     Plan,
-    /// Penalise `z_k − z_{k−1}` as printed in (10.2.21).
+    /// Penalise `z_k − z_{k−1}` as printed in [Romualdi 2022, eq. 10.2.21].
     Zero,
 }
 
@@ -61,7 +63,8 @@ pub enum ZmpRateReference {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum MpcSolverKind {
-    /// The structure-exploiting banded interior-point method of this crate (no allocation per tick).
+    /// The structure-exploiting banded interior-point method ([`stride_qp::BandedQp`]; no allocation
+    /// per tick).
     #[default]
     BandedInteriorPoint,
     /// clarabel on the same (sparse) QP; allocates every tick.
@@ -435,7 +438,7 @@ impl DcmPredictiveController {
     /// The last solved problem and its solution (None before the first successful step).
     pub fn last_problem(&self) -> Option<MpcProblemView<'_>> {
         let c = self.last_problem?;
-        let rows = self.qp.row_count;
+        let rows = self.qp.row_count();
         Some(MpcProblemView {
             omega: c.omega,
             period: self.period,
@@ -470,6 +473,91 @@ impl DcmPredictiveController {
         let start = Instant::now();
         check_omega(omega)?;
         check_point("measured_dcm", &measured_dcm)?;
+        let held_samples = self.load_horizon(horizon)?;
+        let samples = horizon.samples();
+        let planned_zmp_now = samples[0].zmp;
+        let constants = ProblemConstants {
+            omega,
+            initial_dcm: measured_dcm,
+            previous_zmp: self.previous_desired_zmp.unwrap_or(planned_zmp_now),
+            previous_planned_zmp: self.previous_planned_zmp.unwrap_or(planned_zmp_now),
+        };
+        let discretization = LipmDiscretization::new(omega, self.period)?;
+        let f = discretization.dcm_transition();
+        let g = discretization.dcm_input();
+        // z_k = a ξ_{k+1} + c ξ_k
+        let a = 1.0 / g;
+        let c = -f / g;
+        self.assemble(&constants, a, c)?;
+        if self.config.warm_start && self.warm_valid {
+            self.prepare_warm_start();
+        }
+        self.warm_valid = false;
+        let (outcome, iterations) = self.solve_qp();
+        let status = match outcome {
+            BandedOutcome::Unconstrained => MpcStatus::Unconstrained,
+            BandedOutcome::Converged => MpcStatus::Solved,
+            BandedOutcome::MaxIterations => MpcStatus::MaxIterations,
+            BandedOutcome::NumericalError => MpcStatus::NumericalError,
+        };
+        let mut diagnostics = MpcDiagnostics {
+            status,
+            iterations,
+            solve_time: 0.0,
+            stages: self.stages,
+            held_samples,
+            active_constraints: 0,
+            cost: 0.0,
+            fallback: false,
+        };
+        if !matches!(status, MpcStatus::Unconstrained | MpcStatus::Solved)
+            || self.qp.x().iter().any(|v| !v.is_finite())
+        {
+            if !self.config.fallback {
+                return Err(SimplifiedError::SolverFailed { status, iterations });
+            }
+            // Documented safe behaviour: the DCM-feedback law [Romualdi 2022, eq. 10.2.17] with
+            // kp = 2 about the current plan sample, projected onto the current support polygon.
+            let planned_dcm = samples[0].dcm_position;
+            let law = planned_zmp_now + (measured_dcm - planned_dcm) * FALLBACK_GAIN;
+            let (desired, projection_active) = support.project(law);
+            self.previous_desired_zmp = Some(desired);
+            self.previous_planned_zmp = Some(planned_zmp_now);
+            self.last_problem = None;
+            diagnostics.fallback = true;
+            diagnostics.solve_time = start.elapsed().as_secs_f64();
+            return Ok(DcmPredictiveOutput {
+                desired_zmp: desired,
+                unprojected_zmp: law,
+                dcm_error: measured_dcm - planned_dcm,
+                projection_active,
+                diagnostics,
+            });
+        }
+        diagnostics.active_constraints = self.unpack_solution(measured_dcm, a, c);
+        diagnostics.cost = self.cost(&constants);
+        if self.config.warm_start && status == MpcStatus::Solved {
+            self.keep_warm_start();
+        }
+        let unprojected = self.solution_zmp[0];
+        let (desired, _) = support.project(unprojected);
+        let projection_active = support.max_violation(unprojected) > 1e-9;
+        self.previous_desired_zmp = Some(desired);
+        self.previous_planned_zmp = Some(planned_zmp_now);
+        self.last_problem = Some(constants);
+        diagnostics.solve_time = start.elapsed().as_secs_f64();
+        Ok(DcmPredictiveOutput {
+            desired_zmp: desired,
+            unprojected_zmp: unprojected,
+            dcm_error: measured_dcm - samples[0].dcm_position,
+            projection_active,
+            diagnostics,
+        })
+    }
+
+    /// Validates the horizon and copies it into the references of the `N` stages (the last sample held
+    /// when it is shorter than `N + 1`); returns the number of held samples.
+    fn load_horizon(&mut self, horizon: &DcmHorizon) -> Result<usize> {
         let samples = horizon.samples();
         let Some(last) = samples.last() else {
             return Err(SimplifiedError::EmptyHorizon);
@@ -479,7 +567,6 @@ impl DcmPredictiveController {
             check_point("horizon.zmp", &s.zmp)?;
         }
         let n = self.stages;
-        let held_samples = (n + 1).saturating_sub(samples.len());
         for k in 0..=n {
             let s = samples.get(k).unwrap_or(last);
             self.reference_dcm[k] = s.dcm_position;
@@ -488,126 +575,73 @@ impl DcmPredictiveController {
                 self.supports[k] = s.support;
             }
         }
-        let planned_zmp_now = samples[0].zmp;
-        let previous_zmp = self.previous_desired_zmp.unwrap_or(planned_zmp_now);
-        let previous_planned_zmp = self.previous_planned_zmp.unwrap_or(planned_zmp_now);
-        let constants = ProblemConstants {
-            omega,
-            initial_dcm: measured_dcm,
-            previous_zmp,
-            previous_planned_zmp,
-        };
-        let discretization = LipmDiscretization::new(omega, self.period)?;
-        let f = discretization.dcm_transition();
-        let g = discretization.dcm_input();
-        // z_k = a ξ_{k+1} + c ξ_k
-        let a = 1.0 / g;
-        let c = -f / g;
-        self.assemble(&constants, a, c);
-        if self.config.warm_start && self.warm_valid {
-            self.prepare_warm_start();
-        }
-        self.warm_valid = false;
-        let (outcome, iterations) = match self.config.solver {
-            MpcSolverKind::BandedInteriorPoint => self.qp.solve(&IpmSettings {
-                tolerance: self.config.tolerance,
-                max_iterations: self.config.max_iterations,
+        Ok((n + 1).saturating_sub(samples.len()))
+    }
+
+    /// Solves the assembled QP with the configured solver; returns the outcome and the iterations.
+    fn solve_qp(&mut self) -> (BandedOutcome, u32) {
+        let config = &self.config;
+        match config.solver {
+            MpcSolverKind::BandedInteriorPoint => self.qp.solve(&BandedSettings {
+                tolerance: config.tolerance,
+                max_iterations: config.max_iterations,
             }),
-            MpcSolverKind::Clarabel => solve_with_clarabel(&mut self.qp, &self.config),
+            // The QP is in DCM variables; the ZMP is a difference of them (×|1/G| ≈ 25 at 100 Hz), so
+            // clarabel is asked for three more digits than the configured tolerance.
+            MpcSolverKind::Clarabel => self
+                .qp
+                .solve_with_clarabel(1e-3 * config.tolerance, config.max_iterations.max(50)),
             MpcSolverKind::StrideQp => {
-                solve_with_stride_qp(&mut self.qp, &mut self.stride_qp.0, &self.config)
+                let solver = self.stride_qp.0.get_or_insert_with(|| {
+                    ClarabelSparseSolver::new(ClarabelSettings {
+                        tolerance: (1e-3 * config.tolerance).min(1e-3),
+                        max_iterations: config.max_iterations.max(50),
+                    })
+                });
+                self.qp.solve_with_sparse_clarabel(solver)
             }
-        };
-        let status = match outcome {
-            IpmOutcome::Unconstrained => MpcStatus::Unconstrained,
-            IpmOutcome::Converged => MpcStatus::Solved,
-            IpmOutcome::MaxIterations => MpcStatus::MaxIterations,
-            IpmOutcome::NumericalError => MpcStatus::NumericalError,
-        };
-        if !matches!(status, MpcStatus::Unconstrained | MpcStatus::Solved)
-            || self.qp.x.iter().any(|v| !v.is_finite())
-        {
-            if !self.config.fallback {
-                return Err(SimplifiedError::SolverFailed { status, iterations });
-            }
-            // Documented safe behaviour: the DCM-feedback law (10.2.17) with kp = 2 about the
-            // current plan sample, projected onto the current support polygon.
-            let planned_dcm = samples[0].dcm_position;
-            let law = planned_zmp_now + (measured_dcm - planned_dcm) * FALLBACK_GAIN;
-            let (desired, projection_active) = support.project(law);
-            self.previous_desired_zmp = Some(desired);
-            self.previous_planned_zmp = Some(planned_zmp_now);
-            self.last_problem = None;
-            return Ok(DcmPredictiveOutput {
-                desired_zmp: desired,
-                unprojected_zmp: law,
-                dcm_error: measured_dcm - planned_dcm,
-                projection_active,
-                diagnostics: MpcDiagnostics {
-                    status,
-                    iterations,
-                    solve_time: start.elapsed().as_secs_f64(),
-                    stages: n,
-                    held_samples,
-                    active_constraints: 0,
-                    cost: 0.0,
-                    fallback: true,
-                },
-            });
         }
-        // Unpack the solution.
+    }
+
+    /// Copies the QP's solution into the predicted DCMs and ZMPs and its multipliers (scaled back to
+    /// the cost's units); returns the number of active rows (multiplier above 1e-6 × the largest).
+    fn unpack_solution(&mut self, measured_dcm: Vector2<f64>, a: f64, c: f64) -> usize {
+        let n = self.stages;
+        let x = self.qp.x();
         self.solution_dcm[0] = measured_dcm;
         for k in 1..=n {
-            self.solution_dcm[k] = Vector2::new(self.qp.x[2 * (k - 1)], self.qp.x[2 * (k - 1) + 1]);
+            self.solution_dcm[k] = Vector2::new(x[2 * (k - 1)], x[2 * (k - 1) + 1]);
         }
         for k in 0..n {
             self.solution_zmp[k] = self.solution_dcm[k + 1] * a + self.solution_dcm[k] * c;
         }
-        let rows = self.qp.row_count;
+        let multipliers = self.qp.multipliers();
+        let rows = multipliers.len();
         let mut largest: f64 = 0.0;
-        for i in 0..rows {
-            self.multipliers[i] = self.qp.multiplier[i] * self.config.dcm_weight;
-            largest = largest.max(self.multipliers[i]);
+        for (scaled, &l) in self.multipliers.iter_mut().zip(multipliers) {
+            *scaled = l * self.config.dcm_weight;
+            largest = largest.max(*scaled);
         }
-        let active_constraints = if largest > 0.0 {
+        if largest > 0.0 {
             self.multipliers[..rows]
                 .iter()
                 .filter(|&&l| l > 1e-6 * largest)
                 .count()
         } else {
             0
-        };
-        let cost = self.cost(&constants);
-        if self.config.warm_start && status == MpcStatus::Solved {
-            self.warm_x.copy_from_slice(&self.qp.x);
-            self.warm_multiplier[..rows].copy_from_slice(&self.qp.multiplier[..rows]);
-            for (k, g) in self.qp.groups[..self.qp.group_count].iter().enumerate() {
-                self.warm_rows[k] = (g.first_row, g.end_row);
-            }
-            self.warm_valid = true;
         }
-        let unprojected = self.solution_zmp[0];
-        let (desired, _) = support.project(unprojected);
-        let projection_active = support.max_violation(unprojected) > 1e-9;
-        self.previous_desired_zmp = Some(desired);
-        self.previous_planned_zmp = Some(planned_zmp_now);
-        self.last_problem = Some(constants);
-        Ok(DcmPredictiveOutput {
-            desired_zmp: desired,
-            unprojected_zmp: unprojected,
-            dcm_error: measured_dcm - samples[0].dcm_position,
-            projection_active,
-            diagnostics: MpcDiagnostics {
-                status,
-                iterations,
-                solve_time: start.elapsed().as_secs_f64(),
-                stages: n,
-                held_samples,
-                active_constraints,
-                cost,
-                fallback: false,
-            },
-        })
+    }
+
+    /// Keeps the solution (QP units) for the next tick's warm start.
+    fn keep_warm_start(&mut self) {
+        let rows = self.qp.row_count();
+        self.warm_x.copy_from_slice(self.qp.x());
+        self.warm_multiplier[..rows].copy_from_slice(self.qp.multipliers());
+        for k in 0..self.qp.group_count() {
+            let range = self.qp.group_rows(k);
+            self.warm_rows[k] = (range.start, range.end);
+        }
+        self.warm_valid = true;
     }
 
     /// Loads the previous solution shifted by one stage into the solver's start (stage `k` takes the
@@ -615,22 +649,22 @@ impl DcmPredictiveController {
     /// edges starts its multipliers at zero, the solver pushes them into the interior).
     fn prepare_warm_start(&mut self) {
         let n = self.stages;
-        let qp = &mut self.qp;
         for k in 0..n {
             let source = (k + 1).min(n - 1);
-            qp.start_x[2 * k] = self.warm_x[2 * source];
-            qp.start_x[2 * k + 1] = self.warm_x[2 * source + 1];
-            let g = qp.groups[k];
+            let rows = self.qp.group_rows(k);
+            let (start_x, start_multiplier) = self.qp.warm_start_mut();
+            start_x[2 * k] = self.warm_x[2 * source];
+            start_x[2 * k + 1] = self.warm_x[2 * source + 1];
             let (first, end) = self.warm_rows[source];
-            for (offset, i) in (g.first_row..g.end_row).enumerate() {
-                qp.start_multiplier[i] = if end - first == g.end_row - g.first_row {
+            let same_edges = end - first == rows.len();
+            for (offset, i) in rows.enumerate() {
+                start_multiplier[i] = if same_edges {
                     self.warm_multiplier[first + offset]
                 } else {
                     0.0
                 };
             }
         }
-        qp.warm_start = true;
     }
 
     /// Cost of the current solution (original weights).
@@ -658,240 +692,143 @@ impl DcmPredictiveController {
 
     /// Builds the banded QP in the DCM variables `x = [ξ_1; …; ξ_N]` (x/y interleaved), with the cost
     /// divided by `Λ_ξ` (scaling does not change the minimiser; multipliers are scaled back).
-    fn assemble(&mut self, constants: &ProblemConstants, a: f64, c: f64) {
-        let n = self.stages;
+    fn assemble(&mut self, constants: &ProblemConstants, a: f64, c: f64) -> Result<()> {
         let rate_weight = self.config.zmp_rate_weight / self.config.dcm_weight;
         // P depends only on (a, c) and the weights: rebuilt (and refactorised by the solver) only when
         // they change, e.g. with ω.
         let hessian_key = (a, c, rate_weight, self.config.zmp_rate_reference);
         let build_hessian = self.hessian_key != Some(hessian_key);
         self.hessian_key = Some(hessian_key);
-        let qp = &mut self.qp;
         if build_hessian {
-            qp.hessian.fill_zero();
-            qp.hessian_changed();
+            self.qp.hessian_mut().fill_zero();
         }
-        qp.gradient.iter_mut().for_each(|v| *v = 0.0);
-        // A residual row per axis: Σ coef · ξ_stage + constant, stage 0 being the constant ξ̄.
-        // Adds ½ w (row)² to the cost.
-        let mut add_row = |terms: &[(usize, f64)], constant: Vector2<f64>, weight: f64| {
-            let mut offset = constant;
-            for &(stage, coef) in terms {
-                if stage == 0 {
-                    offset += constants.initial_dcm * coef;
-                }
-            }
-            for &(si, ci) in terms {
-                if si == 0 {
-                    continue;
-                }
-                for axis in 0..2 {
-                    let i = 2 * (si - 1) + axis;
-                    qp.gradient[i] += weight * ci * offset[axis];
-                }
-                if !build_hessian {
-                    continue;
-                }
-                for &(sj, cj) in terms {
-                    if sj == 0 || sj > si {
-                        continue;
-                    }
-                    for axis in 0..2 {
-                        qp.hessian
-                            .add(2 * (si - 1) + axis, 2 * (sj - 1) + axis, weight * ci * cj);
-                    }
-                }
-            }
+        self.qp.gradient_mut().iter_mut().for_each(|v| *v = 0.0);
+        self.add_cost_rows(constants, a, c, rate_weight, build_hessian)?;
+        self.add_polygon_rows(constants, a, c)
+    }
+
+    /// The cost: per stage the tracking residual `ξ_k − ξ_ref,k` (weight 1) and, with a positive rate
+    /// weight, the ZMP-rate residual `(z_k − z_{k−1}) − (ẑ_k − ẑ_{k−1})` (weight `Λ_z/Λ_ξ`)
+    /// [Romualdi 2022, eq. 10.2.21]; the Hessian only when `build_hessian`.
+    fn add_cost_rows(
+        &mut self,
+        constants: &ProblemConstants,
+        a: f64,
+        c: f64,
+        rate_weight: f64,
+        build_hessian: bool,
+    ) -> Result<()> {
+        let n = self.stages;
+        let mut rows = ResidualRows {
+            qp: &mut self.qp,
+            initial_dcm: constants.initial_dcm,
+            build_hessian,
         };
         for k in 1..=n {
-            add_row(&[(k, 1.0)], -self.reference_dcm[k], 1.0);
+            rows.add(&[(k, 1.0)], -self.reference_dcm[k], 1.0)?;
         }
-        if rate_weight > 0.0 {
-            for k in 0..n {
-                let zhat_prev = if k == 0 {
-                    constants.previous_planned_zmp
-                } else {
-                    self.reference_zmp[k - 1]
-                };
-                let planned_rate = match self.config.zmp_rate_reference {
-                    ZmpRateReference::Plan => self.reference_zmp[k] - zhat_prev,
-                    ZmpRateReference::Zero => Vector2::zeros(),
-                };
-                if k == 0 {
-                    // z_0 − z_{−1} = a ξ_1 + c ξ̄ − z̄
-                    add_row(
-                        &[(1, a), (0, c)],
-                        -constants.previous_zmp - planned_rate,
-                        rate_weight,
-                    );
-                } else {
-                    // z_k − z_{k−1} = a ξ_{k+1} + (c − a) ξ_k − c ξ_{k−1}
-                    add_row(
-                        &[(k + 1, a), (k, c - a), (k - 1, -c)],
-                        -planned_rate,
-                        rate_weight,
-                    );
-                }
-            }
+        if rate_weight <= 0.0 {
+            return Ok(());
         }
-        // Polygon rows: nᵀ z_k ≤ b with z_k = a ξ_{k+1} + c ξ_k, one group per stage (ξ_0 = ξ̄ is
-        // constant: its term moves into the bounds).
-        let mut r = 0;
         for k in 0..n {
-            let polygon = &self.supports[k];
-            let mut group = PointGroup {
-                first_row: r,
-                ..PointGroup::default()
+            let zhat_prev = if k == 0 {
+                constants.previous_planned_zmp
+            } else {
+                self.reference_zmp[k - 1]
             };
-            if k > 0 {
-                group.columns[group.terms] = 2 * (k - 1);
-                group.coefficients[group.terms] = c;
-                group.terms += 1;
+            let planned_rate = match self.config.zmp_rate_reference {
+                ZmpRateReference::Plan => self.reference_zmp[k] - zhat_prev,
+                ZmpRateReference::Zero => Vector2::zeros(),
+            };
+            if k == 0 {
+                // z_0 − z_{−1} = a ξ_1 + c ξ̄ − z̄
+                rows.add(
+                    &[(1, a), (0, c)],
+                    -constants.previous_zmp - planned_rate,
+                    rate_weight,
+                )?;
+            } else {
+                // z_k − z_{k−1} = a ξ_{k+1} + (c − a) ξ_k − c ξ_{k−1}
+                rows.add(
+                    &[(k + 1, a), (k, c - a), (k - 1, -c)],
+                    -planned_rate,
+                    rate_weight,
+                )?;
             }
-            group.columns[group.terms] = 2 * k;
-            group.coefficients[group.terms] = a;
-            group.terms += 1;
+        }
+        Ok(())
+    }
+
+    /// Polygon rows [Romualdi 2022, eq. 10.2.22]: `nᵀ z_k ≤ b` with `z_k = a ξ_{k+1} + c ξ_k`, one
+    /// group per stage (`ξ_0 = ξ̄` is constant: its term moves into the bounds).
+    fn add_polygon_rows(&mut self, constants: &ProblemConstants, a: f64, c: f64) -> Result<()> {
+        let qp = &mut self.qp;
+        qp.clear_constraints();
+        let mut r = 0;
+        for k in 0..self.stages {
+            let polygon = &self.supports[k];
+            if k > 0 {
+                qp.push_group(&[(2 * (k - 1), c), (2 * k, a)])?;
+            } else {
+                qp.push_group(&[(0, a)])?;
+            }
             for e in 0..polygon.len() {
                 let (normal, mut bound) = polygon.half_plane(e);
                 if k == 0 {
                     bound -= c * normal.dot(&constants.initial_dcm);
                 }
-                qp.rows[r] = HalfPlaneRow {
-                    normal: [normal.x, normal.y],
-                    bound,
-                };
+                qp.push_row([normal.x, normal.y], bound)?;
                 self.row_stage[r] = (k, e);
                 r += 1;
             }
-            group.end_row = r;
-            qp.groups[k] = group;
         }
-        qp.group_count = n;
-        qp.row_count = r;
+        Ok(())
     }
 }
 
-/// Solves the banded QP with clarabel (reference path, allocates).
-fn solve_with_clarabel(qp: &mut BandedQp, config: &DcmPredictiveConfig) -> (IpmOutcome, u32) {
-    use clarabel::algebra::CscMatrix;
-    use clarabel::solver::{
-        DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
-        SupportedConeT,
-    };
-    let n = qp.x.len();
-    let m = qp.row_count;
-    // P upper triangle, column by column.
-    let mut colptr = Vec::with_capacity(n + 1);
-    let mut rowval = Vec::new();
-    let mut nzval = Vec::new();
-    colptr.push(0);
-    for j in 0..n {
-        for i in j.saturating_sub(qp.hessian.bandwidth())..=j {
-            let v = qp.hessian.get(j, i);
-            if v != 0.0 {
-                rowval.push(i);
-                nzval.push(v);
-            }
-        }
-        colptr.push(rowval.len());
-    }
-    let p = CscMatrix::new(n, n, colptr, rowval, nzval);
-    let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
-    for (i, row) in qp.sparse_rows().enumerate() {
-        for e in 0..row.len {
-            triplets.push((row.columns[e], i, row.values[e]));
-        }
-    }
-    triplets.sort_by(|x, y| x.0.cmp(&y.0).then(x.1.cmp(&y.1)));
-    let mut colptr = vec![0usize; n + 1];
-    for &(col, _, _) in &triplets {
-        colptr[col + 1] += 1;
-    }
-    for j in 0..n {
-        colptr[j + 1] += colptr[j];
-    }
-    let rowval: Vec<usize> = triplets.iter().map(|t| t.1).collect();
-    let nzval: Vec<f64> = triplets.iter().map(|t| t.2).collect();
-    let a = CscMatrix::new(m, n, colptr, rowval, nzval);
-    let b: Vec<f64> = qp.sparse_rows().map(|r| r.bound).collect();
-    let cones: Vec<SupportedConeT<f64>> = vec![NonnegativeConeT(m)];
-    let Ok(settings) = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .max_iter(config.max_iterations.max(50))
-        // The QP is in DCM variables; the ZMP is a difference of them (×|1/G| ≈ 25 at 100 Hz), so
-        // clarabel is asked for three more digits than the configured tolerance.
-        .tol_gap_abs(1e-3 * config.tolerance)
-        .tol_gap_rel(1e-3 * config.tolerance)
-        .tol_feas(1e-3 * config.tolerance)
-        .build()
-    else {
-        return (IpmOutcome::NumericalError, 0);
-    };
-    let Ok(mut solver) = DefaultSolver::new(&p, &qp.gradient, &a, &b, &cones, settings) else {
-        return (IpmOutcome::NumericalError, 0);
-    };
-    solver.solve();
-    let iterations = solver.solution.iterations;
-    let outcome = match solver.solution.status {
-        SolverStatus::Solved | SolverStatus::AlmostSolved => IpmOutcome::Converged,
-        SolverStatus::MaxIterations | SolverStatus::MaxTime => IpmOutcome::MaxIterations,
-        _ => IpmOutcome::NumericalError,
-    };
-    qp.x.copy_from_slice(&solver.solution.x);
-    qp.multiplier[..m].copy_from_slice(&solver.solution.z);
-    qp.slack[..m].copy_from_slice(&solver.solution.s);
-    (outcome, iterations)
+/// Adds least-squares residual rows `½ w ‖Σ coef · ξ_stage + constant‖²` (per axis) to the QP's cost,
+/// stage 0 being the constant measured DCM `ξ̄`.
+struct ResidualRows<'a> {
+    qp: &'a mut BandedQp,
+    initial_dcm: Vector2<f64>,
+    build_hessian: bool,
 }
 
-/// Solves the banded QP through stride-qp's sparse clarabel backend (allocates).
-fn solve_with_stride_qp(
-    qp: &mut BandedQp,
-    solver: &mut Option<stride_qp::ClarabelSparseSolver>,
-    config: &DcmPredictiveConfig,
-) -> (IpmOutcome, u32) {
-    use stride_qp::{ClarabelSettings, ClarabelSparseSolver, QpStatus, SparseQp};
-    let n = qp.x.len();
-    let m = qp.row_count;
-    let solver = solver.get_or_insert_with(|| {
-        ClarabelSparseSolver::new(ClarabelSettings {
-            // see solve_with_clarabel for the extra digits
-            tolerance: (1e-3 * config.tolerance).min(1e-3),
-            max_iterations: config.max_iterations.max(50),
-        })
-    });
-    let mut sparse = SparseQp::new(n, 0);
-    for j in 0..n {
-        for i in j.saturating_sub(qp.hessian.bandwidth())..=j {
-            let v = qp.hessian.get(j, i);
-            if v != 0.0 {
-                sparse.hessian.push((i, j, v));
+impl ResidualRows<'_> {
+    /// Adds `½ weight ‖Σ_t coef_t ξ_{stage_t} + constant‖²` given `terms = [(stage_t, coef_t)]`: the
+    /// gradient always, the Hessian only when it is being built.
+    fn add(&mut self, terms: &[(usize, f64)], constant: Vector2<f64>, weight: f64) -> Result<()> {
+        let mut offset = constant;
+        for &(stage, coef) in terms {
+            if stage == 0 {
+                offset += self.initial_dcm * coef;
             }
         }
-    }
-    sparse.gradient.copy_from_slice(&qp.gradient);
-    let mut entries = [(0usize, 0.0f64); crate::banded::MAX_ROW_ENTRIES];
-    for row in qp.sparse_rows() {
-        for (slot, (&c, &v)) in entries
-            .iter_mut()
-            .zip(row.columns.iter().zip(row.values.iter()))
-        {
-            *slot = (c, v);
+        for &(si, ci) in terms {
+            if si == 0 {
+                continue;
+            }
+            let gradient = self.qp.gradient_mut();
+            for axis in 0..2 {
+                let i = 2 * (si - 1) + axis;
+                gradient[i] += weight * ci * offset[axis];
+            }
+            if !self.build_hessian {
+                continue;
+            }
+            for &(sj, cj) in terms {
+                if sj == 0 || sj > si {
+                    continue;
+                }
+                for axis in 0..2 {
+                    self.qp.hessian_mut().add(
+                        2 * (si - 1) + axis,
+                        2 * (sj - 1) + axis,
+                        weight * ci * cj,
+                    )?;
+                }
+            }
         }
-        sparse.add_row(&entries[..row.len], f64::NEG_INFINITY, row.bound);
+        Ok(())
     }
-    let Ok(solution) = solver.solve(&sparse) else {
-        return (IpmOutcome::NumericalError, 0);
-    };
-    let iterations = u32::try_from(solution.iterations).unwrap_or(u32::MAX);
-    let outcome = match solution.status {
-        QpStatus::Solved | QpStatus::SolvedInaccurate => IpmOutcome::Converged,
-        QpStatus::MaxIterations => IpmOutcome::MaxIterations,
-        _ => IpmOutcome::NumericalError,
-    };
-    if solution.x.len() != n || solution.multipliers.len() != m {
-        return (IpmOutcome::NumericalError, iterations);
-    }
-    qp.x.copy_from_slice(&solution.x);
-    qp.multiplier[..m].copy_from_slice(&solution.multipliers);
-    (outcome, iterations)
 }

@@ -53,6 +53,10 @@ pub enum SimplifiedError {
         /// Iterations performed.
         iterations: u32,
     },
+    /// The MPC's QP does not fit the structure of its solver (an internal inconsistency: the MPC sizes
+    /// its QP for the horizon and the largest polygon).
+    #[error("DCM MPC QP structure: {0}")]
+    QpStructure(#[from] stride_qp::BandedQpError),
 }
 
 /// Shorthand for results of this crate.

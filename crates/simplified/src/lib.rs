@@ -1,13 +1,16 @@
-//! `stride-simplified`: the simplified-model control layer (thesis 002 ch. 4 and §10.2.3).
+//! `stride-simplified`: the simplified-model control layer [Romualdi 2022, ch. 4 and §10.2.3].
 //!
 //! It keeps the robot's divergent component of motion (DCM) on the plan by choosing a desired ZMP, and
 //! turns that into CoM references for the whole-body layer:
 //!
 //! ```text
 //! plan (DCM, ZMP, CoM) + measured (DCM, ZMP, CoM) ─► DCM controller ─► desired ZMP ─► ZMP-CoM ─► CoM refs
-//!                                                   (instantaneous PI (10.2.17)      (10.2.25), gains
-//!                                                    or predictive MPC (10.2.23))     scheduled walk/stand
+//!                                                   (instantaneous PI      (gains scheduled
+//!                                                    or predictive MPC)     walk/stand)
 //! ```
+//!
+//! The instantaneous PI law is [Romualdi 2022, eq. 10.2.17], the predictive MPC
+//! [Romualdi 2022, eq. 10.2.23], the ZMP-CoM controller [Romualdi 2022, eq. 10.2.25].
 //!
 //! # What the runner uses
 //!
@@ -27,7 +30,8 @@
 //!     input with [`SimplifiedInput::new`]`(controller.horizon_samples(), polygon)`, no allocation after).
 //!   * `Output` = [`SimplifiedOutput`]: desired ZMP (always inside the support polygon), CoM position,
 //!     velocity and acceleration references, and [`SimplifiedDiagnostics`] (DCM error, integral term,
-//!     projection flag, gains, MPC status/iterations/solve time).
+//!     projection flag, gains, MPC status/iterations/solve time, and `solve_time`: the wall-clock time
+//!     of the tick of whichever DCM controller runs, PI or MPC, plus the ZMP-CoM controller).
 //! * **Bad input**: a non-finite input or an empty horizon returns an error and changes nothing; [`SimplifiedController::output`] keeps the last valid references (hold them). Support
 //!   polygons are validated when built ([`SupportPolygon::convex_hull`] rejects empty/degenerate sets),
 //!   so an invalid polygon cannot reach `step`. A horizon shorter than `N + 1` samples (plan ending) is
@@ -38,7 +42,7 @@
 //!
 //! # Helpers
 //!
-//! [`natural_frequency`], [`dcm_from_com`], [`zmp_from_dcm`] (`p = ξ − ξ̇/ω`, erratum 9),
+//! [`natural_frequency`], [`dcm_from_com`], [`zmp_from_dcm`] (`p = ξ − ξ̇/ω`; the thesis prints `ξ − ω ξ̇`, see [`zmp_from_dcm`]),
 //! [`dcm_velocity`], [`LipmDiscretization`] (exact ZOH LIPM/DCM transition for any `dt`),
 //! [`measured_zmp`] (global ZMP from the feet wrenches), [`SupportPolygon`] (hull, point-in-polygon,
 //! projection, half-planes), [`FootRectangle`] and [`feet_support_polygon`].
@@ -47,7 +51,6 @@
 //! [`DcmPredictiveController`], [`ZmpComController`]; the bare laws [`dcm_instantaneous_law`] and
 //! [`zmp_com_law`] are exposed for analysis.
 
-mod banded;
 mod block;
 mod dcm_instantaneous;
 mod dcm_predictive;
@@ -59,7 +62,7 @@ mod zmp_com;
 
 pub use block::{
     DcmControllerKind, SimplifiedConfig, SimplifiedController, SimplifiedDiagnostics,
-    SimplifiedInput, SimplifiedOutput,
+    SimplifiedInput, SimplifiedOutput, PLACEHOLDER_OMEGA,
 };
 pub use dcm_instantaneous::{
     dcm_instantaneous_law, DcmInstantaneousConfig, DcmInstantaneousController,
@@ -70,10 +73,7 @@ pub use dcm_predictive::{
     MpcDiagnostics, MpcProblemView, MpcSolverKind, MpcStatus, ZmpRateReference,
 };
 pub use error::{Result, SimplifiedError};
-pub use lipm::{
-    dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization,
-    STANDARD_GRAVITY,
-};
+pub use lipm::{dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization};
 pub use polygon::{
     feet_support_polygon, FootRectangle, SupportPolygon, MAX_HULL_POINTS, MAX_POLYGON_VERTICES,
     MIN_POLYGON_AREA,

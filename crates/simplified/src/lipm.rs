@@ -1,19 +1,17 @@
-//! Linear inverted pendulum (LIPM) and divergent component of motion (DCM) utilities (thesis ch. 4).
+//! Linear inverted pendulum (LIPM) and divergent component of motion (DCM) utilities
+//! [Romualdi 2022, ch. 4; Kajita 2001; Englsberger 2015].
 //!
 //! All quantities are planar (x, y in the world frame); the CoM height above the ground is constant.
-//! With `ω = sqrt(g / h)` (the thesis' ζ, a natural frequency in s⁻¹, erratum 29):
+//! With `ω = sqrt(g / h)` (the thesis' ζ, a natural frequency in s⁻¹):
 //!
-//! * CoM dynamics (4.1.5): `ẍ = ω² (x − p)` with `p` the ZMP;
-//! * DCM (4.4.2) with `b = 1/ω`: `ξ = x + ẋ / ω`;
-//! * (4.4.14): `ẋ = −ω (x − ξ)` and `ξ̇ = ω (ξ − p)`, hence `p = ξ − ξ̇ / ω` (erratum 9: the thesis
-//!   prints `ξ − ω ξ̇` in (10.1.20); the consistent sign and scaling is `ξ − ξ̇/ω`).
+//! * CoM dynamics [Romualdi 2022, eq. 4.1.5]: `ẍ = ω² (x − p)` with `p` the ZMP;
+//! * DCM [Romualdi 2022, eq. 4.4.2] with `b = 1/ω`: `ξ = x + ẋ / ω`;
+//! * [Romualdi 2022, eq. 4.4.14]: `ẋ = −ω (x − ξ)` and `ξ̇ = ω (ξ − p)`, hence `p = ξ − ξ̇ / ω` (the thesis prints
+//!   `ξ − ω ξ̇` in [Romualdi 2022, eq. 10.1.20]; the consistent sign and scaling is `ξ − ξ̇/ω`).
 
 use nalgebra::{Matrix2, Vector2};
 
 use crate::error::{check_finite, check_finite2, check_positive, Result, SimplifiedError};
-
-/// Standard gravity \[m/s²\], the default magnitude used by the configs of this crate.
-pub const STANDARD_GRAVITY: f64 = 9.81;
 
 /// Natural frequency `ω = sqrt(g / h)` \[s⁻¹\] of the LIPM.
 ///
@@ -38,12 +36,12 @@ pub fn dcm_from_com(
     com_position + com_velocity / omega
 }
 
-/// ZMP `p = ξ − ξ̇ / ω` \[m\] that realises the DCM velocity `ξ̇` \[m/s\] at DCM `ξ` \[m\] (from (4.4.14b)).
+/// ZMP `p = ξ − ξ̇ / ω` \[m\] that realises the DCM velocity `ξ̇` \[m/s\] at DCM `ξ` \[m\] (from [Romualdi 2022, eq. 4.4.14b]).
 pub fn zmp_from_dcm(dcm: Vector2<f64>, dcm_velocity: Vector2<f64>, omega: f64) -> Vector2<f64> {
     dcm - dcm_velocity / omega
 }
 
-/// DCM velocity `ξ̇ = ω (ξ − p)` \[m/s\] produced by the ZMP `p` (4.4.14b).
+/// DCM velocity `ξ̇ = ω (ξ − p)` \[m/s\] produced by the ZMP `p` [Romualdi 2022, eq. 4.4.14b].
 pub fn dcm_velocity(dcm: Vector2<f64>, zmp: Vector2<f64>, omega: f64) -> Vector2<f64> {
     omega * (dcm - zmp)
 }
@@ -52,7 +50,7 @@ pub fn dcm_velocity(dcm: Vector2<f64>, zmp: Vector2<f64>, omega: f64) -> Vector2
 ///
 /// Per axis, with state `[x; ẋ]` and input `p` held constant over the step:
 /// `[x; ẋ]⁺ = A [x; ẋ] + B p`, `A = [[cosh ωdt, sinh ωdt / ω], [ω sinh ωdt, cosh ωdt]]`,
-/// `B = [1 − cosh ωdt; −ω sinh ωdt]`; for the DCM (10.2.19): `ξ⁺ = F ξ + G p`, `F = e^{ω dt}`,
+/// `B = [1 − cosh ωdt; −ω sinh ωdt]`; for the DCM [Romualdi 2022, eq. 10.2.19]: `ξ⁺ = F ξ + G p`, `F = e^{ω dt}`,
 /// `G = 1 − e^{ω dt}`. `dt` may be zero or negative (backward propagation).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LipmDiscretization {

@@ -1,5 +1,5 @@
 //! Support polygons: fixed-capacity convex polygons, convex hulls of feet rectangles, point-in-polygon tests,
-//! projection onto the polygon and the half-plane (H-) representation used by the MPC (10.2.22).
+//! projection onto the polygon and the half-plane (H-) representation used by the MPC [Romualdi 2022, eq. 10.2.22].
 //!
 //! Nothing here allocates: hulls are built in stack arrays.
 

@@ -1,4 +1,4 @@
-//! Measured ZMP from the feet contact wrenches ((4.2.4) generalised to several feet).
+//! Measured ZMP from the feet contact wrenches ([Romualdi 2022, eq. 4.2.4] generalised to several feet).
 
 use nalgebra::{Vector2, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
@@ -24,7 +24,7 @@ pub struct FootWrench {
 ///
 /// The total wrench about the world origin is `F = Σ fᵢ`, `T = Σ (τᵢ + rᵢ × fᵢ)`. The ZMP is the point
 /// `p = (pₓ, p_y, h)` about which the horizontal torque vanishes: `pₓ = (h Fₓ − T_y) / F_z`,
-/// `p_y = (h F_y + Tₓ) / F_z` — for one foot and `h = 0` this is (4.2.4) `[−μ_y/f_z; μ_x/f_z]`.
+/// `p_y = (h F_y + Tₓ) / F_z` — for one foot and `h = 0` this is [Romualdi 2022, eq. 4.2.4] `[−μ_y/f_z; μ_x/f_z]`.
 ///
 /// Errors: `NonFiniteInput` for a NaN/infinite wrench, point or height; `InvalidParameter` when
 /// `min_normal_force` is not finite and > 0; `InsufficientNormalForce` when `F_z < min_normal_force`

@@ -1,4 +1,5 @@
-//! ZMP-CoM controller (thesis (10.2.25), after Choi et al. 2007) with standing/walking gain scheduling.
+//! ZMP-CoM controller [Romualdi 2022, eq. 10.2.25], after [Choi 2007], with standing/walking gain
+//! scheduling.
 //!
 //! `ẋ* = ẋ_ref − K_ZMP (p* − p) + K_CoM (x_ref − x)` with `p*` the desired ZMP (output of the DCM
 //! controller), `p` the measured ZMP, `x_ref, ẋ_ref` the planned CoM and `x` the measured CoM.
@@ -105,7 +106,7 @@ impl ZmpComConfig {
     }
 }
 
-/// The law (10.2.25): `ẋ* = ẋ_ref − K_ZMP (p* − p) + K_CoM (x_ref − x)` \[m/s\].
+/// The law [Romualdi 2022, eq. 10.2.25]: `ẋ* = ẋ_ref − K_ZMP (p* − p) + K_CoM (x_ref − x)` \[m/s\].
 ///
 /// Exposed (without gain checks) so that tests can show that violating the gain bound diverges.
 pub fn zmp_com_law(

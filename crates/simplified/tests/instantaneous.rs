@@ -299,3 +299,43 @@ proptest! {
         }
     }
 }
+
+/// The block reports the time of the controllers that ran, whichever DCM controller it is: the PI
+/// controller's tick time is not the MPC's (absent) solve time, and the MPC's tick contains its solve.
+#[test]
+fn the_tick_time_is_that_of_the_running_controller() {
+    let plan = Plan::default_walk();
+    for controller in [
+        DcmControllerKind::Instantaneous,
+        DcmControllerKind::Predictive,
+    ] {
+        let config = SimplifiedConfig {
+            dcm_controller: controller,
+            ..SimplifiedConfig::default()
+        };
+        let mut block = SimplifiedController::new(&config, Duration::from_millis(10)).unwrap();
+        let samples = block.horizon_samples();
+        let mut input = input_from_plan(&plan, 0, samples);
+        for j in 0..samples.min(plan.len()) {
+            input
+                .horizon
+                .push(HorizonSample {
+                    dcm_position: plan.dcm[j],
+                    zmp: plan.zmp[j],
+                    support: plan.support[j],
+                })
+                .unwrap();
+        }
+        let out = *block.step(&input).unwrap();
+        let d = out.diagnostics;
+        assert!(d.solve_time > 0.0, "{controller:?}: {}", d.solve_time);
+        assert!(d.solve_time < 1.0, "{controller:?}: {}", d.solve_time);
+        match controller {
+            DcmControllerKind::Instantaneous => assert_eq!(d.mpc.solve_time, 0.0),
+            DcmControllerKind::Predictive => {
+                assert!(d.mpc.solve_time > 0.0);
+                assert!(d.solve_time >= d.mpc.solve_time);
+            }
+        }
+    }
+}

@@ -5,13 +5,10 @@ mod common;
 
 use std::time::Duration;
 
-use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
-};
 use common::{Plan, OMEGA};
 use nalgebra::{DMatrix, DVector, Vector2};
 use stride_block::Block;
+use stride_qp::{ClarabelSettings, ClarabelSolver, DenseQp, QpSolver, SolverOutput};
 use stride_simplified::*;
 
 fn fill_horizon(horizon: &mut DcmHorizon, plan: &Plan, k: usize, samples: usize) {
@@ -226,44 +223,23 @@ fn check_kkt(view: &MpcProblemView, dense: &Dense, label: &str) {
 
 fn solve_dense_with_clarabel(dense: &Dense) -> DVector<f64> {
     let n = 2 * dense.n;
-    let p = CscMatrix::from(
-        &dense
-            .h
-            .upper_triangle()
-            .row_iter()
-            .map(|r| r.iter().copied().collect::<Vec<_>>())
-            .collect::<Vec<_>>(),
-    );
-    let a = CscMatrix::from(
-        &dense
-            .a
-            .row_iter()
-            .map(|r| r.iter().copied().collect::<Vec<_>>())
-            .collect::<Vec<_>>(),
-    );
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .tol_gap_abs(1e-12)
-        .tol_gap_rel(1e-12)
-        .tol_feas(1e-12)
-        .max_iter(300)
-        .build()
-        .unwrap();
-    let q: Vec<f64> = dense.g.iter().copied().collect();
-    let b: Vec<f64> = dense.b.iter().copied().collect();
-    let mut solver =
-        DefaultSolver::new(&p, &q, &a, &b, &[NonnegativeConeT(dense.b.len())], settings).unwrap();
-    solver.solve();
-    assert!(
-        matches!(
-            solver.solution.status,
-            SolverStatus::Solved | SolverStatus::AlmostSolved
-        ),
-        "{:?}",
-        solver.solution.status
-    );
-    assert_eq!(solver.solution.x.len(), n);
-    DVector::from_vec(solver.solution.x.clone())
+    let mut qp = DenseQp::new(n, 0, dense.b.len());
+    // H must be symmetric: its upper triangle mirrored.
+    let upper = dense.h.upper_triangle();
+    qp.hessian_mut()
+        .copy_from(&(&upper + upper.transpose() - DMatrix::from_diagonal(&upper.diagonal())));
+    qp.gradient_mut().copy_from(&dense.g);
+    qp.ineq_matrix_mut().copy_from(&dense.a);
+    qp.ineq_upper_mut().copy_from(&dense.b);
+    let mut solver = ClarabelSolver::new(ClarabelSettings {
+        tolerance: 1e-12,
+        max_iterations: 300,
+    });
+    let mut out = SolverOutput::new(&qp);
+    solver.solve(&qp, &mut out);
+    assert!(out.status.is_success(), "{:?}", out.status);
+    assert_eq!(out.x.len(), n);
+    out.x
 }
 
 /// A standing-on-one-foot plan with a pushed DCM: the MPC must put the ZMP on the foot's edge.

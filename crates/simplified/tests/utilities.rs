@@ -223,3 +223,16 @@ proptest! {
         }
     }
 }
+
+/// A fresh input's ω is a 0.5 m LIPM's under 9.81 m/s², bit for bit (the layer has no gravity of its
+/// own; the value only has to be valid until the caller writes the plan's ω).
+#[test]
+fn the_placeholder_omega_is_that_of_a_half_metre_lipm() {
+    assert_eq!(
+        PLACEHOLDER_OMEGA.to_bits(),
+        (9.81_f64 / 0.5).sqrt().to_bits()
+    );
+    let support = SupportPolygon::rectangle(-0.05, 0.07, -0.03, 0.03).unwrap();
+    assert_eq!(SimplifiedInput::new(0, support).omega, PLACEHOLDER_OMEGA);
+    assert_eq!(natural_frequency(0.5, 9.81).unwrap(), PLACEHOLDER_OMEGA);
+}

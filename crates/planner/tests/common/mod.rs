@@ -4,6 +4,9 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector2, Vector3};
 use stride_planner::{Foot, Plan, PlanSample, PlannerConfig};
 
+/// Gravity magnitude the tests plan with \[m/s²\] (the runner passes the scenario's).
+pub const GRAVITY: f64 = 9.81;
+
 pub fn sole(x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
     Isometry3::from_parts(
         Translation3::new(x, y, 0.0),
@@ -182,7 +185,7 @@ pub fn check_steps(cfg: &PlannerConfig, plan: &Plan, check_durations: bool) {
 
 /// ZMP in the support polygon, LIPM, DCM definition and continuity, final DCM, all at many times.
 pub fn check_dynamics(cfg: &PlannerConfig, plan: &Plan, dt: f64) {
-    let w = (cfg.gravity / cfg.com_height).sqrt();
+    let w = (GRAVITY / cfg.com_height).sqrt();
     let mut t = plan.start_time;
     let end = plan.end_time + 2.0;
     let mut prev: Option<PlanSample> = None;
