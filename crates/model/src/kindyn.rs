@@ -181,7 +181,7 @@ impl KinDyn {
         self.vel[0] = base_mixed;
         self.s[0] = Vector6::zeros();
         self.c[0] = Vector6::zeros();
-        // Base acceleration in A' when ν̇ = 0 in the representation (Traversaro Table 2.2).
+        // Base acceleration in A' when ν̇ = 0 in the representation [Traversaro 2017, Table 2.2].
         self.bias[0] = match self.repr {
             VelocityRepresentation::Mixed => {
                 let od = lin(&base_mixed);
@@ -582,7 +582,7 @@ impl KinDyn {
         Self::to_com(&h, &self.com_rel())
     }
 
-    /// Centroidal momentum matrix (6 × nv): `centroidal_momentum = CMM ν`.
+    /// Centroidal momentum matrix (6 × nv): `centroidal_momentum = CMM ν` [Orin 2013].
     pub fn centroidal_momentum_matrix(&mut self, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
         let nv = self.model.nv();
         check_shape("centroidal_momentum_matrix output", (6, nv), out.shape())?;
@@ -609,7 +609,8 @@ impl KinDyn {
 
     // ------------------------------------------------------------------ dynamics
 
-    /// Mass matrix M (nv × nv) by the composite-rigid-body algorithm, in the current representation.
+    /// Mass matrix M (nv × nv) by the composite-rigid-body algorithm [Featherstone 2008], in the current
+    /// representation.
     pub fn mass_matrix(&mut self, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
         let nv = self.model.nv();
         check_shape("mass_matrix output", (nv, nv), out.shape())?;
@@ -659,9 +660,9 @@ impl KinDyn {
         Ok(())
     }
 
-    /// Inverse dynamics (RNEA): `out = M ν̇ + h − Σ J_fᵀ w_f` = `[base wrench; τ]`, with ν̇ in the current
-    /// representation and the external wrenches acting on the robot. The base wrench is zero for a motion
-    /// that the external wrenches can produce.
+    /// Inverse dynamics (RNEA, [Featherstone 2008]): `out = M ν̇ + h − Σ J_fᵀ w_f` = `[base wrench; τ]`,
+    /// with ν̇ in the current representation and the external wrenches acting on the robot. The base wrench
+    /// is zero for a motion that the external wrenches can produce.
     pub fn inverse_dynamics(
         &mut self,
         nu_dot: &DVector<f64>,
@@ -726,8 +727,8 @@ impl KinDyn {
         }
     }
 
-    /// Forward dynamics (articulated-body algorithm) of the free-floating robot: ν̇ (nv, in the current
-    /// representation) produced by joint torques `tau` (n) and external wrenches.
+    /// Forward dynamics (articulated-body algorithm, [Featherstone 2008]) of the free-floating robot: ν̇ (nv,
+    /// in the current representation) produced by joint torques `tau` (n) and external wrenches.
     pub fn forward_dynamics(
         &mut self,
         tau: &DVector<f64>,
