@@ -749,26 +749,7 @@ impl KinDyn {
             self.art[i] = self.inertia[i].matrix();
             self.force[i] = cross_force(&self.vel[i], &iv) - self.ext[i];
         }
-        for i in (1..nb).rev() {
-            let p = self.model.parent[i];
-            let s = self.s[i];
-            let u_vec = self.art[i] * s;
-            let d = s.dot(&u_vec);
-            if !(d > 1e-14 && d.is_finite()) {
-                return Err(ModelError::SingularInertia {
-                    what: format!("joint `{}`", self.model.joints[i - 1].name),
-                });
-            }
-            let u = tau[i - 1] - s.dot(&self.force[i]);
-            let inv_d = 1.0 / d;
-            let ia = self.art[i] - u_vec * (u_vec.transpose() * inv_d);
-            let pa = self.force[i] + ia * self.c[i] + u_vec * (u * inv_d);
-            self.art[p] += ia;
-            self.force[p] += pa;
-            self.u_vec[i] = u_vec;
-            self.d_val[i] = inv_d;
-            self.u_val[i] = u;
-        }
+        self.articulated_inertias(tau)?;
         let Some(chol) = self.art[0].cholesky() else {
             return Err(ModelError::SingularInertia {
                 what: "the floating base".to_string(),
@@ -792,6 +773,36 @@ impl KinDyn {
             return Err(ModelError::SingularInertia {
                 what: "the floating base".to_string(),
             });
+        }
+        Ok(())
+    }
+
+    /// The ABA's backward pass [Featherstone 2008]: from the leaves up, each body's articulated inertia
+    /// `I^A` and bias force `p^A` (initialised in `art`, `force`) are reduced through its joint,
+    /// `U = I^A S`, `D = Sᵀ U`, `u = τ − Sᵀ p^A`, `I^a = I^A − U D⁻¹ Uᵀ`, and added to the parent's:
+    /// `I^A_p += I^a`, `p^A_p += p^A + I^a c + U D⁻¹ u` (`c` the velocity-product acceleration). Keeps `U`,
+    /// `D⁻¹` and `u` for the forward pass. [`ModelError::SingularInertia`] when `D ≤ 1e-14` or not finite.
+    fn articulated_inertias(&mut self, tau: &DVector<f64>) -> Result<(), ModelError> {
+        let nb = self.model.body_count();
+        for i in (1..nb).rev() {
+            let p = self.model.parent[i];
+            let s = self.s[i];
+            let u_vec = self.art[i] * s;
+            let d = s.dot(&u_vec);
+            if !(d > 1e-14 && d.is_finite()) {
+                return Err(ModelError::SingularInertia {
+                    what: format!("joint `{}`", self.model.joints[i - 1].name),
+                });
+            }
+            let u = tau[i - 1] - s.dot(&self.force[i]);
+            let inv_d = 1.0 / d;
+            let ia = self.art[i] - u_vec * (u_vec.transpose() * inv_d);
+            let pa = self.force[i] + ia * self.c[i] + u_vec * (u * inv_d);
+            self.art[p] += ia;
+            self.force[p] += pa;
+            self.u_vec[i] = u_vec;
+            self.d_val[i] = inv_d;
+            self.u_val[i] = u;
         }
         Ok(())
     }
