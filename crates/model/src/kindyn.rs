@@ -181,7 +181,7 @@ impl KinDyn {
         self.vel[0] = base_mixed;
         self.s[0] = Vector6::zeros();
         self.c[0] = Vector6::zeros();
-        // Base acceleration in A' when ν̇ = 0 in the representation (Traversaro Table 2.2).
+        // Base acceleration in A' when ν̇ = 0 in the representation [Traversaro 2017, Table 2.2].
         self.bias[0] = match self.repr {
             VelocityRepresentation::Mixed => {
                 let od = lin(&base_mixed);
@@ -582,7 +582,7 @@ impl KinDyn {
         Self::to_com(&h, &self.com_rel())
     }
 
-    /// Centroidal momentum matrix (6 × nv): `centroidal_momentum = CMM ν`.
+    /// Centroidal momentum matrix (6 × nv): `centroidal_momentum = CMM ν` [Orin 2013].
     pub fn centroidal_momentum_matrix(&mut self, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
         let nv = self.model.nv();
         check_shape("centroidal_momentum_matrix output", (6, nv), out.shape())?;
@@ -609,7 +609,8 @@ impl KinDyn {
 
     // ------------------------------------------------------------------ dynamics
 
-    /// Mass matrix M (nv × nv) by the composite-rigid-body algorithm, in the current representation.
+    /// Mass matrix M (nv × nv) by the composite-rigid-body algorithm [Featherstone 2008], in the current
+    /// representation.
     pub fn mass_matrix(&mut self, out: &mut DMatrix<f64>) -> Result<(), ModelError> {
         let nv = self.model.nv();
         check_shape("mass_matrix output", (nv, nv), out.shape())?;
@@ -659,9 +660,9 @@ impl KinDyn {
         Ok(())
     }
 
-    /// Inverse dynamics (RNEA): `out = M ν̇ + h − Σ J_fᵀ w_f` = `[base wrench; τ]`, with ν̇ in the current
-    /// representation and the external wrenches acting on the robot. The base wrench is zero for a motion
-    /// that the external wrenches can produce.
+    /// Inverse dynamics (RNEA, [Featherstone 2008]): `out = M ν̇ + h − Σ J_fᵀ w_f` = `[base wrench; τ]`,
+    /// with ν̇ in the current representation and the external wrenches acting on the robot. The base wrench
+    /// is zero for a motion that the external wrenches can produce.
     pub fn inverse_dynamics(
         &mut self,
         nu_dot: &DVector<f64>,
@@ -726,8 +727,8 @@ impl KinDyn {
         }
     }
 
-    /// Forward dynamics (articulated-body algorithm) of the free-floating robot: ν̇ (nv, in the current
-    /// representation) produced by joint torques `tau` (n) and external wrenches.
+    /// Forward dynamics (articulated-body algorithm, [Featherstone 2008]) of the free-floating robot: ν̇ (nv,
+    /// in the current representation) produced by joint torques `tau` (n) and external wrenches.
     pub fn forward_dynamics(
         &mut self,
         tau: &DVector<f64>,
@@ -748,26 +749,7 @@ impl KinDyn {
             self.art[i] = self.inertia[i].matrix();
             self.force[i] = cross_force(&self.vel[i], &iv) - self.ext[i];
         }
-        for i in (1..nb).rev() {
-            let p = self.model.parent[i];
-            let s = self.s[i];
-            let u_vec = self.art[i] * s;
-            let d = s.dot(&u_vec);
-            if !(d > 1e-14 && d.is_finite()) {
-                return Err(ModelError::SingularInertia {
-                    what: format!("joint `{}`", self.model.joints[i - 1].name),
-                });
-            }
-            let u = tau[i - 1] - s.dot(&self.force[i]);
-            let inv_d = 1.0 / d;
-            let ia = self.art[i] - u_vec * (u_vec.transpose() * inv_d);
-            let pa = self.force[i] + ia * self.c[i] + u_vec * (u * inv_d);
-            self.art[p] += ia;
-            self.force[p] += pa;
-            self.u_vec[i] = u_vec;
-            self.d_val[i] = inv_d;
-            self.u_val[i] = u;
-        }
+        self.articulated_inertias(tau)?;
         let Some(chol) = self.art[0].cholesky() else {
             return Err(ModelError::SingularInertia {
                 what: "the floating base".to_string(),
@@ -791,6 +773,36 @@ impl KinDyn {
             return Err(ModelError::SingularInertia {
                 what: "the floating base".to_string(),
             });
+        }
+        Ok(())
+    }
+
+    /// The ABA's backward pass [Featherstone 2008]: from the leaves up, each body's articulated inertia
+    /// `I^A` and bias force `p^A` (initialised in `art`, `force`) are reduced through its joint,
+    /// `U = I^A S`, `D = Sᵀ U`, `u = τ − Sᵀ p^A`, `I^a = I^A − U D⁻¹ Uᵀ`, and added to the parent's:
+    /// `I^A_p += I^a`, `p^A_p += p^A + I^a c + U D⁻¹ u` (`c` the velocity-product acceleration). Keeps `U`,
+    /// `D⁻¹` and `u` for the forward pass. [`ModelError::SingularInertia`] when `D ≤ 1e-14` or not finite.
+    fn articulated_inertias(&mut self, tau: &DVector<f64>) -> Result<(), ModelError> {
+        let nb = self.model.body_count();
+        for i in (1..nb).rev() {
+            let p = self.model.parent[i];
+            let s = self.s[i];
+            let u_vec = self.art[i] * s;
+            let d = s.dot(&u_vec);
+            if !(d > 1e-14 && d.is_finite()) {
+                return Err(ModelError::SingularInertia {
+                    what: format!("joint `{}`", self.model.joints[i - 1].name),
+                });
+            }
+            let u = tau[i - 1] - s.dot(&self.force[i]);
+            let inv_d = 1.0 / d;
+            let ia = self.art[i] - u_vec * (u_vec.transpose() * inv_d);
+            let pa = self.force[i] + ia * self.c[i] + u_vec * (u * inv_d);
+            self.art[p] += ia;
+            self.force[p] += pa;
+            self.u_vec[i] = u_vec;
+            self.d_val[i] = inv_d;
+            self.u_val[i] = u;
         }
         Ok(())
     }

@@ -1,4 +1,5 @@
-//! Small 6D (spatial) algebra helpers, linear-first ordering `[linear; angular]`.
+//! Small 6D (spatial) algebra helpers [Featherstone 2008] in the linear-first ordering `[linear; angular]` of
+//! [Traversaro 2017, ch. 2].
 //!
 //! Internal to the crate: motions and forces are plain `Vector6<f64>`, rigid-body inertias are stored with the
 //! ten inertial parameters about a frame origin (mass, first moment of mass, 3D inertia about the origin), which
@@ -27,7 +28,7 @@ pub(crate) fn join(l: &Vector3<f64>, a: &Vector3<f64>) -> Vector6<f64> {
     Vector6::new(l.x, l.y, l.z, a.x, a.y, a.z)
 }
 
-/// Motion cross product `a × b` (= ad_a b): `[ωa × vb + va × ωb; ωa × ωb]`.
+/// Motion cross product `a × b` (= ad_a b): `[ωa × vb + va × ωb; ωa × ωb]` [Traversaro 2017, eq. 2.37].
 #[inline]
 pub(crate) fn cross_motion(a: &Vector6<f64>, b: &Vector6<f64>) -> Vector6<f64> {
     let (va, wa) = (lin(a), ang(a));
@@ -35,7 +36,7 @@ pub(crate) fn cross_motion(a: &Vector6<f64>, b: &Vector6<f64>) -> Vector6<f64> {
     join(&(wa.cross(&vb) + va.cross(&wb)), &wa.cross(&wb))
 }
 
-/// Dual cross product `v ×̄* f` = `[ω × f; v × f + ω × τ]`.
+/// Dual cross product `v ×̄* f` = `[ω × f; v × f + ω × τ]` [Traversaro 2017, eq. 2.50].
 #[inline]
 pub(crate) fn cross_force(v: &Vector6<f64>, f: &Vector6<f64>) -> Vector6<f64> {
     let (vl, w) = (lin(v), ang(v));
@@ -134,7 +135,7 @@ impl Inertia {
         )
     }
 
-    /// The 6×6 spatial inertia matrix `[[m 1, −h^], [h^, I]]`.
+    /// The 6×6 spatial inertia matrix `[[m 1, −h^], [h^, I]]` [Traversaro 2017, eq. 2.67].
     #[inline]
     pub fn matrix(&self) -> Matrix6<f64> {
         let sh = skew(&self.h);

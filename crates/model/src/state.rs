@@ -6,8 +6,8 @@ use crate::error::{check_len, ModelError};
 use crate::model::Model;
 use crate::spatial::{ang, join, lin, skew};
 
-/// How the base velocity (and frame velocities, Jacobians, accelerations) are expressed (Traversaro 2017,
-/// Table 2.1; iDynTree semantics).
+/// How the base velocity (and frame velocities, Jacobians, accelerations) are expressed
+/// [Traversaro 2017, Table 2.1] (iDynTree semantics).
 #[derive(
     Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
 )]
