@@ -357,7 +357,8 @@ fn check_rnea_aba(model: &Arc<Model>, seed: u64) {
     }
 }
 
-/// Hamel form (Traversaro App. A, erratum E21), body representation:
+/// Hamel form [Traversaro 2017, eq. A.59] (erratum: the thesis prints `−[v ×̄* (𝕄v + F ṡ); 0]`; (A.55a) with
+/// (A.56) gives `+`, used here), body representation:
 /// `h − G = Ṁ ν + [v ×̄* (M ν)_{base}; 0] − [0; ∂/∂s(½ νᵀ M ν)]`, and the skew-symmetry consequence
 /// `νᵀ Ṁ ν = 2 νᵀ (h − G)` in every representation.
 fn check_coriolis(model: &Arc<Model>, seed: u64) {
