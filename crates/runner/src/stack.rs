@@ -296,7 +296,7 @@ impl Stack {
     }
 
     /// Measured CoM, ZMP, soles, tilt from the robot's measurement (first step of every tick that runs
-    /// a layer or logs the state). The DCM needs the plan's ω: [`Stack::measure_dcm`].
+    /// a layer or logs the state). The DCM needs the plan's ω: the simplified tick computes it.
     pub fn estimate(&mut self, m: &Measurement) -> Result<(), RunError> {
         self.kd.set_state(&m.state)?;
         let com = self.kd.com_position();
