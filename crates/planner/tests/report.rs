@@ -1,4 +1,4 @@
-//! The `stride plan --json` shape (design.md) and plan logging/replay through serde.
+//! The `stride plan --json` shape (the contract in docs/cli.md) and plan logging/replay through serde.
 
 mod common;
 

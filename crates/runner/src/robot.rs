@@ -10,7 +10,6 @@ use std::sync::Arc;
 use nalgebra::{DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_sim::ImuMeasurement;
-use stride_simplified::FootWrench;
 
 use crate::config::ControlMode;
 
@@ -58,9 +57,10 @@ pub struct Measurement {
     pub joint_torques: DVector<f64>,
     /// Per joint, in model order: the motor torque sat at its effort limit during the last period.
     pub saturated: Vec<bool>,
-    /// Left and right foot: the wrench the ground applies on the foot, world orientation, torque about
-    /// the sole frame origin (`point`) [N; N m; m]. The one foot-wrench type from the plant to the layers.
-    pub feet: [FootWrench; 2],
+    /// Left and right foot: the wrench `[f; τ]` the ground applies on the foot, world orientation, torque
+    /// about the sole frame origin [N; N m]. The runner hands it to the layers as a
+    /// [`stride_simplified::FootWrench`] about the measured sole origin.
+    pub foot_wrenches: [Vector6<f64>; 2],
     /// Left and right foot touch the ground.
     pub feet_in_contact: [bool; 2],
     /// IMU.
@@ -77,10 +77,7 @@ impl Measurement {
             state: RobotState::zero(model),
             joint_torques: DVector::zeros(model.dof()),
             saturated: vec![false; model.dof()],
-            feet: [FootWrench {
-                wrench: Vector6::zeros(),
-                point: Vector3::zeros(),
-            }; 2],
+            foot_wrenches: [Vector6::zeros(); 2],
             feet_in_contact: [false; 2],
             imu: ImuMeasurement {
                 orientation: UnitQuaternion::identity(),
@@ -218,10 +215,8 @@ impl IdealPlant {
                 p
             };
             let torque = (cop - p).cross(&force);
-            self.meas.feet[i] = FootWrench {
-                wrench: Vector6::new(force.x, force.y, force.z, torque.x, torque.y, torque.z),
-                point: p,
-            };
+            self.meas.foot_wrenches[i] =
+                Vector6::new(force.x, force.y, force.z, torque.x, torque.y, torque.z);
             self.meas.feet_in_contact[i] = f > 0.0;
         }
     }

@@ -362,7 +362,7 @@ impl<'a> Loop<'a> {
             0.0
         };
         if let Some(log) = self.log.as_mut() {
-            log.state(t, self.robot.measurement(), &self.stack.kd)?;
+            log.state(t, self.robot.measurement(), &self.stack)?;
             let timing = RunnerTimingMsg {
                 wall_time: wall,
                 real_time_factor: rtf,

@@ -16,7 +16,6 @@ use crate::robot::{JointCommand, Measurement, Robot, RobotError};
 pub struct SimPlant {
     sim: SimRobot,
     model: Arc<Model>,
-    kd: KinDyn,
     period_ns: u64,
     soles: [FrameId; 2],
     surfaces: [Option<usize>; 2],
@@ -75,7 +74,6 @@ impl SimPlant {
             }
         }
         let mut plant = Self {
-            kd: KinDyn::new(Arc::clone(&model)),
             period_ns,
             soles,
             surfaces,
@@ -85,21 +83,12 @@ impl SimPlant {
             model,
         };
         plant.meas.state = state;
-        plant.refresh_from_state()?;
         Ok(plant)
     }
 
     /// The simulator (for its configuration and contact details).
     pub fn sim(&self) -> &SimRobot {
         &self.sim
-    }
-
-    fn refresh_from_state(&mut self) -> Result<(), RobotError> {
-        self.kd.set_state(&self.meas.state)?;
-        for k in 0..2 {
-            self.meas.feet[k].point = self.kd.frame_pose(self.soles[k]).translation.vector;
-        }
-        Ok(())
     }
 
     fn read_output(&mut self) -> Result<(), RobotError> {
@@ -125,9 +114,9 @@ impl SimPlant {
         for k in 0..2 {
             let surface = self.surfaces[k].and_then(|i| out.surfaces.get(i));
             self.meas.feet_in_contact[k] = surface.is_some_and(|s| s.in_contact);
-            self.meas.feet[k].wrench = surface.map_or(nalgebra::Vector6::zeros(), |s| s.wrench);
+            self.meas.foot_wrenches[k] = surface.map_or(nalgebra::Vector6::zeros(), |s| s.wrench);
         }
-        self.refresh_from_state()
+        Ok(())
     }
 }
 

@@ -218,9 +218,10 @@ impl LogSink {
         self.write(|tp| tp.events, t, &e)
     }
 
-    /// The state topics at a state tick: `/sim/state`, `/sensors/feet`, `/sensors/imu`, `/tf` (from
-    /// `kd`, set to the measured state) and, once a second, `/tf_static`.
-    pub(crate) fn state(&mut self, t: u64, m: &Measurement, kd: &KinDyn) -> Result<(), LogError> {
+    /// The state topics at a state tick: `/sim/state`, `/sensors/feet`, `/sensors/imu`, `/tf` (from the
+    /// stack's kinematics, set to the measured state of this tick) and, once a second, `/tf_static`.
+    pub(crate) fn state(&mut self, t: u64, m: &Measurement, stack: &Stack) -> Result<(), LogError> {
+        let kd = &stack.kd;
         let time = t as f64 * 1e-9;
         let state = SimStateMsg {
             time,
@@ -228,19 +229,14 @@ impl LogSink {
             joint_torques: m.joint_torques.as_slice(),
             saturated: &m.saturated,
         };
-        let foot = |k: usize| FootMsg {
-            in_contact: m.feet_in_contact[k],
-            force: [
-                m.feet[k].wrench[0],
-                m.feet[k].wrench[1],
-                m.feet[k].wrench[2],
-            ],
-            torque: [
-                m.feet[k].wrench[3],
-                m.feet[k].wrench[4],
-                m.feet[k].wrench[5],
-            ],
-            point: m.feet[k].point.into(),
+        let foot = |k: usize| {
+            let w = &m.foot_wrenches[k];
+            FootMsg {
+                in_contact: m.feet_in_contact[k],
+                force: [w[0], w[1], w[2]],
+                torque: [w[3], w[4], w[5]],
+                point: stack.measured.soles[k].translation.vector.into(),
+            }
         };
         let feet = FeetMsg {
             time,

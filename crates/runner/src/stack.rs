@@ -14,13 +14,14 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use nalgebra::{UnitQuaternion, Vector2, Vector3};
+use nalgebra::{UnitQuaternion, Vector2, Vector3, Vector6};
 use stride_block::Block;
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
+use stride_planner::geometry::wrap_angle;
 use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
 use stride_simplified::{
-    feet_support_polygon, measured_zmp, FootRectangle, HorizonSample, SimplifiedController,
-    SimplifiedInput, SimplifiedOutput, SupportPolygon,
+    feet_support_polygon, measured_zmp, FootRectangle, FootWrench, HorizonSample,
+    SimplifiedController, SimplifiedInput, SimplifiedOutput, SupportPolygon,
 };
 use stride_wbc::{QpIk, Tsid, WbcInput};
 
@@ -301,11 +302,16 @@ impl Stack {
         self.kd.set_state(&m.state)?;
         let com = self.kd.com_position();
         let weight = self.model.total_mass() * self.gravity;
-        let mut loaded = [m.feet[0]; 2];
+        let mut loaded = [FootWrench {
+            wrench: Vector6::zeros(),
+            point: Vector3::zeros(),
+        }; 2];
         let mut n = 0;
-        for (foot, in_contact) in m.feet.iter().zip(m.feet_in_contact) {
-            if in_contact && foot.wrench[2] > 0.0 {
-                loaded[n] = *foot;
+        for k in 0..2 {
+            let wrench = m.foot_wrenches[k];
+            if m.feet_in_contact[k] && wrench[2] > 0.0 {
+                let point = self.kd.frame_pose(self.soles[k]).translation.vector;
+                loaded[n] = FootWrench { wrench, point };
                 n += 1;
             }
         }
@@ -534,16 +540,4 @@ pub fn soles_heading(left: &nalgebra::Isometry3<f64>, right: &nalgebra::Isometry
     let yl = left.rotation.euler_angles().2;
     let yr = right.rotation.euler_angles().2;
     yl + 0.5 * wrap_angle(yr - yl)
-}
-
-/// Wraps an angle to (−π, π].
-pub fn wrap_angle(a: f64) -> f64 {
-    let two_pi = std::f64::consts::TAU;
-    let mut x = a % two_pi;
-    if x <= -std::f64::consts::PI {
-        x += two_pi;
-    } else if x > std::f64::consts::PI {
-        x -= two_pi;
-    }
-    x
 }

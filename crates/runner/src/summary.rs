@@ -6,7 +6,9 @@ use serde::Serialize;
 
 use crate::config::Goal;
 use crate::log::LogStats;
-use crate::stack::{soles_heading, wrap_angle};
+use stride_planner::geometry::wrap_angle;
+
+use crate::stack::soles_heading;
 
 /// How a run ended.
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -6,7 +6,9 @@ use nalgebra::Vector3;
 use crate::config::{Goal, Scenario};
 use crate::records::TrackingMsg;
 use crate::robot::{Measurement, Robot};
-use crate::stack::{wrap_angle, Stack};
+use stride_planner::geometry::wrap_angle;
+
+use crate::stack::Stack;
 use crate::summary::{goal_pose, mid_pose, Outcome, RunSummary, SolveTimes};
 
 /// The running figures of a run (preallocated: the loop allocates nothing).

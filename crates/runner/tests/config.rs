@@ -293,22 +293,29 @@ fn environment_variable_expansion_rules() {
     }
 }
 
+/// Layer periods come from `[rates]` only (one source): no layer section has a period or rate key, and
+/// writing one is an unknown key located at the file, line and key.
 #[test]
-fn explicit_layer_period_contradicting_rates_is_rejected() {
+fn layer_periods_come_only_from_rates() {
     let s = Scratch::new("period");
     s.write("r.toml", &common::robot_section());
-    let top = s.write(
-        "s.toml",
-        "include = [\"r.toml\"]\n[wbc.ik]\nperiod = 0.01\n",
-    );
-    let (_, _, _, key, message) = invalid(Scenario::load(&top).unwrap_err());
-    assert_eq!(key, "wbc.ik.period");
-    assert!(message.contains("rates.wbc_hz"), "{message}");
-    // The simulator has no rate key any more (its period is `1 / rates.sim_hz`): writing one is an unknown key.
-    let top = s.write("t.toml", "include = [\"r.toml\"]\n[sim]\nrate_hz = 1000\n");
-    let (_, _, _, key, message) = invalid(Scenario::load(&top).unwrap_err());
-    assert_eq!(key, "sim.rate_hz");
-    assert!(message.contains("unknown field `rate_hz`"), "{message}");
+    for (section, key, field) in [
+        ("wbc.ik", "period = 0.01", "period"),
+        ("wbc.tsid", "period = 0.01", "period"),
+        ("sim", "rate_hz = 1000", "rate_hz"),
+    ] {
+        let top = s.write(
+            "s.toml",
+            &format!("include = [\"r.toml\"]\n[{section}]\n{key}\n"),
+        );
+        let (file, line, _, found, message) = invalid(Scenario::load(&top).unwrap_err());
+        assert_eq!(found, format!("{section}.{field}"));
+        assert!(file.ends_with("s.toml") && line == 3, "{file}:{line}");
+        assert!(
+            message.contains(&format!("unknown field `{field}`")),
+            "{message}"
+        );
+    }
 }
 
 #[test]

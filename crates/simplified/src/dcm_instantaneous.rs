@@ -13,7 +13,7 @@ use crate::polygon::SupportPolygon;
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
-/// | `kp` | – | 1.2 | proportional gain `K_p^ξ`, must be > 1 (thesis: `K_p > I₂`); the error decays as `e^{−ω(kp−1)t}` |
+/// | `kp` | – | 1.2 | proportional gain `K_p^ξ`, must be > 1 ([Romualdi 2022, eq. 10.2.17]: `K_p > I₂`); the error decays as `e^{−ω(kp−1)t}` |
 /// | `ki` | s⁻¹ | 0.0 | integral gain `K_i^ξ`, ≥ 0 (iCub runs with 0; > 0 removes a constant ZMP tracking bias) |
 /// | `integral_limit` | m | 0.03 | anti-windup: bound on each component of the integral term `K_i ∫e dt` |
 ///
@@ -46,7 +46,7 @@ impl DcmInstantaneousConfig {
             return Err(SimplifiedError::InvalidParameter {
                 name: "instantaneous.kp",
                 value: self.kp,
-                reason: "must be finite and > 1 (K_p > I2, thesis (10.2.17))",
+                reason: "must be finite and > 1 (K_p > I2, [Romualdi 2022, eq. 10.2.17])",
             });
         }
         check_non_negative("instantaneous.ki", self.ki)?;

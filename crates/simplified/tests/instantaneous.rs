@@ -191,7 +191,7 @@ fn proportional_gain_at_or_below_one_diverges() {
 
 #[test]
 fn proportional_integral_error_matches_the_closed_loop_solution() {
-    // (10.2.18): d/dt [e; I] = [[−ω(kp−1), −ω ki], [1, 0]] [e; I], e(0) = e0, I(0) = 0.
+    // [Romualdi 2022, eq. 10.2.18]: d/dt [e; I] = [[−ω(kp−1), −ω ki], [1, 0]] [e; I], e(0) = e0, I(0) = 0.
     let (kp, ki, e0, dt) = (1.5, 1.2, 0.02, 1e-4);
     let errors = simulate_error(kp, ki, dt, e0, 3.0, 0.0);
     let a = Matrix2::new(-OMEGA * (kp - 1.0), -OMEGA * ki, 1.0, 0.0);

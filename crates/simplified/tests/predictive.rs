@@ -78,7 +78,7 @@ fn closed_loop_lipm_follows_the_plan_exactly() {
     assert!(worst <= 1e-9, "worst deviation {worst}");
 }
 
-/// The thesis' condensed problem (10.2.24) in w = [z_x(0..N); z_y(0..N)], built from the problem data
+/// The thesis' condensed problem [Romualdi 2022, eq. 10.2.24] in w = [z_x(0..N); z_y(0..N)], built from the problem data
 /// only: H, g, A, b.
 struct Dense {
     h: DMatrix<f64>,

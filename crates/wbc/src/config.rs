@@ -147,7 +147,7 @@ pub struct Frame3TaskConfig {
     pub weight: Option<Weight>,
 }
 
-/// CoM tracking: IK `J_com ν = ẋ_ref + K_p (x_ref − x)` (7.1.4); TSID linear momentum rate
+/// CoM tracking: IK `J_com ν = ẋ_ref + K_p (x_ref − x)` [Romualdi 2022, eq. 7.1.4]; TSID linear momentum rate
 /// `Σ f_lin = m (ẍ_ref + K_d (ẋ_ref − ẋ) + K_p (x_ref − x)) − m g` (7.2.4, 7.2.7).
 ///
 /// | key | unit | default |
@@ -206,8 +206,8 @@ pub struct AngularMomentumTaskConfig {
     pub weight: Option<Weight>,
 }
 
-/// Joint regularization / tracking: IK `ṡ = ṡ_ref + K_p (s_ref − s)` (7.1.12); TSID
-/// `s̈ = s̈_ref + K_d (ṡ_ref − ṡ) + K_p (s_ref − s)` (7.2.17). `s_ref` is `input.posture` when given,
+/// Joint regularization / tracking: IK `ṡ = ṡ_ref + K_p (s_ref − s)` [Romualdi 2022, eq. 7.1.12]; TSID
+/// `s̈ = s̈_ref + K_d (ṡ_ref − ṡ) + K_p (s_ref − s)` [Romualdi 2022, eq. 7.2.17]. `s_ref` is `input.posture` when given,
 /// else `posture` below (joints not listed: 0). Velocity and acceleration references are zero.
 ///
 /// | key | unit | default |
@@ -246,7 +246,7 @@ pub struct JointRegularizationTaskConfig {
 }
 
 /// Joint position limits as bounds on the decision variable (always hard). IK: one-step Euler
-/// look-ahead `(s⁻ − s)/dt ≤ ṡ ≤ (s⁺ − s)/dt` (7.1.15); TSID: `2(s⁻ − s − T ṡ)/T² ≤ s̈ ≤ 2(s⁺ − s − T ṡ)/T²`
+/// look-ahead `(s⁻ − s)/dt ≤ ṡ ≤ (s⁺ − s)/dt` [Romualdi 2022, eq. 7.1.15]; TSID: `2(s⁻ − s − T ṡ)/T² ≤ s̈ ≤ 2(s⁺ − s − T ṡ)/T²`
 /// (7.2.29 with erratum 13) with look-ahead time `T`.
 ///
 /// | key | unit | default | meaning |
@@ -293,7 +293,7 @@ pub struct FloatingBaseDynamicsTaskConfig {
     pub name: String,
 }
 
-/// Joint torque limits `−scale τ_max ≤ τ ≤ scale τ_max` (7.2.30), always hard; `τ_max` is the URDF
+/// Joint torque limits `−scale τ_max ≤ τ ≤ scale τ_max` [Romualdi 2022, eq. 7.2.30], always hard; `τ_max` is the URDF
 /// effort limit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -390,7 +390,7 @@ fn default_ramp() -> f64 {
 }
 
 /// Regularization of the contact wrenches toward `input.desired_wrenches` (zero when absent):
-/// `‖f − f_ref‖²_W` (7.2.25).
+/// `‖f − f_ref‖²_W` [Romualdi 2022, eq. 7.2.25].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WrenchRegularizationTaskConfig {
@@ -401,7 +401,7 @@ pub struct WrenchRegularizationTaskConfig {
     pub weight: Weight,
 }
 
-/// Regularization of the joint torques toward zero: `‖τ‖²_W` (7.2.25), with τ expressed through the
+/// Regularization of the joint torques toward zero: `‖τ‖²_W` [Romualdi 2022, eq. 7.2.25], with τ expressed through the
 /// dynamics.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

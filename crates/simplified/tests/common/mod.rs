@@ -23,7 +23,7 @@ pub fn foot_center(f: &FootRectangle) -> Vector2<f64> {
 }
 
 /// A walk sampled at `period`: the ZMP is constant over each tick, so the DCM is the exact closed form
-/// (10.1.16) `ξ(t) = ẑ_k + e^{ω(t − t_k)} (ξ_k − ẑ_k)` over every tick, obtained by the backward recursion
+/// [Romualdi 2022, eq. 10.1.16] `ξ(t) = ẑ_k + e^{ω(t − t_k)} (ξ_k − ẑ_k)` over every tick, obtained by the backward recursion
 /// from a final DCM at rest on the final ZMP. The CoM is the exact solution of `ẋ = −ω(x − ξ)` for that
 /// DCM (stable forward propagation).
 pub struct Plan {
