@@ -17,7 +17,6 @@ pub struct SimPlant {
     sim: SimRobot,
     model: Arc<Model>,
     period_ns: u64,
-    soles: [FrameId; 2],
     surfaces: [Option<usize>; 2],
     input: SimInput,
     meas: Measurement,
@@ -75,7 +74,7 @@ impl SimPlant {
         }
         let mut plant = Self {
             period_ns,
-            soles,
+
             surfaces,
             input: SimInput::hold(joint_positions),
             meas: Measurement::new(&model),
