@@ -274,7 +274,7 @@ impl RunSummary {
         }
         let _ = writeln!(
             s,
-            "  solve time      p50 [ms]   p99 [ms]   max [ms]   solves"
+            "  solve time      p50 [µs]   p99 [µs]   max [µs]   solves"
         );
         for (name, t) in [
             ("whole-body", &self.wbc_solve_time),
@@ -282,11 +282,11 @@ impl RunSummary {
         ] {
             let _ = writeln!(
                 s,
-                "    {:<10} {:>10.3} {:>10.3} {:>10.3} {:>8}",
+                "    {:<10} {:>10.1} {:>10.1} {:>10.1} {:>8}",
                 name,
-                t.p50 * 1e3,
-                t.p99 * 1e3,
-                t.max * 1e3,
+                t.p50 * 1e6,
+                t.p99 * 1e6,
+                t.max * 1e6,
                 t.count
             );
         }
