@@ -524,35 +524,64 @@ impl Scenario {
             .unwrap_or(full)
     }
 
+    /// `Ok` when `v` is finite and > 0; else an error at `key` with the unit.
+    fn positive(&self, key: &str, v: f64, unit: &str) -> Result<(), ConfigError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(self.invalid(
+                key,
+                format!("{v} is not allowed; expected a finite number > 0 {unit}"),
+            ))
+        }
+    }
+
+    /// `Ok` when `lo ≤ v ≤ hi`; else an error at `key` with the unit.
+    fn within(
+        &self,
+        key: &str,
+        v: f64,
+        (lo, hi): (f64, f64),
+        unit: &str,
+    ) -> Result<(), ConfigError> {
+        if v.is_finite() && v >= lo && v <= hi {
+            Ok(())
+        } else {
+            Err(self.invalid(
+                key,
+                format!("{v} is out of range; expected {lo} ≤ value ≤ {hi} {unit}"),
+            ))
+        }
+    }
+
     /// Range, rate and consistency checks that serde cannot express.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let c = &self.config;
-        let finite_pos = |key: &str, v: f64, unit: &str| -> Result<(), ConfigError> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(self.invalid(
-                    key,
-                    format!("{v} is not allowed; expected a finite number > 0 {unit}"),
-                ))
+        self.positive("scenario.duration", c.scenario.duration, "[s]")?;
+        self.within(
+            "scenario.duration",
+            c.scenario.duration,
+            (0.0, 3600.0),
+            "[s]",
+        )?;
+        self.positive("scenario.gravity", c.scenario.gravity, "[m/s²]")?;
+        self.validate_rates()?;
+        self.validate_goal()?;
+        self.validate_end()?;
+        for (name, q) in &c.robot.initial_joint_positions {
+            if !q.is_finite() {
+                return Err(self.invalid(
+                    &format!("robot.initial_joint_positions.{name}"),
+                    format!("{q}: expected a finite joint position [rad or m]"),
+                ));
             }
-        };
-        let in_range =
-            |key: &str, v: f64, lo: f64, hi: f64, unit: &str| -> Result<(), ConfigError> {
-                if v.is_finite() && v >= lo && v <= hi {
-                    Ok(())
-                } else {
-                    Err(self.invalid(
-                        key,
-                        format!("{v} is out of range; expected {lo} ≤ value ≤ {hi} {unit}"),
-                    ))
-                }
-            };
-        finite_pos("scenario.duration", c.scenario.duration, "[s]")?;
-        in_range("scenario.duration", c.scenario.duration, 0.0, 3600.0, "[s]")?;
-        finite_pos("scenario.gravity", c.scenario.gravity, "[m/s²]")?;
+        }
+        self.validate_layers()
+    }
 
-        // Rates.
+    /// `[rates]` and `[log]`: every rate divides the base rate, the base period is whole nanoseconds.
+    fn validate_rates(&self) -> Result<(), ConfigError> {
+        let c = &self.config;
         let r = &c.rates;
         if r.base_hz == 0 || 1_000_000_000 % r.base_hz != 0 {
             return Err(self.invalid(
@@ -621,7 +650,12 @@ impl Scenario {
             ));
         }
 
-        // Goal.
+        Ok(())
+    }
+
+    /// `[goal]`: finite poses, sorted velocity segments.
+    fn validate_goal(&self) -> Result<(), ConfigError> {
+        let c = &self.config;
         match &c.goal {
             Goal::Pose(p) => self.check_pose("goal.pose", p)?,
             Goal::Waypoints { points } => {
@@ -663,6 +697,12 @@ impl Scenario {
             Goal::Stand {} => {}
         }
 
+        Ok(())
+    }
+
+    /// `[end]`: fall and goal criteria.
+    fn validate_end(&self) -> Result<(), ConfigError> {
+        let c = &self.config;
         let e = &c.end;
         if !(e.fall_height_fraction > 0.0 && e.fall_height_fraction < 1.0) {
             return Err(self.invalid(
@@ -673,27 +713,25 @@ impl Scenario {
                 ),
             ));
         }
-        in_range("end.fall_tilt_deg", e.fall_tilt_deg, 1.0, 90.0, "[deg]")?;
-        finite_pos(
+        self.within("end.fall_tilt_deg", e.fall_tilt_deg, (1.0, 90.0), "[deg]")?;
+        self.positive(
             "end.goal_position_tolerance",
             e.goal_position_tolerance,
             "[m]",
         )?;
-        finite_pos(
+        self.positive(
             "end.goal_heading_tolerance_deg",
             e.goal_heading_tolerance_deg,
             "[deg]",
         )?;
-        finite_pos("end.standstill_speed", e.standstill_speed, "[m/s]")?;
-        finite_pos("end.standstill_time", e.standstill_time, "[s]")?;
-        for (name, q) in &c.robot.initial_joint_positions {
-            if !q.is_finite() {
-                return Err(self.invalid(
-                    &format!("robot.initial_joint_positions.{name}"),
-                    format!("{q}: expected a finite joint position [rad or m]"),
-                ));
-            }
-        }
+        self.positive("end.standstill_speed", e.standstill_speed, "[m/s]")?;
+        self.positive("end.standstill_time", e.standstill_time, "[s]")?;
+        Ok(())
+    }
+
+    /// The layers' own checks, located at the key their `InvalidParameter` names.
+    fn validate_layers(&self) -> Result<(), ConfigError> {
+        let c = &self.config;
         c.planner.validate().map_err(|e| {
             let name = match &e {
                 stride_planner::PlannerError::InvalidParameter { name, .. } => Some(*name),
