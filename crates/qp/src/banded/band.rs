@@ -271,18 +271,8 @@ impl BandMatrix {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::banded::test_numbers::numbers;
     use nalgebra::{DMatrix, DVector};
-
-    /// Deterministic pseudo-random numbers in [−1, 1).
-    fn numbers(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        }
-    }
 
     #[test]
     fn band_kernels_match_dense_linear_algebra() {

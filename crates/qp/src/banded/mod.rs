@@ -16,6 +16,21 @@ mod problem;
 mod reference;
 mod rows;
 
+/// Test data shared by the unit tests of the banded modules.
+#[cfg(test)]
+mod test_numbers {
+    /// Deterministic pseudo-random numbers in [−1, 1) (a 64-bit linear congruential generator).
+    pub(crate) fn numbers(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+    }
+}
+
 pub use band::BandMatrix;
 pub use ipm::{BandedOutcome, BandedSettings};
 pub use problem::BandedQp;
