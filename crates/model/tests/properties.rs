@@ -642,9 +642,9 @@ fn free_fall(dt: f64, steps: usize) -> FreeFall {
 /// Semi-implicit Euler as [`free_fall`] applies it is a first-order one-step method: its local error is
 /// O(dt²) and its global error over a fixed time T is O(dt) [Hairer 1993, §II.3]. The exact flow
 /// conserves E, which is smooth in the state, so the energy error after T is O(dt) too:
-/// E(dt) − E₀ = C·dt + O(dt²) with C independent of dt. (The scheme is the symplectic Euler method only
-/// in canonical coordinates (q, p = Mν) [Hairer 2006, §VI.3]; in (q, ν), with M depending on q, it is not
-/// symplectic, and its energy error is a drift, not a bounded oscillation.) Halving dt over the same T
+/// E(dt) − E₀ = C·dt + O(dt²) with C independent of dt. (With a constant M the scheme would be the
+/// symplectic Euler method [Hairer 2006, §VI.3]; with M depending on q, as here, it is not symplectic,
+/// and its energy error is a drift, not a bounded oscillation.) Halving dt over the same T
 /// must therefore halve the energy error: the ratio of the two errors is 2 + O(dt) (measured:
 /// −1.44e-3 J at dt = 1e-4 s, −7.22e-4 J at dt/2, ratio 2.0000); a forward dynamics inconsistent with M
 /// and the gravity force would leave an error that does not shrink with dt and fail the ratio check.
