@@ -829,3 +829,18 @@ impl TsidConfig {
         }
     }
 }
+
+/// Every task of a controller has its own name (names address tasks in errors, residuals and logs).
+pub(crate) fn check_unique_names(tasks: &[TaskConfig]) -> Result<(), crate::error::WbcError> {
+    let mut names = std::collections::BTreeSet::new();
+    for task in tasks {
+        if !names.insert(task.name()) {
+            return Err(crate::error::WbcError::InvalidConfig {
+                task: task.name().to_owned(),
+                key: "name",
+                reason: "duplicate task name".into(),
+            });
+        }
+    }
+    Ok(())
+}

@@ -8,7 +8,7 @@ use stride_block::Block;
 use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
 
 use crate::bridge::{residual, QpBridge, VariableLayout};
-use crate::config::{IkConfig, IkFeedback, Priority, TaskConfig, Weight};
+use crate::config::{check_unique_names, IkConfig, IkFeedback, Priority, TaskConfig, Weight};
 use crate::error::WbcError;
 use crate::io::{IkOutput, SolveReport, TaskResidual, WbcInput};
 use crate::tasks::joint::velocity_bounds;
@@ -85,15 +85,8 @@ impl QpIk {
         let mut position_limits = None;
         let mut velocity_limits = None;
         let (lo, hi, vmax, _) = joint_limits(&model);
-        let mut names = std::collections::BTreeSet::new();
+        check_unique_names(&config.tasks)?;
         for task in &config.tasks {
-            if !names.insert(task.name().to_owned()) {
-                return Err(WbcError::InvalidConfig {
-                    task: task.name().to_owned(),
-                    key: "name",
-                    reason: "duplicate task name".into(),
-                });
-            }
             let eq_block = |rows: usize, priority: Priority, weight| {
                 layout.equality(task.name(), rows, priority, weight)
             };

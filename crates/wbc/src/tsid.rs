@@ -16,7 +16,7 @@ use stride_model::{KinDyn, Model, VelocityRepresentation};
 use stride_qp::{TaskKind, TaskSpec};
 
 use crate::bridge::{check_weight, priority_weight, residual, QpBridge, VariableLayout};
-use crate::config::{Foot, Priority, TaskConfig, TsidConfig, Weight};
+use crate::config::{check_unique_names, Foot, Priority, TaskConfig, TsidConfig, Weight};
 use crate::error::WbcError;
 use crate::ik::{check_references, check_state};
 use crate::io::{SolveReport, TaskResidual, TsidOutput, WbcInput};
@@ -87,15 +87,8 @@ impl TaskSet {
             has_zmp: false,
             has_dynamics: false,
         };
-        let mut names = std::collections::BTreeSet::new();
+        check_unique_names(&config.tasks)?;
         for task in &config.tasks {
-            if !names.insert(task.name().to_owned()) {
-                return Err(WbcError::InvalidConfig {
-                    task: task.name().to_owned(),
-                    key: "name",
-                    reason: "duplicate task name".into(),
-                });
-            }
             set.add(model, task, period)?;
         }
         if !set.has_dynamics {
