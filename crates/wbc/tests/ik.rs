@@ -686,3 +686,33 @@ weight = [5.0, 5.0, 1.0]
     let config: IkConfig = toml::from_str(&text.replace("weight = 3.0\n", "")).unwrap();
     assert!(QpIk::new(Arc::clone(&model), config, Duration::ZERO).is_err());
 }
+
+/// Task names address tasks in errors, residuals and logs: QP-IK and TSID reject a list with a name twice,
+/// naming it, and accept the same list with the names made unique.
+#[test]
+fn duplicate_task_names_are_rejected_by_both_controllers() {
+    let model = bundled_model();
+    let mut ik = IkConfig::default_for_bundled_model();
+    let mut tsid = stride_wbc::TsidConfig::default_for_bundled_model();
+    for tasks in [&mut ik.tasks, &mut tsid.tasks] {
+        let copy = tasks
+            .iter()
+            .find(|t| matches!(t, TaskConfig::Com(_)))
+            .cloned()
+            .expect("a CoM task");
+        tasks.push(copy);
+    }
+    let ik_err = QpIk::new(Arc::clone(&model), ik.clone(), PERIOD).err();
+    let tsid_err = stride_wbc::Tsid::new(Arc::clone(&model), tsid.clone(), PERIOD).err();
+    for e in [ik_err, tsid_err] {
+        let message = e.expect("a duplicate name is an error").to_string();
+        assert!(
+            message.contains("com") && message.contains("duplicate"),
+            "{message}"
+        );
+    }
+    ik.tasks.pop();
+    tsid.tasks.pop();
+    assert!(QpIk::new(Arc::clone(&model), ik, PERIOD).is_ok());
+    assert!(stride_wbc::Tsid::new(model, tsid, PERIOD).is_ok());
+}
