@@ -73,7 +73,7 @@ pub fn build_robot(
     Ok(match plant {
         PlantKind::Simulator => Box::new(SimPlant::new(
             Arc::clone(model),
-            scenario.sim_config(),
+            c.sim.clone(),
             scenario.sim_period(),
             c.scenario.control_mode,
             &q0,

@@ -306,11 +306,15 @@ impl Stack {
             wrench: Vector6::zeros(),
             point: Vector3::zeros(),
         }; 2];
+        let soles = [
+            self.kd.frame_pose(self.soles[0]),
+            self.kd.frame_pose(self.soles[1]),
+        ];
         let mut n = 0;
-        for k in 0..2 {
-            let wrench = m.foot_wrenches[k];
-            if m.feet_in_contact[k] && wrench[2] > 0.0 {
-                let point = self.kd.frame_pose(self.soles[k]).translation.vector;
+        for ((sole, wrench), in_contact) in soles.iter().zip(m.foot_wrenches).zip(m.feet_in_contact)
+        {
+            if in_contact && wrench[2] > 0.0 {
+                let point = sole.translation.vector;
                 loaded[n] = FootWrench { wrench, point };
                 n += 1;
             }
@@ -327,10 +331,7 @@ impl Stack {
             dcm: self.measured.dcm,
             zmp,
             zmp_from_wrenches: ok,
-            soles: [
-                self.kd.frame_pose(self.soles[0]),
-                self.kd.frame_pose(self.soles[1]),
-            ],
+            soles,
             tilt: up.z.clamp(-1.0, 1.0).acos(),
             base_height: m.state.base_pose.translation.z,
         };

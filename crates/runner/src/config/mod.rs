@@ -768,11 +768,6 @@ impl Scenario {
         Ok(())
     }
 
-    /// The simulator configuration.
-    pub fn sim_config(&self) -> stride_sim::SimConfig {
-        self.config.sim.clone()
-    }
-
     /// The simulator's step period, `1 / rates.sim_hz` (a whole number of nanoseconds: validated).
     pub fn sim_period(&self) -> std::time::Duration {
         std::time::Duration::from_nanos(1_000_000_000 / u64::from(self.config.rates.sim_hz))
