@@ -45,6 +45,9 @@ pub struct SimConfig {
     pub fall: FallConfig,
     /// Divergence detection thresholds.
     pub safety: SafetyConfig,
+    /// The plant's own model when it differs from the controllers' (model mismatch). The simulator is
+    /// built from a model; this section only says which: the runner reads it and loads that model.
+    pub model: PlantModelConfig,
 }
 
 impl Default for SimConfig {
@@ -59,6 +62,55 @@ impl Default for SimConfig {
             pushes: Vec::new(),
             fall: FallConfig::default(),
             safety: SafetyConfig::default(),
+            model: PlantModelConfig::default(),
+        }
+    }
+}
+
+/// `[sim.model]`: how the simulated plant differs from the model the controllers use (`robot.urdf`).
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `urdf` | – | the robot's | the plant's own URDF (relative to the scenario file that sets it) |
+/// | `mass_scale` | – | 1 | scales every link's mass and rotational inertia |
+/// | `links.<link>.mass_scale` | – | 1 | scales that link's mass and inertia (after `mass_scale`) |
+/// | `links.<link>.com_offset` | m | `[0, 0, 0]` | moves that link's centre of mass, link frame |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlantModelConfig {
+    /// The plant's URDF; `None` = the robot's.
+    pub urdf: Option<std::path::PathBuf>,
+    /// Scale of every link's mass and inertia (1 = as in the URDF).
+    pub mass_scale: f64,
+    /// Per-link changes, by URDF link name.
+    pub links: std::collections::BTreeMap<String, LinkInertiaChange>,
+}
+
+/// One link's change in [`PlantModelConfig::links`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LinkInertiaChange {
+    /// Scale of the link's mass and inertia.
+    pub mass_scale: f64,
+    /// Offset of the link's centre of mass, link frame, m.
+    pub com_offset: [f64; 3],
+}
+
+impl Default for LinkInertiaChange {
+    fn default() -> Self {
+        Self {
+            mass_scale: 1.0,
+            com_offset: [0.0; 3],
+        }
+    }
+}
+
+impl Default for PlantModelConfig {
+    fn default() -> Self {
+        Self {
+            urdf: None,
+            mass_scale: 1.0,
+            links: std::collections::BTreeMap::new(),
         }
     }
 }

@@ -37,7 +37,8 @@ mod sensors;
 pub use config::{
     ActuationConfig, ActuationMode, ContactConfig, ContactSurfaceConfig, EffortLimitPolicy,
     FallConfig, GroundConfig, IntegratorKind, JointActuatorConfig, JointActuatorOverride,
-    NoiseConfig, PushConfig, SafetyConfig, SensorConfig, SimConfig,
+    LinkInertiaChange, NoiseConfig, PlantModelConfig, PushConfig, SafetyConfig, SensorConfig,
+    SimConfig,
 };
 pub use contact::{surface_points, trapezoid_nodes, ContactMode, GroundPlane, PointLaw, PointSpec};
 pub use error::SimError;
