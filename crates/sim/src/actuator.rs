@@ -28,7 +28,7 @@ pub(crate) struct Actuator {
 /// Speed below which the implicit Coulomb law holds a sticking joint, rad/s: the stick phase is a viscous
 /// damper `b = τ_c / STICK_SPEED` evaluated at the end of the step, so a joint loaded below `τ_c` creeps at
 /// most at this speed (in practice far less: the servo and gravity torques are balanced before).
-pub(crate) const STICK_SPEED: f64 = 1e-5;
+pub(crate) const STICK_SPEED: f64 = 1e-7;
 
 /// Speed at which the explicit scheme's regularised Coulomb law `τ = −τ_c sat(q̇ / v_s)` reaches `τ_c`, rad/s.
 pub(crate) const EXPLICIT_FRICTION_SPEED: f64 = 0.05;

@@ -936,7 +936,10 @@ impl SimConfig {
         }
         for (steps, name) in [
             (sensors.delay_steps, "sensors.delay_steps"),
-            (self.actuation.command_delay_steps, "actuation.command_delay_steps"),
+            (
+                self.actuation.command_delay_steps,
+                "actuation.command_delay_steps",
+            ),
         ] {
             check(steps <= MAX_DELAY_STEPS, name, "at most 10000 steps")?;
         }

@@ -558,7 +558,7 @@ mod tests {
             ..SimConfig::default()
         };
         let mut sim = SimRobot::new(Arc::clone(&model), config, Duration::from_micros(500))
-        .expect("default config");
+            .expect("default config");
         sim.set_standing_on_ground(&q).expect("placement");
         let mut input = SimInput::hold(&q);
         let elbow = model.joint_index("l_elbow").expect("l_elbow");

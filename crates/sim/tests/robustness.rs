@@ -179,7 +179,8 @@ fn bad_configurations_are_rejected_with_the_parameter() {
         Err(SimError::UnknownFrame { .. })
     ));
     // A non-finite state.
-    let mut sim = SimRobot::new(Arc::clone(&model), common::ideal_config(), common::PERIOD).unwrap();
+    let mut sim =
+        SimRobot::new(Arc::clone(&model), common::ideal_config(), common::PERIOD).unwrap();
     let mut s = RobotState::zero(&model);
     s.joint_velocities[2] = f64::NAN;
     assert!(matches!(
@@ -220,7 +221,7 @@ wrench = [50.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     SimRobot::new(common::humanoid(), c, common::PERIOD).unwrap();
     assert!(toml::from_str::<SimConfig>("momentum_projection = true\ntypo = 1").is_err());
     assert!(toml::from_str::<SimConfig>("[contact]\nstiffness = 1.0").is_err());
-    let default = common::ideal_config();
+    let default = SimConfig::default();
     let text = toml::to_string(&default).unwrap();
     assert_eq!(toml::from_str::<SimConfig>(&text).unwrap(), default);
 }
@@ -228,7 +229,7 @@ wrench = [50.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 #[test]
 fn same_config_gives_bit_identical_trajectories() {
     let run = || {
-        let mut config = common::ideal_config();
+        let mut config = SimConfig::default();
         config.sensors.seed = 42;
         config.sensors.encoder.position_noise = 1e-3;
         config.pushes.push(PushConfig {
@@ -260,7 +261,7 @@ fn same_config_gives_bit_identical_trajectories() {
 
 #[test]
 fn reset_returns_to_the_initial_state() {
-    let (mut sim, input) = standing_sim(common::ideal_config());
+    let (mut sim, input) = standing_sim(SimConfig::default());
     let initial = bits(sim.state());
     let first = sim.step(&input).unwrap().clone();
     for _ in 0..100 {
