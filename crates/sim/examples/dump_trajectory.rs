@@ -40,7 +40,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ] {
         q[model.joint_index(name).ok_or("missing joint")?] = v;
     }
-    let mut config = SimConfig::default();
+    // Ideal sensors and actuators: the MuJoCo scene has neither friction, lag, delay nor sensor errors.
+    let mut config = SimConfig {
+        sensors: stride_sim::SensorConfig::ideal(),
+        actuation: stride_sim::ActuationConfig::ideal(),
+        ..SimConfig::default()
+    };
     if let Some(path) = args.get(4) {
         // Optional TOML file with SimConfig overrides.
         config = toml::from_str(&std::fs::read_to_string(path)?)?;

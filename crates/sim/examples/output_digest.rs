@@ -134,9 +134,7 @@ fn main() {
     };
     let mut c = SimConfig::default();
     c.pushes.push(push.clone());
-    c.sensors.noise.force = 0.5;
-    c.sensors.noise.joint_position = 1e-4;
-    c.sensors.noise.accelerometer = 0.01;
+    c.sensors.encoder.position_noise = 1e-4;
     run("implicit", &model, c.clone(), 2000, 2000, 0.0);
     let mut p = c.clone();
     p.momentum_projection = true;

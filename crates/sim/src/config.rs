@@ -17,8 +17,8 @@ use crate::error::SimError;
 /// | `momentum_projection` | – | `false` | correct the base velocity so that the centroidal momentum balance holds exactly each step |
 /// | `ground` | – | flat floor at z = 0 | [`GroundConfig`] |
 /// | `contact` | – | rigid floor, the humanoid's two soles | [`ContactConfig`] |
-/// | `actuation` | – | position servos on every joint | [`ActuationConfig`] |
-/// | `sensors` | – | IMU on `imu_frame`, no noise | [`SensorConfig`] |
+/// | `actuation` | – | position servos on every joint, 0.1 N·m Coulomb friction, 2-step command delay | [`ActuationConfig`] |
+/// | `sensors` | – | iCub-class encoders, IMU on `imu_frame` and force/torque sensors, 2-step delay | [`SensorConfig`] |
 /// | `pushes` | – | none | [`PushConfig`] list |
 /// | `fall` | – | base below 0.25 m or tilted beyond 1 rad | [`FallConfig`] |
 /// | `safety` | – | see [`SafetyConfig`] | divergence thresholds |
@@ -302,6 +302,9 @@ pub enum EffortLimitPolicy {
 /// | `default` | – | position servo, kp 1000 N·m/rad, kd 60 N·m·s/rad | [`JointActuatorConfig`] of every joint |
 /// | `joints` | – | none | [`JointActuatorOverride`] list by joint name |
 /// | `effort_limit_policy` | – | `saturate` | [`EffortLimitPolicy`] |
+/// | `command_delay_steps` | steps | 2 | every command reaches the motors this many simulator steps late (0 = none; 1 ms at 2 kHz) |
+///
+/// [`ActuationConfig::ideal`] gives the same servos with no friction, no torque lag and no command delay.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ActuationConfig {
@@ -311,6 +314,9 @@ pub struct ActuationConfig {
     pub joints: Vec<JointActuatorOverride>,
     /// Behaviour at the effort limit.
     pub effort_limit_policy: EffortLimitPolicy,
+    /// Command latency in simulator steps: the commands of a step are applied this many steps later (0 =
+    /// none; until then the motors hold the initial joint positions).
+    pub command_delay_steps: usize,
 }
 
 impl Default for ActuationConfig {
@@ -319,6 +325,18 @@ impl Default for ActuationConfig {
             default: JointActuatorConfig::default(),
             joints: Vec::new(),
             effort_limit_policy: EffortLimitPolicy::Saturate,
+            command_delay_steps: 2,
+        }
+    }
+}
+
+impl ActuationConfig {
+    /// The default servos with ideal actuators: no Coulomb friction, ideal torque tracking, no command delay.
+    pub fn ideal() -> Self {
+        Self {
+            default: JointActuatorConfig::ideal(),
+            command_delay_steps: 0,
+            ..Self::default()
         }
     }
 }
@@ -333,6 +351,8 @@ impl Default for ActuationConfig {
 /// | `effort_limit` | N·m (N) | model's limit | motor torque bound; `None` uses the URDF `effort` (unbounded if absent) |
 /// | `damping` | N·m·s/rad | 0 | passive viscous joint damping (not limited by the effort limit) |
 /// | `armature` | kg·m² | 0 | reflected rotor inertia added to the joint's diagonal of the mass matrix |
+/// | `coulomb_friction` | N·m (N) | 0.1 | joint Coulomb friction `τ_c`: the joint sticks while the other torques on it stay within `±τ_c`, else it slides against `∓τ_c` (implicit law, see `docs/sim.md`) |
+/// | `torque_bandwidth` | Hz | 30 | torque mode: first-order lag `f` of the motor torque on the command (time constant `1/(2π f)`); 0 = ideal |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct JointActuatorConfig {
@@ -348,6 +368,10 @@ pub struct JointActuatorConfig {
     pub damping: f64,
     /// Reflected rotor inertia added to the joint's diagonal of the mass matrix, kg·m².
     pub armature: f64,
+    /// Joint Coulomb friction torque (N for prismatic joints), N·m.
+    pub coulomb_friction: f64,
+    /// Torque-mode tracking bandwidth (first-order lag of the motor torque on the command), Hz; 0 = ideal.
+    pub torque_bandwidth: f64,
 }
 
 impl Default for JointActuatorConfig {
@@ -359,6 +383,19 @@ impl Default for JointActuatorConfig {
             effort_limit: None,
             damping: 0.0,
             armature: 0.0,
+            coulomb_friction: 0.1,
+            torque_bandwidth: 30.0,
+        }
+    }
+}
+
+impl JointActuatorConfig {
+    /// The default servo with no Coulomb friction and ideal torque tracking.
+    pub fn ideal() -> Self {
+        Self {
+            coulomb_friction: 0.0,
+            torque_bandwidth: 0.0,
+            ..Self::default()
         }
     }
 }
@@ -387,77 +424,271 @@ pub struct JointActuatorOverride {
     /// Reflected rotor inertia.
     #[serde(default)]
     pub armature: Option<f64>,
+    /// Coulomb friction torque.
+    #[serde(default)]
+    pub coulomb_friction: Option<f64>,
+    /// Torque-mode tracking bandwidth.
+    #[serde(default)]
+    pub torque_bandwidth: Option<f64>,
 }
 
-/// Sensors.
+/// Sensors: what the robot's own sensors report (the ground truth in [`crate::SimOutput::state`] is never
+/// altered). The defaults model an iCub-class robot (sources in `docs/sim.md`, "Sensors");
+/// [`SensorConfig::ideal`] gives exact, undelayed sensors.
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
 /// | `imu_frame` | – | `imu_frame` | frame of the IMU; if absent from the model, the root link |
-/// | `noise` | – | off | [`NoiseConfig`] |
+/// | `seed` | – | 0 | seed of the one ChaCha8 generator every sensor draws from (a run is reproducible from it) |
+/// | `delay_steps` | steps | 2 | every sensor reading is reported this many simulator steps late (0 = none; 1 ms at 2 kHz) |
+/// | `encoder` | – | 4096 counts/rev, velocity differenced and low-passed at 10 Hz | [`EncoderConfig`] |
+/// | `imu` | – | Xsens MTi-1 class | [`ImuConfig`] |
+/// | `ft` | – | iCub-class six-axis sensors | [`FtSensorConfig`] |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SensorConfig {
     /// IMU frame name (falls back to the root link when the model has no frame of that name).
     pub imu_frame: String,
-    /// Additive white Gaussian noise.
-    pub noise: NoiseConfig,
+    /// Seed of the ChaCha8 generator of every sensor's noise, offsets and biases.
+    pub seed: u64,
+    /// Sensor latency in simulator steps: encoders, IMU and force/torque readings are reported this many steps
+    /// after they were taken (0 = none).
+    pub delay_steps: usize,
+    /// Joint encoders.
+    pub encoder: EncoderConfig,
+    /// Inertial measurement unit.
+    pub imu: ImuConfig,
+    /// Six-axis force/torque sensors (the model's, at their URDF frames).
+    pub ft: FtSensorConfig,
 }
 
 impl Default for SensorConfig {
     fn default() -> Self {
         Self {
             imu_frame: "imu_frame".to_string(),
-            noise: NoiseConfig::default(),
+            seed: 0,
+            delay_steps: 2,
+            encoder: EncoderConfig::default(),
+            imu: ImuConfig::default(),
+            ft: FtSensorConfig::default(),
         }
     }
 }
 
-/// Additive white Gaussian noise on the measurements (all standard deviations; zero = off, the default).
-/// The ground-truth state in the output is never noisy. The noise sequence is reproducible from `seed`.
-///
-/// | field | unit | default |
-/// |---|---|---|
-/// | `seed` | – | 0 |
-/// | `joint_position` | rad | 0 |
-/// | `joint_velocity` | rad/s | 0 |
-/// | `force` | N | 0 |
-/// | `torque` | N·m | 0 |
-/// | `gyroscope` | rad/s | 0 |
-/// | `accelerometer` | m/s² | 0 |
-/// | `orientation` | rad | 0 (small random rotation of the IMU orientation) |
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct NoiseConfig {
-    /// Seed of the ChaCha8 noise generator.
-    pub seed: u64,
-    /// Encoder position noise, rad.
-    pub joint_position: f64,
-    /// Encoder velocity noise, rad/s.
-    pub joint_velocity: f64,
-    /// Force noise of the force/torque sensors, N.
-    pub force: f64,
-    /// Torque noise of the force/torque sensors, N·m.
-    pub torque: f64,
-    /// Gyroscope noise, rad/s.
-    pub gyroscope: f64,
-    /// Accelerometer noise, m/s².
-    pub accelerometer: f64,
-    /// IMU orientation noise (angle of a random rotation), rad.
-    pub orientation: f64,
+impl SensorConfig {
+    /// Exact sensors: no noise, offset, bias, drift, quantisation, filter, saturation or delay (the joint
+    /// velocity is the true one). For tests that compare the readings with the physics.
+    pub fn ideal() -> Self {
+        Self {
+            imu_frame: "imu_frame".to_string(),
+            seed: 0,
+            delay_steps: 0,
+            encoder: EncoderConfig::ideal(),
+            imu: ImuConfig::ideal(),
+            ft: FtSensorConfig::ideal(),
+        }
+    }
 }
 
-impl Default for NoiseConfig {
+/// How the encoders report joint velocities.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VelocitySource {
+    /// Finite difference of the reported (quantised) positions over one step, then a first-order low-pass
+    /// filter `y ← y + α (x − y)`, `α = dt / (dt + 1/(2π f_c))` (as a robot's software does it).
+    FilteredDifference,
+    /// The true joint velocity (plus `velocity_noise`), as if a perfect velocity sensor were fitted.
+    Truth,
+}
+
+/// Joint encoders. Positions are `step · round((q + n_q) / step)` with `step = 2π / counts_per_revolution`
+/// (revolute joints; prismatic joints are not quantised); velocities per [`VelocitySource`], plus
+/// `velocity_noise`.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `counts_per_revolution` | counts | 4096 | resolution (12-bit absolute magnetic encoder); 0 = no quantisation |
+/// | `position_noise` | rad | 0 | white noise σ added before quantisation |
+/// | `velocity_source` | – | `filtered_difference` | [`VelocitySource`] |
+/// | `velocity_cutoff` | Hz | 10 | cut-off `f_c` of the velocity low-pass filter (`filtered_difference`; 0 = unfiltered difference) |
+/// | `velocity_noise` | rad/s | 0 | white noise σ added to the reported velocity |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EncoderConfig {
+    /// Encoder resolution, counts per revolution (0 = no quantisation).
+    pub counts_per_revolution: u32,
+    /// White noise σ on the joint position before quantisation, rad.
+    pub position_noise: f64,
+    /// Where the reported joint velocity comes from.
+    pub velocity_source: VelocitySource,
+    /// Cut-off frequency of the first-order low-pass filter on the differenced velocity, Hz (0 = no filter).
+    pub velocity_cutoff: f64,
+    /// White noise σ on the reported joint velocity, rad/s.
+    pub velocity_noise: f64,
+}
+
+impl Default for EncoderConfig {
     fn default() -> Self {
         Self {
-            seed: 0,
-            joint_position: 0.0,
-            joint_velocity: 0.0,
-            force: 0.0,
-            torque: 0.0,
-            gyroscope: 0.0,
-            accelerometer: 0.0,
-            orientation: 0.0,
+            counts_per_revolution: 4096,
+            position_noise: 0.0,
+            velocity_source: VelocitySource::FilteredDifference,
+            velocity_cutoff: 10.0,
+            velocity_noise: 0.0,
+        }
+    }
+}
+
+impl EncoderConfig {
+    /// Exact positions and velocities.
+    pub fn ideal() -> Self {
+        Self {
+            counts_per_revolution: 0,
+            position_noise: 0.0,
+            velocity_source: VelocitySource::Truth,
+            velocity_cutoff: 0.0,
+            velocity_noise: 0.0,
+        }
+    }
+}
+
+/// Inertial measurement unit. Rates and accelerations are raw (`ω + b_ω + n_ω`, `a − g + b_a + n_a`, IMU frame);
+/// the biases start uniformly within `±gyro_bias` / `±accel_bias` per axis and random-walk. White noise is
+/// given as a density `N` and drawn per step with `σ = N / √dt`. The orientation is what an on-board filter
+/// (no magnetometer) reports: `exp([δ_roll, δ_pitch, δ_yaw]^) · world_R_imu` (error about the world axes) with a
+/// constant tilt error drawn within `±tilt_error`, a yaw error growing at a constant rate drawn within
+/// `±yaw_drift_rate`, and white noise `orientation_noise`.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `gyro_noise_density` | rad/s/√Hz | 1.2e-4 | gyroscope white noise (0.007 °/s/√Hz) |
+/// | `gyro_bias` | rad/s | 3.5e-3 | bound of the initial gyroscope bias per axis (0.2 °/s) |
+/// | `gyro_bias_random_walk` | rad/s/√s | 1e-5 | gyroscope bias random walk |
+/// | `accel_noise_density` | m/s²/√Hz | 1.2e-3 | accelerometer white noise (120 µg/√Hz) |
+/// | `accel_bias` | m/s² | 0.05 | bound of the initial accelerometer bias per axis (5 mg) |
+/// | `accel_bias_random_walk` | m/s²/√s | 1e-4 | accelerometer bias random walk |
+/// | `tilt_error` | rad | 8.7e-3 | bound of the constant roll and pitch error of the orientation (0.5°) |
+/// | `yaw_drift_rate` | rad/s | 4.85e-5 | bound of the constant yaw drift rate of the orientation (10 °/h) |
+/// | `orientation_noise` | rad | 1e-3 | white noise σ of the orientation (each world axis) |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImuConfig {
+    /// Gyroscope white-noise density, rad/s/√Hz (per-step σ = density / √dt).
+    pub gyro_noise_density: f64,
+    /// Bound of the initial gyroscope bias (uniform per axis), rad/s.
+    pub gyro_bias: f64,
+    /// Gyroscope bias random walk, rad/s/√s (per-step σ = value · √dt).
+    pub gyro_bias_random_walk: f64,
+    /// Accelerometer white-noise density, m/s²/√Hz (per-step σ = density / √dt).
+    pub accel_noise_density: f64,
+    /// Bound of the initial accelerometer bias (uniform per axis), m/s².
+    pub accel_bias: f64,
+    /// Accelerometer bias random walk, m/s²/√s (per-step σ = value · √dt).
+    pub accel_bias_random_walk: f64,
+    /// Bound of the constant roll and pitch error of the reported orientation (uniform), rad.
+    pub tilt_error: f64,
+    /// Bound of the constant yaw drift rate of the reported orientation (uniform), rad/s.
+    pub yaw_drift_rate: f64,
+    /// White noise σ of the reported orientation about each world axis, rad.
+    pub orientation_noise: f64,
+}
+
+impl Default for ImuConfig {
+    fn default() -> Self {
+        Self {
+            gyro_noise_density: 1.2e-4,
+            gyro_bias: 3.5e-3,
+            gyro_bias_random_walk: 1e-5,
+            accel_noise_density: 1.2e-3,
+            accel_bias: 0.05,
+            accel_bias_random_walk: 1e-4,
+            tilt_error: 8.7e-3,
+            yaw_drift_rate: 4.85e-5,
+            orientation_noise: 1e-3,
+        }
+    }
+}
+
+impl ImuConfig {
+    /// An exact IMU.
+    pub fn ideal() -> Self {
+        Self {
+            gyro_noise_density: 0.0,
+            gyro_bias: 0.0,
+            gyro_bias_random_walk: 0.0,
+            accel_noise_density: 0.0,
+            accel_bias: 0.0,
+            accel_bias_random_walk: 0.0,
+            tilt_error: 0.0,
+            yaw_drift_rate: 0.0,
+            orientation_noise: 0.0,
+        }
+    }
+}
+
+/// The six-axis force/torque sensors of the model ([`stride_model::Model::ft_sensors`]), all alike. Each reads
+/// the wrench transmitted through its fixed joint, in its frame, with its measurement direction, plus a constant
+/// offset drawn uniformly within `±offset` per axis at start, a random-walk drift and white noise, clamped at
+/// the full scale per axis.
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `force_offset` | N | 5 | bound of the initial force offset per axis |
+/// | `torque_offset` | N·m | 0.5 | bound of the initial torque offset per axis |
+/// | `force_drift` | N/√s | 0.0645 | force drift random walk (0.5 N after one minute) |
+/// | `torque_drift` | N·m/√s | 6.45e-3 | torque drift random walk (0.05 N·m after one minute) |
+/// | `force_noise` | N | 1.5 | force white noise σ per step |
+/// | `torque_noise` | N·m | 0.05 | torque white noise σ per step |
+/// | `force_range` | N | `[580, 580, 1160]` | full scale per force axis (clamped); 0 = unbounded |
+/// | `torque_range` | N·m | `[20, 20, 20]` | full scale per torque axis (clamped); 0 = unbounded |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FtSensorConfig {
+    /// Bound of the initial force offset (uniform per axis), N.
+    pub force_offset: f64,
+    /// Bound of the initial torque offset (uniform per axis), N·m.
+    pub torque_offset: f64,
+    /// Force drift random walk, N/√s (per-step σ = value · √dt).
+    pub force_drift: f64,
+    /// Torque drift random walk, N·m/√s (per-step σ = value · √dt).
+    pub torque_drift: f64,
+    /// Force white noise σ per step, N.
+    pub force_noise: f64,
+    /// Torque white noise σ per step, N·m.
+    pub torque_noise: f64,
+    /// Full scale of each force axis (the reading is clamped to ±range; 0 = unbounded), N.
+    pub force_range: [f64; 3],
+    /// Full scale of each torque axis (the reading is clamped to ±range; 0 = unbounded), N·m.
+    pub torque_range: [f64; 3],
+}
+
+impl Default for FtSensorConfig {
+    fn default() -> Self {
+        Self {
+            force_offset: 5.0,
+            torque_offset: 0.5,
+            force_drift: 0.0645,
+            torque_drift: 6.45e-3,
+            force_noise: 1.5,
+            torque_noise: 0.05,
+            force_range: [580.0, 580.0, 1160.0],
+            torque_range: [20.0, 20.0, 20.0],
+        }
+    }
+}
+
+impl FtSensorConfig {
+    /// Exact, unbounded sensors.
+    pub fn ideal() -> Self {
+        Self {
+            force_offset: 0.0,
+            torque_offset: 0.0,
+            force_drift: 0.0,
+            torque_drift: 0.0,
+            force_noise: 0.0,
+            torque_noise: 0.0,
+            force_range: [0.0; 3],
+            torque_range: [0.0; 3],
         }
     }
 }
@@ -547,6 +778,9 @@ fn check(ok: bool, parameter: &str, message: &str) -> Result<(), SimError> {
         })
     }
 }
+
+/// Largest sensor or command delay, simulator steps (the ring buffers are allocated at construction).
+pub(crate) const MAX_DELAY_STEPS: usize = 10_000;
 
 fn finite_nonneg(x: f64) -> bool {
     x.is_finite() && x >= 0.0
@@ -644,6 +878,8 @@ impl SimConfig {
                 (j.kd, "kd"),
                 (j.damping, "damping"),
                 (j.armature, "armature"),
+                (j.coulomb_friction, "coulomb_friction"),
+                (j.torque_bandwidth, "torque_bandwidth"),
             ] {
                 if let Some(v) = v {
                     check(
@@ -664,23 +900,48 @@ impl SimConfig {
         Ok(())
     }
 
-    /// Noise levels and pushes.
+    /// Sensor parameters, delays and pushes.
     fn validate_sensors_and_pushes(&self) -> Result<(), SimError> {
-        let n = &self.sensors.noise;
+        let sensors = &self.sensors;
+        let (e, imu, ft) = (&sensors.encoder, &sensors.imu, &sensors.ft);
         for (v, name) in [
-            (n.joint_position, "joint_position"),
-            (n.joint_velocity, "joint_velocity"),
-            (n.force, "force"),
-            (n.torque, "torque"),
-            (n.gyroscope, "gyroscope"),
-            (n.accelerometer, "accelerometer"),
-            (n.orientation, "orientation"),
-        ] {
+            (e.position_noise, "encoder.position_noise"),
+            (e.velocity_cutoff, "encoder.velocity_cutoff"),
+            (e.velocity_noise, "encoder.velocity_noise"),
+            (imu.gyro_noise_density, "imu.gyro_noise_density"),
+            (imu.gyro_bias, "imu.gyro_bias"),
+            (imu.gyro_bias_random_walk, "imu.gyro_bias_random_walk"),
+            (imu.accel_noise_density, "imu.accel_noise_density"),
+            (imu.accel_bias, "imu.accel_bias"),
+            (imu.accel_bias_random_walk, "imu.accel_bias_random_walk"),
+            (imu.tilt_error, "imu.tilt_error"),
+            (imu.yaw_drift_rate, "imu.yaw_drift_rate"),
+            (imu.orientation_noise, "imu.orientation_noise"),
+            (ft.force_offset, "ft.force_offset"),
+            (ft.torque_offset, "ft.torque_offset"),
+            (ft.force_drift, "ft.force_drift"),
+            (ft.torque_drift, "ft.torque_drift"),
+            (ft.force_noise, "ft.force_noise"),
+            (ft.torque_noise, "ft.torque_noise"),
+        ]
+        .into_iter()
+        .chain(ft.force_range.iter().map(|r| (*r, "ft.force_range")))
+        .chain(ft.torque_range.iter().map(|r| (*r, "ft.torque_range")))
+        {
             check(
                 finite_nonneg(v),
-                &format!("sensors.noise.{name}"),
+                &format!("sensors.{name}"),
                 "must be finite and ≥ 0",
             )?;
+        }
+        for (steps, name) in [
+            (sensors.delay_steps, "sensors.delay_steps"),
+            (
+                self.actuation.command_delay_steps,
+                "actuation.command_delay_steps",
+            ),
+        ] {
+            check(steps <= MAX_DELAY_STEPS, name, "at most 10000 steps")?;
         }
         for (i, p) in self.pushes.iter().enumerate() {
             let name = format!("pushes[{i}]");
@@ -750,6 +1011,16 @@ fn check_actuator(a: &JointActuatorConfig, p: &str) -> Result<(), SimError> {
     check(
         finite_nonneg(a.armature),
         &format!("{p}.armature"),
+        "must be finite and ≥ 0",
+    )?;
+    check(
+        finite_nonneg(a.coulomb_friction),
+        &format!("{p}.coulomb_friction"),
+        "must be finite and ≥ 0",
+    )?;
+    check(
+        finite_nonneg(a.torque_bandwidth),
+        &format!("{p}.torque_bandwidth"),
         "must be finite and ≥ 0",
     )?;
     if let Some(e) = a.effort_limit {

@@ -65,10 +65,10 @@ pub struct SurfaceMeasurement {
     /// Ground-truth contact wrench `[f; τ]` the environment applies on the robot through this surface, in world
     /// orientation, torque about the surface frame origin (N, N·m).
     pub wrench: Vector6<f64>,
-    /// The same wrench as the six-axis sensor reports it: expressed in the sensor frame (the configured
-    /// `ft_sensor` frame, else the surface frame), torque about the sensor origin, noise added (N, N·m). The
-    /// sensor is ideal in that it measures the contact wrench (the inertia and weight of the part below the
-    /// sensor are not subtracted).
+    /// The same ground-truth wrench expressed in the surface's sensor frame (the configured `ft_sensor` frame,
+    /// else the surface frame), torque about its origin (N, N·m): the contact wrench alone, with no noise or
+    /// delay. The realistic sensor readings, which also carry the foot's own weight and inertia, are
+    /// [`SimOutput::ft_wrenches`].
     pub sensor_wrench: Vector6<f64>,
     /// Normal force along the ground normal, N (zero without contact).
     pub normal_force: f64,
@@ -91,10 +91,11 @@ impl SurfaceMeasurement {
     }
 }
 
-/// Inertial measurement unit reading.
+/// Inertial measurement unit reading (biased, noisy and delayed as configured in
+/// [`ImuConfig`](crate::ImuConfig)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ImuMeasurement {
-    /// `world_R_imu` (with noise if configured).
+    /// `world_R_imu` as an on-board attitude filter reports it (tilt error, yaw drift and noise as configured).
     pub orientation: UnitQuaternion<f64>,
     /// Angular velocity of the IMU frame, expressed in the IMU frame, rad/s.
     pub angular_velocity: Vector3<f64>,
@@ -118,9 +119,9 @@ pub struct SimOutput {
     pub time: Duration,
     /// Ground-truth state (base velocity in the mixed representation).
     pub state: RobotState,
-    /// Encoder positions (with noise), rad (m).
+    /// Encoder positions (quantised, noisy and delayed as configured), rad (m).
     pub joint_positions: DVector<f64>,
-    /// Encoder velocities (with noise), rad/s (m/s).
+    /// Encoder velocities (by default the differenced, low-passed encoder positions; delayed), rad/s (m/s).
     pub joint_velocities: DVector<f64>,
     /// Motor torques applied during the step (after saturation), N·m (N).
     pub joint_torques: DVector<f64>,
@@ -131,8 +132,15 @@ pub struct SimOutput {
     pub surfaces: Vec<SurfaceMeasurement>,
     /// All contact points, surface by surface.
     pub contact_points: Vec<ContactPointState>,
-    /// IMU reading.
+    /// IMU reading (delayed as configured).
     pub imu: ImuMeasurement,
+    /// Readings of the model's six-axis force/torque sensors, in [`stride_model::Model::ft_sensors`] order:
+    /// `[f; τ]` in the sensor frame, torque about its origin, with the sensor's measurement-direction sign, the
+    /// wrench transmitted through the sensor's fixed joint (so a foot sensor also carries the weight and
+    /// inertia of the foot below it), with offset, drift, noise, saturation and delay (N, N·m).
+    pub ft_wrenches: Vec<Vector6<f64>>,
+    /// The same wrenches without any sensor error or delay (ground truth, for tests and logs).
+    pub ft_wrenches_truth: Vec<Vector6<f64>>,
     /// Total wrench `[f; τ]` of all contacts on the robot, world orientation, torque about the world origin.
     pub total_contact_wrench: Vector6<f64>,
     /// A fall has been detected (latched until reset or a new initial state).
@@ -158,6 +166,7 @@ impl SimOutput {
         state: &RobotState,
         surface_names: impl Iterator<Item = String>,
         point_surfaces: impl Iterator<Item = usize>,
+        ft_sensors: usize,
     ) -> Self {
         let n = state.joint_positions.len();
         Self {
@@ -184,6 +193,8 @@ impl SimOutput {
                 angular_velocity: Vector3::zeros(),
                 proper_acceleration: Vector3::zeros(),
             },
+            ft_wrenches: vec![Vector6::zeros(); ft_sensors],
+            ft_wrenches_truth: vec![Vector6::zeros(); ft_sensors],
             total_contact_wrench: Vector6::zeros(),
             fallen: false,
             fall_time: None,

@@ -15,9 +15,11 @@
 //!   and damping are area densities (N/m³, N·s/m³) of the visco-elastic contact model
 //!   [Romualdi 2022, Lemma 1], so a fine grid reproduces that lemma's wrench.
 //! * **Actuation** per joint: position PD servo, velocity servo or torque, with effort limits, passive
-//!   damping and armature.
-//! * **Sensors:** encoders, six-axis wrench of each surface in its force/torque sensor frame, IMU, ground
-//!   truth, with optional seeded noise. **Pushes** and **fall detection** from the config.
+//!   damping, armature, Coulomb friction, a torque-tracking lag and a command delay.
+//! * **Sensors** as an iCub-class robot has them: quantised encoders with differenced, low-passed
+//!   velocities; an IMU with biases, noise and a filter-like orientation; the six-axis force/torque sensors
+//!   of the URDF with offsets, drift, noise and saturation; a sensor delay; all from one seeded generator.
+//!   Ground truth beside them. **Pushes** and **fall detection** from the config.
 //!
 //! See `docs/sim.md` for the choices, the checks and the measured numbers.
 
@@ -36,9 +38,9 @@ mod sensors;
 
 pub use config::{
     ActuationConfig, ActuationMode, ContactConfig, ContactSurfaceConfig, EffortLimitPolicy,
-    FallConfig, GroundConfig, IntegratorKind, JointActuatorConfig, JointActuatorOverride,
-    LinkInertiaChange, NoiseConfig, PlantModelConfig, PushConfig, SafetyConfig, SensorConfig,
-    SimConfig,
+    EncoderConfig, FallConfig, FtSensorConfig, GroundConfig, ImuConfig, IntegratorKind,
+    JointActuatorConfig, JointActuatorOverride, LinkInertiaChange, PlantModelConfig, PushConfig,
+    SafetyConfig, SensorConfig, SimConfig, VelocitySource,
 };
 pub use contact::{surface_points, trapezoid_nodes, ContactMode, GroundPlane, PointLaw, PointSpec};
 pub use error::SimError;

@@ -37,6 +37,15 @@ impl GaussianNoise {
         std * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
     }
 
+    /// One sample of the uniform distribution on `[−bound, bound)`; no random number is drawn when
+    /// `bound == 0`.
+    pub fn uniform(&mut self, bound: f64) -> f64 {
+        if bound == 0.0 {
+            return 0.0;
+        }
+        bound * (2.0 * self.rng.random::<f64>() - 1.0)
+    }
+
     /// Three independent samples of `N(0, std²)`.
     pub fn sample3(&mut self, std: f64) -> Vector3<f64> {
         Vector3::new(self.sample(std), self.sample(std), self.sample(std))
@@ -59,5 +68,11 @@ mod tests {
         g.reset();
         assert_eq!(g.sample(2.0).to_bits(), samples[0].to_bits());
         assert_eq!(g.sample(0.0), 0.0);
+        let uniform: Vec<f64> = (0..n).map(|_| g.uniform(3.0)).collect();
+        assert!(uniform.iter().all(|u| u.abs() <= 3.0));
+        let var = uniform.iter().map(|u| u * u).sum::<f64>() / n as f64;
+        // Uniform on [−b, b): variance b²/3.
+        assert!((var - 3.0).abs() < 0.03, "variance {var}");
+        assert_eq!(g.uniform(0.0), 0.0);
     }
 }

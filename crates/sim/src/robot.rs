@@ -11,18 +11,18 @@ mod state;
 use std::sync::Arc;
 use std::time::Duration;
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3, Vector6};
 use stride_block::Block;
 use stride_model::{ExternalWrench, FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 
-use crate::actuator::{resolve_actuators, Actuator};
+use crate::actuator::{resolve_actuators, torque_lag_gain, Actuator, Friction};
 use crate::config::{IntegratorKind, JointActuatorConfig, PushConfig, SimConfig};
 use crate::contact::{build_surfaces, GroundPlane, Point, Surface};
 use crate::error::{find_frame, SimError};
 use crate::io::{ContactPointState, SimInput, SimOutput};
-use crate::linalg::{lin, TreeCholesky};
+use crate::linalg::{join, lin, TreeCholesky};
 use crate::push::Push;
-use crate::sensors::Sensors;
+use crate::sensors::{Sensors, Truth};
 
 /// The simulated robot: floating-base dynamics of a [`Model`] on compliant ground, joint servos, sensors and
 /// pushes. One [`Block::step`] advances one period (the constructor's `period`); gravity is the model's
@@ -82,6 +82,22 @@ pub struct SimRobot {
     anchor_backup: Vec<Option<Vector3<f64>>>,
     saturated: Vec<bool>,
     wrenches: Vec<ExternalWrench>,
+    /// Coulomb friction phase of each joint (kept from step to step), its copy for a failed step, and the
+    /// number of phase switches of each joint in the current step (at most two).
+    friction: Vec<Friction>,
+    friction_backup: Vec<Friction>,
+    friction_switches: Vec<u8>,
+    /// Motor torque of the torque-mode lag at the end of the last step, N·m.
+    lagged_torques: DVector<f64>,
+    /// Command delay line of `command_delay_steps + 1` inputs; `commands[command_head]` receives the next.
+    commands: Vec<SimInput>,
+    command_head: usize,
+    /// The command applied in the current step (the delayed one, torque lag applied).
+    applied: SimInput,
+    /// External wrenches of the step for the force/torque sensors (contacts and pushes).
+    ft_external: Vec<ExternalWrench>,
+    /// Transmitted wrench of each force/torque sensor in the last step (sensor frame), N, N·m.
+    ft_truth: Vec<Vector6<f64>>,
     sensors: Sensors,
     fall_time_ns: Option<u64>,
     /// Largest number of solves of an implicit step ([`SimOutput::MAX_SOLVES`]; lowered by a unit test).
@@ -160,15 +176,18 @@ impl SimRobot {
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_representation(VelocityRepresentation::Mixed);
         let state = RobotState::zero(&model);
+        let n_ft = model.ft_sensors().len();
         let output = SimOutput::new(
             &state,
             config.contact.surfaces.iter().map(|s| s.name.clone()),
             points.iter().map(|p| p.surface),
+            n_ft,
         );
+        let dt = period_ns as f64 * 1e-9;
         let wrench_capacity = surfaces.len() + pushes.len() + 8;
         let mut sim = Self {
             kd,
-            dt: period_ns as f64 * 1e-9,
+            dt,
             period_ns,
             time_ns: 0,
             gravity: model.gravity(),
@@ -196,7 +215,16 @@ impl SimRobot {
             joint_torque_buffer: DVector::zeros(n),
             saturated: vec![false; n],
             wrenches: Vec::with_capacity(wrench_capacity),
-            sensors: Sensors::new(&config.sensors.noise),
+            friction: vec![Friction::Stick; n],
+            friction_backup: vec![Friction::Stick; n],
+            friction_switches: vec![0; n],
+            lagged_torques: DVector::zeros(n),
+            commands: vec![SimInput::zeros(n); config.actuation.command_delay_steps + 1],
+            command_head: 0,
+            applied: SimInput::zeros(n),
+            ft_external: Vec::with_capacity(wrench_capacity),
+            ft_truth: vec![Vector6::zeros(); n_ft],
+            sensors: Sensors::new(&model, &config.sensors, dt),
             fall_time_ns: None,
             max_solves: SimOutput::MAX_SOLVES,
             solve_cap_hits: 0,
@@ -306,12 +334,44 @@ impl SimRobot {
     /// the state, time and contact anchors are those before the step.
     fn do_step(&mut self, input: &SimInput) -> Result<(), SimError> {
         self.check_input(input)?;
+        // The delay line takes the new command; the step applies the one of `command_delay_steps` ago. A failed
+        // step does not advance the line (the slot written is the one no longer needed).
+        copy_input(&mut self.commands[self.command_head], input);
+        let delayed = (self.command_head + 1) % self.commands.len();
+        let mut applied = std::mem::replace(&mut self.applied, SimInput::zeros(0));
+        copy_input(&mut applied, &self.commands[delayed]);
+        self.lag_torques(&mut applied);
+        let result = self.advance(&applied);
+        self.applied = applied;
+        if result.is_ok() {
+            self.command_head = delayed;
+        }
+        result
+    }
+
+    /// Torque-mode joints: the motor torque follows the command through the first-order lag of the joint's
+    /// `torque_bandwidth`, `τ = τ_prev + β (τ_cmd − τ_prev)` (written into `applied.joint_torques`).
+    fn lag_torques(&self, applied: &mut SimInput) {
+        for (j, a) in self.actuators.iter().enumerate() {
+            if a.mode == crate::config::ActuationMode::Torque {
+                let beta = torque_lag_gain(self.dt, a.torque_bandwidth);
+                let previous = self.lagged_torques[j];
+                applied.joint_torques[j] = previous + beta * (applied.joint_torques[j] - previous);
+            }
+        }
+    }
+
+    /// One step with the applied command `input`: solve, integrate, commit the contact memory, then measure at
+    /// the end-of-step state. On error the state, time, contact anchors and friction phases are those before
+    /// the step.
+    fn advance(&mut self, input: &SimInput) -> Result<(), SimError> {
         self.wrenches.clear();
         self.apply_pushes()?;
         // Keep the anchors so that a failed step can restore them.
         for (b, p) in self.anchor_backup.iter_mut().zip(&self.points) {
             *b = p.anchor;
         }
+        self.friction_backup.copy_from_slice(&self.friction);
         let momentum_start = if self.config.momentum_projection {
             Some((self.kd.centroidal_momentum(), self.kd.com_position()))
         } else {
@@ -322,6 +382,8 @@ impl SimRobot {
             IntegratorKind::Explicit => self.solve_explicit(input),
         };
         let result = solved.and_then(|solve| {
+            // The sensors' transmitted wrenches need the start-of-step workspace, which `integrate` may move.
+            self.compute_ft_truth()?;
             self.integrate(momentum_start)?;
             Ok(solve)
         });
@@ -341,41 +403,84 @@ impl SimRobot {
         if solve.cap_hit {
             self.solve_cap_hits += 1;
         }
+        self.lagged_torques.copy_from(&input.joint_torques);
         // Forces were computed at the start-of-step geometry; outputs use the end-of-step geometry.
         self.update_kinematics()?;
         let imu_velocity = lin(&self.kd.frame_velocity(self.imu_frame));
         let imu_acceleration = (imu_velocity - self.imu_velocity) / self.dt;
         self.imu_velocity = imu_velocity;
-        self.update_output(&imu_acceleration, solve);
+        self.update_output(&imu_acceleration, solve, false);
+        Ok(())
+    }
+
+    /// The wrench transmitted through each force/torque sensor during the step
+    /// ([`KinDyn::ft_sensor_wrenches`]) from the step's acceleration and external wrenches (each touching
+    /// surface's point forces about its frame origin, the active pushes), at the start-of-step state the
+    /// dynamics used.
+    pub(super) fn compute_ft_truth(&mut self) -> Result<(), SimError> {
+        if self.ft_truth.is_empty() {
+            return Ok(());
+        }
+        self.ft_external.clear();
+        for s in &self.surfaces {
+            let o = s.pose.translation.vector;
+            let mut w = Vector6::zeros();
+            for p in &self.points[s.points()] {
+                w += join(&p.force, &(p.position - o).cross(&p.force));
+            }
+            if w != Vector6::zeros() {
+                self.ft_external.push(ExternalWrench {
+                    frame: s.frame,
+                    wrench: w,
+                });
+            }
+        }
+        for p in &self.pushes {
+            if p.is_active(self.time_ns) {
+                self.ft_external.push(ExternalWrench {
+                    frame: p.frame,
+                    wrench: p.wrench,
+                });
+            }
+        }
+        self.kd
+            .ft_sensor_wrenches(&self.acceleration, &self.ft_external, &mut self.ft_truth)?;
         Ok(())
     }
 
     /// Fills the output from the committed state and the forces of the last step; `imu_acceleration` is the
-    /// world acceleration of the IMU origin over the step (m/s²).
-    fn update_output(&mut self, imu_acceleration: &Vector3<f64>, solve: integrator::Solve) {
+    /// world acceleration of the IMU origin over the step (m/s²); `fresh_start` after a state change (the
+    /// sensors restart their filters and delay line).
+    fn update_output(
+        &mut self,
+        imu_acceleration: &Vector3<f64>,
+        solve: integrator::Solve,
+        fresh_start: bool,
+    ) {
         let out = &mut self.output;
         out.time = Duration::from_nanos(self.time_ns);
         out.state.copy_from(&self.state);
         out.solves = solve.solves;
         out.solve_cap_hit = solve.cap_hit;
         out.solve_cap_hits = self.solve_cap_hits;
-        self.sensors.read_encoders(
-            &self.state,
-            &mut out.joint_positions,
-            &mut out.joint_velocities,
-        );
         out.joint_torques.copy_from(&self.motor_torques);
         out.saturated.copy_from_slice(&self.saturated);
         out.total_contact_wrench.fill(0.0);
         for (si, s) in self.surfaces.iter().enumerate() {
             let points = &self.points[s.points()];
-            self.sensors
-                .measure_surface(si, s, points, &self.ground, out);
+            Sensors::measure_surface(si, s, points, &self.ground, out);
         }
-        let pose = self.kd.frame_pose(self.imu_frame);
-        let twist = self.kd.frame_velocity(self.imu_frame);
-        self.sensors
-            .measure_imu(&pose, &twist, imu_acceleration, &self.gravity, &mut out.imu);
+        let truth = Truth {
+            state: &self.state,
+            imu_pose: self.kd.frame_pose(self.imu_frame),
+            imu_twist: self.kd.frame_velocity(self.imu_frame),
+            imu_acceleration: *imu_acceleration,
+            gravity: self.gravity,
+            time: self.time_ns as f64 * 1e-9,
+            ft_wrenches: &self.ft_truth,
+            fresh_start,
+        };
+        self.sensors.measure(&truth, out);
         self.detect_fall();
     }
 
@@ -402,9 +507,17 @@ impl SimRobot {
         for (b, p) in self.anchor_backup.iter().zip(&mut self.points) {
             p.anchor = *b;
         }
+        self.friction.copy_from_slice(&self.friction_backup);
         // The state was not modified; re-synchronise the kinematics (cannot fail for a state that was accepted).
         let _ = self.update_kinematics();
     }
+}
+
+/// Copies `from` into `to` (same sizes; no allocation).
+fn copy_input(to: &mut SimInput, from: &SimInput) {
+    to.joint_positions.copy_from(&from.joint_positions);
+    to.joint_velocities.copy_from(&from.joint_velocities);
+    to.joint_torques.copy_from(&from.joint_torques);
 }
 
 impl Block for SimRobot {
@@ -439,12 +552,13 @@ mod tests {
         );
         let model = Arc::new(Model::from_urdf_file(path).expect("bundled model"));
         let q = DVector::zeros(model.dof());
-        let mut sim = SimRobot::new(
-            Arc::clone(&model),
-            SimConfig::default(),
-            Duration::from_micros(500),
-        )
-        .expect("default config");
+        // Ideal actuators: the saturating command acts in the first step (no command delay, no friction).
+        let config = SimConfig {
+            actuation: crate::config::ActuationConfig::ideal(),
+            ..SimConfig::default()
+        };
+        let mut sim = SimRobot::new(Arc::clone(&model), config, Duration::from_micros(500))
+            .expect("default config");
         sim.set_standing_on_ground(&q).expect("placement");
         let mut input = SimInput::hold(&q);
         let elbow = model.joint_index("l_elbow").expect("l_elbow");

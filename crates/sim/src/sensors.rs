@@ -1,57 +1,304 @@
-//! The sensors: encoders, six-axis force/torque sensors of the contact surfaces and the IMU, with their
-//! optional seeded noise. They read the committed state and the forces of the last step.
+//! The sensors as a real iCub-class robot has them: quantised encoders with differenced and low-passed
+//! velocities, an IMU with biases, white noise and a filter-like orientation, the six-axis force/torque sensors
+//! with offsets, drift, noise and saturation, and a sensor delay. Every random number comes from one seeded
+//! generator, drawn in a fixed order, so a run is reproducible from [`SensorConfig::seed`]. Nothing here
+//! allocates after construction except [`Sensors::measure`] right after a state change (it fills the delay
+//! line).
+//!
+//! The contact-surface wrenches ([`Sensors::measure_surface`]) are ground truth.
 
 use nalgebra::{DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
-use stride_model::RobotState;
+use stride_model::{JointKind, Model, RobotState};
 
-use crate::config::NoiseConfig;
+use crate::config::{SensorConfig, VelocitySource};
 use crate::contact::{GroundPlane, Point, Surface};
 use crate::io::{ImuMeasurement, SimOutput};
 use crate::linalg::{ang, join, lin};
 use crate::noise::GaussianNoise;
 
-/// The measurement noise: its standard deviations and the one seeded generator every sensor draws from (in a
-/// fixed order, so a run is reproducible from the seed).
+/// `x` rounded to the nearest multiple of `step` (`x` itself when `step == 0`).
+pub(crate) fn quantise(x: f64, step: f64) -> f64 {
+    if step > 0.0 {
+        step * (x / step).round()
+    } else {
+        x
+    }
+}
+
+/// Gain `α = dt / (dt + 1/(2π f_c))` of the discrete first-order low-pass filter `y ← y + α (x − y)` with cut-off
+/// `cutoff` Hz at the period `dt` s (1, no filtering, when `cutoff == 0`). Its delay at low frequency is about
+/// `1/(2π f_c)`.
+pub(crate) fn low_pass_gain(dt: f64, cutoff: f64) -> f64 {
+    if cutoff > 0.0 {
+        dt / (dt + 1.0 / (std::f64::consts::TAU * cutoff))
+    } else {
+        1.0
+    }
+}
+
+/// Clamps each entry of `v` to `±range` (an entry with range 0 is unbounded).
+fn clamp_axes(v: &mut Vector3<f64>, range: &[f64; 3]) {
+    for (x, r) in v.iter_mut().zip(range) {
+        if *r > 0.0 {
+            *x = x.clamp(-r, *r);
+        }
+    }
+}
+
+/// Three uniform samples on `[−bound, bound)`.
+fn uniform3(noise: &mut GaussianNoise, bound: f64) -> Vector3<f64> {
+    Vector3::new(
+        noise.uniform(bound),
+        noise.uniform(bound),
+        noise.uniform(bound),
+    )
+}
+
+/// One reading of every sensor (what the delay line holds).
+#[derive(Clone, Debug)]
+pub(crate) struct Reading {
+    joint_positions: DVector<f64>,
+    joint_velocities: DVector<f64>,
+    imu: ImuMeasurement,
+    ft_wrenches: Vec<Vector6<f64>>,
+}
+
+impl Reading {
+    fn new(dof: usize, ft_sensors: usize) -> Self {
+        Self {
+            joint_positions: DVector::zeros(dof),
+            joint_velocities: DVector::zeros(dof),
+            imu: ImuMeasurement {
+                orientation: UnitQuaternion::identity(),
+                angular_velocity: Vector3::zeros(),
+                proper_acceleration: Vector3::zeros(),
+            },
+            ft_wrenches: vec![Vector6::zeros(); ft_sensors],
+        }
+    }
+
+    fn copy_from(&mut self, other: &Reading) {
+        self.joint_positions.copy_from(&other.joint_positions);
+        self.joint_velocities.copy_from(&other.joint_velocities);
+        self.imu = other.imu;
+        self.ft_wrenches.copy_from_slice(&other.ft_wrenches);
+    }
+}
+
+/// The true quantities the sensors read at the end of a step.
+pub(crate) struct Truth<'a> {
+    /// Committed state (mixed velocities).
+    pub(crate) state: &'a RobotState,
+    /// `world_H_imu`.
+    pub(crate) imu_pose: Isometry3<f64>,
+    /// Mixed twist of the IMU frame, m/s, rad/s.
+    pub(crate) imu_twist: Vector6<f64>,
+    /// World acceleration of the IMU origin over the step, m/s².
+    pub(crate) imu_acceleration: Vector3<f64>,
+    /// Gravity (world), m/s².
+    pub(crate) gravity: Vector3<f64>,
+    /// Simulated time, s.
+    pub(crate) time: f64,
+    /// Transmitted wrench of each force/torque sensor (sensor frame, measurement direction), N, N·m.
+    pub(crate) ft_wrenches: &'a [Vector6<f64>],
+    /// The state was just set (not reached by a step): restart the velocity filter and fill the delay line.
+    pub(crate) fresh_start: bool,
+}
+
+/// The sensor models and their internal state (filters, biases, offsets, the delay line).
 #[derive(Clone, Debug)]
 pub(crate) struct Sensors {
     noise: GaussianNoise,
-    config: NoiseConfig,
+    config: SensorConfig,
+    /// Step period, s.
+    dt: f64,
+    /// Quantisation step of each joint (0: none), rad.
+    steps: Vec<f64>,
+    /// Velocity filter gain α.
+    alpha: f64,
+    /// Last reported (quantised) joint positions, before the delay.
+    previous_positions: DVector<f64>,
+    /// Low-pass filter state of the differenced velocities, rad/s.
+    filtered_velocities: DVector<f64>,
+    gyro_bias: Vector3<f64>,
+    accel_bias: Vector3<f64>,
+    /// Constant roll and pitch error of the orientation, rad.
+    tilt: [f64; 2],
+    /// Yaw drift rate of the orientation, rad/s.
+    yaw_rate: f64,
+    /// Offset of each force/torque sensor `[f; τ]`.
+    ft_offsets: Vec<Vector6<f64>>,
+    /// Random-walk drift of each force/torque sensor `[f; τ]`.
+    ft_drifts: Vec<Vector6<f64>>,
+    /// Delay line of `delay_steps + 1` readings; `ring[head]` receives the next fresh one.
+    ring: Vec<Reading>,
+    head: usize,
 }
 
 impl Sensors {
-    /// Sensors with the noise `config` (generator seeded with `config.seed`).
-    pub(crate) fn new(config: &NoiseConfig) -> Self {
+    /// The sensors of `model` with `config` at the step period `dt` (s). Call [`Sensors::reset`] before use.
+    pub(crate) fn new(model: &Model, config: &SensorConfig, dt: f64) -> Self {
+        let dof = model.dof();
+        let step = match config.encoder.counts_per_revolution {
+            0 => 0.0,
+            counts => std::f64::consts::TAU / f64::from(counts),
+        };
+        let steps = model
+            .joints()
+            .iter()
+            .map(|j| match j.kind {
+                JointKind::Prismatic => 0.0,
+                _ => step,
+            })
+            .collect();
+        let n_ft = model.ft_sensors().len();
         Self {
             noise: GaussianNoise::new(config.seed),
             config: config.clone(),
+            dt,
+            steps,
+            alpha: low_pass_gain(dt, config.encoder.velocity_cutoff),
+            previous_positions: DVector::zeros(dof),
+            filtered_velocities: DVector::zeros(dof),
+            gyro_bias: Vector3::zeros(),
+            accel_bias: Vector3::zeros(),
+            tilt: [0.0; 2],
+            yaw_rate: 0.0,
+            ft_offsets: vec![Vector6::zeros(); n_ft],
+            ft_drifts: vec![Vector6::zeros(); n_ft],
+            ring: vec![Reading::new(dof, n_ft); config.delay_steps + 1],
+            head: 0,
         }
     }
 
-    /// Restarts the noise sequence from the seed.
+    /// Restarts the random sequence from the seed and draws the start-up errors, in this order: each
+    /// force/torque sensor's offset (force then torque axes), the gyroscope bias, the accelerometer bias, the
+    /// roll and pitch error, the yaw drift rate. Drifts restart at zero.
     pub(crate) fn reset(&mut self) {
         self.noise.reset();
+        let ft = &self.config.ft;
+        for (offset, drift) in self.ft_offsets.iter_mut().zip(&mut self.ft_drifts) {
+            for k in 0..3 {
+                offset[k] = self.noise.uniform(ft.force_offset);
+            }
+            for k in 3..6 {
+                offset[k] = self.noise.uniform(ft.torque_offset);
+            }
+            *drift = Vector6::zeros();
+        }
+        let imu = &self.config.imu;
+        self.gyro_bias = uniform3(&mut self.noise, imu.gyro_bias);
+        self.accel_bias = uniform3(&mut self.noise, imu.accel_bias);
+        self.tilt = [
+            self.noise.uniform(imu.tilt_error),
+            self.noise.uniform(imu.tilt_error),
+        ];
+        self.yaw_rate = self.noise.uniform(imu.yaw_drift_rate);
     }
 
-    /// Encoder positions and velocities (`q + n_q`, `q̇ + n_q̇`, drawn joint by joint in that order), rad, rad/s.
-    pub(crate) fn read_encoders(
-        &mut self,
-        state: &RobotState,
-        positions: &mut DVector<f64>,
-        velocities: &mut DVector<f64>,
-    ) {
+    /// Takes a reading of every sensor (encoders, IMU, force/torque sensors, drawing their noise in that order)
+    /// into the delay line and copies the reading of `delay_steps` steps ago into `out`. After a state change
+    /// (`truth.fresh_start`) the whole delay line is filled with the new reading (this allocates once).
+    pub(crate) fn measure(&mut self, truth: &Truth<'_>, out: &mut SimOutput) {
+        let head = self.head;
+        let mut fresh = std::mem::replace(&mut self.ring[head], Reading::new(0, 0));
+        self.read_encoders(truth, &mut fresh);
+        self.read_imu(truth, &mut fresh.imu);
+        self.read_ft(truth.ft_wrenches, &mut fresh.ft_wrenches);
+        if truth.fresh_start {
+            for (k, r) in self.ring.iter_mut().enumerate() {
+                if k != head {
+                    r.copy_from(&fresh);
+                }
+            }
+        }
+        self.ring[head] = fresh;
+        let len = self.ring.len();
+        let delayed = &self.ring[(head + 1) % len];
+        out.joint_positions.copy_from(&delayed.joint_positions);
+        out.joint_velocities.copy_from(&delayed.joint_velocities);
+        out.imu = delayed.imu;
+        out.ft_wrenches.copy_from_slice(&delayed.ft_wrenches);
+        out.ft_wrenches_truth.copy_from_slice(truth.ft_wrenches);
+        self.head = (head + 1) % len;
+    }
+
+    /// Encoder positions `quantise(q + n_q)` and velocities (differenced and low-passed, or true) plus `n_q̇`,
+    /// drawn joint by joint in that order.
+    fn read_encoders(&mut self, truth: &Truth<'_>, reading: &mut Reading) {
+        let e = &self.config.encoder;
+        let state = truth.state;
         for j in 0..state.joint_positions.len() {
-            positions[j] = state.joint_positions[j] + self.noise.sample(self.config.joint_position);
-            velocities[j] =
-                state.joint_velocities[j] + self.noise.sample(self.config.joint_velocity);
+            let q = quantise(
+                state.joint_positions[j] + self.noise.sample(e.position_noise),
+                self.steps[j],
+            );
+            let v = match e.velocity_source {
+                VelocitySource::FilteredDifference => {
+                    let y = &mut self.filtered_velocities[j];
+                    if truth.fresh_start {
+                        *y = state.joint_velocities[j];
+                    } else {
+                        let raw = (q - self.previous_positions[j]) / self.dt;
+                        *y += self.alpha * (raw - *y);
+                    }
+                    *y
+                }
+                VelocitySource::Truth => state.joint_velocities[j],
+            };
+            self.previous_positions[j] = q;
+            reading.joint_positions[j] = q;
+            reading.joint_velocities[j] = v + self.noise.sample(e.velocity_noise);
         }
     }
 
-    /// `out.surfaces[index]` from the forces of the surface's points: the wrench about the surface origin
-    /// (world orientation), the sensor's wrench in its frame about its origin (plus noise, force then torque),
-    /// the normal force and the centre of pressure on the ground. Copies each point into `out.contact_points`
-    /// and adds its wrench about the world origin to `out.total_contact_wrench` (point by point, in order).
+    /// The IMU: the biases take their random-walk step, then the angular velocity `Rᵀ ω + b_ω + n_ω`, the
+    /// proper acceleration `Rᵀ (a − g) + b_a + n_a` and the orientation `exp(δ^) world_R_imu` with
+    /// `δ = [e_roll, e_pitch, ψ̇ t] + n_R` (noise drawn in that order).
+    fn read_imu(&mut self, truth: &Truth<'_>, imu: &mut ImuMeasurement) {
+        let c = &self.config.imu;
+        let sqrt_dt = self.dt.sqrt();
+        self.gyro_bias += self.noise.sample3(c.gyro_bias_random_walk * sqrt_dt);
+        self.accel_bias += self.noise.sample3(c.accel_bias_random_walk * sqrt_dt);
+        let rot = truth.imu_pose.rotation;
+        imu.angular_velocity = rot.inverse_transform_vector(&ang(&truth.imu_twist))
+            + self.gyro_bias
+            + self.noise.sample3(c.gyro_noise_density / sqrt_dt);
+        imu.proper_acceleration = rot
+            .inverse_transform_vector(&(truth.imu_acceleration - truth.gravity))
+            + self.accel_bias
+            + self.noise.sample3(c.accel_noise_density / sqrt_dt);
+        let error = Vector3::new(self.tilt[0], self.tilt[1], self.yaw_rate * truth.time)
+            + self.noise.sample3(c.orientation_noise);
+        imu.orientation = UnitQuaternion::from_scaled_axis(error) * rot;
+    }
+
+    /// Each force/torque sensor: its drift takes a random-walk step (force then torque axes), then
+    /// `w + offset + drift + n` (force noise, torque noise) clamped at the full scale.
+    fn read_ft(&mut self, truth: &[Vector6<f64>], out: &mut [Vector6<f64>]) {
+        let c = &self.config.ft;
+        let sqrt_dt = self.dt.sqrt();
+        for (i, w) in truth.iter().enumerate() {
+            let drift = &mut self.ft_drifts[i];
+            let d = join(
+                &self.noise.sample3(c.force_drift * sqrt_dt),
+                &self.noise.sample3(c.torque_drift * sqrt_dt),
+            );
+            *drift += d;
+            let biased = w + self.ft_offsets[i] + *drift;
+            let mut f = lin(&biased) + self.noise.sample3(c.force_noise);
+            let mut t = ang(&biased) + self.noise.sample3(c.torque_noise);
+            clamp_axes(&mut f, &c.force_range);
+            clamp_axes(&mut t, &c.torque_range);
+            out[i] = join(&f, &t);
+        }
+    }
+
+    /// `out.surfaces[index]` from the forces of the surface's points (ground truth): the wrench about the
+    /// surface origin (world orientation), the same wrench in the contact sensor frame about its origin, the
+    /// normal force and the centre of pressure on the ground. Copies each point into `out.contact_points` and
+    /// adds its wrench about the world origin to `out.total_contact_wrench` (point by point, in order).
     pub(crate) fn measure_surface(
-        &mut self,
         index: usize,
         surface: &Surface,
         points: &[Point],
@@ -78,10 +325,8 @@ impl Sensors {
             cp.mode = p.mode;
         }
         let r_ft = surface.ft_pose.rotation;
-        let f_s =
-            r_ft.inverse_transform_vector(&lin(&w_ft)) + self.noise.sample3(self.config.force);
-        let t_s =
-            r_ft.inverse_transform_vector(&ang(&w_ft)) + self.noise.sample3(self.config.torque);
+        let f_s = r_ft.inverse_transform_vector(&lin(&w_ft));
+        let t_s = r_ft.inverse_transform_vector(&ang(&w_ft));
         let m = &mut out.surfaces[index];
         m.in_contact = in_contact;
         m.wrench = w;
@@ -99,24 +344,60 @@ impl Sensors {
             o_ground
         };
     }
+}
 
-    /// The IMU reading from its frame's pose and mixed twist and the world acceleration `a` of its origin
-    /// (m/s²): orientation `world_R_imu · exp(n_R)`, angular velocity `Rᵀ ω + n_ω`, proper acceleration
-    /// `Rᵀ (a − g) + n_a` (noise drawn in that order).
-    pub(crate) fn measure_imu(
-        &mut self,
-        pose: &Isometry3<f64>,
-        twist: &Vector6<f64>,
-        acceleration: &Vector3<f64>,
-        gravity: &Vector3<f64>,
-        imu: &mut ImuMeasurement,
-    ) {
-        let rot = pose.rotation;
-        let orientation_noise = self.noise.sample3(self.config.orientation);
-        imu.orientation = rot * UnitQuaternion::from_scaled_axis(orientation_noise);
-        imu.angular_velocity =
-            rot.inverse_transform_vector(&ang(twist)) + self.noise.sample3(self.config.gyroscope);
-        imu.proper_acceleration = rot.inverse_transform_vector(&(acceleration - gravity))
-            + self.noise.sample3(self.config.accelerometer);
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantise_rounds_to_the_nearest_step() {
+        let step = std::f64::consts::TAU / 4096.0;
+        assert_eq!(quantise(0.4 * step, step), 0.0);
+        assert_eq!(quantise(0.6 * step, step), step);
+        assert_eq!(quantise(-2.6 * step, step), -3.0 * step);
+        assert_eq!(quantise(0.123, 0.0), 0.123);
+    }
+
+    /// A sine at the cut-off frequency comes out of the filter with gain 1/√2 and a 45° lag; a slow sine is
+    /// delayed by `1/(2π f_c)`.
+    #[test]
+    fn the_velocity_filter_has_its_cut_off_and_delay() {
+        let dt = 0.0005;
+        let fc = 10.0;
+        let alpha = low_pass_gain(dt, fc);
+        // Gain and phase from a least-squares fit of the steady-state output on sin and cos.
+        let response = |f: f64| {
+            let w = std::f64::consts::TAU * f;
+            let (mut y, mut s, mut c) = (0.0, 0.0, 0.0);
+            let n = (20.0 / f / dt) as usize;
+            let skip = n / 2;
+            for k in 0..n {
+                let t = k as f64 * dt;
+                y += alpha * ((w * t).sin() - y);
+                if k >= skip {
+                    s += y * (w * t).sin();
+                    c += y * (w * t).cos();
+                }
+            }
+            let m = (n - skip) as f64 / 2.0;
+            let (a, b) = (s / m, c / m);
+            ((a * a + b * b).sqrt(), (-b).atan2(a))
+        };
+        let (gain, lag) = response(fc);
+        assert!((gain - 0.5f64.sqrt()).abs() < 0.01, "gain {gain}");
+        assert!(
+            (lag - std::f64::consts::FRAC_PI_4).abs() < 0.02,
+            "lag {lag} rad"
+        );
+        let f = 0.5;
+        let (gain, lag) = response(f);
+        let delay = lag / (std::f64::consts::TAU * f);
+        let expected = 1.0 / (std::f64::consts::TAU * fc);
+        assert!(gain > 0.99, "gain {gain}");
+        assert!(
+            (delay - expected).abs() < 0.03 * expected,
+            "delay {delay} s, expected {expected} s"
+        );
     }
 }

@@ -6,7 +6,9 @@ mod common;
 use std::sync::Arc;
 
 use stride_block::Block;
-use stride_sim::{IntegratorKind, PushConfig, SimConfig, SimInput, SimRobot};
+use stride_sim::{
+    ActuationMode, IntegratorKind, JointActuatorOverride, PushConfig, SimConfig, SimInput, SimRobot,
+};
 
 #[global_allocator]
 static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
@@ -29,8 +31,19 @@ fn stepping_does_not_allocate() {
             config.actuation.default.kp = 300.0;
             config.actuation.default.kd = 3.0;
         }
-        config.sensors.noise.force = 0.5;
-        config.sensors.noise.joint_position = 1e-4;
+        // The default, realistic sensors and actuators (quantisation, filters, biases, force/torque sensors,
+        // delays, friction), plus a torque-mode joint for the torque lag.
+        config.actuation.joints.push(JointActuatorOverride {
+            name: "r_elbow".into(),
+            mode: Some(ActuationMode::Torque),
+            kp: None,
+            kd: None,
+            effort_limit: None,
+            damping: None,
+            armature: None,
+            coulomb_friction: None,
+            torque_bandwidth: None,
+        });
         config.pushes.push(PushConfig {
             frame: "chest".into(),
             start: 0.0,

@@ -12,12 +12,12 @@ use stride_sim::{SimConfig, SimInput, SimRobot};
 
 #[test]
 fn humanoid_stands_for_ten_seconds_with_still_feet_and_zmp_under_the_com() {
-    stand(SimConfig::default());
+    stand(common::ideal_config());
 }
 
 #[test]
 fn humanoid_stands_with_momentum_projection() {
-    let mut config = SimConfig::default();
+    let mut config = common::ideal_config();
     config.momentum_projection = true;
     stand(config);
 }

@@ -18,7 +18,7 @@ fn torque_mode(config: &mut SimConfig) {
 fn free_fall_accelerates_the_com_at_g_with_both_integrators() {
     let model = common::humanoid();
     for integrator in [IntegratorKind::Implicit, IntegratorKind::Explicit] {
-        let mut config = SimConfig::default();
+        let mut config = common::ideal_config();
         config.integrator = integrator;
         config.contact.surfaces.clear();
         config.fall.min_base_height = -1e9;
@@ -68,7 +68,7 @@ fn free_fall_accelerates_the_com_at_g_with_both_integrators() {
 /// CoM error after 10 s of free-floating motion with no gravity, no contact and no actuation.
 fn free_floating(rate: u32, projection: bool) -> [f64; 4] {
     let model = common::weightless(&common::humanoid());
-    let mut config = SimConfig::default();
+    let mut config = common::ideal_config();
     config.momentum_projection = projection;
     config.contact.surfaces.clear();
     config.fall.min_base_height = -1e9;

@@ -39,7 +39,7 @@ fn bits(state: &RobotState) -> Vec<u64> {
 
 #[test]
 fn non_finite_commands_are_rejected_naming_the_joint_and_keep_the_state() {
-    let (mut sim, input) = standing_sim(SimConfig::default());
+    let (mut sim, input) = standing_sim(common::ideal_config());
     for _ in 0..10 {
         sim.step(&input).unwrap();
     }
@@ -72,7 +72,7 @@ fn non_finite_commands_are_rejected_naming_the_joint_and_keep_the_state() {
 
 #[test]
 fn effort_limits_saturate_and_are_reported_or_fail_by_policy() {
-    let (mut sim, mut input) = standing_sim(SimConfig::default());
+    let (mut sim, mut input) = standing_sim(common::ideal_config());
     let elbow = sim.model().joint_index("l_elbow").unwrap();
     let limit = sim.model().joints()[elbow].effort_limit;
     input.joint_positions[elbow] = 1.5; // kp · 1.5 rad = 1500 N·m ≫ 20 N·m
@@ -92,7 +92,7 @@ fn effort_limits_saturate_and_are_reported_or_fail_by_policy() {
         );
     }
     // A feed-forward torque beyond the limit with the `error` policy.
-    let mut config = SimConfig::default();
+    let mut config = common::ideal_config();
     config.actuation.effort_limit_policy = EffortLimitPolicy::Error;
     let (mut sim, mut input) = standing_sim(config);
     let before = bits(sim.state());
@@ -108,7 +108,7 @@ fn effort_limits_saturate_and_are_reported_or_fail_by_policy() {
 #[test]
 fn divergence_is_reported_and_the_last_good_state_kept() {
     // Explicit integration of a 1e6 N·m/rad servo at 2 kHz is unstable.
-    let mut config = SimConfig::default();
+    let mut config = common::ideal_config();
     config.integrator = IntegratorKind::Explicit;
     config.actuation.default.kp = 1e6;
     config.actuation.default.kd = 0.0;
@@ -139,13 +139,13 @@ fn divergence_is_reported_and_the_last_good_state_kept() {
 fn bad_configurations_are_rejected_with_the_parameter() {
     let model = common::humanoid();
     assert!(
-        matches!(SimRobot::new(Arc::clone(&model), SimConfig::default(), Duration::ZERO), Err(SimError::InvalidConfig { parameter, .. }) if parameter == "period")
+        matches!(SimRobot::new(Arc::clone(&model), common::ideal_config(), Duration::ZERO), Err(SimError::InvalidConfig { parameter, .. }) if parameter == "period")
     );
-    let mut c = SimConfig::default();
+    let mut c = common::ideal_config();
     c.contact.surfaces[0].frame = "no_such_frame".into();
     let err = SimRobot::new(Arc::clone(&model), c, common::PERIOD).unwrap_err();
     assert!(err.to_string().contains("no_such_frame"), "{err}");
-    let mut c = SimConfig::default();
+    let mut c = common::ideal_config();
     c.actuation.joints.push(JointActuatorOverride {
         name: "no_such_joint".into(),
         mode: Some(ActuationMode::Torque),
@@ -154,18 +154,20 @@ fn bad_configurations_are_rejected_with_the_parameter() {
         effort_limit: None,
         damping: None,
         armature: None,
+        coulomb_friction: None,
+        torque_bandwidth: None,
     });
     assert!(matches!(
         SimRobot::new(Arc::clone(&model), c, common::PERIOD),
         Err(SimError::UnknownJoint { .. })
     ));
-    let mut c = SimConfig::default();
+    let mut c = common::ideal_config();
     c.contact.normal_stiffness = f64::NAN;
     assert!(matches!(
         SimRobot::new(Arc::clone(&model), c, common::PERIOD),
         Err(SimError::InvalidConfig { .. })
     ));
-    let mut c = SimConfig::default();
+    let mut c = common::ideal_config();
     c.pushes.push(PushConfig {
         frame: "nowhere".into(),
         start: 0.0,
@@ -177,7 +179,8 @@ fn bad_configurations_are_rejected_with_the_parameter() {
         Err(SimError::UnknownFrame { .. })
     ));
     // A non-finite state.
-    let mut sim = SimRobot::new(Arc::clone(&model), SimConfig::default(), common::PERIOD).unwrap();
+    let mut sim =
+        SimRobot::new(Arc::clone(&model), common::ideal_config(), common::PERIOD).unwrap();
     let mut s = RobotState::zero(&model);
     s.joint_velocities[2] = f64::NAN;
     assert!(matches!(
@@ -227,9 +230,8 @@ wrench = [50.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 fn same_config_gives_bit_identical_trajectories() {
     let run = || {
         let mut config = SimConfig::default();
-        config.sensors.noise.joint_position = 1e-3;
-        config.sensors.noise.force = 1.0;
-        config.sensors.noise.seed = 42;
+        config.sensors.seed = 42;
+        config.sensors.encoder.position_noise = 1e-3;
         config.pushes.push(PushConfig {
             frame: "chest".into(),
             start: 0.05,
@@ -242,6 +244,10 @@ fn same_config_gives_bit_identical_trajectories() {
             let out = sim.step(&input).unwrap();
             trace.extend(bits(&out.state));
             trace.extend(out.joint_positions.iter().map(|x| x.to_bits()));
+            trace.extend(out.joint_velocities.iter().map(|x| x.to_bits()));
+            trace.extend(out.imu.angular_velocity.iter().map(|x| x.to_bits()));
+            trace.extend(out.imu.orientation.coords.iter().map(|x| x.to_bits()));
+            trace.extend(out.ft_wrenches.iter().flatten().map(|x| x.to_bits()));
             trace.extend(
                 out.surfaces
                     .iter()
@@ -269,7 +275,7 @@ fn reset_returns_to_the_initial_state() {
 
 #[test]
 fn foot_sensors_measure_the_weight_upwards_in_their_frames_and_a_push_tips_the_robot() {
-    let (mut sim, input) = standing_sim(SimConfig::default());
+    let (mut sim, input) = standing_sim(common::ideal_config());
     for _ in 0..6000 {
         sim.step(&input).unwrap();
     }
@@ -322,7 +328,7 @@ fn foot_sensors_measure_the_weight_upwards_in_their_frames_and_a_push_tips_the_r
 
 #[test]
 fn torque_mode_joint_is_limp() {
-    let mut config = SimConfig::default();
+    let mut config = common::ideal_config();
     config.actuation.joints.push(JointActuatorOverride {
         name: "l_elbow".into(),
         mode: Some(ActuationMode::Torque),
@@ -331,6 +337,8 @@ fn torque_mode_joint_is_limp() {
         effort_limit: None,
         damping: Some(0.5),
         armature: None,
+        coulomb_friction: None,
+        torque_bandwidth: None,
     });
     let (mut sim, mut input) = standing_sim(config);
     let elbow = sim.model().joint_index("l_elbow").unwrap();
@@ -350,7 +358,7 @@ fn torque_mode_joint_is_limp() {
 
 #[test]
 fn velocity_servo_tracks_the_commanded_velocity() {
-    let mut config = SimConfig::default();
+    let mut config = common::ideal_config();
     config.contact.surfaces.clear();
     config.fall.min_base_height = -1e9;
     config.actuation.default.mode = ActuationMode::Velocity;
@@ -377,7 +385,7 @@ fn velocity_servo_tracks_the_commanded_velocity() {
 #[test]
 fn a_torque_mode_joint_commanded_beyond_its_limit_is_saturated_every_step_with_both_integrators() {
     for integrator in [IntegratorKind::Implicit, IntegratorKind::Explicit] {
-        let mut config = SimConfig::default();
+        let mut config = common::ideal_config();
         let mut period = common::PERIOD;
         config.integrator = integrator;
         if integrator == IntegratorKind::Explicit {
@@ -393,6 +401,8 @@ fn a_torque_mode_joint_commanded_beyond_its_limit_is_saturated_every_step_with_b
             effort_limit: None,
             damping: None,
             armature: None,
+            coulomb_friction: None,
+            torque_bandwidth: None,
         });
         let model = common::humanoid();
         let q = common::bent_knees(&model, 0.2);
@@ -429,7 +439,7 @@ fn a_torque_mode_joint_commanded_beyond_its_limit_is_saturated_every_step_with_b
 
 #[test]
 fn a_position_servo_far_from_its_target_saturates_until_it_gets_close() {
-    let (mut sim, mut input) = standing_sim(SimConfig::default());
+    let (mut sim, mut input) = standing_sim(common::ideal_config());
     let model = Arc::clone(sim.model());
     let elbow = model.joint_index("l_elbow").unwrap();
     input.joint_positions[elbow] = 1.5; // kp · 1.5 rad = 1500 N·m ≫ 20 N·m

@@ -12,6 +12,7 @@ use nalgebra::{Matrix6, Vector3, Vector6};
 use stride_model::{ExternalWrench, VelocityRepresentation};
 
 use super::SimRobot;
+use crate::actuator::explicit_friction;
 use crate::config::IntegratorKind;
 use crate::contact::linearize_surface;
 use crate::error::SimError;
@@ -66,6 +67,7 @@ impl SimRobot {
             p.begin_implicit_step(&self.ground);
         }
         self.saturated.fill(false);
+        self.friction_switches.fill(0);
         let mut solves = 0;
         loop {
             self.assemble_joints(input);
@@ -90,9 +92,10 @@ impl SimRobot {
     }
 
     /// Starts `(M + dt D + dt² K) ν̇ = rhs` with the mass matrix and the joints: each servo adds
-    /// `armature + dt (kd + d) + dt² kp` to its diagonal and its torque at the start of the step
-    /// `τ_ff + kp (q_ref − q − dt q̇) + kd (q̇_ref − q̇) − d q̇` to `rhs` (a saturated joint: its fixed
-    /// torque, no gains); `rhs` also gets the pushes and `−h`.
+    /// `armature + dt (kd + d + b) + dt² kp` to its diagonal and its torque at the start of the step
+    /// `τ_ff + kp (q_ref − q − dt q̇) + kd (q̇_ref − q̇) − (d + b) q̇ + τ_s` to `rhs` (a saturated joint: its
+    /// fixed torque, no gains), where the Coulomb friction phase gives either the stick damper `b` or the
+    /// sliding torque `τ_s`; `rhs` also gets the pushes and `−h`.
     fn assemble_joints(&mut self, input: &SimInput) {
         let dt = self.dt;
         let nb = 6;
@@ -114,9 +117,11 @@ impl SimRobot {
                     input.joint_velocities[j] - qd[j],
                 )
             };
+            let (stick, slide) = self.friction[j].terms(a.coulomb_friction);
+            let damping = a.damping + stick;
             let i = nb + j;
-            self.system[(i, i)] += a.armature + dt * (kd + a.damping) + dt * dt * kp;
-            self.rhs[i] += motor - a.damping * qd[j];
+            self.system[(i, i)] += a.armature + dt * (kd + damping) + dt * dt * kp;
+            self.rhs[i] += motor - damping * qd[j] + slide;
         }
     }
 
@@ -152,6 +157,7 @@ impl SimRobot {
     /// that the solution violates. Returns whether anything changed (then the step is solved again).
     fn update_modes(&mut self, input: &SimInput) -> bool {
         let mut changed = self.saturate_joints(input);
+        changed |= self.switch_friction();
         for s in &mut self.surfaces {
             s.acceleration = Vector6::zeros();
             for &c in &s.columns {
@@ -193,6 +199,24 @@ impl SimRobot {
         changed
     }
 
+    /// Switches the Coulomb friction phases the solution violates (each joint at most twice per step, so the
+    /// re-solves end). Returns whether one switched.
+    fn switch_friction(&mut self) -> bool {
+        let mut changed = false;
+        for (j, a) in self.actuators.iter().enumerate() {
+            if a.coulomb_friction == 0.0 || self.friction_switches[j] >= 2 {
+                continue;
+            }
+            let v_end = self.state.joint_velocities[j] + self.dt * self.acceleration[6 + j];
+            if let Some(next) = self.friction[j].switch(a.coulomb_friction, v_end) {
+                self.friction[j] = next;
+                self.friction_switches[j] += 1;
+                changed = true;
+            }
+        }
+        changed
+    }
+
     /// One explicit step: servo torques (saturated) and contact forces at the start of the step, then the
     /// articulated-body algorithm for `ν̇`.
     pub(super) fn solve_explicit(&mut self, input: &SimInput) -> Result<Solve, SimError> {
@@ -226,9 +250,10 @@ impl SimRobot {
                 });
             }
         }
-        // Joint torques for ABA: motor minus passive damping.
-        for j in 0..self.model.dof() {
-            self.joint_torque_buffer[j] = self.motor_torques[j] - self.actuators[j].damping * qd[j];
+        // Joint torques for ABA: motor minus passive damping and the regularised Coulomb friction.
+        for (j, a) in self.actuators.iter().enumerate() {
+            self.joint_torque_buffer[j] = self.motor_torques[j] - a.damping * qd[j]
+                + explicit_friction(a.coulomb_friction, qd[j]);
         }
         self.kd.forward_dynamics(
             &self.joint_torque_buffer,

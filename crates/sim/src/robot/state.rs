@@ -33,6 +33,14 @@ impl SimRobot {
         self.fall_time_ns = None;
         self.solve_cap_hits = 0;
         self.sensors.reset();
+        // Until the first delayed command arrives the motors hold the initial posture.
+        for c in &mut self.commands {
+            c.joint_positions.copy_from(&state.joint_positions);
+            c.joint_velocities.fill(0.0);
+            c.joint_torques.fill(0.0);
+        }
+        self.command_head = 0;
+        self.lagged_torques.fill(0.0);
         self.set_state(state)
     }
 
@@ -117,12 +125,17 @@ impl SimRobot {
         self.imu_velocity = lin(&self.kd.frame_velocity(self.imu_frame));
         self.motor_torques.fill(0.0);
         self.saturated.fill(false);
+        self.friction.fill(crate::actuator::Friction::Stick);
+        // Until the first step the force/torque sensors read the wrench of the robot at rest with no contact force.
+        self.acceleration.fill(0.0);
+        self.compute_ft_truth()?;
         self.update_output(
             &Vector3::zeros(),
             super::integrator::Solve {
                 solves: 0,
                 cap_hit: false,
             },
+            true,
         );
         Ok(())
     }

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use stride_model::{KinDyn, Model, RobotState};
-use stride_sim::{ContactSurfaceConfig, SimConfig};
+use stride_sim::{ActuationConfig, ContactSurfaceConfig, SensorConfig, SimConfig};
 
 /// The default step period of the tests, 500 µs (2 kHz).
 pub const PERIOD: Duration = Duration::from_micros(500);
@@ -22,6 +22,16 @@ pub fn weightless(model: &Model) -> Arc<Model> {
     m.set_gravity(Vector3::zeros())
         .expect("zero gravity is finite");
     Arc::new(m)
+}
+
+/// The default configuration with ideal sensors and actuators (no noise, quantisation, filter, delay,
+/// friction or torque lag): for the tests that compare the readings with the physics.
+pub fn ideal_config() -> SimConfig {
+    SimConfig {
+        sensors: SensorConfig::ideal(),
+        actuation: ActuationConfig::ideal(),
+        ..SimConfig::default()
+    }
 }
 
 /// The bundled humanoid.
@@ -57,7 +67,7 @@ pub fn box_model(m: f64, lx: f64, ly: f64, lz: f64) -> Arc<Model> {
 
 /// A config for a box of footprint `lx × ly` with its contact grid on the `bottom` frame.
 pub fn box_config(lx: f64, ly: f64, grid: [usize; 2]) -> SimConfig {
-    let mut c = SimConfig::default();
+    let mut c = ideal_config();
     c.contact.surfaces = vec![ContactSurfaceConfig {
         name: "bottom".into(),
         frame: "bottom".into(),
