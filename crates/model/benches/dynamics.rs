@@ -14,7 +14,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{DMatrix, DVector, Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use stride_model::{FrameId, KinDyn, Model, RobotState};
+use stride_model::{ExternalWrench, FrameId, KinDyn, Model, RobotState};
 
 fn random_states(model: &Model, count: usize) -> Vec<RobotState> {
     let mut rng = ChaCha8Rng::seed_from_u64(42);
@@ -125,6 +125,24 @@ fn bench_model(c: &mut Criterion, label: &str, model: Arc<Model>) {
             kd.set_state(&states[next()]).unwrap();
             kd.centroidal_momentum_matrix(&mut cmm).unwrap();
             black_box(&cmm);
+        })
+    });
+    // The readings of every FT sensor with a wrench on each sole (what a simulator's sensor model calls).
+    let soles: Vec<ExternalWrench> = ["l_sole", "r_sole"]
+        .iter()
+        .filter_map(|n| model.frame_id(n))
+        .map(|frame| ExternalWrench {
+            frame,
+            wrench: Vector6::new(5.0, -3.0, 150.0, 0.5, -1.0, 0.2),
+        })
+        .collect();
+    let mut ft = vec![Vector6::zeros(); model.ft_sensors().len()];
+    group.bench_function("FT sensor wrenches (all sensors, 2 sole wrenches)", |b| {
+        b.iter(|| {
+            kd.set_state(&states[next()]).unwrap();
+            kd.ft_sensor_wrenches(&nu_dot, black_box(&soles), &mut ft)
+                .unwrap();
+            black_box(&ft);
         })
     });
     group.finish();

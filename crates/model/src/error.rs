@@ -136,6 +136,25 @@ pub enum ModelError {
         /// Number of frames of the model.
         count: usize,
     },
+    /// An [`InertiaEdits`](crate::InertiaEdits) entry that cannot be applied (unknown link, non-positive or
+    /// non-finite scale, non-finite CoM offset).
+    #[error("{element}: invalid {field}: {reason}")]
+    InvalidInertiaEdit {
+        /// `inertia edits` or `inertia edit of link `name``.
+        element: String,
+        /// `mass_scale`, `com_offset` or `link`.
+        field: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A force/torque sensor index that does not belong to this model.
+    #[error("force/torque sensor index {index} is out of range (the model has {count} sensors)")]
+    FtSensorOutOfRange {
+        /// The index.
+        index: usize,
+        /// Number of force/torque sensors of the model.
+        count: usize,
+    },
     /// The articulated-body inertia seen by a joint (or the floating base) is singular: a subtree carries no
     /// mass or inertia that the joint can move.
     #[error("forward dynamics is singular at {what}: the subtree moved by it carries no inertia")]

@@ -20,6 +20,8 @@ use crate::spatial::{
 };
 use crate::state::{convert_velocity, RobotState, VelocityRepresentation};
 
+mod ft_sensors;
+
 /// A wrench applied ON the robot at a frame: `[force; torque]`, torque about the frame origin, both in world
 /// orientation (the frame's mixed frame `F[A]`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -682,6 +684,22 @@ impl KinDyn {
 
     /// RNEA in frame A'. `velocity = false` computes gravity only.
     fn rnea(&mut self, nu_dot: Option<&DVector<f64>>, velocity: bool, out: &mut DVector<f64>) {
+        self.rnea_forces(nu_dot, velocity);
+        let nb = self.model.body_count();
+        for i in 1..nb {
+            out[5 + i] = self.s[i].dot(&self.force[i]);
+        }
+        let fb = self.base_t_tr_mul(&self.force[0]);
+        for r in 0..6 {
+            out[r] = fb[r];
+        }
+    }
+
+    /// The RNEA's passes in frame A' without the projection on the joints: `acc[i]` = proper acceleration
+    /// of body `i` (gravity subtracted), then `force[i]` = the wrench its parent applies on the subtree of
+    /// `i`, `Σ (I a + v ×̄* I v − f^x)` over the subtree [Traversaro 2017, eqs. 4.17, 4.23 with erratum E12].
+    /// `velocity = false` computes gravity only (`acc` untouched).
+    fn rnea_forces(&mut self, nu_dot: Option<&DVector<f64>>, velocity: bool) {
         self.ensure_inertias();
         let nb = self.model.body_count();
         let g6 = self.world_gravity6();
@@ -716,14 +734,9 @@ impl KinDyn {
         }
         let m = &*self.model;
         for i in (1..nb).rev() {
-            out[5 + i] = self.s[i].dot(&self.force[i]);
             let p = m.parent[i];
             let f = self.force[i];
             self.force[p] += f;
-        }
-        let fb = self.base_t_tr_mul(&self.force[0]);
-        for r in 0..6 {
-            out[r] = fb[r];
         }
     }
 

@@ -23,6 +23,7 @@
 
 #![warn(missing_docs)]
 
+mod edits;
 mod error;
 mod kindyn;
 mod model;
@@ -30,6 +31,7 @@ pub mod spatial;
 mod state;
 mod urdf;
 
+pub use edits::{InertiaEdits, LinkInertiaEdit};
 pub use error::ModelError;
 pub use kindyn::{ExternalWrench, KinDyn};
 pub use model::{
@@ -49,5 +51,27 @@ impl Model {
     /// limits, massless bodies) are in [`Model::warnings`] and are also emitted with `tracing::warn!`.
     pub fn from_urdf_str(urdf: &str) -> Result<Model, ModelError> {
         urdf::load_str(urdf)
+    }
+
+    /// Loads a model from a URDF file with its inertial parameters edited (a plant that differs from the
+    /// controllers' model); see [`Model::from_urdf_str_edited`].
+    pub fn from_urdf_file_edited(
+        path: impl AsRef<std::path::Path>,
+        edits: &InertiaEdits,
+    ) -> Result<Model, ModelError> {
+        urdf::load_file_edited(path.as_ref(), edits)
+    }
+
+    /// Loads a model from URDF text with the inertial parameters of its links edited before fixed joints are
+    /// merged: every link's mass and rotational inertia (about its CoM) are scaled by `edits.mass_scale`,
+    /// then each listed link's by its own `mass_scale`, and its CoM is moved by its `com_offset` (m, link
+    /// frame). Moving link `l`'s CoM by `d` moves the robot's CoM by `m_l d / M` (world orientation of the
+    /// link frame).
+    ///
+    /// # Errors
+    /// Those of [`Model::from_urdf_str`], and [`ModelError::InvalidInertiaEdit`] for an unknown link, a
+    /// non-positive or non-finite scale or a non-finite offset.
+    pub fn from_urdf_str_edited(urdf: &str, edits: &InertiaEdits) -> Result<Model, ModelError> {
+        urdf::load_str_edited(urdf, edits)
     }
 }

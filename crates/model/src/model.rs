@@ -140,6 +140,29 @@ pub struct FtSensor {
     pub measure_direction: String,
 }
 
+/// How the fixed joint of a force/torque sensor splits the model, computed at load time: the sensor's
+/// fixed joint lies inside one lumped body (the host), so the inertia of the URDF links on the joint's child
+/// side within the host is kept apart, with the bodies that hang from that side [Traversaro 2017, §4.5].
+#[derive(Clone, Debug)]
+pub(crate) struct FtSensorSide {
+    /// The lumped body that contains the sensor's fixed joint.
+    pub(crate) host: usize,
+    /// Mass (kg) of the child-side links of the host body.
+    pub(crate) mass: f64,
+    /// Their centre of mass, host body frame (m).
+    pub(crate) com: Vector3<f64>,
+    /// Their rotational inertia about that centre of mass, host body orientation (kg·m²).
+    pub(crate) inertia_at_com: Matrix3<f64>,
+    /// Bodies whose parent is the host and whose joint hangs from a child-side link (their subtrees are on
+    /// the child side).
+    pub(crate) child_bodies: Vec<usize>,
+    /// Per frame ([`FrameId::index`]): whether the frame's URDF link is on the child side.
+    pub(crate) child_side_frame: Vec<bool>,
+    /// `true` for `child_to_parent` (the reading is the wrench the child side applies on the parent side),
+    /// `false` for `parent_to_child`.
+    pub(crate) child_to_parent: bool,
+}
+
 /// The immutable floating-base model. Build it with [`Model::from_urdf_file`] or [`Model::from_urdf_str`]
 /// and share it with [`std::sync::Arc`].
 #[derive(Clone, Debug)]
@@ -152,6 +175,8 @@ pub struct Model {
     pub(crate) frame_index: HashMap<String, usize>,
     pub(crate) joint_index: HashMap<String, usize>,
     pub(crate) ft_sensors: Vec<FtSensor>,
+    /// Per force/torque sensor (same order): how its fixed joint splits the hosting lumped body.
+    pub(crate) ft_sides: Vec<FtSensorSide>,
     pub(crate) warnings: Vec<String>,
     pub(crate) total_mass: f64,
     /// Gravity acceleration in world coordinates (m/s²).
@@ -256,6 +281,11 @@ impl Model {
     /// Six-axis force/torque sensors.
     pub fn ft_sensors(&self) -> &[FtSensor] {
         &self.ft_sensors
+    }
+
+    /// Index into [`Model::ft_sensors`] of the force/torque sensor called `name`.
+    pub fn ft_sensor_index(&self, name: &str) -> Option<usize> {
+        self.ft_sensors.iter().position(|s| s.name == name)
     }
 
     /// Warnings raised while loading (physically inconsistent inertias, missing limits, massless bodies, ...).

@@ -33,6 +33,8 @@ fn exercise(model: Arc<Model>) {
         wrench: Vector6::new(1.0, 2.0, 3.0, 0.1, 0.2, 0.3),
     }];
     let mut integrated = states[0].clone();
+    let mut ft = vec![Vector6::zeros(); model.ft_sensors().len()];
+    let mut ft_map = nalgebra::Matrix6::zeros();
 
     let mut sink = 0.0;
     // only this thread's allocations count (the test harness may allocate on its own threads)
@@ -58,6 +60,11 @@ fn exercise(model: Arc<Model>) {
                 kd.centroidal_momentum_matrix(&mut cmm).unwrap();
                 kd.mass_matrix(&mut mass).unwrap();
                 kd.bias_forces(&mut vec_nv).unwrap();
+                kd.ft_sensor_wrenches(&nu_dot, &wrenches, &mut ft).unwrap();
+                for (s, reading) in ft.iter().enumerate() {
+                    kd.ft_sensor_wrench_map(s, frames[0], &mut ft_map).unwrap();
+                    sink += reading[2] + ft_map[(0, 0)];
+                }
                 kd.gravity_forces(&mut vec_nv).unwrap();
                 kd.inverse_dynamics(&nu_dot, &wrenches, &mut vec_nv)
                     .unwrap();

@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use super::frames::Frames;
 use super::graph::Graph;
 use super::tree::Tree;
-use crate::model::{FtSensor, Model, STANDARD_GRAVITY};
+use crate::model::{FtSensor, FtSensorSide, Model, STANDARD_GRAVITY};
 use crate::spatial::skew;
 
 /// Writes each body's lumped mass (kg), CoM (m, body frame) and rotational inertia about the CoM (kg·m²)
@@ -60,6 +60,7 @@ pub(super) struct Named {
     pub(super) frames: Frames,
     pub(super) joint_index: HashMap<String, usize>,
     pub(super) ft_sensors: Vec<FtSensor>,
+    pub(super) ft_sides: Vec<FtSensorSide>,
     pub(super) warnings: Vec<String>,
 }
 
@@ -101,6 +102,7 @@ pub(super) fn model(
         frame_index: named.frames.index,
         joint_index: named.joint_index,
         ft_sensors: named.ft_sensors,
+        ft_sides: named.ft_sides,
         warnings: named.warnings,
         total_mass,
         gravity: Vector3::new(0.0, 0.0, -STANDARD_GRAVITY),

@@ -13,10 +13,12 @@ use crate::model::{Body, Frame, FrameId, FrameKind, FtSensor, Joint};
 pub(super) struct Frames {
     pub(super) list: Vec<Frame>,
     pub(super) index: HashMap<String, usize>,
+    /// Per frame, the URDF link (file-order index) it is attached to.
+    pub(super) links: Vec<usize>,
 }
 
 /// Body frames first (frame `k` is body `k`), then the merged links in traversal order.
-pub(super) fn body_and_merged_frames(bodies: &[Body], merged: Vec<Frame>) -> Frames {
+pub(super) fn body_and_merged_frames(bodies: &[Body], merged: Vec<Frame>, links: &Links) -> Frames {
     let mut list: Vec<Frame> = Vec::new();
     for b in bodies {
         list.push(Frame {
@@ -31,7 +33,9 @@ pub(super) fn body_and_merged_frames(bodies: &[Body], merged: Vec<Frame>) -> Fra
     for (k, f) in list.iter().enumerate() {
         index.insert(f.name.clone(), k);
     }
-    Frames { list, index }
+    // Body and merged frames are named after their URDF link.
+    let links = list.iter().map(|f| links.index[&f.name]).collect();
+    Frames { list, index, links }
 }
 
 /// The movable joints by name; every mimic joint must copy one of them ([`ModelError::MimicTarget`]).
@@ -114,7 +118,8 @@ fn sensor_frame(
         "parent" => &joint.parent.link,
         _ => &joint.child.link,
     };
-    let (body, placement) = tree.link_frame[links.index[link]]?;
+    let link = links.index[link];
+    let (body, placement) = tree.link_frame[link]?;
     let placement = if s.frame == "sensor" {
         placement * s.origin
     } else {
@@ -126,6 +131,7 @@ fn sensor_frame(
         placement,
         kind: FrameKind::Sensor,
     });
+    frames.links.push(link);
     frames.index.insert(s.name.clone(), frames.list.len() - 1);
     Some(frames.list.len() - 1)
 }

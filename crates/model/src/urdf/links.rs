@@ -5,6 +5,7 @@ use std::collections::HashMap;
 use nalgebra::{Matrix3, SymmetricEigen};
 
 use super::{check_finite, pose};
+use crate::edits::InertiaEdits;
 use crate::error::ModelError;
 use crate::spatial::Inertia;
 
@@ -18,8 +19,10 @@ pub(super) struct Links {
 
 /// Validates every link in file order (unique name, finite numbers, non-negative mass, positive
 /// semi-definite rotational inertia) and builds its inertia; physically doubtful inertias are warnings.
+/// The inertias are then edited by `edits` ([`InertiaEdits::apply`], checked first).
 pub(super) fn read_links(
     robot: &urdf_rs::Robot,
+    edits: &InertiaEdits,
     warnings: &mut Vec<String>,
 ) -> Result<Links, ModelError> {
     let mut index: HashMap<String, usize> = HashMap::new();
@@ -31,6 +34,13 @@ pub(super) fn read_links(
             });
         }
         inertia.push(link_inertia(link, warnings)?);
+    }
+    if !edits.is_identity() {
+        edits.validate(|name| index.contains_key(name))?;
+        for (link, i) in robot.links.iter().zip(inertia.iter_mut()) {
+            let (m, c, i_com) = edits.apply(&link.name, i.m, i.com(), i.inertia_at_com());
+            *i = Inertia::from_com(m, &c, &i_com);
+        }
     }
     Ok(Links { index, inertia })
 }

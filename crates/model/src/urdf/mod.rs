@@ -5,15 +5,17 @@
 //! order too):
 //! 1. [`texture`]: drop the `<texture/>` elements urdf-rs rejects; urdf-rs parses the text;
 //! 2. [`raw`]: the XML pass (`<limit>` presence, force/torque sensors);
-//! 3. [`links`]: validate every link and build its spatial inertia;
+//! 3. [`links`]: validate every link (and the inertia edits, applied here) and build its spatial inertia;
 //! 4. [`graph`]: validate every joint, find each link's parent joint and the one root;
 //! 5. [`tree`]: depth-first from the root: one body per movable joint, fixed joints merged (inertias lumped,
 //!    merged links kept as frames);
 //! 6. [`frames`]: the frame list, the mimic targets and the force/torque sensors;
+//!    [`ft`]: how each sensor's fixed joint splits its lumped body;
 //! 7. [`assemble`]: lumped body inertias, massless-body warnings and the flat data of the algorithms.
 
 mod assemble;
 mod frames;
+mod ft;
 mod graph;
 mod links;
 mod raw;
@@ -24,6 +26,7 @@ use std::path::Path;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
+use crate::edits::InertiaEdits;
 use crate::error::ModelError;
 use crate::model::Model;
 
@@ -36,8 +39,22 @@ pub(crate) fn load_file(path: &Path) -> Result<Model, ModelError> {
     load_str(&text)
 }
 
+/// Loads a model from a URDF file with edited inertias.
+pub(crate) fn load_file_edited(path: &Path, edits: &InertiaEdits) -> Result<Model, ModelError> {
+    let text = std::fs::read_to_string(path).map_err(|e| ModelError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    load_str_edited(&text, edits)
+}
+
 /// Loads a model from URDF text.
 pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
+    load_str_edited(text, &InertiaEdits::default())
+}
+
+/// Loads a model from URDF text, the link inertias edited by `edits` before lumping.
+pub(crate) fn load_str_edited(text: &str, edits: &InertiaEdits) -> Result<Model, ModelError> {
     let text = texture::strip_textures_without_filename(text);
     let robot = urdf_rs::read_from_string(&text).map_err(|e| ModelError::Urdf(e.to_string()))?;
     let raw = raw::read_raw(&text)?;
@@ -46,12 +63,12 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
     if robot.links.is_empty() {
         return Err(ModelError::Empty);
     }
-    let links = links::read_links(&robot, &mut warnings)?;
+    let links = links::read_links(&robot, edits, &mut warnings)?;
     let graph = graph::read_joints(&robot, &links.index)?;
     let mut tree = tree::build(&robot, &raw, &links, &graph, version_ge_1_2, &mut warnings)?;
     let joint_index = frames::check_mimic_targets(&tree.joints)?;
     let merged = std::mem::take(&mut tree.merged_frames);
-    let mut frames = frames::body_and_merged_frames(&tree.bodies, merged);
+    let mut frames = frames::body_and_merged_frames(&tree.bodies, merged, &links);
     let total_mass = assemble::lump_inertias(&mut tree, &mut warnings);
     let ft_sensors = frames::ft_sensors(
         &robot,
@@ -62,6 +79,7 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
         &mut frames,
         &mut warnings,
     );
+    let ft_sides = ft::sensor_sides(&robot, &links, &graph, &tree, &frames, &ft_sensors);
     for w in &warnings {
         tracing::warn!("{w}");
     }
@@ -69,6 +87,7 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
         frames,
         joint_index,
         ft_sensors,
+        ft_sides,
         warnings,
     };
     Ok(assemble::model(&robot, &graph, tree, total_mass, named))

@@ -1,0 +1,128 @@
+//! Expected six-axis force/torque sensor readings: the wrench transmitted through each sensor's fixed joint,
+//! i.e. the fixed-joint line of inverse dynamics [Traversaro 2017, §4.3.1, §4.6].
+
+use nalgebra::{DVector, Matrix3, Matrix6, Vector3, Vector6};
+
+use super::{ExternalWrench, KinDyn};
+use crate::error::{check_len, ModelError};
+use crate::model::FrameId;
+use crate::spatial::{ang, cross_force, join, lin, skew, Inertia};
+
+impl KinDyn {
+    /// The wrench each force/torque sensor of [`Model::ft_sensors`](crate::Model::ft_sensors) measures (same
+    /// order) for the current state, the generalized acceleration `nu_dot` (nv, current representation, as
+    /// in [`KinDyn::inverse_dynamics`]) and the `external` wrenches acting on the robot.
+    ///
+    /// `out[k] = [f; τ]` (N, N·m) is the wrench transmitted through the sensor's fixed joint, expressed in the
+    /// sensor frame about its origin [Traversaro 2017, eq. 4.1]: for `child_to_parent` the wrench the child
+    /// side applies on the parent side (iDynTree's `SixAxisForceTorqueSensor` convention), for
+    /// `parent_to_child` its opposite. With the child-side links `L` (the subtree below the joint),
+    /// `child_to_parent` reads `y = − _S X^A Σ_L (φ_L − f^x_L)`, where `φ_L = M_L a_L + v_L ×̄* M_L v_L` is
+    /// the net wrench of link `L` (`a_L` its proper acceleration, gravity subtracted) and `f^x_L` the external
+    /// wrench on it [Traversaro 2017, eqs. 4.9, 4.17, 4.23b with erratum E12]. A robot standing still on one
+    /// foot whose sensor is between ankle and sole reads the ground wrench plus the weight of the sole part.
+    ///
+    /// # Errors
+    /// [`ModelError::DimensionMismatch`] when `nu_dot` is not nv long or `out` is not one entry per sensor,
+    /// [`ModelError::NonFiniteInput`] for a non-finite `nu_dot` or wrench, [`ModelError::FrameOutOfRange`]
+    /// for a wrench on a frame of another model. Does not allocate.
+    pub fn ft_sensor_wrenches(
+        &mut self,
+        nu_dot: &DVector<f64>,
+        external: &[ExternalWrench],
+        out: &mut [Vector6<f64>],
+    ) -> Result<(), ModelError> {
+        check_len("nu_dot", self.model.nv(), nu_dot.len())?;
+        check_len(
+            "ft_sensor_wrenches output",
+            self.model.ft_sensors.len(),
+            out.len(),
+        )?;
+        if !nu_dot.iter().all(|v| v.is_finite()) {
+            return Err(ModelError::NonFiniteInput { what: "nu_dot" });
+        }
+        self.gather_wrenches(external)?;
+        // `force[i]` = Σ over the subtree of i of (φ − f^x), frame A'.
+        self.rnea_forces(Some(nu_dot), true);
+        let model = &*self.model;
+        for (k, (sensor, side)) in model.ft_sensors.iter().zip(&model.ft_sides).enumerate() {
+            let h = side.host;
+            // Child-side part of the host body: φ = M a + v ×̄* M v with the host's motion.
+            let inertia = Inertia::from_body_com(
+                side.mass,
+                &side.com,
+                &side.inertia_at_com,
+                &self.rot[h],
+                &self.pos[h],
+            );
+            let momentum = inertia.mul_motion(&self.vel[h]);
+            let mut net = inertia.mul_motion(&self.acc[h]) + cross_force(&self.vel[h], &momentum);
+            for &c in &side.child_bodies {
+                net += self.force[c];
+            }
+            // External wrenches on child-side frames of the host body (those on child bodies are in `force`).
+            for w in external {
+                if model.frames[w.frame.0].link == h && side.child_side_frame[w.frame.0] {
+                    let (_, _, p) = self.frame_rt(w.frame);
+                    let f = lin(&w.wrench);
+                    net -= join(&f, &(ang(&w.wrench) + p.cross(&f)));
+                }
+            }
+            // `net` is the wrench of the parent side on the child side, about the A' origin.
+            let (_, r, p) = self.frame_rt(sensor.frame);
+            let f = lin(&net);
+            let tau = ang(&net) - p.cross(&f);
+            let reading = join(&r.tr_mul(&f), &r.tr_mul(&tau));
+            out[k] = if side.child_to_parent {
+                -reading
+            } else {
+                reading
+            };
+        }
+        Ok(())
+    }
+
+    /// The 6×6 matrix `A` by which force/torque sensor `sensor`'s reading changes, `Δy = A w`, when an
+    /// external wrench `w = [f; τ]` (N, N·m; world orientation, torque about the origin of `frame`) is added
+    /// on `frame` with the accelerations held fixed.
+    ///
+    /// When `frame` lies on the sensor's child side, `A = ± [[Rᵀ, 0], [Rᵀ (p_F − p_S)^, Rᵀ]]` (`R`, `p_S` the
+    /// sensor frame's orientation and origin, `p_F` the origin of `frame`; `+` for `child_to_parent`): the
+    /// wrench moved to the sensor frame [Traversaro 2017, eqs. 4.1, 4.20]; when it lies on the parent side,
+    /// `A = 0`. A wrench estimate on a sole is then `A⁻¹ (y − y₀)`, `y₀` the reading without it
+    /// [Traversaro 2017, eq. 4.21].
+    ///
+    /// # Errors
+    /// [`ModelError::FtSensorOutOfRange`], [`ModelError::FrameOutOfRange`].
+    pub fn ft_sensor_wrench_map(
+        &self,
+        sensor: usize,
+        frame: FrameId,
+        out: &mut Matrix6<f64>,
+    ) -> Result<(), ModelError> {
+        let count = self.model.ft_sensors.len();
+        if sensor >= count {
+            return Err(ModelError::FtSensorOutOfRange {
+                index: sensor,
+                count,
+            });
+        }
+        self.frame_checked(frame)?;
+        let side = &self.model.ft_sides[sensor];
+        if !side.child_side_frame[frame.0] {
+            *out = Matrix6::zeros();
+            return Ok(());
+        }
+        let (_, r, ps) = self.frame_rt(self.model.ft_sensors[sensor].frame);
+        let (_, _, pf) = self.frame_rt(frame);
+        let rt: Matrix3<f64> = r.transpose();
+        let sign = if side.child_to_parent { 1.0 } else { -1.0 };
+        let d: Vector3<f64> = pf - ps;
+        *out = Matrix6::zeros();
+        out.fixed_view_mut::<3, 3>(0, 0).copy_from(&(rt * sign));
+        out.fixed_view_mut::<3, 3>(3, 3).copy_from(&(rt * sign));
+        out.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&(rt * skew(&d) * sign));
+        Ok(())
+    }
+}
