@@ -11,11 +11,13 @@
 mod config;
 pub mod ekf;
 mod error;
+mod estimator;
 mod io;
 mod schmitt;
 
 pub use config::{ContactConfig, EkfConfig, EkfPrior, EstimatorConfig, FtOffsetConfig};
 pub use ekf::{EkfState, InvariantEkf};
 pub use error::{EstimatorError, Result};
+pub use estimator::Estimator;
 pub use io::{EstimatorInput, EstimatorOutput, ImuReading};
 pub use schmitt::SchmittTrigger;

@@ -2,7 +2,7 @@
 //! trajectory of the IMU and the feet.
 #![allow(dead_code)]
 
-use nalgebra::{Matrix3, Rotation3, Vector3};
+use nalgebra::{Matrix3, Rotation3, Vector3, Vector6};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -174,4 +174,86 @@ pub fn yaw_between(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
     let xa = a.column(0).xy();
     let xb = b.column(0).xy();
     (xa.x * xb.y - xa.y * xb.x).atan2(xa.dot(&xb)).abs()
+}
+
+use std::sync::Arc;
+use stride_estimation::{EstimatorInput, ImuReading};
+use stride_model::{ExternalWrench, KinDyn, Model, RobotState};
+
+pub fn bundled_model() -> Arc<Model> {
+    let path = format!(
+        "{}/../../models/stride_humanoid.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    Arc::new(Model::from_urdf_file(path).expect("bundled model"))
+}
+
+/// A standing state of the bundled model: knees and ankles bent, base tilted a little and placed so that
+/// the left sole is on z = 0 (the right one too: the posture is symmetric).
+pub fn standing_state(model: &Model) -> RobotState {
+    let mut state = RobotState::zero(model);
+    for (name, v) in [
+        ("l_hip_pitch", 0.3),
+        ("r_hip_pitch", 0.3),
+        ("l_knee", 0.6),
+        ("r_knee", 0.6),
+        ("l_ankle_pitch", 0.3),
+        ("r_ankle_pitch", 0.3),
+        ("torso_pitch", 0.1),
+    ] {
+        if let Some(i) = model.joint_index(name) {
+            state.joint_positions[i] = v;
+        }
+    }
+    let mut kd = KinDyn::new(Arc::new(model.clone()));
+    kd.set_state(&state).expect("state");
+    let sole = kd.frame_pose(model.frame_id("l_sole").expect("l_sole"));
+    // Put the sole flat at the world origin's height, with a 0.3 rad heading.
+    let target = nalgebra::Isometry3::from_parts(
+        nalgebra::Translation3::new(0.2, 0.1, 0.0),
+        nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.0, 0.3),
+    );
+    state.base_pose = target * sole.inverse() * state.base_pose;
+    state
+}
+
+/// What the sensors of `model` read for a robot at rest in `state` (IMU still, readings from
+/// `ft_sensor_wrenches` with the ground wrenches `ground` on the soles, plus `offsets`).
+pub fn standing_input(
+    model: &Arc<Model>,
+    state: &RobotState,
+    ground: &[Vector6<f64>; 2],
+    offsets: &[Vector6<f64>],
+    time_ns: u64,
+) -> EstimatorInput {
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_state(state).expect("state");
+    let imu = model.frame_id("imu_frame").expect("imu");
+    let (r, _) = kd.frame_rotation_translation(imu);
+    let soles = ["l_sole", "r_sole"].map(|s| model.frame_id(s).expect("sole"));
+    let external = [0, 1].map(|i| ExternalWrench {
+        frame: soles[i],
+        wrench: ground[i],
+    });
+    let mut readings = vec![Vector6::zeros(); model.ft_sensors().len()];
+    kd.ft_sensor_wrenches(
+        &nalgebra::DVector::zeros(model.nv()),
+        &external,
+        &mut readings,
+    )
+    .expect("readings");
+    for (y, o) in readings.iter_mut().zip(offsets) {
+        *y += o;
+    }
+    EstimatorInput {
+        time_ns,
+        joint_positions: state.joint_positions.clone(),
+        joint_velocities: state.joint_velocities.clone(),
+        imu: ImuReading {
+            orientation: nalgebra::UnitQuaternion::from_matrix(&r),
+            angular_velocity: Vector3::zeros(),
+            proper_acceleration: r.transpose() * (-model.gravity()),
+        },
+        ft_wrenches: readings,
+    }
 }
