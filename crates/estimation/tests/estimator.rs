@@ -44,14 +44,9 @@ fn foot_wrenches_and_joint_torques_are_recovered_exactly() {
         out = Some(est.step(&input).unwrap().clone());
     }
     let out = out.unwrap();
-    for foot in 0..2 {
-        let err = (out.foot_wrenches[foot] - ground[foot]).norm();
-        assert!(
-            err < 1e-8,
-            "foot {foot}: {} vs {}",
-            out.foot_wrenches[foot],
-            ground[foot]
-        );
+    for (estimate, truth) in out.foot_wrenches.iter().zip(&ground) {
+        let err = (estimate - truth).norm();
+        assert!(err < 1e-8, "{estimate} vs {truth}");
     }
     assert_eq!(out.contacts, [true, true]);
     // The pose stays where it started.
