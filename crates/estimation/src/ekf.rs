@@ -215,36 +215,61 @@ impl InvariantEkf {
         self.rot = orthonormalize(&(self.rot * exp_w));
     }
 
-    /// `Φ = I + A dt + ½ A² dt²` of the linearised right-invariant error dynamics ([Hartley 2020];
-    /// bias columns as in bipedal-locomotion-framework's `calcFc`).
-    fn transition(&self, dt: f64) -> Covariance {
-        let mut phi = Covariance::identity();
+    /// The off-identity 3×3 blocks `(row, column, block)` of `Φ = I + A dt + ½ A² dt²`, the transition of
+    /// the linearised right-invariant error dynamics ([Hartley 2020]; bias columns as in
+    /// bipedal-locomotion-framework's `calcFc`), evaluated at the current estimate. `Φ` is sparse: products
+    /// with it go block by block.
+    fn transition_blocks(&self, dt: f64) -> ([(usize, usize, Matrix3<f64>); 11], usize) {
         let gx = skew(&self.gravity);
         let r = self.rot;
         let dt2 = 0.5 * dt * dt;
-        phi.fixed_view_mut::<3, 3>(VEL, PHI).copy_from(&(gx * dt));
-        phi.fixed_view_mut::<3, 3>(POS, VEL)
-            .copy_from(&(Matrix3::identity() * dt));
-        phi.fixed_view_mut::<3, 3>(POS, PHI).copy_from(&(gx * dt2));
-        if self.bias_estimation {
-            let vx_r = skew(&self.vel) * r;
-            phi.fixed_view_mut::<3, 3>(PHI, BG).copy_from(&(-r * dt));
-            phi.fixed_view_mut::<3, 3>(VEL, BG)
-                .copy_from(&(-vx_r * dt - gx * r * dt2));
-            phi.fixed_view_mut::<3, 3>(VEL, BA).copy_from(&(-r * dt));
-            phi.fixed_view_mut::<3, 3>(POS, BG)
-                .copy_from(&(-skew(&self.pos) * r * dt - vx_r * dt2));
-            phi.fixed_view_mut::<3, 3>(POS, BA).copy_from(&(-r * dt2));
-            for (foot, &row) in FOOT.iter().enumerate() {
-                phi.fixed_view_mut::<3, 3>(row, BG)
-                    .copy_from(&(-skew(&self.feet[foot]) * r * dt));
-            }
+        let mut blocks = [(0, 0, Matrix3::zeros()); 11];
+        blocks[0] = (VEL, PHI, gx * dt);
+        blocks[1] = (POS, VEL, Matrix3::identity() * dt);
+        blocks[2] = (POS, PHI, gx * dt2);
+        if !self.bias_estimation {
+            return (blocks, 3);
+        }
+        let vx_r = skew(&self.vel) * r;
+        blocks[3] = (PHI, BG, -r * dt);
+        blocks[4] = (VEL, BG, -vx_r * dt - gx * r * dt2);
+        blocks[5] = (VEL, BA, -r * dt);
+        blocks[6] = (POS, BG, -skew(&self.pos) * r * dt - vx_r * dt2);
+        blocks[7] = (POS, BA, -r * dt2);
+        blocks[8] = (FOOT[0], BG, -skew(&self.feet[0]) * r * dt);
+        blocks[9] = (FOOT[1], BG, -skew(&self.feet[1]) * r * dt);
+        (blocks, 10)
+    }
+
+    /// The dense `Φ` (for tests).
+    pub fn transition(&self, dt: f64) -> Covariance {
+        let (blocks, n) = self.transition_blocks(dt);
+        let mut phi = Covariance::identity();
+        for (r, c, b) in &blocks[..n] {
+            phi.fixed_view_mut::<3, 3>(*r, *c).copy_from(b);
         }
         phi
     }
 
+    /// `Φ P Φᵀ` with `Φ = I + N` given by its blocks: `M = P + N P`, then `M + M Nᵀ`.
+    fn sandwich(blocks: &[(usize, usize, Matrix3<f64>)], p: &Covariance) -> Covariance {
+        let mut m = *p;
+        for (r, c, b) in blocks {
+            let rows = b * p.fixed_view::<3, DIM>(*c, 0);
+            let mut dst = m.fixed_view_mut::<3, DIM>(*r, 0);
+            dst += rows;
+        }
+        let mut out = m;
+        for (r, c, b) in blocks {
+            let cols = m.fixed_view::<DIM, 3>(0, *c) * b.transpose();
+            let mut dst = out.fixed_view_mut::<DIM, 3>(0, *r);
+            dst += cols;
+        }
+        out
+    }
+
     fn propagate_covariance(&mut self, dt: f64, stance: [bool; 2], imu_r_sole: &[Matrix3<f64>; 2]) {
-        let phi = self.transition(dt);
+        let (blocks, n_blocks) = self.transition_blocks(dt);
         let r = self.rot;
         // Gyro noise enters every group block through Ad_X̂: [R; v×R; p×R; d_l×R; d_r×R].
         let mut g_gyro = SMatrix::<f64, NG, 3>::zeros();
@@ -281,7 +306,7 @@ impl InvariantEkf {
             add(BG, self.gyro_bias_var);
             add(BA, self.acc_bias_var);
         }
-        self.cov = phi * p * phi.transpose();
+        self.cov = Self::sandwich(&blocks[..n_blocks], &p);
         symmetrize(&mut self.cov);
     }
 
@@ -396,6 +421,22 @@ fn symmetrize(p: &mut Covariance) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_block_sandwich_equals_the_dense_product() {
+        let mut ekf = InvariantEkf::new(&EkfConfig::default(), Vector3::new(0.0, 0.0, -9.81));
+        ekf.rot = *nalgebra::Rotation3::from_euler_angles(0.1, -0.2, 0.3).matrix();
+        ekf.vel = Vector3::new(0.3, -0.1, 0.05);
+        ekf.pos = Vector3::new(1.0, 2.0, 0.6);
+        ekf.feet = [Vector3::new(1.1, 2.1, 0.0), Vector3::new(0.9, 1.9, 0.0)];
+        let a = Covariance::from_fn(|r, c| ((r * 7 + c * 3) % 11) as f64 * 0.01);
+        let p = a * a.transpose() + Covariance::identity();
+        let dt = 0.01;
+        let (blocks, n) = ekf.transition_blocks(dt);
+        let phi = ekf.transition(dt);
+        let dense = phi * p * phi.transpose();
+        assert!((InvariantEkf::sandwich(&blocks[..n], &p) - dense).amax() < 1e-12);
+    }
 
     #[test]
     fn exp_and_left_jacobian_match_their_series() {
