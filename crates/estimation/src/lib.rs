@@ -3,10 +3,21 @@
 //! wrench the ground applies on each foot and the joint torques [Traversaro 2017, ch. 4].
 //!
 //! Like every stride layer it is a [`stride_block::Block`]: data-only [`EstimatorInput`] in,
-//! [`EstimatorOutput`] out, no allocation after construction.
+//! [`EstimatorOutput`] out, no allocation after construction. The pipeline of one tick is in
+//! [`Estimator`]; `docs/estimation.md` describes it with every configuration key.
 
 #![warn(missing_docs)]
 
+mod config;
+pub mod ekf;
+mod error;
+mod estimator;
 mod io;
+mod schmitt;
 
+pub use config::{ContactConfig, EkfConfig, EkfPrior, EstimatorConfig, FtOffsetConfig};
+pub use ekf::{EkfState, InvariantEkf};
+pub use error::{EstimatorError, Result};
+pub use estimator::Estimator;
 pub use io::{EstimatorInput, EstimatorOutput, ImuReading};
+pub use schmitt::SchmittTrigger;

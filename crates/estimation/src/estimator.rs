@@ -1,0 +1,528 @@
+//! The estimation block: one tick runs kinematics, the EKF prediction, foot wrenches from the force/torque
+//! sensors, contact detection, the EKF update, offset estimation and joint torques.
+
+use std::sync::Arc;
+
+use nalgebra::{
+    DVector, Isometry3, Matrix3, Matrix6, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6,
+};
+use stride_block::Block;
+use stride_model::{ExternalWrench, FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
+
+use crate::config::EstimatorConfig;
+use crate::ekf::InvariantEkf;
+use crate::error::{check_positive, EstimatorError, Result};
+use crate::io::{EstimatorInput, EstimatorOutput};
+use crate::schmitt::SchmittTrigger;
+
+/// The estimation layer.
+///
+/// One tick ([`Block::step`]):
+/// 1. forward kinematics from the encoders: each sole's position and orientation in the IMU frame, `imu_H_base`;
+/// 2. EKF propagation with the raw gyroscope and accelerometer ([`InvariantEkf::propagate`]; the IMU's
+///    on-board orientation is not used);
+/// 3. the predicted robot state (base pose and mixed twist from the propagated EKF, joints as measured)
+///    and its acceleration: base linear acceleration from the accelerometer, `R (ã − b_a) + g`, moved from
+///    the IMU to the base origin with the centripetal term; base angular acceleration and joint
+///    accelerations **zero** (a foot wrench estimate is then off by the unmodelled inertial wrench of the
+///    links between its sensor and the sole: 0.7 kg of foot on the bundled robot);
+/// 4. foot wrenches `w = A⁻¹ (y − o − y₀)` [Traversaro 2017, eq. 4.21]: `y` the reading of the foot's
+///    sensor, `o` its offset, `y₀` the reading the model predicts with no external wrench, `A` the map from
+///    a wrench on the sole (world orientation, about the sole origin) to the reading;
+/// 5. contact detection: a [`SchmittTrigger`] per foot on the normal force `w_z`;
+/// 6. EKF: feet in swing are placed by kinematics, feet in contact update the filter with their kinematics
+///    and (option) the flat-ground pseudo-measurement;
+/// 7. offsets: on a sensor whose child side carries no contact, `y − y₀` is an offset sample
+///    [Traversaro 2017, §4.7], averaged by a first-order filter;
+/// 8. joint torques by inverse dynamics with the estimated foot wrenches acting on the soles (both feet,
+///    in swing too: there it is what the sensor attributes to the sole, ≈ 0) [Traversaro 2017, §4.6];
+/// 9. the output: base pose `world_H_imu · imu_H_base` and the base's mixed twist from the corrected EKF.
+///
+/// Steps 3–5 and 8 use the state predicted at step 2 (before the update of step 6): the difference is one
+/// tick's correction. A step that fails on its input (size, non-finite value, time, not initialised)
+/// changes nothing: inputs are checked first. After the checks only
+/// [`EstimatorError::SingularInnovation`] can occur (a degenerate covariance, e.g. every σ zero); the
+/// filter has then been propagated but not updated.
+#[derive(Debug)]
+pub struct Estimator {
+    model: Arc<Model>,
+    config: EstimatorConfig,
+    period: f64,
+    kd: KinDyn,
+    ekf: InvariantEkf,
+    triggers: [SchmittTrigger; 2],
+    soles: [FrameId; 2],
+    imu: FrameId,
+    base: FrameId,
+    foot_sensors: [usize; 2],
+    /// For each sensor, which soles lie on its child side.
+    sensor_feet: Vec<[bool; 2]>,
+    wrench_maps: [Matrix6<f64>; 2],
+    initial_offsets: Vec<Vector6<f64>>,
+    predicted: Vec<Vector6<f64>>,
+    nu_dot: DVector<f64>,
+    generalized: DVector<f64>,
+    scratch: RobotState,
+    swing_since_ns: [Option<u64>; 2],
+    ground_height: f64,
+    thresholds: (f64, f64),
+    last_time_ns: Option<u64>,
+    initialized: bool,
+    output: EstimatorOutput,
+}
+
+/// Kinematics of one tick, relative to the base (base at the identity, zero base velocity).
+#[derive(Debug, Clone, Copy)]
+struct RelativeKinematics {
+    imu_h_sole: [Isometry3<f64>; 2],
+    imu_h_base: Isometry3<f64>,
+    /// Velocity of the IMU due to the joints alone, `[ṗ; ω]`, base orientation.
+    imu_velocity_from_joints: Vector6<f64>,
+}
+
+impl Estimator {
+    /// Builds the estimator (allocates everything). `period` is the nominal sampling period (used for the
+    /// first sample; later samples use the difference of their time stamps).
+    ///
+    /// # Errors
+    /// An invalid configuration, an unknown frame or sensor, a foot no sensor measures.
+    pub fn new(
+        model: Arc<Model>,
+        config: &EstimatorConfig,
+        period: std::time::Duration,
+    ) -> Result<Self> {
+        config.validate()?;
+        let period = period.as_secs_f64();
+        check_positive("period", period)?;
+        let frame = |key: &'static str, name: &str| {
+            model.frame_id(name).ok_or(EstimatorError::UnknownFrame {
+                key,
+                name: name.to_string(),
+            })
+        };
+        let soles = [
+            frame("left_sole", &config.left_sole)?,
+            frame("right_sole", &config.right_sole)?,
+        ];
+        let imu = frame("imu_frame", &config.imu_frame)?;
+        let base = frame("root link", model.root_link())?;
+        let mut kd = KinDyn::new(Arc::clone(&model));
+        kd.set_representation(VelocityRepresentation::Mixed);
+        let n_ft = model.ft_sensors().len();
+        let mut sensor_feet = vec![[false; 2]; n_ft];
+        let mut map = Matrix6::zeros();
+        for (s, feet) in sensor_feet.iter_mut().enumerate() {
+            for foot in 0..2 {
+                kd.ft_sensor_wrench_map(s, soles[foot], &mut map)?;
+                feet[foot] = map.abs().max() > 0.0;
+            }
+        }
+        let names = [&config.left_foot_ft_sensor, &config.right_foot_ft_sensor];
+        let keys = ["left_foot_ft_sensor", "right_foot_ft_sensor"];
+        let mut foot_sensors = [0; 2];
+        for foot in 0..2 {
+            foot_sensors[foot] = choose_foot_sensor(
+                &model,
+                &kd,
+                &sensor_feet,
+                soles[foot],
+                foot,
+                names[foot],
+                keys[foot],
+            )?;
+        }
+        if !config.ft_offsets.initial.is_empty() && config.ft_offsets.initial.len() != n_ft {
+            return Err(EstimatorError::InvalidParameter {
+                name: "ft_offsets.initial",
+                value: config.ft_offsets.initial.len() as f64,
+                reason: "must be empty or have one entry per force/torque sensor of the model",
+            });
+        }
+        let initial_offsets = if config.ft_offsets.initial.is_empty() {
+            vec![Vector6::zeros(); n_ft]
+        } else {
+            config
+                .ft_offsets
+                .initial
+                .iter()
+                .map(|o| Vector6::from(*o))
+                .collect()
+        };
+        let weight = model.total_mass() * model.gravity().norm();
+        let thresholds = config.contact.thresholds_newton(weight);
+        let trigger = SchmittTrigger::new(
+            thresholds.0,
+            thresholds.1,
+            config.contact.make_delay,
+            config.contact.break_delay,
+            true,
+        );
+        let mut output = EstimatorOutput::new(&model);
+        output.ft_offsets.clone_from(&initial_offsets);
+        Ok(Self {
+            ekf: InvariantEkf::new(&config.ekf, model.gravity()),
+            config: config.clone(),
+            period,
+            triggers: [trigger.clone(), trigger],
+            soles,
+            imu,
+            base,
+            foot_sensors,
+            sensor_feet,
+            wrench_maps: [Matrix6::zeros(); 2],
+            initial_offsets,
+            predicted: vec![Vector6::zeros(); n_ft],
+            nu_dot: DVector::zeros(model.nv()),
+            generalized: DVector::zeros(model.nv()),
+            scratch: RobotState::zero(&model),
+            swing_since_ns: [None; 2],
+            ground_height: 0.0,
+            thresholds,
+            last_time_ns: None,
+            initialized: false,
+            output,
+            kd,
+            model,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &EstimatorConfig {
+        &self.config
+    }
+
+    /// The filter (state, covariance).
+    pub fn ekf(&self) -> &InvariantEkf {
+        &self.ekf
+    }
+
+    /// Indices (into [`Model::ft_sensors`]) of the left and right foot sensors.
+    pub fn foot_sensors(&self) -> [usize; 2] {
+        self.foot_sensors
+    }
+
+    /// The ground height used by the flat-ground pseudo-measurement \[m\] (the soles' mean height in the
+    /// initial state).
+    pub fn ground_height(&self) -> f64 {
+        self.ground_height
+    }
+
+    /// The last output.
+    pub fn output(&self) -> &EstimatorOutput {
+        &self.output
+    }
+
+    /// Starts the estimate from a known state of the robot standing still on both feet: `state.base_pose`
+    /// defines the world frame (its base velocity is ignored and taken as zero), both feet are in contact,
+    /// the ground is at the soles' mean height, the offsets are `ft_offsets.initial`.
+    ///
+    /// # Errors
+    /// A state that does not fit the model.
+    pub fn set_initial_state(&mut self, state: &RobotState) -> Result<()> {
+        self.scratch.copy_from(state);
+        self.scratch.base_velocity = Vector6::zeros();
+        self.kd.set_state(&self.scratch)?;
+        let (r_imu, p_imu) = self.kd.frame_rotation_translation(self.imu);
+        let feet = self.soles.map(|s| self.kd.frame_rotation_translation(s).1);
+        self.ekf
+            .initialize(&self.config.ekf, r_imu, Vector3::zeros(), p_imu, feet);
+        self.ground_height = 0.5 * (feet[0].z + feet[1].z);
+        for t in &mut self.triggers {
+            t.set_state(true, 0);
+        }
+        self.swing_since_ns = [None; 2];
+        self.last_time_ns = None;
+        self.initialized = true;
+        let out = &mut self.output;
+        out.state.copy_from(&self.scratch);
+        out.contacts = [true; 2];
+        out.foot_wrenches = [Vector6::zeros(); 2];
+        out.joint_torques.fill(0.0);
+        for (o, i) in out.ft_offsets.iter_mut().zip(&self.initial_offsets) {
+            *o = *i;
+        }
+        Ok(())
+    }
+
+    fn check_input(&self, input: &EstimatorInput) -> Result<f64> {
+        if !self.initialized {
+            return Err(EstimatorError::NotInitialized);
+        }
+        let n = self.model.dof();
+        let sizes = [
+            ("joint_positions", n, input.joint_positions.len()),
+            ("joint_velocities", n, input.joint_velocities.len()),
+            ("ft_wrenches", self.predicted.len(), input.ft_wrenches.len()),
+        ];
+        for (name, expected, actual) in sizes {
+            if expected != actual {
+                return Err(EstimatorError::InputSize {
+                    name,
+                    expected,
+                    actual,
+                });
+            }
+        }
+        let finite = [
+            (
+                "joint_positions",
+                input.joint_positions.iter().all(|v| v.is_finite()),
+            ),
+            (
+                "joint_velocities",
+                input.joint_velocities.iter().all(|v| v.is_finite()),
+            ),
+            (
+                "imu.angular_velocity",
+                input.imu.angular_velocity.iter().all(|v| v.is_finite()),
+            ),
+            (
+                "imu.proper_acceleration",
+                input.imu.proper_acceleration.iter().all(|v| v.is_finite()),
+            ),
+            (
+                "ft_wrenches",
+                input
+                    .ft_wrenches
+                    .iter()
+                    .all(|w| w.iter().all(|v| v.is_finite())),
+            ),
+        ];
+        for (name, ok) in finite {
+            if !ok {
+                return Err(EstimatorError::NonFiniteInput { name });
+            }
+        }
+        match self.last_time_ns {
+            None => Ok(self.period),
+            Some(previous_ns) if input.time_ns > previous_ns => {
+                Ok((input.time_ns - previous_ns) as f64 * 1e-9)
+            }
+            Some(previous_ns) => Err(EstimatorError::NonIncreasingTime {
+                time_ns: input.time_ns,
+                previous_ns,
+            }),
+        }
+    }
+
+    /// Step 1: kinematics relative to the base.
+    fn relative_kinematics(&mut self, input: &EstimatorInput) -> Result<RelativeKinematics> {
+        self.scratch.base_pose = Isometry3::identity();
+        self.scratch.base_velocity = Vector6::zeros();
+        self.scratch
+            .joint_positions
+            .copy_from(&input.joint_positions);
+        self.scratch
+            .joint_velocities
+            .copy_from(&input.joint_velocities);
+        self.kd.set_state(&self.scratch)?;
+        Ok(RelativeKinematics {
+            imu_h_sole: self.soles.map(|s| self.kd.relative_transform(self.imu, s)),
+            imu_h_base: self.kd.relative_transform(self.imu, self.base),
+            imu_velocity_from_joints: self.kd.frame_velocity(self.imu),
+        })
+    }
+
+    /// Base pose, mixed twist and linear acceleration from the EKF's IMU state (steps 3 and 9).
+    fn base_from_imu(
+        &self,
+        kin: &RelativeKinematics,
+        input: &EstimatorInput,
+    ) -> (Isometry3<f64>, Vector6<f64>, Vector3<f64>) {
+        let s = self.ekf.state();
+        let world_h_imu = Isometry3::from_parts(
+            Translation3::from(s.position),
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(s.rotation)),
+        );
+        let world_h_base = world_h_imu * kin.imu_h_base;
+        let r_base: Matrix3<f64> = *world_h_base.rotation.to_rotation_matrix().matrix();
+        let rel = kin.imu_velocity_from_joints;
+        let omega_imu = self.ekf.angular_velocity_world(&input.imu.angular_velocity);
+        let omega_base = omega_imu - r_base * rel.fixed_rows::<3>(3);
+        let lever = s.position - world_h_base.translation.vector;
+        let v_base = s.velocity - r_base * rel.fixed_rows::<3>(0) - omega_base.cross(&lever);
+        let a_imu = self.ekf.acceleration_world(&input.imu.proper_acceleration);
+        let a_base = a_imu - omega_base.cross(&omega_base.cross(&lever));
+        let mut twist = Vector6::zeros();
+        twist.fixed_rows_mut::<3>(0).copy_from(&v_base);
+        twist.fixed_rows_mut::<3>(3).copy_from(&omega_base);
+        (world_h_base, twist, a_base)
+    }
+
+    /// Steps 3–4: the predicted readings and the foot wrenches (world orientation, about the soles).
+    fn foot_wrenches(
+        &mut self,
+        kin: &RelativeKinematics,
+        input: &EstimatorInput,
+    ) -> Result<[Vector6<f64>; 2]> {
+        let (pose, twist, acc) = self.base_from_imu(kin, input);
+        self.scratch.base_pose = pose;
+        self.scratch.base_velocity = twist;
+        self.kd.set_state(&self.scratch)?;
+        self.nu_dot.fill(0.0);
+        self.nu_dot.fixed_rows_mut::<3>(0).copy_from(&acc);
+        self.kd
+            .ft_sensor_wrenches(&self.nu_dot, &[], &mut self.predicted)?;
+        let mut wrenches = [Vector6::zeros(); 2];
+        for (foot, wrench) in wrenches.iter_mut().enumerate() {
+            let s = self.foot_sensors[foot];
+            self.kd
+                .ft_sensor_wrench_map(s, self.soles[foot], &mut self.wrench_maps[foot])?;
+            let rhs = input.ft_wrenches[s] - self.output.ft_offsets[s] - self.predicted[s];
+            *wrench = self.wrench_maps[foot].lu().solve(&rhs).ok_or_else(|| {
+                EstimatorError::SingularWrenchMap {
+                    sensor: self.model.ft_sensors()[s].name.clone(),
+                    sole: self.model.frame_name(self.soles[foot]).to_string(),
+                }
+            })?;
+        }
+        Ok(wrenches)
+    }
+
+    /// Step 7: offsets from the sensors whose child side carries no contact.
+    fn update_offsets(&mut self, input: &EstimatorInput, wrenches: &[Vector6<f64>; 2], dt: f64) {
+        let cfg = &self.config.ft_offsets;
+        if !cfg.enabled {
+            return;
+        }
+        let min_swing_ns = (cfg.min_swing_time * 1e9).round() as u64;
+        let free = [0, 1].map(|foot| {
+            self.swing_since_ns[foot]
+                .is_some_and(|since| input.time_ns.saturating_sub(since) >= min_swing_ns)
+                && wrenches[foot].z < self.thresholds.1
+        });
+        let alpha = dt / (cfg.time_constant + dt);
+        for (s, feet) in self.sensor_feet.iter().enumerate() {
+            if (feet[0] && !free[0]) || (feet[1] && !free[1]) {
+                continue;
+            }
+            let sample = input.ft_wrenches[s] - self.predicted[s];
+            let o = &mut self.output.ft_offsets[s];
+            *o += (sample - *o) * alpha;
+        }
+    }
+
+    /// Step 8: joint torques.
+    fn joint_torques(&mut self, wrenches: &[Vector6<f64>; 2]) -> Result<()> {
+        let external = [0, 1].map(|foot| ExternalWrench {
+            frame: self.soles[foot],
+            wrench: wrenches[foot],
+        });
+        self.kd
+            .inverse_dynamics(&self.nu_dot, &external, &mut self.generalized)?;
+        let n = self.model.dof();
+        self.output
+            .joint_torques
+            .copy_from(&self.generalized.rows(6, n));
+        Ok(())
+    }
+}
+
+/// The sensor measuring foot `foot`: the named one (which must have the sole on its child side), or the
+/// nearest to the sole at the zero configuration among those that have it on their child side.
+fn choose_foot_sensor(
+    model: &Model,
+    kd: &KinDyn,
+    sensor_feet: &[[bool; 2]],
+    sole: FrameId,
+    foot: usize,
+    name: &Option<String>,
+    key: &'static str,
+) -> Result<usize> {
+    let sole_name = model.frame_name(sole).to_string();
+    if let Some(name) = name {
+        let s = model
+            .ft_sensor_index(name)
+            .ok_or_else(|| EstimatorError::UnknownFtSensor {
+                key,
+                name: name.clone(),
+            })?;
+        if !sensor_feet[s][foot] {
+            return Err(EstimatorError::NoFootSensor {
+                sole: sole_name,
+                reason: "the named sensor has the sole on its parent side",
+            });
+        }
+        return Ok(s);
+    }
+    let p_sole = kd.frame_rotation_translation(sole).1;
+    model
+        .ft_sensors()
+        .iter()
+        .enumerate()
+        .filter(|(s, _)| sensor_feet[*s][foot])
+        .map(|(s, sensor)| {
+            (
+                s,
+                (kd.frame_rotation_translation(sensor.frame).1 - p_sole).norm(),
+            )
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(s, _)| s)
+        .ok_or(EstimatorError::NoFootSensor {
+            sole: sole_name,
+            reason: "no sensor has it on its child side",
+        })
+}
+
+impl Block for Estimator {
+    type Input = EstimatorInput;
+    type Output = EstimatorOutput;
+    type Error = EstimatorError;
+
+    fn step(&mut self, input: &EstimatorInput) -> Result<&EstimatorOutput> {
+        let dt = self.check_input(input)?;
+        let kin = self.relative_kinematics(input)?;
+        let imu_r_sole = kin
+            .imu_h_sole
+            .map(|h| *h.rotation.to_rotation_matrix().matrix());
+        let h = kin.imu_h_sole.map(|h| h.translation.vector);
+        self.ekf.propagate(
+            &input.imu.angular_velocity,
+            &input.imu.proper_acceleration,
+            dt,
+            self.output.contacts,
+            &imu_r_sole,
+        );
+        let wrenches = self.foot_wrenches(&kin, input)?;
+        for foot in 0..2 {
+            let contact = self.triggers[foot].update(wrenches[foot].z, input.time_ns);
+            if contact {
+                self.swing_since_ns[foot] = None;
+                self.ekf.update_foot(foot, &h[foot])?;
+                if self.config.ekf.flat_ground {
+                    self.ekf.update_ground_height(
+                        foot,
+                        self.ground_height,
+                        self.config.ekf.ground_height_noise,
+                    )?;
+                }
+            } else {
+                self.swing_since_ns[foot].get_or_insert(input.time_ns);
+                self.ekf.reset_foot(foot, &h[foot]);
+            }
+            self.output.contacts[foot] = contact;
+        }
+        self.update_offsets(input, &wrenches, dt);
+        self.joint_torques(&wrenches)?;
+        let (pose, twist, _) = self.base_from_imu(&kin, input);
+        let out = &mut self.output;
+        out.state.base_pose = pose;
+        out.state.base_velocity = twist;
+        out.state.joint_positions.copy_from(&input.joint_positions);
+        out.state
+            .joint_velocities
+            .copy_from(&input.joint_velocities);
+        out.foot_wrenches = wrenches;
+        self.last_time_ns = Some(input.time_ns);
+        Ok(&self.output)
+    }
+
+    fn reset(&mut self) {
+        self.initialized = false;
+        self.last_time_ns = None;
+        self.swing_since_ns = [None; 2];
+        self.output = EstimatorOutput::new(&self.model);
+        self.output.ft_offsets.clone_from(&self.initial_offsets);
+    }
+}
