@@ -110,7 +110,7 @@ pub enum Command {
         /// Do not draw the progress bar.
         #[arg(long)]
         no_progress: bool,
-        /// Override the scenario's plant (`ideal`: joint commands applied exactly, base from the stance foot).
+        /// Override the scenario's plant (`ideal`: joint commands applied exactly, base from the stance foot, read as ground truth).
         #[arg(long, value_enum)]
         plant: Option<PlantArg>,
     },

@@ -33,6 +33,9 @@ pub enum RunError {
     /// The whole-body layer failed.
     #[error("whole-body layer: {0}")]
     Wbc(#[from] stride_wbc::WbcError),
+    /// The estimation layer failed.
+    #[error("estimation layer: {0}")]
+    Estimation(#[from] stride_estimation::EstimatorError),
     /// The robot (plant) failed.
     #[error(transparent)]
     Robot(#[from] RobotError),

@@ -17,6 +17,7 @@ pub mod cli;
 pub mod commands;
 pub mod config;
 pub mod error;
+pub mod estimation_summary;
 pub mod log;
 pub mod model_cmd;
 pub mod records;

@@ -467,12 +467,45 @@ pub(crate) struct FootMsg {
     pub(crate) point: [f64; 3],
 }
 
-/// `/sensors/feet`: the measured foot wrenches (the ground on the foot, world orientation, about `point`).
+/// `/sensors/feet`: the plant's contact wrenches (truth: the ground on the foot, world orientation, about
+/// `point`); what the controllers use is in `/estimation/state`.
 #[derive(Serialize)]
 pub(crate) struct FeetMsg {
     pub(crate) time: f64,
     pub(crate) left: FootMsg,
     pub(crate) right: FootMsg,
+}
+
+/// `/sensors/ft`: the six-axis force/torque sensor readings as the robot senses them (offsets and noise
+/// included), each `[f; τ]` in its sensor frame, in the order of `names`.
+#[derive(Serialize)]
+pub(crate) struct FtMsg<'a> {
+    pub(crate) time: f64,
+    pub(crate) names: &'a [String],
+    pub(crate) wrenches: &'a [[f64; 6]],
+}
+
+/// Contact flags of `/estimation/state`.
+#[derive(Serialize)]
+pub(crate) struct ContactsMsg {
+    pub(crate) left: bool,
+    pub(crate) right: bool,
+}
+
+/// `/estimation/state`: the estimation layer's output, what the controllers read of the robot. Base
+/// quantities in the world frame; foot wrenches are the ground on the foot, world orientation, about the
+/// sole frame origin.
+#[derive(Serialize)]
+pub(crate) struct EstimationMsg<'a> {
+    pub(crate) time: f64,
+    pub(crate) base_position: [f64; 3],
+    pub(crate) base_orientation_xyzw: [f64; 4],
+    pub(crate) base_linear_velocity: [f64; 3],
+    pub(crate) base_angular_velocity: [f64; 3],
+    pub(crate) contacts: ContactsMsg,
+    pub(crate) left_foot_wrench: [f64; 6],
+    pub(crate) right_foot_wrench: [f64; 6],
+    pub(crate) joint_torques: &'a [f64],
 }
 
 /// `/sensors/imu`.

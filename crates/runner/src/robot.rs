@@ -8,8 +8,8 @@
 use std::sync::Arc;
 
 use nalgebra::{DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
+use stride_estimation::EstimatorInput;
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
-use stride_sim::ImuMeasurement;
 
 use crate::config::ControlMode;
 
@@ -46,27 +46,36 @@ pub enum RobotError {
     Interface(String),
 }
 
-/// What the robot reports each plant period.
+/// What the robot reports each plant period: what it senses (the estimation layer's input, the only thing
+/// the controllers' path reads) and, for a simulator, the plant's truth (logs, the summary, and the
+/// `ground_truth` estimation kind for debugging).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Measurement {
     /// Plant time \[ns\].
     pub time_ns: u64,
-    /// Base pose, joint positions, base twist (mixed) and joint velocities (estimated on a real robot).
+    /// Encoders, IMU and force/torque sensors, as the robot senses them.
+    pub sensors: EstimatorInput,
+    /// The plant's truth (a real robot fills it with what it has, e.g. from motion capture, or leaves it
+    /// at the last estimate).
+    pub truth: PlantTruth,
+    /// The plant's own fall detector (the runner also checks base height and tilt).
+    pub fallen: bool,
+}
+
+/// The plant's true state and contacts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlantTruth {
+    /// Base pose, joint positions, base twist (mixed) and joint velocities.
     pub state: RobotState,
-    /// Measured joint torques [N m].
+    /// Actuator torques applied on the joints [N m].
     pub joint_torques: DVector<f64>,
     /// Per joint, in model order: the motor torque sat at its effort limit during the last period.
     pub saturated: Vec<bool>,
     /// Left and right foot: the wrench `[f; τ]` the ground applies on the foot, world orientation, torque
-    /// about the sole frame origin [N; N m]. The runner hands it to the layers as a
-    /// [`stride_simplified::FootWrench`] about the measured sole origin.
+    /// about the sole frame origin [N; N m].
     pub foot_wrenches: [Vector6<f64>; 2],
     /// Left and right foot touch the ground.
     pub feet_in_contact: [bool; 2],
-    /// IMU.
-    pub imu: ImuMeasurement,
-    /// The plant's own fall detector (the runner also checks base height and tilt).
-    pub fallen: bool,
 }
 
 impl Measurement {
@@ -74,15 +83,13 @@ impl Measurement {
     pub fn new(model: &Model) -> Self {
         Self {
             time_ns: 0,
-            state: RobotState::zero(model),
-            joint_torques: DVector::zeros(model.dof()),
-            saturated: vec![false; model.dof()],
-            foot_wrenches: [Vector6::zeros(); 2],
-            feet_in_contact: [false; 2],
-            imu: ImuMeasurement {
-                orientation: UnitQuaternion::identity(),
-                angular_velocity: Vector3::zeros(),
-                proper_acceleration: Vector3::zeros(),
+            sensors: EstimatorInput::new(model),
+            truth: PlantTruth {
+                state: RobotState::zero(model),
+                joint_torques: DVector::zeros(model.dof()),
+                saturated: vec![false; model.dof()],
+                foot_wrenches: [Vector6::zeros(); 2],
+                feet_in_contact: [false; 2],
             },
             fallen: false,
         }
@@ -138,7 +145,9 @@ pub trait Robot {
 /// The ideal kinematic plant (the first bring-up step of docs/architecture.md): commanded joint positions are applied exactly and the
 /// base pose follows from keeping the anchored stance foot where it is (legged odometry). Joint and base
 /// velocities are finite differences over the plant period; foot wrenches are the static weight split so
-/// that the measured ZMP is the CoM's ground projection (clamped between the feet in double support).
+/// that the ZMP is the CoM's ground projection (clamped between the feet in double support). It has
+/// encoders but no IMU and no force/torque sensors: the controllers read its truth
+/// (`estimation.kind = "ground_truth"`, which the scenario check requires with this plant).
 pub struct IdealPlant {
     model: Arc<Model>,
     kd: KinDyn,
@@ -166,7 +175,10 @@ impl IdealPlant {
         kd.set_state(initial)?;
         let anchor_pose = kd.frame_pose(left_sole);
         let mut meas = Measurement::new(&model);
-        meas.state = initial.clone();
+        meas.truth.state = initial.clone();
+        meas.sensors
+            .joint_positions
+            .copy_from(&initial.joint_positions);
         let pending = JointCommand::hold(ControlMode::Position, &initial.joint_positions);
         let mut plant = Self {
             kd,
@@ -215,9 +227,9 @@ impl IdealPlant {
                 p
             };
             let torque = (cop - p).cross(&force);
-            self.meas.foot_wrenches[i] =
+            self.meas.truth.foot_wrenches[i] =
                 Vector6::new(force.x, force.y, force.z, torque.x, torque.y, torque.z);
-            self.meas.feet_in_contact[i] = f > 0.0;
+            self.meas.truth.feet_in_contact[i] = f > 0.0;
         }
     }
 }
@@ -254,14 +266,14 @@ impl Robot for IdealPlant {
     }
     fn advance(&mut self) -> Result<(), RobotError> {
         let dt = self.period_ns as f64 * 1e-9;
-        self.previous.copy_from(&self.meas.state);
+        self.previous.copy_from(&self.meas.truth.state);
         // Re-anchor when the anchored foot leaves the ground and the other one is down.
         let contacts = self.pending.contacts;
         if !contacts[self.anchor] && contacts[1 - self.anchor] {
             self.anchor = 1 - self.anchor;
             self.anchor_pose = self.kd.frame_pose(self.feet[self.anchor]);
         }
-        let state = &mut self.meas.state;
+        let state = &mut self.meas.truth.state;
         state
             .joint_positions
             .copy_from(&self.pending.joint_positions);
@@ -271,7 +283,7 @@ impl Robot for IdealPlant {
         let mut base = self.anchor_pose * base_to_anchor.inverse();
         // Frame poses come from rotation matrices; renormalize so rounding errors cannot compound.
         base.rotation = UnitQuaternion::new_normalize(base.rotation.into_inner());
-        let state = &mut self.meas.state;
+        let state = &mut self.meas.truth.state;
         state.base_pose = base;
         // Finite-difference velocities (mixed).
         let prev = &self.previous;
@@ -284,10 +296,10 @@ impl Robot for IdealPlant {
         state.base_velocity = Vector6::new(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z);
         self.kd.set_state(state)?;
         self.meas.time_ns += self.period_ns;
-        self.meas.imu.orientation = base.rotation;
-        self.meas.imu.angular_velocity = base.rotation.inverse() * ang;
-        self.meas.imu.proper_acceleration =
-            base.rotation.inverse() * Vector3::new(0.0, 0.0, self.gravity);
+        let sensors = &mut self.meas.sensors;
+        sensors.time_ns = self.meas.time_ns;
+        sensors.joint_positions.copy_from(&state.joint_positions);
+        sensors.joint_velocities.copy_from(&state.joint_velocities);
         self.update_wrenches();
         Ok(())
     }

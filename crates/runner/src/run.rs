@@ -5,8 +5,10 @@
 //! layer runs on the ticks that are multiples of `base_hz / layer_hz`. Within tick `k` at time
 //! `t = k · T_base` the order is fixed:
 //!
-//! 1. **measure**: read the robot's measurement at `t`; if any layer runs or the state is logged this
-//!    tick, compute the measured CoM, ZMP, sole poses and tilt from it ([`Stack::estimate`]);
+//! 1. **sense and measure**: on a fresh measurement (every `base/sim` ticks) step the estimation layer
+//!    ([`Stack::sense`]); if any layer runs or the state is logged this tick, compute the measured CoM,
+//!    ZMP, sole poses and tilt from the estimate, and the same from the plant's truth for the summary
+//!    ([`Stack::measure`]). No layer reads the truth (unless `estimation.kind = "ground_truth"`);
 //! 2. **planner**: on events only (first tick; start of a new goal segment), replan from the measured
 //!    soles (or at `rates.planner_hz` in `periodic` mode);
 //! 3. **simplified layer** (every `base/simplified` ticks): plan sampled at `t`, measured DCM with the
@@ -28,9 +30,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::config::{PlannerMode, PlantKind, Scenario, ScenarioConfig};
+use crate::config::{EstimationKind, PlannerMode, PlantKind, Scenario, ScenarioConfig};
 use crate::records::{RunnerTimingMsg, TimingRecord};
 use crate::robot::Robot;
+use crate::setup::check_same_joints;
 use crate::sink::LogSink;
 use crate::stack::{Stack, Wbc};
 use crate::summary::mid_pose;
@@ -97,18 +100,26 @@ pub fn run_scenario(scenario: &Scenario, options: &RunOptions) -> Result<RunSumm
     let model = load_model(scenario)?;
     let plant = options.plant.unwrap_or(scenario.config.scenario.plant);
     let robot = build_robot(scenario, &model, plant)?;
+    if plant == PlantKind::Ideal && scenario.config.estimation.kind != EstimationKind::GroundTruth {
+        // The ideal plant has no IMU and no force/torque sensors: the controllers read its truth.
+        let mut scenario = scenario.clone();
+        scenario.config.estimation.kind = EstimationKind::GroundTruth;
+        return run_with_robot(&scenario, options, robot);
+    }
     run_with_robot(scenario, options, robot)
 }
 
 /// Runs a scenario against any [`Robot`] (a real robot interface, another simulator, a test double).
-/// The robot's model must be the scenario's and its period `1 / rates.sim_hz`.
+/// The controllers use the scenario's model (`robot.urdf`); the robot's own may differ in its inertias
+/// (`[sim.model]`) but must have the same joints. Its period must be `1 / rates.sim_hz`.
 pub fn run_with_robot(
     scenario: &Scenario,
     options: &RunOptions,
     robot: Box<dyn Robot>,
 ) -> Result<RunSummary, RunError> {
     let c = &scenario.config;
-    let model = Arc::clone(robot.model());
+    let model = load_model(scenario)?;
+    check_same_joints(scenario, &model, robot.model())?;
     let duration = options.duration.unwrap_or(c.scenario.duration);
     let schedule = Schedule::new(c, duration);
     let expected_ns = schedule.sim_every * schedule.base_ns;
@@ -119,7 +130,11 @@ pub fn run_with_robot(
         }
         .into());
     }
-    let stack = Stack::new(scenario, Arc::clone(&model), &robot.measurement().state)?;
+    let stack = Stack::new(
+        scenario,
+        Arc::clone(&model),
+        &robot.measurement().truth.state,
+    )?;
     let log = if c.log.enabled && !options.no_log {
         let path = options
             .output
@@ -178,7 +193,8 @@ impl<'a> Loop<'a> {
         log: Option<LogSink>,
         options: &RunOptions,
     ) -> Result<Self, RunError> {
-        stack.estimate(robot.measurement())?;
+        stack.sense(robot.measurement())?;
+        stack.measure(robot.measurement())?;
         let tracker = Tracker::new(
             scenario,
             robot.as_ref(),
@@ -239,8 +255,13 @@ impl<'a> Loop<'a> {
         let run_planner = self.stack.planner_due(t) || s.planner_every.is_some_and(|e| k % e == 0);
         let log_state = k % s.state_every == 0;
         let run_plant = k % s.sim_every == 0;
+        if run_plant && k > 0 {
+            // A fresh measurement (the plant advanced at the end of the previous tick; the initial one was
+            // sensed when the loop started).
+            self.stack.sense(self.robot.measurement())?;
+        }
         if run_simplified || run_wbc || run_planner || log_state {
-            self.stack.estimate(self.robot.measurement())?;
+            self.stack.measure(self.robot.measurement())?;
         }
         if run_planner && self.stack.planner_tick(t)? {
             self.planned(t, k == 0)?;
@@ -313,7 +334,9 @@ impl<'a> Loop<'a> {
 
     fn wbc(&mut self, t: u64) -> Result<(), RunError> {
         let fallbacks = self.stack.counters.wbc_fallbacks;
-        self.stack.wbc_tick(t, self.robot.measurement())?;
+        self.stack.wbc_tick(t)?;
+        self.tracker
+            .estimation(&self.stack, self.robot.measurement());
         let report = match &self.stack.wbc {
             Wbc::Ik(ik) => ik.output().report,
             Wbc::Tsid(ts) => ts.output().report,
@@ -383,8 +406,8 @@ impl<'a> Loop<'a> {
         let wall = self.wall_start.elapsed().as_secs_f64();
         let t_end = (self.tracker.summary.simulated_time * 1e9).round() as u64;
         let _ = self.event(t_end, "end", outcome.to_string());
-        let _ = self.stack.estimate(self.robot.measurement());
-        let end = mid_pose(&self.stack.measured.soles);
+        let _ = self.stack.measure(self.robot.measurement());
+        let end = mid_pose(&self.stack.truth.soles);
         let goal = &self.scenario.config.goal;
         let mut summary = self.tracker.finish(&self.stack, goal, outcome, end, wall);
         if let Some(log) = self.log.take() {

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use nalgebra::{DVector, Vector3};
-use stride_model::{FrameId, Model};
+use stride_model::{FrameId, InertiaEdits, LinkInertiaEdit, Model};
 
 use crate::config::{PlantKind, Scenario};
 use crate::error::RunError;
@@ -58,7 +58,68 @@ pub fn load_model(scenario: &Scenario) -> Result<Arc<Model>, RunError> {
     Ok(Arc::new(model))
 }
 
-/// Builds the plant of the scenario (or of the override).
+/// The simulated plant's own model: the controllers' `model` unless `[sim.model]` sets another URDF or
+/// changes inertias (model mismatch), then loaded from that URDF with the changes applied to its links
+/// before lumping, with the scenario's gravity.
+pub fn load_plant_model(scenario: &Scenario, model: &Arc<Model>) -> Result<Arc<Model>, RunError> {
+    let m = &scenario.config.sim.model;
+    if m.urdf.is_none() && m.mass_scale == 1.0 && m.links.is_empty() {
+        return Ok(Arc::clone(model));
+    }
+    let path = scenario
+        .plant_urdf_path
+        .clone()
+        .unwrap_or_else(|| scenario.urdf_path.clone());
+    let edits = InertiaEdits {
+        mass_scale: m.mass_scale,
+        links: m
+            .links
+            .iter()
+            .map(|(link, change)| LinkInertiaEdit {
+                link: link.clone(),
+                mass_scale: change.mass_scale,
+                com_offset: Vector3::from(change.com_offset),
+            })
+            .collect(),
+    };
+    let load_error = |source| RunError::ModelLoad {
+        path: path.clone(),
+        source,
+    };
+    let mut plant = Model::from_urdf_file_edited(&path, &edits).map_err(load_error)?;
+    plant.set_gravity(model.gravity()).map_err(load_error)?;
+    check_same_joints(scenario, model, &plant)?;
+    Ok(Arc::new(plant))
+}
+
+/// The plant must have the controllers' joints, in the same order.
+pub(crate) fn check_same_joints(
+    scenario: &Scenario,
+    model: &Model,
+    plant: &Model,
+) -> Result<(), RunError> {
+    let names = |m: &Model| {
+        m.joints()
+            .iter()
+            .map(|j| j.name.clone())
+            .collect::<Vec<_>>()
+    };
+    if names(model) == names(plant) {
+        return Ok(());
+    }
+    Err(RunError::Config(scenario.invalid(
+        "sim.model.urdf",
+        format!(
+            "the plant's joints ({}) differ from the controllers' model's ({}); expected the same joints in \
+             the same order",
+            joint_list(plant),
+            joint_list(model)
+        ),
+    )))
+}
+
+/// Builds the plant of the scenario (or of the override). `model` is the controllers' model; the
+/// simulator runs on [`load_plant_model`]'s.
 pub fn build_robot(
     scenario: &Scenario,
     model: &Arc<Model>,
@@ -71,14 +132,21 @@ pub fn build_robot(
         frame_of(scenario, model, "robot.right_sole", &c.robot.right_sole)?,
     ];
     Ok(match plant {
-        PlantKind::Simulator => Box::new(SimPlant::new(
-            Arc::clone(model),
-            c.sim.clone(),
-            scenario.sim_period(),
-            c.scenario.control_mode,
-            &q0,
-            soles,
-        )?),
+        PlantKind::Simulator => {
+            let plant = load_plant_model(scenario, model)?;
+            let soles = [
+                frame_of(scenario, &plant, "robot.left_sole", &c.robot.left_sole)?,
+                frame_of(scenario, &plant, "robot.right_sole", &c.robot.right_sole)?,
+            ];
+            Box::new(SimPlant::new(
+                plant,
+                c.sim.clone(),
+                scenario.sim_period(),
+                c.scenario.control_mode,
+                &q0,
+                soles,
+            )?)
+        }
         PlantKind::Ideal => {
             let state = standing_state(model, &q0, soles[0], soles[1])?;
             let period = 1_000_000_000 / u64::from(c.rates.sim_hz);

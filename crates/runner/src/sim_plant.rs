@@ -4,15 +4,17 @@ use std::time::Duration;
 
 use nalgebra::DVector;
 use stride_block::Block;
+use stride_estimation::ImuReading;
 use stride_model::{FrameId, KinDyn, Model};
 use stride_sim::{ActuationMode, SimConfig, SimInput, SimRobot};
 
 use crate::config::ControlMode;
 use crate::robot::{JointCommand, Measurement, Robot, RobotError};
 
-/// The simulated robot behind the [`Robot`] trait. The measurement is the simulator's ground-truth base
-/// state (a real robot would need a base estimator here), its encoders, the contact wrenches of the two
-/// sole surfaces (world orientation, about the sole frame origins) and its IMU.
+/// The simulated robot behind the [`Robot`] trait. The sensors are the simulator's: encoders, IMU and the
+/// six-axis force/torque sensors of the model (offsets, noise, delays as configured in `[sim.sensors]`);
+/// the truth is its state, actuator torques and the contact wrenches of the two sole surfaces (world
+/// orientation, about the sole frame origins).
 pub struct SimPlant {
     sim: SimRobot,
     model: Arc<Model>,
@@ -81,7 +83,8 @@ impl SimPlant {
             sim,
             model,
         };
-        plant.meas.state = state;
+        plant.meas.truth.state = state;
+        plant.read_output()?;
         Ok(plant)
     }
 
@@ -92,28 +95,31 @@ impl SimPlant {
 
     fn read_output(&mut self) -> Result<(), RobotError> {
         let out = self.sim.output();
-        self.meas.time_ns = u64::try_from(out.time.as_nanos()).unwrap_or(u64::MAX);
-        // Ground-truth base, measured joints.
-        self.meas.state.base_pose = out.state.base_pose;
-        self.meas.state.base_velocity = out.state.base_velocity;
-        self.meas
-            .state
-            .joint_positions
-            .copy_from(&out.joint_positions);
-        self.meas
-            .state
-            .joint_velocities
-            .copy_from(&out.joint_velocities);
-        self.meas.joint_torques.copy_from(&out.joint_torques);
-        self.meas.imu = out.imu;
-        self.meas.fallen = out.fallen;
+        let m = &mut self.meas;
+        m.time_ns = u64::try_from(out.time.as_nanos()).unwrap_or(u64::MAX);
+        m.fallen = out.fallen;
+        let sensors = &mut m.sensors;
+        sensors.time_ns = m.time_ns;
+        sensors.joint_positions.copy_from(&out.joint_positions);
+        sensors.joint_velocities.copy_from(&out.joint_velocities);
+        sensors.imu = ImuReading {
+            orientation: out.imu.orientation,
+            angular_velocity: out.imu.angular_velocity,
+            proper_acceleration: out.imu.proper_acceleration,
+        };
+        for (reading, wrench) in sensors.ft_wrenches.iter_mut().zip(&out.ft_wrenches) {
+            *reading = *wrench;
+        }
+        let truth = &mut m.truth;
+        truth.state.copy_from(&out.state);
+        truth.joint_torques.copy_from(&out.joint_torques);
         for (k, saturated) in out.saturated.iter().enumerate() {
-            self.meas.saturated[k] = *saturated;
+            truth.saturated[k] = *saturated;
         }
         for k in 0..2 {
             let surface = self.surfaces[k].and_then(|i| out.surfaces.get(i));
-            self.meas.feet_in_contact[k] = surface.is_some_and(|s| s.in_contact);
-            self.meas.foot_wrenches[k] = surface.map_or(nalgebra::Vector6::zeros(), |s| s.wrench);
+            truth.feet_in_contact[k] = surface.is_some_and(|s| s.in_contact);
+            truth.foot_wrenches[k] = surface.map_or(nalgebra::Vector6::zeros(), |s| s.wrench);
         }
         Ok(())
     }

@@ -14,13 +14,14 @@ use crate::log::{
     LogOptions, LogStats, LogWriter, TopicId, FRAME_TRANSFORMS_SCHEMA,
 };
 use crate::records::{
-    simplified_output_record, EventRecord, FeetMsg, FootMsg, FootstepMsg, FootstepsMsg,
-    IkOutputRecord, ImuMsg, PlanSampleRecord, PlannerInputRecord, PoseRecord, RobotDescription,
-    RunnerTimingMsg, SimStateMsg, StateRecord, TimingRecord, TrackingMsg, TsidOutputRecord,
-    WbcInputRecord,
+    simplified_output_record, ContactsMsg, EstimationMsg, EventRecord, FeetMsg, FootMsg,
+    FootstepMsg, FootstepsMsg, FtMsg, IkOutputRecord, ImuMsg, PlanSampleRecord, PlannerInputRecord,
+    PoseRecord, RobotDescription, RunnerTimingMsg, SimStateMsg, StateRecord, TimingRecord,
+    TrackingMsg, TsidOutputRecord, WbcInputRecord,
 };
 use crate::robot::Measurement;
 use crate::stack::{Stack, Wbc};
+use stride_estimation::EstimatorOutput;
 
 /// Topics whose content depends on wall-clock time (excluded from determinism comparisons).
 pub const WALL_CLOCK_TOPICS: &[&str] = &["/simplified/timing", "/wbc/timing", "/runner/timing"];
@@ -39,6 +40,8 @@ struct Topics {
     sim_state: TopicId,
     sensors_feet: TopicId,
     sensors_imu: TopicId,
+    sensors_ft: TopicId,
+    estimation_state: TopicId,
     tf: TopicId,
     tf_static: TopicId,
     tracking: TopicId,
@@ -63,6 +66,8 @@ impl Topics {
             sim_state: w.topic("/sim/state", "stride.sim.State", None)?,
             sensors_feet: w.topic("/sensors/feet", "stride.sensors.Feet", None)?,
             sensors_imu: w.topic("/sensors/imu", "stride.sensors.Imu", None)?,
+            sensors_ft: w.topic("/sensors/ft", "stride.sensors.ForceTorque", None)?,
+            estimation_state: w.topic("/estimation/state", "stride.estimation.State", None)?,
             tf: w.topic("/tf", "foxglove.FrameTransforms", tf_schema())?,
             tf_static: w.topic("/tf_static", "foxglove.FrameTransforms", tf_schema())?,
             tracking: w.topic("/runner/tracking", "stride.runner.Tracking", None)?,
@@ -157,6 +162,30 @@ pub(crate) struct LogSink {
     topics: Topics,
     path: PathBuf,
     tf: Transforms,
+    /// The model's force/torque sensor names and a buffer of their readings (`/sensors/ft`).
+    ft_names: Vec<String>,
+    ft_wrenches: Vec<[f64; 6]>,
+}
+
+/// `/estimation/state` from the estimation layer's output.
+fn estimation_msg(time: f64, e: &EstimatorOutput) -> EstimationMsg<'_> {
+    let s = &e.state;
+    let q = s.base_pose.rotation.coords;
+    let v = &s.base_velocity;
+    EstimationMsg {
+        time,
+        base_position: s.base_pose.translation.vector.into(),
+        base_orientation_xyzw: [q.x, q.y, q.z, q.w],
+        base_linear_velocity: [v[0], v[1], v[2]],
+        base_angular_velocity: [v[3], v[4], v[5]],
+        contacts: ContactsMsg {
+            left: e.contacts[0],
+            right: e.contacts[1],
+        },
+        left_foot_wrench: e.foot_wrenches[0].into(),
+        right_foot_wrench: e.foot_wrenches[1].into(),
+        joint_torques: e.joint_torques.as_slice(),
+    }
 }
 
 impl LogSink {
@@ -196,6 +225,8 @@ impl LogSink {
             topics,
             path: path.to_path_buf(),
             tf: Transforms::new(model, c.log.state_hz),
+            ft_names: model.ft_sensors().iter().map(|f| f.name.clone()).collect(),
+            ft_wrenches: vec![[0.0; 6]; model.ft_sensors().len()],
         })
     }
 
@@ -218,24 +249,27 @@ impl LogSink {
         self.write(|tp| tp.events, t, &e)
     }
 
-    /// The state topics at a state tick: `/sim/state`, `/sensors/feet`, `/sensors/imu`, `/tf` (from the
-    /// stack's kinematics, set to the measured state of this tick) and, once a second, `/tf_static`.
+    /// The state topics at a state tick: `/sim/state` and `/sensors/feet` (the plant's truth),
+    /// `/sensors/imu` and `/sensors/ft` (what the robot senses), `/estimation/state` (what the controllers
+    /// read), `/tf` (from the stack's kinematics, set to the true state of this tick) and, once a second,
+    /// `/tf_static`.
     pub(crate) fn state(&mut self, t: u64, m: &Measurement, stack: &Stack) -> Result<(), LogError> {
         let kd = &stack.kd;
         let time = t as f64 * 1e-9;
+        let truth = &m.truth;
         let state = SimStateMsg {
             time,
-            state: StateRecord::from_state(&m.state),
-            joint_torques: m.joint_torques.as_slice(),
-            saturated: &m.saturated,
+            state: StateRecord::from_state(&truth.state),
+            joint_torques: truth.joint_torques.as_slice(),
+            saturated: &truth.saturated,
         };
         let foot = |k: usize| {
-            let w = &m.foot_wrenches[k];
+            let w = &truth.foot_wrenches[k];
             FootMsg {
-                in_contact: m.feet_in_contact[k],
+                in_contact: truth.feet_in_contact[k],
                 force: [w[0], w[1], w[2]],
                 torque: [w[3], w[4], w[5]],
-                point: stack.measured.soles[k].translation.vector.into(),
+                point: stack.truth.soles[k].translation.vector.into(),
             }
         };
         let feet = FeetMsg {
@@ -243,13 +277,28 @@ impl LogSink {
             left: foot(0),
             right: foot(1),
         };
-        let q = m.imu.orientation.coords;
+        let imu = &m.sensors.imu;
+        let q = imu.orientation.coords;
         let imu = ImuMsg {
             time,
             orientation_xyzw: [q.x, q.y, q.z, q.w],
-            angular_velocity: m.imu.angular_velocity.into(),
-            linear_acceleration: m.imu.proper_acceleration.into(),
+            angular_velocity: imu.angular_velocity.into(),
+            linear_acceleration: imu.proper_acceleration.into(),
         };
+        for (out, w) in self.ft_wrenches.iter_mut().zip(&m.sensors.ft_wrenches) {
+            *out = (*w).into();
+        }
+        let ft = FtMsg {
+            time,
+            names: &self.ft_names,
+            wrenches: &self.ft_wrenches,
+        };
+        self.writer.write(self.topics.sensors_ft, t, &ft)?;
+        self.write(
+            |tp| tp.estimation_state,
+            t,
+            &estimation_msg(time, &stack.estimate),
+        )?;
         let stamp = FoxgloveTime::from_ns(t);
         self.tf.update(kd, stamp);
         self.write(|tp| tp.sim_state, t, &state)?;

@@ -2,11 +2,12 @@
 //!
 //! [`Stack`] owns one instance of each layer, their preallocated inputs and the runner's own kinematics
 //! workspace for the measured quantities. The scheduler ([`crate::run`]) calls, within one base tick and
-//! in this order: [`Stack::estimate`] (measured CoM, DCM, ZMP from the robot's measurement),
+//! in this order: [`Stack::sense`] (the estimation layer, on each fresh measurement), [`Stack::measure`]
+//! (measured CoM, DCM, ZMP from the estimate, and the same from the plant's truth for the summary),
 //! [`Stack::planner_tick`] (only on events: start, new goal segment), [`Stack::simplified_tick`] and
 //! [`Stack::wbc_tick`] (each at its rate), then the command goes to the robot.
 //!
-//! Measured quantities: the CoM position and velocity from the measured base state and joints through
+//! Measured quantities: the CoM position and velocity from the estimated base state and joints through
 //! the model; the DCM `ξ = x + ẋ/ω` with the plan's ω (computed once per simplified tick); the ZMP from the
 //! feet wrenches ([`stride_simplified::measured_zmp`]), falling back to the CoM's ground projection when
 //! no foot carries more than 5 % of the weight.
@@ -16,6 +17,7 @@ use std::time::Duration;
 
 use nalgebra::{UnitQuaternion, Vector2, Vector3, Vector6};
 use stride_block::Block;
+use stride_estimation::{Estimator, EstimatorOutput};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_planner::geometry::wrap_angle;
 use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
@@ -25,7 +27,7 @@ use stride_simplified::{
 };
 use stride_wbc::{QpIk, Tsid, WbcInput};
 
-use crate::config::{ControlMode, Goal, Scenario};
+use crate::config::{ControlMode, EstimationKind, Goal, Scenario};
 use crate::error::RunError;
 use crate::robot::{JointCommand, Measurement};
 use crate::setup::frame_of;
@@ -50,6 +52,39 @@ impl Wbc {
             }
             ControlMode::Torque => {
                 Wbc::Tsid(Tsid::new(Arc::clone(model), c.wbc.tsid.clone(), period)?)
+            }
+        })
+    }
+}
+
+/// Where the controllers' view of the robot comes from.
+#[allow(clippy::large_enum_variant)]
+pub enum Estimation {
+    /// The estimation layer (`estimation.kind = "ekf"`, the default).
+    Estimator(Estimator),
+    /// The plant's truth, for debugging (`estimation.kind = "ground_truth"`); the summary says so.
+    GroundTruth,
+}
+
+impl Estimation {
+    /// The scenario's estimation, started at the robot's initial state `initial` (standing still: the
+    /// world frame is defined by it).
+    pub fn new(
+        scenario: &Scenario,
+        model: &Arc<Model>,
+        initial: &RobotState,
+    ) -> Result<Self, RunError> {
+        let c = &scenario.config;
+        Ok(match c.estimation.kind {
+            EstimationKind::GroundTruth => Estimation::GroundTruth,
+            EstimationKind::Ekf => {
+                let config = c
+                    .estimation
+                    .estimator_config(&c.robot, &c.sim.sensors.imu_frame);
+                let mut estimator =
+                    Estimator::new(Arc::clone(model), &config, scenario.sim_period())?;
+                estimator.set_initial_state(initial)?;
+                Estimation::Estimator(estimator)
             }
         })
     }
@@ -137,12 +172,7 @@ pub struct Stack {
     /// The runner's one kinematics workspace, set to the last measured state (the log sink's `/tf`
     /// reads it too).
     pub(crate) kd: KinDyn,
-    soles: [FrameId; 2],
-    torso: FrameId,
-    /// The world's vertical in the torso frame's coordinates at the initial posture: the torso's "up"
-    /// axis, whatever the frame convention of the model (z up on the bundled humanoid, y up on iCub's
-    /// `chest`). The tilt is the angle of this axis from the vertical.
-    torso_up: Vector3<f64>,
+    frames: MeasureFrames,
     /// Gravity magnitude \[m/s²\] (the model's, along −z).
     gravity: f64,
     foot_half_length: f64,
@@ -168,8 +198,15 @@ pub struct Stack {
     pub wbc_input: WbcInput,
     /// The command of the last whole-body tick.
     pub command: JointCommand,
-    /// Measured quantities of the last estimate.
+    /// The estimation layer (or the ground-truth bypass).
+    pub estimation: Estimation,
+    /// The estimation layer's output of the last plant period: all the controllers read of the robot.
+    pub estimate: EstimatorOutput,
+    /// Measured quantities of the last tick, from [`Stack::estimate`] (what the layers use).
     pub measured: Measured,
+    /// The same quantities from the plant's truth (what the summary reports; equal to
+    /// [`Stack::measured`] with the ground-truth bypass).
+    pub truth: Measured,
     events: Vec<GoalEvent>,
     next_event: usize,
     /// Fallback/hold counters: simplified errors held, wbc QP fallbacks, wbc holds.
@@ -223,6 +260,9 @@ impl Stack {
         let mut wbc_input = WbcInput::new(&model);
         wbc_input.state.clone_from(initial);
         let command = JointCommand::hold(c.scenario.control_mode, &initial.joint_positions);
+        let estimation = Estimation::new(scenario, &model, initial)?;
+        let mut estimate = EstimatorOutput::new(&model);
+        estimate.state.clone_from(initial);
         let planner_input = PlannerInput {
             time: Duration::ZERO,
             goal: None,
@@ -230,9 +270,11 @@ impl Stack {
             right_sole: kd.frame_pose(soles[1]),
         };
         Ok(Self {
-            soles,
-            torso,
-            torso_up,
+            frames: MeasureFrames {
+                soles,
+                torso,
+                torso_up,
+            },
             gravity: -model.gravity().z,
             foot_half_length: c.planner.foot_length * 0.5,
             foot_half_width: c.planner.foot_width * 0.5,
@@ -248,7 +290,10 @@ impl Stack {
             wbc,
             wbc_input,
             command,
+            estimation,
+            estimate,
             measured: Measured::default(),
+            truth: Measured::default(),
             events: goal_events(&c.goal),
             next_event: 0,
             counters: Counters::default(),
@@ -296,44 +341,64 @@ impl Stack {
         Ok(feet_support_polygon(&feet[..n])?)
     }
 
-    /// Measured CoM, ZMP, soles, tilt from the robot's measurement (first step of every tick that runs
-    /// a layer or logs the state). The DCM needs the plan's ω: the simplified tick computes it.
-    pub fn estimate(&mut self, m: &Measurement) -> Result<(), RunError> {
-        self.kd.set_state(&m.state)?;
-        let com = self.kd.com_position();
-        let weight = self.model.total_mass() * self.gravity;
-        let mut loaded = [FootWrench {
-            wrench: Vector6::zeros(),
-            point: Vector3::zeros(),
-        }; 2];
-        let soles = [
-            self.kd.frame_pose(self.soles[0]),
-            self.kd.frame_pose(self.soles[1]),
-        ];
-        let mut n = 0;
-        for ((sole, wrench), in_contact) in soles.iter().zip(m.foot_wrenches).zip(m.feet_in_contact)
-        {
-            if in_contact && wrench[2] > 0.0 {
-                let point = sole.translation.vector;
-                loaded[n] = FootWrench { wrench, point };
-                n += 1;
+    /// Steps the estimation layer on a fresh measurement (every plant period): its output
+    /// ([`Stack::estimate`]) is all the controllers read of the robot. With `estimation.kind =
+    /// "ground_truth"` (debugging only) it copies the plant's truth instead.
+    pub fn sense(&mut self, m: &Measurement) -> Result<(), RunError> {
+        match &mut self.estimation {
+            Estimation::Estimator(estimator) => {
+                let out = estimator.step(&m.sensors)?;
+                self.estimate.state.copy_from(&out.state);
+                self.estimate.contacts = out.contacts;
+                self.estimate.foot_wrenches = out.foot_wrenches;
+                self.estimate.joint_torques.copy_from(&out.joint_torques);
+                for (o, e) in self.estimate.ft_offsets.iter_mut().zip(&out.ft_offsets) {
+                    *o = *e;
+                }
+            }
+            Estimation::GroundTruth => {
+                let t = &m.truth;
+                self.estimate.state.copy_from(&t.state);
+                self.estimate.contacts = t.feet_in_contact;
+                self.estimate.foot_wrenches = t.foot_wrenches;
+                self.estimate.joint_torques.copy_from(&t.joint_torques);
             }
         }
-        let (zmp, ok) = match measured_zmp(&loaded[..n], 0.0, 0.05 * weight) {
-            Ok(z) => (z, true),
-            Err(_) => (com.xy(), false),
-        };
-        let torso = self.kd.frame_pose(self.torso);
-        let up = torso.rotation * self.torso_up;
+        Ok(())
+    }
+
+    /// Measured CoM, ZMP, soles and tilt, twice: [`Stack::measured`] from the estimate (what the layers
+    /// use) and [`Stack::truth`] from the plant's truth (what the summary reports). First step of every tick
+    /// that runs a layer or logs the state; it leaves the kinematics at the true state (for `/tf`). The DCM
+    /// needs the plan's ω: the simplified tick computes it.
+    pub fn measure(&mut self, m: &Measurement) -> Result<(), RunError> {
+        let weight = self.model.total_mass() * self.gravity;
+        let e = &self.estimate;
+        let frames = &self.frames;
+        let measured = measure_state(
+            &mut self.kd,
+            frames,
+            weight,
+            &e.state,
+            &e.foot_wrenches,
+            e.contacts,
+        )?;
         self.measured = Measured {
-            com,
-            com_velocity: self.kd.com_velocity(),
             dcm: self.measured.dcm,
-            zmp,
-            zmp_from_wrenches: ok,
-            soles,
-            tilt: up.z.clamp(-1.0, 1.0).acos(),
-            base_height: m.state.base_pose.translation.z,
+            ..measured
+        };
+        let t = &m.truth;
+        let truth = measure_state(
+            &mut self.kd,
+            frames,
+            weight,
+            &t.state,
+            &t.foot_wrenches,
+            t.feet_in_contact,
+        )?;
+        self.truth = Measured {
+            dcm: self.truth.dcm,
+            ..truth
         };
         Ok(())
     }
@@ -341,8 +406,9 @@ impl Stack {
     /// The measured DCM `ξ = x + ẋ/ω` \[m\] [Romualdi 2022, eq. 4.4.2] (b = 1/ω) with the plan's ω (the one rule for
     /// ω), stored in [`Stack::measured`]; called by the simplified tick after sampling the plan.
     fn measure_dcm(&mut self, omega: f64) {
-        let m = &mut self.measured;
-        m.dcm = m.com.xy() + m.com_velocity.xy() / omega;
+        for m in [&mut self.measured, &mut self.truth] {
+            m.dcm = m.com.xy() + m.com_velocity.xy() / omega;
+        }
     }
 
     /// Whether a planner event is due at `time_ns` (the first tick always is).
@@ -456,11 +522,11 @@ impl Stack {
 
     /// One whole-body tick at `time_ns`: references from the plan (feet, CoM height, torso) and the
     /// simplified layer (CoM xy, desired ZMP), measured state in; [`Stack::command`] out.
-    pub fn wbc_tick(&mut self, time_ns: u64, m: &Measurement) -> Result<(), RunError> {
+    pub fn wbc_tick(&mut self, time_ns: u64) -> Result<(), RunError> {
         self.sample_plan(time_ns)?;
         let s = &self.plan_sample;
         let i = &mut self.wbc_input;
-        i.state.copy_from(&m.state);
+        i.state.copy_from(&self.estimate.state);
         let so = &self.simplified_output;
         if self.simplified_valid {
             i.com_position = Vector3::new(so.com_position.x, so.com_position.y, s.com_position.z);
@@ -514,7 +580,8 @@ impl Stack {
                 let out = t.step(&self.wbc_input)?;
                 cmd.mode = ControlMode::Torque;
                 cmd.joint_torques.copy_from(&out.joint_torques);
-                cmd.joint_positions.copy_from(&m.state.joint_positions);
+                cmd.joint_positions
+                    .copy_from(&self.estimate.state.joint_positions);
                 cmd.joint_velocities.fill(0.0);
                 if out.report.fallback {
                     self.counters.wbc_fallbacks += 1;
@@ -541,4 +608,65 @@ pub fn soles_heading(left: &nalgebra::Isometry3<f64>, right: &nalgebra::Isometry
     let yl = left.rotation.euler_angles().2;
     let yr = right.rotation.euler_angles().2;
     yl + 0.5 * wrap_angle(yr - yl)
+}
+
+/// The frames the measured quantities come from.
+struct MeasureFrames {
+    /// Left and right sole.
+    soles: [FrameId; 2],
+    /// The torso frame.
+    torso: FrameId,
+    /// The world's vertical in the torso frame's coordinates at the initial posture: the torso's "up"
+    /// axis, whatever the frame convention of the model (z up on the bundled humanoid, y up on iCub's
+    /// `chest`). The tilt is the angle of this axis from the vertical.
+    torso_up: Vector3<f64>,
+}
+
+/// CoM, ZMP (from the wrenches of the feet in contact carrying more than 5 % of the `weight` \[N\]),
+/// soles and tilt of `state`; the DCM is left at zero (it needs the plan's ω).
+fn measure_state(
+    kd: &mut KinDyn,
+    frames: &MeasureFrames,
+    weight: f64,
+    state: &RobotState,
+    foot_wrenches: &[Vector6<f64>; 2],
+    contacts: [bool; 2],
+) -> Result<Measured, RunError> {
+    kd.set_state(state)?;
+    let com = kd.com_position();
+    let mut loaded = [FootWrench {
+        wrench: Vector6::zeros(),
+        point: Vector3::zeros(),
+    }; 2];
+    let soles = [
+        kd.frame_pose(frames.soles[0]),
+        kd.frame_pose(frames.soles[1]),
+    ];
+    let mut n = 0;
+    for ((sole, wrench), in_contact) in soles.iter().zip(foot_wrenches).zip(contacts) {
+        if in_contact && wrench[2] > 0.0 {
+            let point = sole.translation.vector;
+            loaded[n] = FootWrench {
+                wrench: *wrench,
+                point,
+            };
+            n += 1;
+        }
+    }
+    let (zmp, ok) = match measured_zmp(&loaded[..n], 0.0, 0.05 * weight) {
+        Ok(z) => (z, true),
+        Err(_) => (com.xy(), false),
+    };
+    let torso = kd.frame_pose(frames.torso);
+    let up = torso.rotation * frames.torso_up;
+    Ok(Measured {
+        com,
+        com_velocity: kd.com_velocity(),
+        dcm: Vector2::zeros(),
+        zmp,
+        zmp_from_wrenches: ok,
+        soles,
+        tilt: up.z.clamp(-1.0, 1.0).acos(),
+        base_height: state.base_pose.translation.z,
+    })
 }

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::config::Goal;
+use crate::estimation_summary::EstimationSummary;
 use crate::log::LogStats;
 use stride_planner::geometry::wrap_angle;
 
@@ -149,6 +150,8 @@ pub struct RunSummary {
     pub replans: u64,
     /// Realtime mode: whole-body ticks that started late.
     pub deadline_misses: u64,
+    /// Estimation errors (estimate − plant truth).
+    pub estimation: EstimationSummary,
     /// Log file and counters.
     pub log: Option<(PathBuf, LogStats)>,
 }
@@ -182,6 +185,7 @@ impl RunSummary {
             simplified_holds: 0,
             replans: 0,
             deadline_misses: 0,
+            estimation: EstimationSummary::default(),
             log: None,
         }
     }
@@ -291,6 +295,7 @@ impl RunSummary {
             );
         }
         render_saturation(&mut s, &self.joint_saturation);
+        self.estimation.render(&mut s);
         let _ = writeln!(
             s,
             "  QP fallbacks {}, held commands {}, simplified holds {}, replans {}, deadline misses {}",

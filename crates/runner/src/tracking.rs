@@ -3,7 +3,8 @@
 
 use nalgebra::Vector3;
 
-use crate::config::{Goal, Scenario};
+use crate::config::{EstimationKind, Goal, Scenario};
+use crate::estimation_summary::EstimationSummary;
 use crate::records::TrackingMsg;
 use crate::robot::{Measurement, Robot};
 use stride_planner::geometry::wrap_angle;
@@ -37,27 +38,37 @@ impl Tracker {
         simplified_ticks: u64,
     ) -> Self {
         let m = robot.measurement();
+        let mut summary = RunSummary::new(&scenario.config.scenario.name, robot.name());
+        summary.estimation = EstimationSummary::new(match scenario.config.estimation.kind {
+            EstimationKind::Ekf => "ekf",
+            EstimationKind::GroundTruth => "ground_truth",
+        });
         Self {
-            summary: RunSummary::new(&scenario.config.scenario.name, robot.name()),
+            summary,
             wbc_times: Vec::with_capacity(wbc_ticks as usize),
             simplified_times: Vec::with_capacity(simplified_ticks as usize),
-            saturated_time: vec![0.0; m.saturated.len()],
+            saturated_time: vec![0.0; m.truth.saturated.len()],
             plant_period: robot.period_ns() as f64 * 1e-9,
-            initial_base_height: m.state.base_pose.translation.z,
-            start_mid: mid_pose(&stack.measured.soles),
+            initial_base_height: m.truth.state.base_pose.translation.z,
+            start_mid: mid_pose(&stack.truth.soles),
             standstill_since: None,
         }
     }
 
     /// Planar distance of the stance from its start \[m\].
     pub(crate) fn distance(&self, stack: &Stack) -> f64 {
-        let mid = mid_pose(&stack.measured.soles);
+        let mid = mid_pose(&stack.truth.soles);
         ((mid[0] - self.start_mid[0]).powi(2) + (mid[1] - self.start_mid[1]).powi(2)).sqrt()
+    }
+
+    /// After a whole-body tick: the estimate against the plant's truth.
+    pub(crate) fn estimation(&mut self, stack: &Stack, m: &Measurement) {
+        self.summary.estimation.add(&stack.estimate, &m.truth);
     }
 
     /// After a plant period: joint saturation.
     pub(crate) fn plant_period(&mut self, m: &Measurement) {
-        for (time, saturated) in self.saturated_time.iter_mut().zip(&m.saturated) {
+        for (time, saturated) in self.saturated_time.iter_mut().zip(&m.truth.saturated) {
             if *saturated {
                 *time += self.plant_period;
             }
@@ -67,7 +78,7 @@ impl Tracker {
     /// Tracking errors at a simplified tick (after the layer ran), accumulated and returned for the log.
     pub(crate) fn track(&mut self, t: u64, stack: &Stack) -> TrackingMsg {
         let s = &stack.plan_sample;
-        let m = &stack.measured;
+        let m = &stack.truth;
         let dcm_err = (m.dcm - s.dcm_position.xy()).norm();
         let so = &stack.simplified_output;
         let com_ref = Vector3::new(so.com_position.x, so.com_position.y, s.com_position.z);
@@ -128,6 +139,7 @@ impl Tracker {
         s.simplified_holds = counters.simplified_holds;
         s.replans = counters.replans;
         s.finish(self.start_mid, end, goal, wall);
+        s.estimation.finish(s.distance);
         self.summary
     }
 }
@@ -142,7 +154,7 @@ pub(crate) fn end_check(
     fallen: bool,
 ) -> Option<Outcome> {
     let e = &scenario.config.end;
-    let m = &stack.measured;
+    let m = &stack.truth;
     let frac = m.base_height / tracker.initial_base_height;
     let summary = &mut tracker.summary;
     summary.min_base_height_fraction = summary.min_base_height_fraction.min(frac);

@@ -91,11 +91,12 @@ fn camel(s: &str) -> String {
 fn configuration_reference_matches_the_code() {
     let root = common::root();
     // Sections and the crates whose config types they embed (QP settings live in stride-qp).
-    let crates: [(&str, &[&str]); 4] = [
+    let crates: [(&str, &[&str]); 5] = [
         ("planner", &["planner"]),
         ("simplified", &["simplified", "qp"]),
         ("wbc", &["wbc", "qp"]),
         ("sim", &["sim"]),
+        ("estimation", &["estimation"]),
     ];
     let docs: BTreeMap<&str, _> = crates
         .iter()

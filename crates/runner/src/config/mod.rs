@@ -74,6 +74,57 @@ pub enum PlantKind {
     Ideal,
 }
 
+/// `[estimation]`: where the controllers' view of the robot comes from, and the estimation layer's
+/// parameters (`stride_estimation::EstimatorConfig`; its sole and IMU frames are the robot's:
+/// `robot.left_sole`, `robot.right_sole`, `sim.sensors.imu_frame`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct EstimationSection {
+    /// `ekf` (default): the estimation layer; `ground_truth`: the plant's truth, for debugging only.
+    pub kind: EstimationKind,
+    /// Force/torque sensor of the left foot (none: the one nearest above the sole).
+    pub left_foot_ft_sensor: Option<String>,
+    /// Force/torque sensor of the right foot (none: the one nearest above the sole).
+    pub right_foot_ft_sensor: Option<String>,
+    /// The floating-base EKF (`stride_estimation::EkfConfig`).
+    pub ekf: stride_estimation::EkfConfig,
+    /// Contact detection (`stride_estimation::ContactConfig`).
+    pub contact: stride_estimation::ContactConfig,
+    /// Force/torque offset estimation (`stride_estimation::FtOffsetConfig`).
+    pub ft_offsets: stride_estimation::FtOffsetConfig,
+}
+
+impl EstimationSection {
+    /// The estimation layer's configuration with the robot's frames.
+    pub fn estimator_config(
+        &self,
+        robot: &RobotSection,
+        imu_frame: &str,
+    ) -> stride_estimation::EstimatorConfig {
+        stride_estimation::EstimatorConfig {
+            left_sole: robot.left_sole.clone(),
+            right_sole: robot.right_sole.clone(),
+            imu_frame: imu_frame.into(),
+            left_foot_ft_sensor: self.left_foot_ft_sensor.clone(),
+            right_foot_ft_sensor: self.right_foot_ft_sensor.clone(),
+            ekf: self.ekf.clone(),
+            contact: self.contact.clone(),
+            ft_offsets: self.ft_offsets.clone(),
+        }
+    }
+}
+
+/// Which estimation the loop runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum EstimationKind {
+    /// The estimation layer: contact-aided invariant EKF, foot wrenches and contacts from the FT sensors.
+    #[default]
+    Ekf,
+    /// The plant's truth read directly (a simulator's privilege; debugging only).
+    GroundTruth,
+}
+
 /// `[scenario]`: what this run is.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -353,6 +404,8 @@ pub struct ScenarioConfig {
     pub wbc: WbcSection,
     /// Simulator parameters (`stride_sim::SimConfig`), pushes included (`[[sim.pushes]]`).
     pub sim: stride_sim::SimConfig,
+    /// The estimation layer.
+    pub estimation: EstimationSection,
     /// The log.
     pub log: LogSection,
     /// Run endings.
@@ -411,6 +464,35 @@ pub struct Scenario {
     pub merged: toml::Table,
     /// Resolved URDF path.
     pub urdf_path: PathBuf,
+    /// Resolved `sim.model.urdf` (the plant's own URDF), if set.
+    pub plant_urdf_path: Option<PathBuf>,
+}
+
+/// The path `written` at `key` with `${NAME}` expanded, relative to the file that sets the key (the
+/// top-level scenario file when only the built-in defaults do).
+fn resolve_path(sources: &SourceMap, key: &str, written: &str) -> Result<PathBuf, ConfigError> {
+    let dir = sources.value_dir(key).unwrap_or_else(|| {
+        sources
+            .files
+            .last()
+            .filter(|f| f.path != Path::new(load::DEFAULTS_PATH))
+            .and_then(|f| f.path.parent().map(Path::to_path_buf))
+            .unwrap_or_default()
+    });
+    let expanded =
+        expand_env_vars(written, |name| std::env::var(name).ok()).map_err(|message| {
+            ConfigError::Invalid {
+                location: sources.value_location(key),
+                key: key.into(),
+                message,
+            }
+        })?;
+    let expanded = PathBuf::from(expanded);
+    Ok(if expanded.is_absolute() {
+        expanded
+    } else {
+        dir.join(&expanded)
+    })
 }
 
 impl Scenario {
@@ -439,30 +521,15 @@ impl Scenario {
             sources,
             merged,
         } = loaded;
-        let dir = sources.value_dir("robot.urdf").unwrap_or_else(|| {
-            // Only in the built-in defaults: relative to the top-level scenario file.
-            // Not written anywhere: relative to the top-level scenario file.
-            sources
-                .files
-                .last()
-                .filter(|f| f.path != Path::new(load::DEFAULTS_PATH))
-                .and_then(|f| f.path.parent().map(Path::to_path_buf))
-                .unwrap_or_default()
-        });
         let written = value.robot.urdf.to_string_lossy().into_owned();
-        let expanded =
-            expand_env_vars(&written, |name| std::env::var(name).ok()).map_err(|message| {
-                ConfigError::Invalid {
-                    location: sources.value_location("robot.urdf"),
-                    key: "robot.urdf".into(),
-                    message,
-                }
-            })?;
-        let expanded = PathBuf::from(expanded);
-        let urdf_path = if expanded.is_absolute() {
-            expanded
-        } else {
-            dir.join(&expanded)
+        let urdf_path = resolve_path(&sources, "robot.urdf", &written)?;
+        let plant_urdf_path = match &value.sim.model.urdf {
+            Some(p) => Some(resolve_path(
+                &sources,
+                "sim.model.urdf",
+                &p.to_string_lossy(),
+            )?),
+            None => None,
         };
         let mut merged = merged;
         if written.contains('$') {
@@ -480,6 +547,7 @@ impl Scenario {
             sources,
             merged,
             urdf_path,
+            plant_urdf_path,
         };
         scenario.validate()?;
         Ok(scenario)
@@ -576,7 +644,32 @@ impl Scenario {
                 ));
             }
         }
+        self.validate_plant()?;
         self.validate_layers()
+    }
+
+    /// `[estimation]` against the plant, and `[sim.model]`'s scales.
+    fn validate_plant(&self) -> Result<(), ConfigError> {
+        let c = &self.config;
+        if c.scenario.plant == PlantKind::Ideal && c.estimation.kind != EstimationKind::GroundTruth
+        {
+            return Err(self.invalid(
+                "estimation.kind",
+                "the ideal plant has no IMU and no force/torque sensors to estimate from; expected \
+                 `ground_truth` with `scenario.plant = \"ideal\"`",
+            ));
+        }
+        self.positive("sim.model.mass_scale", c.sim.model.mass_scale, "")?;
+        for (link, change) in &c.sim.model.links {
+            let key = format!("sim.model.links.{link}");
+            self.positive(&format!("{key}.mass_scale"), change.mass_scale, "")?;
+            if !change.com_offset.iter().all(|v| v.is_finite()) {
+                return Err(
+                    self.invalid(&format!("{key}.com_offset"), "expected finite numbers [m]")
+                );
+            }
+        }
+        Ok(())
     }
 
     /// `[rates]` and `[log]`: every rate divides the base rate, the base period is whole nanoseconds.
@@ -746,6 +839,16 @@ impl Scenario {
             };
             self.layer_invalid("simplified", name, e.to_string())
         })?;
+        c.estimation
+            .estimator_config(&c.robot, &c.sim.sensors.imu_frame)
+            .validate()
+            .map_err(|e| {
+                let name = match &e {
+                    stride_estimation::EstimatorError::InvalidParameter { name, .. } => Some(*name),
+                    _ => None,
+                };
+                self.layer_invalid("estimation", name, e.to_string())
+            })?;
         c.sim.validate().map_err(|e| {
             let name = match &e {
                 stride_sim::SimError::InvalidConfig { parameter, .. } => Some(parameter.as_str()),

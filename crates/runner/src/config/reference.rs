@@ -40,6 +40,7 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "scenario.duration", unit: "s", meaning: "Simulated duration, 0 < value ≤ 3600; the run ends here at the latest (`--duration` overrides)." },
     KeyDoc { key: "scenario.control_mode", unit: "-", meaning: "`position` (QP-IK → joint position servos) or `torque` (TSID → joint torques)." },
     KeyDoc { key: "scenario.gravity", unit: "m/s²", meaning: "Gravity acceleration along −z of the world, > 0: the run's one gravity, set on the model and handed to the planner, the controllers and the simulator." },
+    KeyDoc { key: "estimation.kind", unit: "-", meaning: "`ekf` (default): the controllers read only the estimation layer's output (stride-estimation: invariant EKF, contacts and foot wrenches from the force/torque sensors). `ground_truth`: they read the simulator's truth, for debugging only (the summary says GROUND TRUTH; required with `scenario.plant = \"ideal\"`)." },
     KeyDoc { key: "scenario.plant", unit: "-", meaning: "`simulator` (stride-sim) or `ideal` (joint commands applied exactly, base from the fixed stance foot)." },
     KeyDoc { key: "robot.urdf", unit: "-", meaning: "URDF of the robot, relative to the file that sets this key; `${NAME}` is replaced by the environment variable `NAME` (unset: a configuration error), e.g. `\"${STRIDE_ICUB_MODELS_DIR}/iCubGazeboV2_7/model.urdf\"`." },
     KeyDoc { key: "robot.left_sole", unit: "-", meaning: "Frame at the centre of the left sole (a link or frame of the model)." },
@@ -57,7 +58,7 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "goal.pose.heading_deg", unit: "deg", meaning: "Goal heading about world z." },
     KeyDoc { key: "log.enabled", unit: "-", meaning: "Write an MCAP log." },
     KeyDoc { key: "log.path", unit: "-", meaning: "Log path (relative to the working directory); empty: `<scenario.name>.mcap`. `--output` overrides." },
-    KeyDoc { key: "log.state_hz", unit: "Hz", meaning: "Rate of `/sim/state`, `/sensors/*`, `/tf`, `/runner/timing`; divides `rates.sim_hz`." },
+    KeyDoc { key: "log.state_hz", unit: "Hz", meaning: "Rate of `/sim/state`, `/sensors/*`, `/estimation/state`, `/tf`, `/runner/timing`; divides `rates.sim_hz`." },
     KeyDoc { key: "log.compression", unit: "-", meaning: "Chunk compression: `zstd`, `lz4` or `none`." },
     KeyDoc { key: "log.chunk_size", unit: "bytes", meaning: "Target uncompressed chunk size." },
     KeyDoc { key: "log.queue_capacity", unit: "messages", meaning: "Messages the loop may queue ahead of the writer thread (≥ 1); beyond it the loop waits (counted in the summary as writer waits). Each owns a preallocated 16 KB buffer (16 MB by default), so the loop never allocates for logging." },
@@ -77,6 +78,7 @@ pub const LAYER_SECTIONS: &[(&str, &str)] = &[
     ("wbc.ik", "stride_wbc::IkConfig"),
     ("wbc.tsid", "stride_wbc::TsidConfig"),
     ("sim", "stride_sim::SimConfig"),
+    ("estimation", "stride_estimation::EstimatorConfig"),
 ];
 
 /// One row of the reference.
