@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 use crate::config::{EstimationKind, PlannerMode, PlantKind, Scenario, ScenarioConfig};
 use crate::records::{RunnerTimingMsg, TimingRecord};
 use crate::robot::Robot;
-use crate::setup::check_same_joints;
+use crate::setup::{check_same_joints, frame_of};
 use crate::sink::LogSink;
 use crate::stack::{Stack, Wbc};
 use crate::summary::mid_pose;
@@ -109,6 +109,31 @@ pub fn run_scenario(scenario: &Scenario, options: &RunOptions) -> Result<RunSumm
     run_with_robot(scenario, options, robot)
 }
 
+/// The state the run starts from, as the controllers know it: the robot stands on flat ground at its
+/// encoders' posture, which defines the world frame (left sole level on `z = 0`, the soles' mid-point at
+/// the origin, heading along +x), as a real robot's start does; the ground-truth bypass reads the plant's
+/// truth.
+fn initial_state(
+    scenario: &Scenario,
+    model: &Arc<stride_model::Model>,
+    m: &crate::robot::Measurement,
+) -> Result<stride_model::RobotState, RunError> {
+    if scenario.config.estimation.kind == EstimationKind::GroundTruth {
+        return Ok(m.truth.state.clone());
+    }
+    let c = &scenario.config;
+    let soles = [
+        frame_of(scenario, model, "robot.left_sole", &c.robot.left_sole)?,
+        frame_of(scenario, model, "robot.right_sole", &c.robot.right_sole)?,
+    ];
+    Ok(crate::robot::standing_state(
+        model,
+        &m.sensors.joint_positions,
+        soles[0],
+        soles[1],
+    )?)
+}
+
 /// Runs a scenario against any [`Robot`] (a real robot interface, another simulator, a test double).
 /// The controllers use the scenario's model (`robot.urdf`); the robot's own may differ in its inertias
 /// (`[sim.model]`) but must have the same joints. Its period must be `1 / rates.sim_hz`.
@@ -130,11 +155,8 @@ pub fn run_with_robot(
         }
         .into());
     }
-    let stack = Stack::new(
-        scenario,
-        Arc::clone(&model),
-        &robot.measurement().truth.state,
-    )?;
+    let initial = initial_state(scenario, &model, robot.measurement())?;
+    let stack = Stack::new(scenario, Arc::clone(&model), &initial)?;
     let log = if c.log.enabled && !options.no_log {
         let path = options
             .output

@@ -1,0 +1,248 @@
+//! The estimation layer in the loop: the controllers read only what the robot senses, the ground-truth
+//! bypass says so, `/estimation/state` carries its documented keys, and `[sim.model]` builds the plant
+//! from another model than the controllers'.
+mod common;
+
+use std::sync::{Arc, Mutex};
+
+use common::Scratch;
+use stride_runner::config::{PlantKind, Scenario};
+use stride_runner::log::read_log;
+use stride_runner::robot::{JointCommand, Measurement, Robot, RobotError};
+use stride_runner::run::{build_robot, load_model, run_with_robot, RunError, RunOptions};
+
+/// A short walk on the simulator with `extra` TOML appended.
+fn walk(s: &Scratch, extra: &str) -> Scenario {
+    s.write("r.toml", &common::robot_section());
+    s.write(
+        "layers/rates.toml",
+        &std::fs::read_to_string(common::root().join("configs/layers/rates.toml")).unwrap(),
+    );
+    let top = s.write(
+        "w.toml",
+        &format!(
+            "include = [\"r.toml\", \"layers/rates.toml\"]\n[scenario]\nname = \"w\"\nduration = 1.6\n\
+             [goal.pose]\nx = 1.0\n{extra}\n"
+        ),
+    );
+    Scenario::load(&top).unwrap()
+}
+
+/// A robot whose reported truth is wrong (base 10 m away, wrenches tripled, contacts swapped, torques
+/// offset) and that records every command it receives.
+struct LyingTruth {
+    inner: Box<dyn Robot>,
+    meas: Measurement,
+    commands: Arc<Mutex<Vec<JointCommand>>>,
+}
+
+impl LyingTruth {
+    fn new(inner: Box<dyn Robot>, commands: Arc<Mutex<Vec<JointCommand>>>) -> Self {
+        let mut robot = Self {
+            meas: inner.measurement().clone(),
+            inner,
+            commands,
+        };
+        robot.corrupt();
+        robot
+    }
+
+    fn corrupt(&mut self) {
+        self.meas.clone_from(self.inner.measurement());
+        let t = &mut self.meas.truth;
+        t.state.base_pose.translation.x += 10.0;
+        t.state.base_velocity[1] += 0.5;
+        t.foot_wrenches[0] *= 3.0;
+        t.foot_wrenches[1] *= 3.0;
+        t.feet_in_contact.swap(0, 1);
+        t.joint_torques.add_scalar_mut(100.0);
+    }
+}
+
+impl Robot for LyingTruth {
+    fn name(&self) -> &str {
+        "lying"
+    }
+    fn model(&self) -> &Arc<stride_model::Model> {
+        self.inner.model()
+    }
+    fn period_ns(&self) -> u64 {
+        self.inner.period_ns()
+    }
+    fn measurement(&self) -> &Measurement {
+        &self.meas
+    }
+    fn command(&mut self, c: &JointCommand) -> Result<(), RobotError> {
+        self.commands.lock().unwrap().push(c.clone());
+        self.inner.command(c)
+    }
+    fn advance(&mut self) -> Result<(), RobotError> {
+        self.inner.advance()?;
+        self.corrupt();
+        Ok(())
+    }
+}
+
+/// The commands of a run of `sc`, with the robot's truth corrupted or not.
+fn commands(s: &Scratch, sc: &Scenario, lie: bool) -> Vec<JointCommand> {
+    let model = load_model(sc).unwrap();
+    let robot = build_robot(sc, &model, PlantKind::Simulator).unwrap();
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let robot: Box<dyn Robot> = if lie {
+        Box::new(LyingTruth::new(robot, Arc::clone(&log)))
+    } else {
+        Box::new(LyingTruth {
+            meas: robot.measurement().clone(),
+            inner: robot,
+            commands: Arc::clone(&log),
+        })
+    };
+    let options = RunOptions {
+        output: Some(s.path(if lie { "lie.mcap" } else { "true.mcap" })),
+        ..RunOptions::default()
+    };
+    let summary = run_with_robot(sc, &options, robot).unwrap();
+    assert!(
+        !matches!(summary.outcome, stride_runner::run::Outcome::Error { .. }),
+        "{}",
+        summary.render()
+    );
+    let commands = log.lock().unwrap().clone();
+    commands
+}
+
+#[test]
+fn the_controllers_never_read_the_plants_truth() {
+    let s = Scratch::new("no-truth");
+    let sc = walk(&s, "");
+    let honest = commands(&s, &sc, false);
+    let lied_to = commands(&s, &sc, true);
+    assert!(honest.len() > 500, "{} commands", honest.len());
+    assert_eq!(honest.len(), lied_to.len());
+    for (k, (a, b)) in honest.iter().zip(&lied_to).enumerate() {
+        assert_eq!(a, b, "command {k} differs: the controllers read the truth");
+    }
+    // The other side: with the ground-truth bypass the same corruption reaches the commands.
+    let s2 = Scratch::new("truth-bypass");
+    let gt = walk(&s2, "[estimation]\nkind = \"ground_truth\"");
+    let honest = commands(&s2, &gt, false);
+    let lied_to = commands(&s2, &gt, true);
+    assert!(
+        honest.iter().zip(&lied_to).any(|(a, b)| a != b),
+        "the corrupted truth should change the commands of the ground-truth bypass"
+    );
+}
+
+#[test]
+fn the_estimation_topic_has_its_documented_keys() {
+    let s = Scratch::new("est-topic");
+    let sc = walk(&s, "");
+    commands(&s, &sc, false);
+    let log = read_log(&s.path("true.mcap")).unwrap();
+    let msgs: Vec<_> = log.topic("/estimation/state").collect();
+    assert!(msgs.len() > 100, "{} messages", msgs.len());
+    let v: serde_json::Value = serde_json::from_slice(&msgs[msgs.len() / 2].data).unwrap();
+    for (key, len) in [
+        ("base_position", 3),
+        ("base_orientation_xyzw", 4),
+        ("base_linear_velocity", 3),
+        ("base_angular_velocity", 3),
+        ("left_foot_wrench", 6),
+        ("right_foot_wrench", 6),
+    ] {
+        let a = v[key]
+            .as_array()
+            .unwrap_or_else(|| panic!("{key} missing: {v}"));
+        assert_eq!(a.len(), len, "{key}");
+        assert!(
+            a.iter().all(|x| x.as_f64().is_some_and(f64::is_finite)),
+            "{key}"
+        );
+    }
+    assert!(v["contacts"]["left"].is_boolean() && v["contacts"]["right"].is_boolean());
+    // Standing at the start: both feet carry about half the weight (the estimate, not the truth).
+    let first: serde_json::Value = serde_json::from_slice(&msgs[0].data).unwrap();
+    let fz = |k: &str| first[k][2].as_f64().unwrap();
+    let weight = 32.8 * 9.81;
+    assert!(
+        (fz("left_foot_wrench") + fz("right_foot_wrench") - weight).abs() < 0.05 * weight,
+        "{first}"
+    );
+    let ft = log.topic("/sensors/ft").next().unwrap();
+    let ft: serde_json::Value = serde_json::from_slice(&ft.data).unwrap();
+    assert_eq!(ft["names"].as_array().unwrap().len(), 4, "{ft}");
+}
+
+#[test]
+fn the_summary_says_ground_truth_in_capitals_only_when_used() {
+    let s = Scratch::new("gt-summary");
+    let options = RunOptions {
+        duration: Some(0.3),
+        no_log: true,
+        ..RunOptions::default()
+    };
+    let run = |extra: &str| {
+        let sc = walk(&s, extra);
+        stride_runner::run::run_scenario(&sc, &options)
+            .unwrap()
+            .render()
+    };
+    let gt = run("[estimation]\nkind = \"ground_truth\"");
+    assert!(gt.contains("GROUND TRUTH"), "{gt}");
+    let ekf = run("");
+    assert!(!ekf.contains("GROUND TRUTH"), "{ekf}");
+    assert!(ekf.contains("estimation (ekf)"), "{ekf}");
+}
+
+#[test]
+fn the_plant_model_can_differ_from_the_controllers() {
+    let s = Scratch::new("plant-model");
+    let sc = walk(
+        &s,
+        "[sim.model]\nmass_scale = 1.1\n[sim.model.links.chest]\ncom_offset = [0.02, 0.0, 0.0]",
+    );
+    let model = load_model(&sc).unwrap();
+    let robot = build_robot(&sc, &model, PlantKind::Simulator).unwrap();
+    let ratio = robot.model().total_mass() / model.total_mass();
+    assert!((ratio - 1.1).abs() < 1e-12, "plant/model mass {ratio}");
+    // An unknown link is an error that names it.
+    let bad = walk(&s, "[sim.model.links.no_such_link]\nmass_scale = 2.0");
+    let model = load_model(&bad).unwrap();
+    match build_robot(&bad, &model, PlantKind::Simulator) {
+        Err(RunError::ModelLoad { source, .. }) => {
+            assert!(source.to_string().contains("no_such_link"), "{source}")
+        }
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(_) => panic!("an unknown link was accepted"),
+    }
+}
+
+#[test]
+fn scenario_checks_of_estimation_and_the_plant_model() {
+    let s = Scratch::new("est-config");
+    s.write("r.toml", &common::robot_section());
+    let check = |extra: &str| {
+        let top = s.write(
+            "c.toml",
+            &format!("include = [\"r.toml\"]\n[goal.pose]\nx = 1.0\n{extra}\n"),
+        );
+        Scenario::load(&top).map(|_| ()).map_err(|e| e.to_string())
+    };
+    let e = check("[scenario]\nplant = \"ideal\"").unwrap_err();
+    assert!(
+        e.contains("estimation.kind") && e.contains("ground_truth"),
+        "{e}"
+    );
+    assert!(check("[scenario]\nplant = \"ideal\"\n[estimation]\nkind = \"ground_truth\"").is_ok());
+    let e = check("[sim.model]\nmass_scale = 0.0").unwrap_err();
+    assert!(
+        e.contains("sim.model.mass_scale") && e.contains("c.toml"),
+        "{e}"
+    );
+    let e = check("[sim.model.links.chest]\nmass_scale = -1.0").unwrap_err();
+    assert!(e.contains("sim.model.links.chest.mass_scale"), "{e}");
+    let e = check("[estimation]\nkind = \"magic\"").unwrap_err();
+    assert!(e.contains("estimation.kind") || e.contains("magic"), "{e}");
+    let e = check("[estimation.contact]\nno_such_key = 1").unwrap_err();
+    assert!(e.contains("no_such_key"), "{e}");
+}
