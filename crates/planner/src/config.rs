@@ -68,7 +68,7 @@ impl PlanVerification {
 /// | `step_length_min` | m | 0.0 | min distance between the feet at touch-down [Romualdi 2022, eq. 10.1.12] |
 /// | `step_length_max` | m | 0.22 | max distance between the feet at touch-down [Romualdi 2022, eq. 10.1.12], width included |
 /// | `nominal_width` | m | 0.16 | lateral distance of the feet from each other on the unicycle axle |
-/// | `min_width` | m | 0.14 | min lateral distance of the left foot in the right-foot frame |
+/// | `min_width` | m | 0.14 | min lateral distance of the left foot in the right-foot frame (or of the right foot in the left-foot frame, see `geometry::feet_lateral_separation`) |
 /// | `max_yaw_per_step` | rad | 0.26 | max relative yaw between the feet [Romualdi 2022, eq. 10.1.13], ≈ 15° |
 /// | `swing_height` | m | 0.03 | apex height of the swing foot above the higher of its two footholds |
 /// | `swing_apex_fraction` | – | 0.5 | apex time as a fraction of the swing, in (0, 1) |

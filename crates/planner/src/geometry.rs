@@ -72,6 +72,23 @@ impl Pose2 {
     }
 }
 
+/// How far the left sole is to the left of the right one \[m\], the quantity bounded below by `min_width`
+/// [Romualdi 2022, eq. 10.1.13]: the left sole's lateral position in the right-sole frame or, mirrored, the
+/// right sole's lateral position (negated) in the left-sole frame, whichever is larger.
+///
+/// Measuring in the right-sole frame only is not mirror-symmetric when the soles have different yaws: a
+/// left foot landing ahead of a right foot turned by ψ to the left loses `Δx·sin ψ` of width, while the
+/// mirrored step (right foot ahead of a left foot turned right) loses nothing. With `min_width ==
+/// nominal_width` every right-turning step of the left foot was infeasible, so a start yawed by +1e-6 rad
+/// crawled while −1e-6 rad walked. Either frame keeps the feet apart: if one sole's centre is at least
+/// `min_width` (> the overlap bound checked by validation) off the other sole's axis, the sole outlines are
+/// separated along that axis.
+pub fn feet_lateral_separation(left: Pose2, right: Pose2) -> f64 {
+    let left_in_right = right.inverse_transform_point(left.position()).y;
+    let right_in_left = -left.inverse_transform_point(right.position()).y;
+    left_in_right.max(right_in_left)
+}
+
 /// Maximum number of vertices of a support polygon (convex hull of two rectangles).
 pub const MAX_POLYGON_VERTICES: usize = 8;
 

@@ -14,7 +14,7 @@ use nalgebra::Vector2;
 use crate::config::{FirstSwingFoot, PlannerConfig};
 use crate::contacts::Foot;
 use crate::error::PlannerError;
-use crate::geometry::{wrap_angle, Pose2};
+use crate::geometry::{feet_lateral_separation, wrap_angle, Pose2};
 use crate::goal::Goal;
 
 /// A piece of the reference trajectory of the controlled point F.
@@ -494,14 +494,15 @@ pub(crate) fn feet_feasible(
 ) -> Result<(), Violation> {
     let rel = right.inverse_transform_point(left.position());
     let len = rel.norm();
+    let lateral = feet_lateral_separation(left, right);
     let dyaw = wrap_angle(left.yaw - right.yaw);
     let v = Violation {
         length: len,
-        lateral: rel.y,
+        lateral,
         yaw: dyaw,
         too_long: len > cfg.step_length_max + BOUND_TOLERANCE,
         too_short: len < cfg.step_length_min - BOUND_TOLERANCE,
-        too_narrow: rel.y < cfg.min_width - BOUND_TOLERANCE,
+        too_narrow: lateral < cfg.min_width - BOUND_TOLERANCE,
         too_twisted: dyaw.abs() > cfg.max_yaw_per_step + BOUND_TOLERANCE,
     };
     if v.too_long || v.too_short || v.too_narrow || v.too_twisted {

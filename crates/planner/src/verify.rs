@@ -12,7 +12,7 @@
 //! |---|---|---|
 //! | `finite` | every number of the plan (segments, contacts, swings, times) | – |
 //! | `step_length` | at every touch-down: distance between the soles in `[step_length_min, step_length_max]` | 1e-9 m |
-//! | `step_width` | at every touch-down: left sole at least `min_width` to the left of the right one | 1e-9 m |
+//! | `step_width` | at every touch-down: left sole at least `min_width` to the left of the right one (in the right-sole frame or, mirrored, the left-sole frame: `geometry::feet_lateral_separation`) | 1e-9 m |
 //! | `step_yaw` | at every touch-down: relative yaw of the soles within `max_yaw_per_step` | 1e-9 rad |
 //! | `feet_overlap` | at every touch-down: the two sole rectangles do not intersect | – |
 //! | `step_duration` | touch-down to touch-down in `[step_duration_min, step_duration_max]` (after the last merge: a merge may shorten the step it falls in) | 1e-9 s |
@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::PlannerConfig;
 use crate::contacts::Foot;
-use crate::geometry::{wrap_angle, Pose2, SupportPolygon};
+use crate::geometry::{feet_lateral_separation, wrap_angle, Pose2, SupportPolygon};
 use crate::plan::{Plan, PlanSample};
 
 pub use crate::error::{Invariant, InvariantViolation};
@@ -254,17 +254,18 @@ impl Plan {
                     ),
                 ));
             }
-            if relative.y < config.min_width - STEP_TOLERANCE {
+            let width = feet_lateral_separation(left, right);
+            if width < config.min_width - STEP_TOLERANCE {
                 return Err(violation(
                     Invariant::StepWidth,
                     t,
                     format!(
                         "left sole {:.6} m left of the right one, below min_width {} m",
-                        relative.y, config.min_width
+                        width, config.min_width
                     ),
                 ));
             }
-            report.min_width_margin = report.min_width_margin.min(relative.y - config.min_width);
+            report.min_width_margin = report.min_width_margin.min(width - config.min_width);
             if relative_yaw.abs() > config.max_yaw_per_step + STEP_TOLERANCE {
                 return Err(violation(
                     Invariant::StepYaw,

@@ -159,7 +159,11 @@ pub fn check_steps(cfg: &PlannerConfig, plan: &Plan, check_durations: bool) {
             "step length {} at {t}",
             rel.norm()
         );
-        assert!(rel.y >= cfg.min_width - tol, "width {} at {t}", rel.y);
+        // width: left sole left of the right one in the right-sole frame or, mirrored, right sole right of
+        // the left one in the left-sole frame (the constraint must not depend on which foot is "right")
+        let (rel_mirror, _) = left_in_right(&r.pose, &l.pose);
+        let width = rel.y.max(-rel_mirror.y);
+        assert!(width >= cfg.min_width - tol, "width {width} at {t}");
         assert!(
             dyaw.abs() <= cfg.max_yaw_per_step + tol,
             "yaw {dyaw} at {t}"
