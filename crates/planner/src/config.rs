@@ -116,7 +116,7 @@ pub struct PlannerConfig {
     pub step_length_max: f64,
     /// Nominal lateral distance between the feet \[m\].
     pub nominal_width: f64,
-    /// Minimum lateral position of the left foot in the right-foot frame \[m\].
+    /// Minimum lateral separation of the feet: the larger of the left sole's lateral position in the right-sole frame and the right sole's (negated) in the left-sole frame \[m\].
     pub min_width: f64,
     /// Maximum relative yaw between the feet \[rad\].
     pub max_yaw_per_step: f64,
