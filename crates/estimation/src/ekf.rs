@@ -59,6 +59,7 @@ pub struct InvariantEkf {
     kin_var: f64,
     kin_rot_var: f64,
     foot_orientation: bool,
+    foot_tilt: bool,
     bias_estimation: bool,
 }
 
@@ -157,6 +158,7 @@ impl InvariantEkf {
             kin_var: config.kinematics_noise * config.kinematics_noise,
             kin_rot_var: config.kinematics_orientation_noise * config.kinematics_orientation_noise,
             foot_orientation: config.foot_orientation,
+            foot_tilt: config.foot_tilt,
             bias_estimation: config.bias_estimation,
         }
     }
@@ -402,7 +404,9 @@ impl InvariantEkf {
     ///   (`ψ`, growing by `contact_foot_angular_velocity_noise` while in contact), so the repeated use of
     ///   one touchdown reference does not make the filter overconfident.
     ///
-    /// Both parts go in one 6-row correction.
+    /// By default (`foot_tilt` false) only the heading row of the orientation part is used (the world-z
+    /// row of the residual and of `H`): roll and pitch come from gravity, and a sole that rocks on a
+    /// compliant contact would pull them. Both parts go in one correction (4 or 6 rows).
     pub fn update_foot(&mut self, foot: usize, h: &Vector3<f64>, r_h: &Matrix3<f64>) -> Result<()> {
         let residual = self.rot * h - (self.feet[foot] - self.pos);
         if !self.foot_orientation {
@@ -415,6 +419,23 @@ impl InvariantEkf {
             return self.correct(&jac, &residual, &noise, "foot kinematics");
         }
         let rot_residual = so3_log(&(self.rot * r_h * self.foot_rot[foot].transpose()));
+        if !self.foot_tilt {
+            // Heading only: the world-z row of the orientation residual.
+            let mut jac = SMatrix::<f64, 4, DIM>::zeros();
+            let mut r4 = SVector::<f64, 4>::zeros();
+            let mut noise = SMatrix::<f64, 4, 4>::zeros();
+            for k in 0..3 {
+                jac[(k, POS + k)] = -1.0;
+                jac[(k, FOOT[foot] + k)] = 1.0;
+                r4[k] = residual[k];
+                noise[(k, k)] = self.kin_var;
+            }
+            jac[(3, PHI + 2)] = -1.0;
+            jac[(3, FOOT_ROT[foot] + 2)] = 1.0;
+            r4[3] = rot_residual.z;
+            noise[(3, 3)] = self.kin_rot_var;
+            return self.correct(&jac, &r4, &noise, "foot kinematics");
+        }
         let mut jac = SMatrix::<f64, 6, DIM>::zeros();
         let mut r6 = SVector::<f64, 6>::zeros();
         let mut noise = SMatrix::<f64, 6, 6>::zeros();
