@@ -363,7 +363,7 @@ impl InvariantEkf {
     /// that it touches down where the kinematics put it, with the heading the IMU has then.
     pub fn reset_foot(&mut self, foot: usize, h: &Vector3<f64>, r_h: &Matrix3<f64>) {
         self.feet[foot] = self.pos + self.rot * h;
-        self.foot_rot[foot] = orthonormalize(&(self.rot * r_h));
+        self.foot_rot[foot] = self.rot * r_h;
         self.copy_base_error_to_foot(foot);
     }
 
@@ -476,15 +476,37 @@ impl InvariantEkf {
         noise: &SMatrix<f64, M, M>,
         what: &'static str,
     ) -> Result<()> {
-        let pht = self.cov * jac.transpose();
-        let s = jac * pht + noise;
+        // `P Hᵀ` and `H P Hᵀ` over the nonzeros of `H` (a few ±1 and the flat-ground row's lever arms).
+        let mut pht = SMatrix::<f64, DIM, M>::zeros();
+        let mut s = *noise;
+        for k in 0..M {
+            for j in 0..DIM {
+                let h = jac[(k, j)];
+                if h != 0.0 {
+                    pht.column_mut(k).axpy(h, &self.cov.column(j), 1.0);
+                }
+            }
+        }
+        for k in 0..M {
+            for j in 0..DIM {
+                let h = jac[(k, j)];
+                if h != 0.0 {
+                    for l in 0..M {
+                        s[(k, l)] += h * pht[(j, l)];
+                    }
+                }
+            }
+        }
         let chol = s
             .cholesky()
             .ok_or(EstimatorError::SingularInnovation { what })?;
         // K = P Hᵀ S⁻¹  ⇔  S Kᵀ = H P.
         let kt = chol.solve(&pht.transpose());
         let delta = kt.transpose() * residual;
-        self.cov -= kt.transpose() * pht.transpose();
+        for k in 0..M {
+            self.cov
+                .ger(-1.0, &kt.row(k).transpose(), &pht.column(k), 1.0);
+        }
         symmetrize(&mut self.cov);
         self.apply(&delta);
         Ok(())
@@ -502,7 +524,8 @@ impl InvariantEkf {
         }
         for (foot, &row) in FOOT_ROT.iter().enumerate() {
             let (rf, _) = so3_exp_and_jacobian(&delta.fixed_rows::<3>(row).into_owned());
-            self.foot_rot[foot] = orthonormalize(&(rf * self.foot_rot[foot]));
+            // A product of rotations: orthonormal to rounding; `reset_foot` restarts it every swing.
+            self.foot_rot[foot] = rf * self.foot_rot[foot];
         }
         if self.bias_estimation {
             self.gyro_bias += delta.fixed_rows::<3>(BG);
