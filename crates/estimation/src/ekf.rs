@@ -1,16 +1,21 @@
 //! Contact-aided invariant EKF [Hartley 2020] in the fixed two-feet form of bipedal-locomotion-framework.
 //!
 //! State: `X ∈ SE_4(3)` holding the IMU orientation `R` (IMU to world), velocity `v` and position `p` of the
-//! IMU origin (world), and the left and right contact points `d_l`, `d_r` (world); plus the gyroscope and
-//! accelerometer biases `b_g`, `b_a` (IMU frame) outside the group. Error: right-invariant, `X = Exp(ξ) X̂`,
-//! `b = b̂ + δb`, tangent ordered `(φ, v, p, d_l, d_r | b_g, b_a)` (21).
+//! IMU origin (world), and the left and right contact points `d_l`, `d_r` (world); the left and right sole
+//! orientations `F_l`, `F_r ∈ SO(3)` (sole to world, DILIGENT-KIO's foot orientations [Ramadoss 2021]); plus
+//! the gyroscope and accelerometer biases `b_g`, `b_a` (IMU frame) outside the group. Error:
+//! right-invariant, `X = Exp(ξ) X̂`, `F = Exp(ψ) F̂`, `b = b̂ + δb`, tangent ordered
+//! `(φ, v, p, d_l, d_r, ψ_l, ψ_r | b_g, b_a)` (27).
 //!
 //! Propagation uses the raw gyroscope and accelerometer ([Hartley 2020] process model), never the IMU's
 //! on-board orientation: `ω = ω̃ − b_g`, `a = ã − b_a`, `R⁺ = R Exp(ω dt)`, `v⁺ = v + (R a + g) dt`,
 //! `p⁺ = p + v dt + ½ (R a + g) dt²`. A contact point is static up to white velocity noise in its sole
 //! frame (which lets a foot slip); the swing foot's point is reset to kinematics (see
 //! [`InvariantEkf::reset_foot`]). The kinematic update [`InvariantEkf::update_foot`] has the
-//! right-invariant form `Y = X⁻¹ b + V` with the constant Jacobian `H = [0 0 −I … I …]`.
+//! right-invariant form `Y = X⁻¹ b + V` with the constant Jacobian `H = [0 0 −I … I …]`; its orientation
+//! part (a flat foot in contact does not rotate: `Rᵀ F = R_h(q)`) has the constant Jacobian
+//! `[−I … I at ψ …]` too. The sole orientation is what makes the yaw and the gyroscope's yaw bias
+//! observable while a foot is in contact: a point contact pins the IMU's position, not its heading.
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use stride_model::spatial::skew;
@@ -19,7 +24,7 @@ use crate::config::EkfConfig;
 use crate::error::{EstimatorError, Result};
 
 /// Dimension of the error state.
-pub const DIM: usize = 21;
+pub const DIM: usize = 27;
 /// Error-state covariance.
 pub type Covariance = SMatrix<f64, DIM, DIM>;
 
@@ -27,10 +32,11 @@ const PHI: usize = 0;
 const VEL: usize = 3;
 const POS: usize = 6;
 const FOOT: [usize; 2] = [9, 12];
-const BG: usize = 15;
-const BA: usize = 18;
+const FOOT_ROT: [usize; 2] = [15, 18];
+const BG: usize = 21;
+const BA: usize = 24;
 /// Size of the group part of the error state.
-const NG: usize = 15;
+const NG: usize = 21;
 
 /// The filter's state and covariance, with its noise model.
 #[derive(Debug, Clone)]
@@ -39,6 +45,7 @@ pub struct InvariantEkf {
     vel: Vector3<f64>,
     pos: Vector3<f64>,
     feet: [Vector3<f64>; 2],
+    foot_rot: [Matrix3<f64>; 2],
     gyro_bias: Vector3<f64>,
     acc_bias: Vector3<f64>,
     cov: Covariance,
@@ -48,7 +55,11 @@ pub struct InvariantEkf {
     gyro_bias_var: Matrix3<f64>,
     acc_bias_var: Matrix3<f64>,
     foot_var: Matrix3<f64>,
+    foot_rot_var: Matrix3<f64>,
     kin_var: f64,
+    kin_rot_var: f64,
+    foot_orientation: bool,
+    foot_tilt: bool,
     bias_estimation: bool,
 }
 
@@ -63,6 +74,8 @@ pub struct EkfState {
     pub position: Vector3<f64>,
     /// Left and right contact points, world \[m\].
     pub feet: [Vector3<f64>; 2],
+    /// Left and right sole orientations, `world_R_sole`.
+    pub foot_rotations: [Matrix3<f64>; 2],
     /// Gyroscope bias, IMU frame \[rad/s\].
     pub gyro_bias: Vector3<f64>,
     /// Accelerometer bias, IMU frame \[m/s²\].
@@ -97,6 +110,26 @@ fn so3_exp_and_jacobian(phi: &Vector3<f64>) -> (Matrix3<f64>, Matrix3<f64>) {
     (i + k * a + k2 * b, i + k * b + k2 * c)
 }
 
+/// `Log` of SO(3): the rotation vector of `r` (a rotation matrix), for angles below π (the residuals it
+/// serves are small). The cosine is clamped: a product of rotations may have a trace slightly above 3.
+fn so3_log(r: &Matrix3<f64>) -> Vector3<f64> {
+    let vee = 0.5
+        * Vector3::new(
+            r[(2, 1)] - r[(1, 2)],
+            r[(0, 2)] - r[(2, 0)],
+            r[(1, 0)] - r[(0, 1)],
+        );
+    let cos = (0.5 * (r.trace() - 1.0)).clamp(-1.0, 1.0);
+    let theta = cos.acos();
+    // θ / sin θ with its series near 0 (vee = sin θ · axis).
+    let scale = if theta < 1e-4 {
+        1.0 + theta * theta / 6.0
+    } else {
+        theta / theta.sin()
+    };
+    vee * scale
+}
+
 /// Re-orthonormalises a rotation matrix (through a unit quaternion).
 fn orthonormalize(r: &Matrix3<f64>) -> Matrix3<f64> {
     let rot = nalgebra::Rotation3::from_matrix(r);
@@ -111,6 +144,7 @@ impl InvariantEkf {
             vel: Vector3::zeros(),
             pos: Vector3::zeros(),
             feet: [Vector3::zeros(); 2],
+            foot_rot: [Matrix3::identity(); 2],
             gyro_bias: Vector3::from(config.initial_gyro_bias),
             acc_bias: Vector3::from(config.initial_accelerometer_bias),
             cov: Covariance::identity(),
@@ -120,15 +154,19 @@ impl InvariantEkf {
             gyro_bias_var: diag_sq(&config.gyro_bias_noise),
             acc_bias_var: diag_sq(&config.accelerometer_bias_noise),
             foot_var: diag_sq(&config.contact_foot_velocity_noise),
+            foot_rot_var: diag_sq(&config.contact_foot_angular_velocity_noise),
             kin_var: config.kinematics_noise * config.kinematics_noise,
+            kin_rot_var: config.kinematics_orientation_noise * config.kinematics_orientation_noise,
+            foot_orientation: config.foot_orientation,
+            foot_tilt: config.foot_tilt,
             bias_estimation: config.bias_estimation,
         }
     }
 
-    /// Sets the state: IMU pose and velocity, contact points, biases; covariance from `config.prior`
-    /// (orientation σ's about world axes; each foot's error equals the position error plus
-    /// `kinematics_noise`, as when a foot is placed by kinematics). Biases without estimation get no
-    /// uncertainty.
+    /// Sets the state: IMU pose and velocity, contact points and sole orientations (`world_R_sole`),
+    /// biases; covariance from `config.prior` (orientation σ's about world axes; each foot's error equals
+    /// the position and orientation error plus `kinematics_noise` and `kinematics_orientation_noise`, as
+    /// when a foot is placed by kinematics). Biases without estimation get no uncertainty.
     #[allow(clippy::too_many_arguments)]
     pub fn initialize(
         &mut self,
@@ -137,11 +175,13 @@ impl InvariantEkf {
         velocity: Vector3<f64>,
         position: Vector3<f64>,
         feet: [Vector3<f64>; 2],
+        foot_rotations: [Matrix3<f64>; 2],
     ) {
         self.rot = orthonormalize(&rotation);
         self.vel = velocity;
         self.pos = position;
         self.feet = feet;
+        self.foot_rot = foot_rotations.map(|r| orthonormalize(&r));
         self.gyro_bias = Vector3::from(config.initial_gyro_bias);
         self.acc_bias = Vector3::from(config.initial_accelerometer_bias);
         let prior = &config.prior;
@@ -160,7 +200,7 @@ impl InvariantEkf {
         }
         self.cov = cov;
         for foot in 0..2 {
-            self.copy_position_error_to_foot(foot);
+            self.copy_base_error_to_foot(foot);
         }
     }
 
@@ -171,12 +211,13 @@ impl InvariantEkf {
             velocity: self.vel,
             position: self.pos,
             feet: self.feet,
+            foot_rotations: self.foot_rot,
             gyro_bias: self.gyro_bias,
             accelerometer_bias: self.acc_bias,
         }
     }
 
-    /// The error-state covariance, tangent ordered `(φ, v, p, d_l, d_r, b_g, b_a)`.
+    /// The error-state covariance, tangent ordered `(φ, v, p, d_l, d_r, ψ_l, ψ_r, b_g, b_a)`.
     pub fn covariance(&self) -> &Covariance {
         &self.cov
     }
@@ -195,7 +236,8 @@ impl InvariantEkf {
     /// Propagates by `dt` \[s\] with a gyroscope sample `gyro` \[rad/s\] and an accelerometer sample `acc`
     /// (proper acceleration) \[m/s²\], IMU frame. `stance[i]` says whether foot `i` was in contact over the
     /// interval, and `imu_r_sole[i]` is its sole orientation in the IMU frame (the frame of its velocity
-    /// noise). Covariance: `P⁻ = Φ (P + G Q_c Gᵀ dt) Φᵀ` [Hartley 2020], with `Φ = I + A dt + ½ (A dt)²`,
+    /// noise). A sole in contact turns by white angular-velocity noise in its own frame
+    /// (`contact_foot_angular_velocity_noise`, rotated to world by `F̂`); no other term moves `ψ`. Covariance: `P⁻ = Φ (P + G Q_c Gᵀ dt) Φᵀ` [Hartley 2020], with `Φ = I + A dt + ½ (A dt)²`,
     /// `A` the right-invariant error dynamics evaluated at the current estimate and `G = blkdiag(Ad_X̂, I₆)`.
     pub fn propagate(
         &mut self,
@@ -300,6 +342,8 @@ impl InvariantEkf {
             if stance[foot] {
                 let ws = r * imu_r_sole[foot];
                 add(FOOT[foot], ws * self.foot_var * ws.transpose());
+                let f = self.foot_rot[foot];
+                add(FOOT_ROT[foot], f * self.foot_rot_var * f.transpose());
             }
         }
         if self.bias_estimation {
@@ -310,47 +354,102 @@ impl InvariantEkf {
         symmetrize(&mut self.cov);
     }
 
-    /// Places foot `foot`'s contact point by kinematics, `d = p + R h` with `h` the sole position in the IMU
-    /// frame, and its error with it: in right-invariant coordinates the error of `p + R h` is the position
-    /// error (`ξ_d = ξ_p`), so the foot's rows and columns of `P` become copies of the position's, plus
-    /// `kinematics_noise` on its own block ([Hartley 2020]'s contact augmentation). Used on every sample
-    /// where the foot is in swing, so that it touches down where the kinematics put it.
-    pub fn reset_foot(&mut self, foot: usize, h: &Vector3<f64>) {
+    /// Places foot `foot` by kinematics: contact point `d = p + R h` and sole orientation `F = R R_h`, with
+    /// `h`, `r_h` the sole position and orientation in the IMU frame; and its error with it: in
+    /// right-invariant coordinates the error of `p + R h` is the position error (`ξ_d = ξ_p`) and that of
+    /// `R R_h` the orientation error (`ψ = φ`), so the foot's rows and columns of `P` become copies of the
+    /// position's and orientation's, plus `kinematics_noise²` and `kinematics_orientation_noise²` on its own
+    /// blocks ([Hartley 2020]'s contact augmentation). Used on every sample where the foot is in swing, so
+    /// that it touches down where the kinematics put it, with the heading the IMU has then.
+    pub fn reset_foot(&mut self, foot: usize, h: &Vector3<f64>, r_h: &Matrix3<f64>) {
         self.feet[foot] = self.pos + self.rot * h;
-        self.copy_position_error_to_foot(foot);
+        self.foot_rot[foot] = self.rot * r_h;
+        self.copy_base_error_to_foot(foot);
     }
 
-    fn copy_position_error_to_foot(&mut self, foot: usize) {
-        let f = FOOT[foot];
+    fn copy_base_error_to_foot(&mut self, foot: usize) {
+        self.copy_error_block(POS, FOOT[foot], self.kin_var);
+        self.copy_error_block(PHI, FOOT_ROT[foot], self.kin_rot_var);
+    }
+
+    /// Makes error block `dst` a copy of block `src` (rows and columns; `P[dst, dst] = P[src, src]`), plus
+    /// `var` on its diagonal.
+    fn copy_error_block(&mut self, src: usize, dst: usize, var: f64) {
         for c in 0..DIM {
             for k in 0..3 {
-                let v = self.cov[(POS + k, c)];
-                self.cov[(f + k, c)] = v;
+                let v = self.cov[(src + k, c)];
+                self.cov[(dst + k, c)] = v;
             }
         }
         for r in 0..DIM {
             for k in 0..3 {
-                let v = self.cov[(r, POS + k)];
-                self.cov[(r, f + k)] = v;
+                let v = self.cov[(r, src + k)];
+                self.cov[(r, dst + k)] = v;
             }
         }
         for k in 0..3 {
-            self.cov[(f + k, f + k)] += self.kin_var;
+            self.cov[(dst + k, dst + k)] += var;
         }
     }
 
-    /// Kinematic update with foot `foot` in contact: `h` is the sole position in the IMU frame from the
-    /// encoders. Innovation `R̂ h − (d̂ − p̂)`, `H = [0 0 −I … I …]` (constant, [Hartley 2020]), noise
-    /// `kinematics_noise² I`.
-    pub fn update_foot(&mut self, foot: usize, h: &Vector3<f64>) -> Result<()> {
+    /// Kinematic update with foot `foot` in contact: `h`, `r_h` are the sole position and orientation in the
+    /// IMU frame from the encoders.
+    ///
+    /// - Position [Hartley 2020]: innovation `R̂ h − (d̂ − p̂)`, `H = [0 0 −I … I at d …]` (constant), noise
+    ///   `kinematics_noise² I`.
+    /// - Orientation (option `foot_orientation`; a flat foot in contact does not rotate, so `Rᵀ F = R_h`):
+    ///   innovation `Log(R̂ R_h F̂ᵀ)`, which is `ψ − φ` to first order (`R̂ R_h F̂ᵀ = Exp(−φ) Exp(ψ)`), so
+    ///   `H = [−I … I at ψ …]`, constant like the position's; noise `kinematics_orientation_noise² I`.
+    ///   As in DILIGENT-KIO [Ramadoss 2021] the sole's orientation is a state with its own uncertainty
+    ///   (`ψ`, growing by `contact_foot_angular_velocity_noise` while in contact), so the repeated use of
+    ///   one touchdown reference does not make the filter overconfident.
+    ///
+    /// By default (`foot_tilt` false) only the heading row of the orientation part is used (the world-z
+    /// row of the residual and of `H`): roll and pitch come from gravity, and a sole that rocks on a
+    /// compliant contact would pull them. Both parts go in one correction (4 or 6 rows).
+    pub fn update_foot(&mut self, foot: usize, h: &Vector3<f64>, r_h: &Matrix3<f64>) -> Result<()> {
         let residual = self.rot * h - (self.feet[foot] - self.pos);
-        let mut jac = SMatrix::<f64, 3, DIM>::zeros();
+        if !self.foot_orientation {
+            let mut jac = SMatrix::<f64, 3, DIM>::zeros();
+            for k in 0..3 {
+                jac[(k, POS + k)] = -1.0;
+                jac[(k, FOOT[foot] + k)] = 1.0;
+            }
+            let noise = Matrix3::identity() * self.kin_var;
+            return self.correct(&jac, &residual, &noise, "foot kinematics");
+        }
+        let rot_residual = so3_log(&(self.rot * r_h * self.foot_rot[foot].transpose()));
+        if !self.foot_tilt {
+            // Heading only: the world-z row of the orientation residual.
+            let mut jac = SMatrix::<f64, 4, DIM>::zeros();
+            let mut r4 = SVector::<f64, 4>::zeros();
+            let mut noise = SMatrix::<f64, 4, 4>::zeros();
+            for k in 0..3 {
+                jac[(k, POS + k)] = -1.0;
+                jac[(k, FOOT[foot] + k)] = 1.0;
+                r4[k] = residual[k];
+                noise[(k, k)] = self.kin_var;
+            }
+            jac[(3, PHI + 2)] = -1.0;
+            jac[(3, FOOT_ROT[foot] + 2)] = 1.0;
+            r4[3] = rot_residual.z;
+            noise[(3, 3)] = self.kin_rot_var;
+            return self.correct(&jac, &r4, &noise, "foot kinematics");
+        }
+        let mut jac = SMatrix::<f64, 6, DIM>::zeros();
+        let mut r6 = SVector::<f64, 6>::zeros();
+        let mut noise = SMatrix::<f64, 6, 6>::zeros();
         for k in 0..3 {
             jac[(k, POS + k)] = -1.0;
             jac[(k, FOOT[foot] + k)] = 1.0;
+            jac[(3 + k, PHI + k)] = -1.0;
+            jac[(3 + k, FOOT_ROT[foot] + k)] = 1.0;
+            r6[k] = residual[k];
+            r6[3 + k] = rot_residual[k];
+            noise[(k, k)] = self.kin_var;
+            noise[(3 + k, 3 + k)] = self.kin_rot_var;
         }
-        let noise = Matrix3::identity() * self.kin_var;
-        self.correct(&jac, &residual, &noise, "foot kinematics")
+        self.correct(&jac, &r6, &noise, "foot kinematics")
     }
 
     /// Flat-ground pseudo-measurement on foot `foot` in contact: its contact point's height is `height`
@@ -368,7 +467,7 @@ impl InvariantEkf {
         self.correct(&jac, &residual, &noise, "flat ground")
     }
 
-    /// Kalman correction: `K = P Hᵀ S⁻¹`, `δ = K r`, `X̂ ← Exp(δ) X̂`, `b̂ ← b̂ + δ_b`, `P ← P − K H P`
+    /// Kalman correction: `K = P Hᵀ S⁻¹`, `δ = K r`, `X̂ ← Exp(δ) X̂`, `F̂ ← Exp(δ_ψ) F̂`, `b̂ ← b̂ + δ_b`, `P ← P − K H P`
     /// (symmetrised). Fails, changing nothing, if `S` is not positive definite.
     fn correct<const M: usize>(
         &mut self,
@@ -377,21 +476,43 @@ impl InvariantEkf {
         noise: &SMatrix<f64, M, M>,
         what: &'static str,
     ) -> Result<()> {
-        let pht = self.cov * jac.transpose();
-        let s = jac * pht + noise;
+        // `P Hᵀ` and `H P Hᵀ` over the nonzeros of `H` (a few ±1 and the flat-ground row's lever arms).
+        let mut pht = SMatrix::<f64, DIM, M>::zeros();
+        let mut s = *noise;
+        for k in 0..M {
+            for j in 0..DIM {
+                let h = jac[(k, j)];
+                if h != 0.0 {
+                    pht.column_mut(k).axpy(h, &self.cov.column(j), 1.0);
+                }
+            }
+        }
+        for k in 0..M {
+            for j in 0..DIM {
+                let h = jac[(k, j)];
+                if h != 0.0 {
+                    for l in 0..M {
+                        s[(k, l)] += h * pht[(j, l)];
+                    }
+                }
+            }
+        }
         let chol = s
             .cholesky()
             .ok_or(EstimatorError::SingularInnovation { what })?;
         // K = P Hᵀ S⁻¹  ⇔  S Kᵀ = H P.
         let kt = chol.solve(&pht.transpose());
         let delta = kt.transpose() * residual;
-        self.cov -= kt.transpose() * pht.transpose();
+        for k in 0..M {
+            self.cov
+                .ger(-1.0, &kt.row(k).transpose(), &pht.column(k), 1.0);
+        }
         symmetrize(&mut self.cov);
         self.apply(&delta);
         Ok(())
     }
 
-    /// `X̂ ← Exp(δ) X̂` on SE_4(3) and the Euclidean bias update.
+    /// `X̂ ← Exp(δ) X̂` on SE_4(3), `F̂ ← Exp(δ_ψ) F̂` on each SO(3), and the Euclidean bias update.
     fn apply(&mut self, delta: &SVector<f64, DIM>) {
         let phi = delta.fixed_rows::<3>(PHI).into_owned();
         let (r, jl) = so3_exp_and_jacobian(&phi);
@@ -400,6 +521,11 @@ impl InvariantEkf {
         self.pos = r * self.pos + jl * delta.fixed_rows::<3>(POS);
         for (foot, &row) in FOOT.iter().enumerate() {
             self.feet[foot] = r * self.feet[foot] + jl * delta.fixed_rows::<3>(row);
+        }
+        for (foot, &row) in FOOT_ROT.iter().enumerate() {
+            let (rf, _) = so3_exp_and_jacobian(&delta.fixed_rows::<3>(row).into_owned());
+            // A product of rotations: orthonormal to rounding; `reset_foot` restarts it every swing.
+            self.foot_rot[foot] = rf * self.foot_rot[foot];
         }
         if self.bias_estimation {
             self.gyro_bias += delta.fixed_rows::<3>(BG);
@@ -436,6 +562,22 @@ mod tests {
         let phi = ekf.transition(dt);
         let dense = phi * p * phi.transpose();
         assert!((InvariantEkf::sandwich(&blocks[..n], &p) - dense).amax() < 1e-12);
+    }
+
+    #[test]
+    fn log_inverts_exp() {
+        for phi in [
+            Vector3::new(0.3, -0.2, 0.5),
+            Vector3::new(1e-7, 2e-7, -1e-7),
+            Vector3::new(0.0, 0.0, 3.0),
+            Vector3::zeros(),
+        ] {
+            let (r, _) = so3_exp_and_jacobian(&phi);
+            assert!((so3_log(&r) - phi).norm() < 1e-9, "{phi}");
+        }
+        // A rotation whose trace rounds above 3 still gives a finite, small vector.
+        let r = Matrix3::identity() * (1.0 + 1e-15);
+        assert!(so3_log(&r).norm() < 1e-12);
     }
 
     #[test]

@@ -30,8 +30,9 @@ use crate::schmitt::SchmittTrigger;
 ///    sensor, `o` its offset, `y₀` the reading the model predicts with no external wrench, `A` the map from
 ///    a wrench on the sole (world orientation, about the sole origin) to the reading;
 /// 5. contact detection: a [`SchmittTrigger`] per foot on the normal force `w_z`;
-/// 6. EKF: feet in swing are placed by kinematics, feet in contact update the filter with their kinematics
-///    and (option) the flat-ground pseudo-measurement;
+/// 6. EKF: feet in swing are placed by kinematics (position and sole orientation), feet in contact update
+///    the filter with their kinematics (position and, option, sole orientation) and (option) the
+///    flat-ground pseudo-measurement;
 /// 7. offsets: on a sensor whose child side carries no contact, `y − y₀` is an offset sample
 ///    [Traversaro 2017, §4.7], averaged by a first-order filter;
 /// 8. joint torques by inverse dynamics with the estimated foot wrenches acting on the soles (both feet,
@@ -223,9 +224,17 @@ impl Estimator {
         self.scratch.base_velocity = Vector6::zeros();
         self.kd.set_state(&self.scratch)?;
         let (r_imu, p_imu) = self.kd.frame_rotation_translation(self.imu);
-        let feet = self.soles.map(|s| self.kd.frame_rotation_translation(s).1);
-        self.ekf
-            .initialize(&self.config.ekf, r_imu, Vector3::zeros(), p_imu, feet);
+        let soles = self.soles.map(|s| self.kd.frame_rotation_translation(s));
+        let feet = soles.map(|(_, p)| p);
+        let foot_rotations = soles.map(|(r, _)| r);
+        self.ekf.initialize(
+            &self.config.ekf,
+            r_imu,
+            Vector3::zeros(),
+            p_imu,
+            feet,
+            foot_rotations,
+        );
         self.ground_height = 0.5 * (feet[0].z + feet[1].z);
         for t in &mut self.triggers {
             t.set_state(true, 0);
@@ -489,7 +498,7 @@ impl Block for Estimator {
             let contact = self.triggers[foot].update(wrenches[foot].z, input.time_ns);
             if contact {
                 self.swing_since_ns[foot] = None;
-                self.ekf.update_foot(foot, &h[foot])?;
+                self.ekf.update_foot(foot, &h[foot], &imu_r_sole[foot])?;
                 if self.config.ekf.flat_ground {
                     self.ekf.update_ground_height(
                         foot,
@@ -499,7 +508,7 @@ impl Block for Estimator {
                 }
             } else {
                 self.swing_since_ns[foot].get_or_insert(input.time_ns);
-                self.ekf.reset_foot(foot, &h[foot]);
+                self.ekf.reset_foot(foot, &h[foot], &imu_r_sole[foot]);
             }
             self.output.contacts[foot] = contact;
         }

@@ -6,7 +6,7 @@
 mod common;
 
 use common::{imu_sample, tilt_between, yaw_between, Gauss, Truth, Walk};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Rotation3, Vector3};
 use stride_estimation::{EkfConfig, InvariantEkf};
 
 const DT: f64 = 0.002;
@@ -44,13 +44,16 @@ fn run(
     mut observe: impl FnMut(f64, &InvariantEkf, &Truth),
 ) -> InvariantEkf {
     let mut rng = Gauss::new(seed);
+    // Sole-orientation noise from its own stream, so that the other noises do not depend on it.
+    let mut rot_rng = Gauss::new(seed.wrapping_add(1000));
     let mut ekf = InvariantEkf::new(config, G);
     let t0 = walk.at(0.0);
-    ekf.initialize(config, t0.rot, t0.vel, t0.pos, t0.feet);
+    ekf.initialize(config, t0.rot, t0.vel, t0.pos, t0.feet, t0.foot_rot);
     let per_sample = |s: &[f64; 3]| s.map(|v| v * noise_scale / DT.sqrt());
     let gyro_sigma = per_sample(&config.gyro_noise);
     let acc_sigma = per_sample(&config.accelerometer_noise);
     let kin_sigma = [config.kinematics_noise * noise_scale; 3];
+    let kin_rot_sigma = [config.kinematics_orientation_noise * noise_scale; 3];
     let mut stance = t0.stance;
     let steps = (duration / DT).round() as usize;
     for k in 1..=steps {
@@ -65,18 +68,20 @@ fn run(
             &acc_sigma,
             &mut rng,
         );
-        ekf.propagate(&gyro, &acc, DT, stance, &[Matrix3::identity(); 2]);
+        let imu_r_sole = truth.foot_rot.map(|f| truth.rot.transpose() * f);
+        ekf.propagate(&gyro, &acc, DT, stance, &imu_r_sole);
         stance = truth.stance;
         for (foot, &in_contact) in stance.iter().enumerate() {
             let h = truth.rot.transpose() * (truth.feet[foot] - truth.pos) + rng.vec3(&kin_sigma);
+            let r_h = imu_r_sole[foot] * Rotation3::new(rot_rng.vec3(&kin_rot_sigma)).matrix();
             if in_contact {
-                ekf.update_foot(foot, &h).expect("update");
+                ekf.update_foot(foot, &h, &r_h).expect("update");
                 if config.flat_ground {
                     ekf.update_ground_height(foot, 0.0, config.ground_height_noise)
                         .expect("ground");
                 }
             } else {
-                ekf.reset_foot(foot, &h);
+                ekf.reset_foot(foot, &h, &r_h);
             }
         }
         observe(t, &ekf, &truth);
@@ -310,4 +315,67 @@ fn gyro_bias_is_estimated_while_walking() {
         yaw < 0.6 * yaw_off,
         "yaw error {yaw} vs {yaw_off} without bias estimation"
     );
+}
+
+/// Runs `walk` for 20 s with a gyro bias of 3.5e-3 rad/s about z (the bound of the simulator's turn-on
+/// bias) and returns (final yaw error, max yaw error over the last 10 s, final z bias error).
+fn yaw_with_gyro_z_bias(walk: &Walk, foot_orientation: bool, seed: u64) -> (f64, f64, f64) {
+    let biases = Biases {
+        gyro: Vector3::new(0.0, 0.0, 3.5e-3),
+        acc: Vector3::zeros(),
+    };
+    let config = EkfConfig {
+        foot_orientation,
+        ..EkfConfig::default()
+    };
+    let mut max_yaw: f64 = 0.0;
+    let mut last = 0.0;
+    let ekf = run(
+        walk,
+        &config,
+        &biases,
+        NOISE,
+        20.0,
+        seed,
+        |t, ekf, truth| {
+            last = yaw_between(&ekf.state().rotation, &truth.rot);
+            if t > 10.0 {
+                max_yaw = max_yaw.max(last);
+            }
+        },
+    );
+    (last, max_yaw, ekf.state().gyro_bias.z - biases.gyro.z)
+}
+
+#[test]
+fn the_sole_orientation_stops_the_yaw_drift_standing() {
+    let (yaw, max_yaw, bias_err) = yaw_with_gyro_z_bias(&Walk::standing(), true, 6);
+    let (yaw_off, _, bias_err_off) = yaw_with_gyro_z_bias(&Walk::standing(), false, 6);
+    println!(
+        "standing 20 s, gyro z bias 3.5e-3 rad/s: yaw error {:.3}° (max after 10 s {:.3}°), z bias error \
+         {bias_err:.1e} rad/s; without the sole orientation: yaw error {:.3}°, z bias error {bias_err_off:.1e} rad/s",
+        yaw.to_degrees(),
+        max_yaw.to_degrees(),
+        yaw_off.to_degrees()
+    );
+    assert!(max_yaw < 0.2_f64.to_radians(), "yaw error {max_yaw}");
+    assert!(bias_err.abs() < 0.2 * 3.5e-3, "z bias error {bias_err}");
+    assert!(yaw_off > 2.0 * max_yaw, "without: {yaw_off}");
+}
+
+#[test]
+fn the_sole_orientation_stops_the_yaw_drift_walking() {
+    let walk = Walk::walking(0.3);
+    let (yaw, max_yaw, bias_err) = yaw_with_gyro_z_bias(&walk, true, 7);
+    let (yaw_off, _, bias_err_off) = yaw_with_gyro_z_bias(&walk, false, 7);
+    println!(
+        "walking 0.3 m/s 20 s, gyro z bias 3.5e-3 rad/s: yaw error {:.3}° (max after 10 s {:.3}°), z bias error \
+         {bias_err:.1e} rad/s; without the sole orientation: yaw error {:.3}°, z bias error {bias_err_off:.1e} rad/s",
+        yaw.to_degrees(),
+        max_yaw.to_degrees(),
+        yaw_off.to_degrees()
+    );
+    assert!(max_yaw < 0.2_f64.to_radians(), "yaw error {max_yaw}");
+    assert!(bias_err.abs() < 0.2 * 3.5e-3, "z bias error {bias_err}");
+    assert!(yaw_off > 2.0 * max_yaw, "without: {yaw_off}");
 }

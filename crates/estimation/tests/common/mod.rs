@@ -38,6 +38,9 @@ pub struct Truth {
     /// Angular velocity, IMU frame.
     pub omega: Vector3<f64>,
     pub feet: [Vector3<f64>; 2],
+    /// Sole orientations, `world_R_sole`: flat, with the initial heading of the IMU (constant, the feet do
+    /// not turn).
+    pub foot_rot: [Matrix3<f64>; 2],
     pub stance: [bool; 2],
 }
 
@@ -78,6 +81,12 @@ impl Walk {
             sway: 0.03,
             ..Self::standing()
         }
+    }
+
+    /// Orientation of both soles: a rotation about z by the initial heading of the IMU.
+    pub fn foot_rot(&self) -> Matrix3<f64> {
+        let x = self.rot0.column(0);
+        *Rotation3::from_axis_angle(&Vector3::z_axis(), x.y.atan2(x.x)).matrix()
     }
 
     /// Foothold of foot `i` for its `k`-th stance (`k` counted so that the stance covers the body's
@@ -138,6 +147,7 @@ impl Walk {
             acc,
             omega: self.omega,
             feet,
+            foot_rot: [self.foot_rot(); 2],
             stance,
         }
     }
