@@ -20,7 +20,7 @@ fn scenario(s: &Scratch) -> Scenario {
     );
     let top = s.write(
         "walk.toml",
-        "include = [\"robots/r.toml\", \"layers/rates.toml\"]\n[scenario]\nname = \"t\"\nduration = 1.5\nplant = \"ideal\"\n\
+        "include = [\"robots/r.toml\", \"layers/rates.toml\"]\n[scenario]\nname = \"t\"\nduration = 1.5\nplant = \"ideal\"\n[estimation]\nkind = \"ground_truth\"\n\
          [goal.pose]\nx = 1.0\n",
     );
     Scenario::load(&top).unwrap()

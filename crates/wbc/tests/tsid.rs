@@ -810,9 +810,17 @@ struct PushOutcome {
 /// with `push` N for 0.1 s at t = 0.2 s, for `duration` s. `feedback = false` holds the first tick's
 /// torques (the TSID never sees the push).
 fn pushed_in_the_simulator(push: f64, feedback: bool, duration: f64) -> PushOutcome {
-    use stride_sim::{ActuationMode, PushConfig, SimConfig, SimInput, SimRobot};
+    use stride_sim::{
+        ActuationConfig, ActuationMode, PushConfig, SensorConfig, SimConfig, SimInput, SimRobot,
+    };
     let model = bundled_model();
-    let mut config = SimConfig::default();
+    // The TSID on the plant's exact state with ideal actuators (no friction, torque lag or command delay):
+    // the test is about the controller, the realistic plant is the runner's business.
+    let mut config = SimConfig {
+        actuation: ActuationConfig::ideal(),
+        sensors: SensorConfig::ideal(),
+        ..SimConfig::default()
+    };
     config.actuation.default.mode = ActuationMode::Torque;
     let mut sim = SimRobot::new(Arc::clone(&model), config, Duration::from_micros(500)).unwrap();
     let state = sim
