@@ -92,6 +92,37 @@ fn default_scenario_walks_two_metres_to_its_goal() {
     assert!(s.wall_time > 0.0 && s.simulated_time > 10.0);
     let rtf = s.simulated_time / s.wall_time;
     assert!((s.real_time_factor - rtf).abs() <= 1e-9 * rtf);
+    assert_estimation_targets("walk_straight", &s);
+}
+
+/// The estimation targets of the sensing issue on a walk (docs/estimation.md): horizontal drift ≤ 1 % of
+/// the distance walked, height error ≤ 5 mm, tilt error RMS ≤ 0.3°, base velocity error RMS ≤ 2 cm/s.
+fn assert_estimation_targets(name: &str, s: &RunSummary) {
+    let e = &s.estimation;
+    assert_eq!(
+        e.kind, "ekf",
+        "{name}: the controllers must run on the estimate"
+    );
+    let [dx, dy] = e.drift_per_metre.expect("the walk covers more than 0.1 m");
+    assert!(
+        dx.abs() <= 0.01 && dy.abs() <= 0.01,
+        "{name}: drift {dx} / {dy} per metre"
+    );
+    assert!(
+        e.height_error.max <= 5e-3,
+        "{name}: height error {} m",
+        e.height_error.max
+    );
+    assert!(
+        e.tilt_error.rms.to_degrees() <= 0.3,
+        "{name}: tilt error RMS {}°",
+        e.tilt_error.rms.to_degrees()
+    );
+    assert!(
+        e.velocity_error.rms <= 0.02,
+        "{name}: velocity error RMS {} m/s",
+        e.velocity_error.rms
+    );
 }
 
 #[test]
@@ -124,6 +155,7 @@ fn torque_controlled_scenario_walks_two_metres_to_its_goal() {
     let s = run("walk_straight_torque.toml");
     assert_stayed_up("walk_straight_torque", &s);
     assert_reached_goal("walk_straight_torque", &s, 2.0, 0.10);
+    assert_estimation_targets("walk_straight_torque", &s);
 }
 
 #[test]
