@@ -11,10 +11,16 @@ use stride_runner::run::{run_scenario, RunOptions};
 static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
 
 /// Allocations made by this (the loop's) thread during a run of `duration` seconds.
-fn allocations_for(s: &Scratch, sc: &Scenario, duration: f64, log: bool) -> usize {
+fn allocations_for(
+    s: &Scratch,
+    sc: &Scenario,
+    plant: PlantKind,
+    duration: f64,
+    log: bool,
+) -> usize {
     let options = RunOptions {
         duration: Some(duration),
-        plant: Some(PlantKind::Ideal),
+        plant: Some(plant),
         no_log: !log,
         output: Some(s.path(&format!("alloc-{duration}.mcap"))),
         ..RunOptions::default()
@@ -36,14 +42,20 @@ fn steady_state_ticks_do_not_allocate() {
     let sc = Scenario::load(&top).unwrap();
     let extra_seconds = 4.5;
     let wbc_ticks = (extra_seconds * f64::from(sc.config.rates.wbc_hz)) as usize;
-    for log in [false, true] {
-        let short = allocations_for(&s, &sc, 1.5, log);
-        let long = allocations_for(&s, &sc, 1.5 + extra_seconds, log);
+    // The ideal plant (ground truth) and the simulator with the estimation layer in the loop.
+    for (plant, log) in [
+        (PlantKind::Ideal, false),
+        (PlantKind::Ideal, true),
+        (PlantKind::Simulator, false),
+        (PlantKind::Simulator, true),
+    ] {
+        let short = allocations_for(&s, &sc, plant, 1.5, log);
+        let long = allocations_for(&s, &sc, plant, 1.5 + extra_seconds, log);
         // one allocation per tick would be thousands; a few one-off ones (e.g. a summary string whose
         // length depends on the run) are allowed
         assert!(
             long.abs_diff(short) <= 5,
-            "log {log}: {short} allocations in 1.5 s, {long} in {} s ({wbc_ticks} extra whole-body ticks)",
+            "{plant:?}, log {log}: {short} allocations in 1.5 s, {long} in {} s ({wbc_ticks} extra whole-body ticks)",
             1.5 + extra_seconds
         );
     }
