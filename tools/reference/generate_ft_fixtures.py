@@ -39,6 +39,9 @@ import sys
 import numpy as np
 import idyntree.bindings as idt
 
+# One definition of the fixtures' rounding and agreement checks: the dynamics fixtures' generator.
+from generate_fixtures import AGREEMENT_TOL, DIGITS, check, exact, rnd, skew  # noqa: E402
+
 try:
     import icub_models
 except ImportError:  # pragma: no cover
@@ -47,8 +50,6 @@ except ImportError:  # pragma: no cover
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 GRAVITY = np.array([0.0, 0.0, -9.81])
-AGREEMENT_TOL = 1e-10
-DIGITS = 12
 
 MODELS = {
     "stride_humanoid": {
@@ -64,32 +65,6 @@ MODELS = {
         "seed": 7,
     },
 }
-
-
-def skew(v):
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
-def rnd(x):
-    a = np.asarray(x, dtype=float)
-    if a.ndim == 0:
-        v = float("%.*g" % (DIGITS, float(a)))
-        return 0 if v == 0.0 else v
-    return [rnd(v) for v in a]
-
-
-def exact(x):
-    return [float(v) for v in np.asarray(x, dtype=float)]
-
-
-def check(name, a, b, tol=AGREEMENT_TOL):
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    scale = max(1.0, float(np.max(np.abs(b))))
-    err = float(np.max(np.abs(a - b)))
-    if not err <= tol * scale:
-        raise AssertionError("%s: disagreement %.3e (scale %.3e)" % (name, err, scale))
-    return err / scale
 
 
 def shift_wrench(w, from_p, to_p):
