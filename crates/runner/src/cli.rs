@@ -128,6 +128,49 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Run a scenario over a grid or random sample of parameters (docs/sweeps.md).
+    Sweep(SweepArgs),
+}
+
+/// `stride sweep SWEEP.toml ...` or `stride sweep merge DIR... -o DIR`.
+#[derive(Debug, clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct SweepArgs {
+    /// `merge`: combine shards.
+    #[command(subcommand)]
+    pub command: Option<SweepCommand>,
+    /// Sweep TOML file.
+    #[arg(required = true)]
+    pub file: Option<PathBuf>,
+    /// Worker threads (default: the core count).
+    #[arg(short, long)]
+    pub jobs: Option<usize>,
+    /// Output folder for results.csv, results.json (and logs/) (default: `sweep_<file stem>`).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Run only shard I of N (variant k belongs to shard k mod N + 1).
+    #[arg(long)]
+    pub shard: Option<crate::sweep::Shard>,
+    /// Write each variant's MCAP log into DIR/logs/.
+    #[arg(long)]
+    pub logs: bool,
+    /// Do not draw the progress bar.
+    #[arg(long)]
+    pub no_progress: bool,
+}
+
+/// `stride sweep merge`.
+#[derive(Debug, Subcommand)]
+pub enum SweepCommand {
+    /// Combine the results of `--shard` runs into those of the whole sweep.
+    Merge {
+        /// Shard output folders.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Output folder.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
 }
 
 /// `stride model ...`

@@ -287,5 +287,6 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             config,
             output,
         } => replay(&log, layer, config, output),
+        Command::Sweep(args) => crate::sweep_cmd::sweep(args),
     }
 }

@@ -29,4 +29,6 @@ pub mod sim_plant;
 pub mod sink;
 pub mod stack;
 pub mod summary;
+pub mod sweep;
+pub mod sweep_cmd;
 mod tracking;
