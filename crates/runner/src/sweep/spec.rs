@@ -266,21 +266,14 @@ impl Sweep {
         })
     }
 
-    /// `key = value, ...` of a variant.
+    /// `key = value, ...` of a variant (push columns included).
     pub fn describe(&self, v: &Variant) -> String {
-        let mut parts: Vec<String> = self
-            .columns
+        self.columns
             .iter()
             .zip(&v.values)
             .map(|(k, x)| format!("{k} = {x}"))
-            .collect();
-        if let Some(p) = v.push {
-            parts.push(format!(
-                "push {} N at {}° from {} s",
-                p.magnitude, p.direction_deg, p.start
-            ));
-        }
-        parts.join(", ")
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     fn overlay_path(&self) -> PathBuf {
