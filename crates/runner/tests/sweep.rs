@@ -232,3 +232,19 @@ fn sweep_options_default_to_every_core() {
     let sh: sweep::Shard = "2/3".parse().unwrap();
     assert!(sh.owns(1) && sh.owns(4) && !sh.owns(0));
 }
+
+#[test]
+fn example_sweeps_load() {
+    let dir = common::root().join("configs/sweeps");
+    for (file, n) in [
+        ("push_walk.toml", 48),
+        ("ground_contact.toml", 6),
+        ("mass_mismatch.toml", 7),
+    ] {
+        let sw = Sweep::load(&dir.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert_eq!(sw.variants.len(), n, "{file}");
+        for v in &sw.variants {
+            sw.scenario(v).unwrap_or_else(|e| panic!("{file}: {e}"));
+        }
+    }
+}
