@@ -128,7 +128,7 @@ fn a_short_walk_gives_every_figure_with_its_series() {
     let torques = read("torques.svg");
     assert_eq!(
         data_lines(&torques),
-        vec![count("/sim/state"), state].repeat(log_figures::TORQUE_JOINTS)
+        [count("/sim/state"), state].repeat(log_figures::TORQUE_JOINTS)
     );
     let titles: Vec<_> = texts(&torques)
         .into_iter()

@@ -162,7 +162,8 @@ fn draw_map(file: &Path, rows: &[Row], xk: &str, yk: &str) -> Result<(), PlotErr
     let root = SVGBackend::new(file, (900, 640)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let (nx, ny) = (xs.len() as f64, ys.len() as f64);
-    let mut chart = ChartBuilder::on(&root)
+    let (left, right) = root.split_horizontally(700);
+    let mut chart = ChartBuilder::on(&left)
         .caption(
             format!(
                 "survival map: {} runs, share of `goal` per cell",
@@ -173,7 +174,6 @@ fn draw_map(file: &Path, rows: &[Row], xk: &str, yk: &str) -> Result<(), PlotErr
         .margin(15)
         .x_label_area_size(45)
         .y_label_area_size(70)
-        .right_y_label_area_size(150)
         .build_cartesian_2d(-0.5..nx - 0.5, -0.5..ny - 0.5)
         .map_err(err)?;
     let at = |v: &[String], f: f64| {
@@ -227,28 +227,36 @@ fn draw_map(file: &Path, rows: &[Row], xk: &str, yk: &str) -> Result<(), PlotErr
                 .map_err(err)?;
         }
     }
-    for (name, color) in OUTCOMES {
-        chart
-            .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())
-            .map_err(err)?
-            .label(format!("all {name}"))
-            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 12, y + 6)], color.filled()));
-    }
-    let half = cell_color(&["goal", "fell"]);
-    chart
-        .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())
-        .map_err(err)?
-        .label("mixed: fell → goal by share")
-        .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 12, y + 6)], half.filled()));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .margin(-140)
-        .background_style(WHITE)
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
+    draw_legend(&right)?;
     root.present().map_err(err)
+}
+
+/// Outcome colours and the mixed colour, beside the map (swatches 14 px wide).
+fn draw_legend(
+    area: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+) -> Result<(), PlotError> {
+    let half = cell_color(&["goal", "fell"]);
+    let entries = OUTCOMES
+        .iter()
+        .map(|(n, c)| (format!("all {n}"), *c))
+        .chain([("mixed: fell → goal".to_string(), half)]);
+    for (k, (text, color)) in entries.enumerate() {
+        let y = 80 + 24 * k as i32;
+        area.draw(&Rectangle::new([(10, y), (24, y + 14)], color.filled()))
+            .map_err(err)?;
+        area.draw(&Text::new(
+            text,
+            (32, y + 2),
+            ("sans-serif", 14).into_font(),
+        ))
+        .map_err(err)?;
+    }
+    area.draw(&Text::new(
+        "(colour by share of goal)",
+        (10, 80 + 24 * 5),
+        ("sans-serif", 12).into_font(),
+    ))
+    .map_err(err)
 }
 
 #[cfg(test)]
