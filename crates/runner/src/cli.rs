@@ -128,6 +128,20 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// SVG figures of a run's log (tracking, feet, forces, torques, solve times) or a sweep's survival map.
+    Plot {
+        /// MCAP log written by `stride run`, or a sweep's `results.json`.
+        input: PathBuf,
+        /// Output directory (default: `<log stem>_plots/` next to the log; the directory of `results.json`).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Survival map: the axis key across (default: the first axis of the results).
+        #[arg(long)]
+        x: Option<String>,
+        /// Survival map: the axis key up (default: the second axis).
+        #[arg(long)]
+        y: Option<String>,
+    },
     /// Run a scenario over a grid or random sample of parameters (docs/sweeps.md).
     Sweep(SweepArgs),
 }

@@ -228,6 +228,31 @@ pub fn replay(
     Ok(ExitCode::SUCCESS)
 }
 
+/// `stride plot`: the figures of a log, or the survival map of a sweep's `results.json`.
+pub fn plot(
+    input: &Path,
+    output: Option<PathBuf>,
+    x: Option<&str>,
+    y: Option<&str>,
+) -> Result<ExitCode, CliError> {
+    use crate::plot;
+    let dir = output.unwrap_or_else(|| plot::default_dir(input));
+    let files = if plot::is_results(input) {
+        vec![plot::plot_sweep(input, &dir, x, y).map_err(err)?]
+    } else {
+        if x.is_some() || y.is_some() {
+            return Err(CliError::msg(
+                "--x and --y apply to a sweep's results.json, not to a log",
+            ));
+        }
+        plot::plot_log(input, &dir).map_err(err)?
+    };
+    for f in files {
+        crate::outln!("{}", f.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 fn err<E: std::error::Error + 'static>(e: E) -> CliError {
     CliError::msg(crate::cli::one_paragraph(&e))
 }
@@ -288,5 +313,11 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             output,
         } => replay(&log, layer, config, output),
         Command::Sweep(args) => crate::sweep_cmd::sweep(args),
+        Command::Plot {
+            input,
+            output,
+            x,
+            y,
+        } => plot(&input, output, x.as_deref(), y.as_deref()),
     }
 }

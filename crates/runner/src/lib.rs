@@ -20,6 +20,7 @@ pub mod error;
 pub mod estimation_summary;
 pub mod log;
 pub mod model_cmd;
+pub mod plot;
 pub mod records;
 pub mod replay;
 pub mod robot;
