@@ -76,12 +76,32 @@ pub fn cell_color(outcomes: &[&str]) -> RGBColor {
     RGBColor(mix(g.0, f.0), mix(g.1, f.1), mix(g.2, f.2))
 }
 
-/// The axis keys of the rows: every key of the first row that is not a result, in file order.
+/// The rows of a `results.json`: `stride sweep`'s object (`{"variants", "shard", "columns", "rows": [...]}`) or
+/// a bare array of rows.
+fn parse_rows(text: &str) -> Result<Vec<Row>, serde_json::Error> {
+    #[derive(serde::Deserialize)]
+    struct Results {
+        rows: Vec<Row>,
+    }
+    #[derive(serde::Deserialize)]
+    #[serde(untagged)]
+    enum File {
+        Sweep(Results),
+        Rows(Vec<Row>),
+    }
+    Ok(match serde_json::from_str(text)? {
+        File::Sweep(r) => r.rows,
+        File::Rows(rows) => rows,
+    })
+}
+
+/// The axis keys of the rows: every key of the first row that is not a result (the fixed columns and the
+/// `est_*` estimation columns), in file order.
 pub fn axes(rows: &[Row]) -> Vec<String> {
     rows.first().map_or_else(Vec::new, |r| {
         r.0.iter()
             .map(|(k, _)| k.clone())
-            .filter(|k| !RESULT_KEYS.contains(&k.as_str()))
+            .filter(|k| !RESULT_KEYS.contains(&k.as_str()) && !k.starts_with("est_"))
             .collect()
     })
 }
@@ -125,8 +145,8 @@ pub fn plot_sweep(
         path: results.into(),
         source: e,
     })?;
-    let rows: Vec<Row> = serde_json::from_str(&text)
-        .map_err(|e| PlotError::Log(format!("{}: {e}", results.display())))?;
+    let rows =
+        parse_rows(&text).map_err(|e| PlotError::Log(format!("{}: {e}", results.display())))?;
     let axes = axes(&rows);
     let pick = |chosen: Option<&str>, default: usize, flag: &str| -> Result<String, PlotError> {
         match chosen {
@@ -262,6 +282,21 @@ fn draw_legend(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn reads_stride_sweeps_results_and_bare_rows_alike() {
+        let row = r#"{"variant": 0, "sim.model.mass_scale": 1.1, "push.magnitude": 20.0, "outcome": "goal",
+            "distance": 2.0, "goal_distance": 0.01, "dcm_rms": 0.01, "max_tilt_deg": 5.0, "wall_s": 1.0,
+            "est_drift_x_per_m": null, "est_tilt_rms_deg": 0.2}"#;
+        let sweep =
+            format!(r#"{{"variants": 1, "shard": null, "columns": ["variant"], "rows": [{row}]}}"#);
+        for text in [sweep, format!("[{row}]")] {
+            let rows = parse_rows(&text).unwrap();
+            assert_eq!(rows.len(), 1);
+            assert_eq!(axes(&rows), ["sim.model.mass_scale", "push.magnitude"]);
+        }
+        assert!(parse_rows(r#"{"rows": 3}"#).is_err());
+    }
 
     #[test]
     fn mixed_cells_run_from_fell_to_goal() {
