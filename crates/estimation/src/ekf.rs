@@ -130,9 +130,18 @@ fn so3_log(r: &Matrix3<f64>) -> Vector3<f64> {
     vee * scale
 }
 
-/// Re-orthonormalises a rotation matrix (through a unit quaternion).
+/// Re-orthonormalises a rotation matrix: the rotation nearest to `r`, by nalgebra's iteration
+/// (`Rotation3::from_matrix_eps`) to machine precision, started from the identity.
 fn orthonormalize(r: &Matrix3<f64>) -> Matrix3<f64> {
-    let rot = nalgebra::Rotation3::from_matrix(r);
+    orthonormalize_near(r, &Matrix3::identity())
+}
+
+/// [`orthonormalize`] started from `guess`, a rotation near `r`: the filter's rotation before an
+/// increment, from which the iteration needs fewer steps than from the identity (the same rotation to
+/// rounding, not bit for bit; measured, docs/performance.md: 147 → 116 M instructions in a 2 s walk).
+fn orthonormalize_near(r: &Matrix3<f64>, guess: &Matrix3<f64>) -> Matrix3<f64> {
+    let guess = nalgebra::Rotation3::from_matrix_unchecked(*guess);
+    let rot = nalgebra::Rotation3::from_matrix_eps(r, f64::EPSILON, 0, guess);
     *rot.matrix()
 }
 
@@ -254,7 +263,7 @@ impl InvariantEkf {
         let (exp_w, _) = so3_exp_and_jacobian(&(w * dt));
         self.pos += self.vel * dt + acc_world * (0.5 * dt * dt);
         self.vel += acc_world * dt;
-        self.rot = orthonormalize(&(self.rot * exp_w));
+        self.rot = orthonormalize_near(&(self.rot * exp_w), &self.rot);
     }
 
     /// The off-identity 3×3 blocks `(row, column, block)` of `Φ = I + A dt + ½ A² dt²`, the transition of
@@ -516,7 +525,7 @@ impl InvariantEkf {
     fn apply(&mut self, delta: &SVector<f64, DIM>) {
         let phi = delta.fixed_rows::<3>(PHI).into_owned();
         let (r, jl) = so3_exp_and_jacobian(&phi);
-        self.rot = orthonormalize(&(r * self.rot));
+        self.rot = orthonormalize_near(&(r * self.rot), &self.rot);
         self.vel = r * self.vel + jl * delta.fixed_rows::<3>(VEL);
         self.pos = r * self.pos + jl * delta.fixed_rows::<3>(POS);
         for (foot, &row) in FOOT.iter().enumerate() {
