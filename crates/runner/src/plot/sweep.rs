@@ -11,16 +11,11 @@ use serde_json::Value;
 
 use super::PlotError;
 
-/// Keys of a row that are results, not axes.
-pub const RESULT_KEYS: [&str; 7] = [
-    "variant",
-    "outcome",
-    "distance",
-    "goal_distance",
-    "dcm_rms",
-    "max_tilt_deg",
-    "wall_s",
-];
+/// Whether a key of a row is a result (the variant index or one of `stride sweep`'s metric columns), not an
+/// axis.
+fn is_result(key: &str) -> bool {
+    key == "variant" || crate::sweep::METRIC_COLUMNS.contains(&key)
+}
 
 /// The outcomes of a run and their colours.
 pub const OUTCOMES: [(&str, RGBColor); 4] = [
@@ -95,13 +90,12 @@ fn parse_rows(text: &str) -> Result<Vec<Row>, serde_json::Error> {
     })
 }
 
-/// The axis keys of the rows: every key of the first row that is not a result (the fixed columns and the
-/// `est_*` estimation columns), in file order.
+/// The axis keys of the rows: every key of the first row that is not a result, in file order.
 pub fn axes(rows: &[Row]) -> Vec<String> {
     rows.first().map_or_else(Vec::new, |r| {
         r.0.iter()
             .map(|(k, _)| k.clone())
-            .filter(|k| !RESULT_KEYS.contains(&k.as_str()) && !k.starts_with("est_"))
+            .filter(|k| !is_result(k))
             .collect()
     })
 }
