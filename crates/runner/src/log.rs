@@ -77,6 +77,11 @@ impl Default for LogOptions {
     }
 }
 
+/// zstd level of the chunks. Level 1 compresses a walk's log about as well as the library's default
+/// (level 3) for much less CPU time: the figures are in docs/performance.md. Compression runs on the
+/// writer thread itself (no zstd worker threads): the loop already has the writer thread beside it.
+const ZSTD_LEVEL: u32 = 1;
+
 /// Handle of a registered topic.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TopicId(u16);
@@ -151,6 +156,8 @@ impl LogWriter {
         };
         let writer = mcap::WriteOptions::new()
             .compression(compression)
+            .compression_level(ZSTD_LEVEL)
+            .compression_threads(0)
             .chunk_size(Some(options.chunk_size))
             .profile("")
             .library(concat!("stride-", env!("CARGO_PKG_VERSION")))
