@@ -258,14 +258,27 @@ impl InvariantEkf {
         stance: [bool; 2],
         imu_r_sole: &[Matrix3<f64>; 2],
     ) {
+        self.propagate_covariance(dt, stance, imu_r_sole);
+        let predicted = self.predicted_state(gyro, acc, dt);
+        self.rot = predicted.rotation;
+        self.vel = predicted.velocity;
+        self.pos = predicted.position;
+    }
+
+    /// The mean that [`Self::propagate`] leads to, bit for bit, without changing the filter: `R⁺ = R Exp(ω dt)`,
+    /// `v⁺ = v + (R a + g) dt`, `p⁺ = p + v dt + ½ (R a + g) dt²` with `ω = ω̃ − b_g`, `a = ã − b_a`
+    /// [Hartley 2020]. Lets a caller place the robot at the predicted state before the propagation.
+    pub fn predicted_state(&self, gyro: &Vector3<f64>, acc: &Vector3<f64>, dt: f64) -> EkfState {
         let w = gyro - self.gyro_bias;
         let a = acc - self.acc_bias;
-        self.propagate_covariance(dt, stance, imu_r_sole);
         let acc_world = self.rot * a + self.gravity;
         let (exp_w, _) = so3_exp_and_jacobian(&(w * dt));
-        self.pos += self.vel * dt + acc_world * (0.5 * dt * dt);
-        self.vel += acc_world * dt;
-        self.rot = renormalize(&(self.rot * exp_w));
+        EkfState {
+            rotation: renormalize(&(self.rot * exp_w)),
+            velocity: self.vel + acc_world * dt,
+            position: self.pos + (self.vel * dt + acc_world * (0.5 * dt * dt)),
+            ..self.state()
+        }
     }
 
     /// The off-identity 3×3 blocks `(row, column, block)` of `Φ = I + A dt + ½ A² dt²`, the transition of
