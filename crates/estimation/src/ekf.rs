@@ -317,36 +317,43 @@ impl InvariantEkf {
         phi
     }
 
-    /// `Φ P Φᵀ` with `Φ = I + N` given by its 3×3 blocks: `M = P + N P` (block rows), then `M + M Nᵀ` (block
-    /// columns), on the column-major storage (`P[(i, j)]` at `j·DIM + i`). The result is made exactly
-    /// symmetric by copying its upper triangle to the lower one.
-    fn sandwich(blocks: &[(usize, usize, Matrix3<f64>)], p: &Covariance) -> Covariance {
-        let mut m = *p;
-        {
-            let (src, dst) = (p.as_slice(), m.as_mut_slice());
+    /// `P ← Φ P Φᵀ` in place, with `Φ = I + N` given by its 3×3 blocks, on the column-major storage
+    /// (`P[(i, j)]` at `j·DIM + i`): `M = P + N P` (block rows, column by column from a copy of the
+    /// column), then `M + M Nᵀ` (block columns) on the upper triangle only, which is then copied onto the
+    /// lower one (the result is exactly symmetric). The column pass writes the destination columns in an
+    /// order that leaves every source column unchanged until it has been read: the feet's and `p`'s
+    /// first, then `v`'s (a source of `p`'s), then `φ`'s (a source of both).
+    fn sandwich(blocks: &[(usize, usize, Matrix3<f64>)], p: &mut Covariance) {
+        let data = p.as_mut_slice();
+        for col in data.chunks_exact_mut(DIM) {
+            let mut x = [0.0; DIM];
+            x.copy_from_slice(col);
             for &(r, c, ref b) in blocks {
-                for (s, d) in src.chunks_exact(DIM).zip(dst.chunks_exact_mut(DIM)) {
-                    let x = [s[c], s[c + 1], s[c + 2]];
-                    for (k, d) in d[r..r + 3].iter_mut().enumerate() {
-                        *d += b[(k, 0)] * x[0] + b[(k, 1)] * x[1] + b[(k, 2)] * x[2];
-                    }
+                for (k, d) in col[r..r + 3].iter_mut().enumerate() {
+                    *d += b[(k, 0)] * x[c] + b[(k, 1)] * x[c + 1] + b[(k, 2)] * x[c + 2];
                 }
             }
         }
-        let mut out = m;
-        {
-            let (src, dst) = (m.as_slice(), out.as_mut_slice());
-            for (r, c, b) in blocks {
+        let last = |r: usize| match r {
+            PHI => 2,
+            VEL => 1,
+            _ => 0,
+        };
+        for pass in 0..3 {
+            for &(r, c, ref b) in blocks.iter().filter(|(r, _, _)| last(*r) == pass) {
                 for k in 0..3 {
-                    let d = &mut dst[(r + k) * DIM..(r + k + 1) * DIM];
-                    for l in 0..3 {
-                        axpy(d, b[(k, l)], &src[(c + l) * DIM..(c + l + 1) * DIM]);
+                    let j = r + k;
+                    let (dst, x0, x1, x2) = column_and_sources(data, j, c);
+                    let (b0, b1, b2) = (b[(k, 0)], b[(k, 1)], b[(k, 2)]);
+                    for (i, y) in dst.iter_mut().enumerate() {
+                        *y += b0 * x0[i];
+                        *y += b1 * x1[i];
+                        *y += b2 * x2[i];
                     }
                 }
             }
         }
-        mirror_upper(&mut out);
-        out
+        mirror_upper(p);
     }
 
     fn propagate_covariance(&mut self, dt: f64, stance: [bool; 2], imu_r_sole: &[Matrix3<f64>; 2]) {
@@ -367,7 +374,7 @@ impl InvariantEkf {
                 .copy_from(&(skew(&self.feet[foot]) * r));
         }
         let qg = g_gyro * self.gyro_var * g_gyro.transpose() * dt;
-        let mut p = self.cov;
+        let p = &mut self.cov;
         {
             let mut group = p.fixed_view_mut::<NGYRO, NGYRO>(0, 0);
             group += qg;
@@ -389,7 +396,7 @@ impl InvariantEkf {
             add(BG, self.gyro_bias_var);
             add(BA, self.acc_bias_var);
         }
-        self.cov = Self::sandwich(&blocks[..n_blocks], &p);
+        Self::sandwich(&blocks[..n_blocks], &mut self.cov);
     }
 
     /// Places foot `foot` by kinematics: contact point `d = p + R h` and sole orientation `F = R R_h`, with
@@ -533,12 +540,18 @@ impl InvariantEkf {
         }
         let w = wt.transpose();
         let delta = w * z;
+        // Upper triangle, column by column, then mirrored.
         let (cov, w) = (self.cov.as_mut_slice(), w.as_slice());
         for (j, col) in cov.chunks_exact_mut(DIM).enumerate() {
-            for wk in w.chunks_exact(DIM) {
-                axpy(col, -wk[j], wk);
+            let a: [f64; M] = std::array::from_fn(|k| w[k * DIM + j]);
+            let wk: [&[f64]; M] = std::array::from_fn(|k| &w[k * DIM..k * DIM + j + 1]);
+            for (i, y) in col[..=j].iter_mut().enumerate() {
+                for k in 0..M {
+                    *y -= a[k] * wk[k][i];
+                }
             }
         }
+        mirror_upper(&mut self.cov);
         self.apply(&delta);
         Ok(())
     }
@@ -565,12 +578,20 @@ impl InvariantEkf {
     }
 }
 
-/// `y ← y + a x` (a contiguous column).
-#[inline]
-fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
-    for (y, x) in y.iter_mut().zip(x) {
-        *y += a * x;
-    }
+/// The first `j + 1` entries of column `j` (mutable) and of columns `c`, `c + 1`, `c + 2` (`j` not among
+/// them) of a column-major `DIM × DIM` storage.
+#[allow(clippy::type_complexity)]
+fn column_and_sources(data: &mut [f64], j: usize, c: usize) -> (&mut [f64], &[f64], &[f64], &[f64]) {
+    let n = j + 1;
+    let (dst, src, offset) = if c > j {
+        let (a, b) = data.split_at_mut(c * DIM);
+        (&mut a[j * DIM..j * DIM + n], &*b, 0)
+    } else {
+        let (a, b) = data.split_at_mut(j * DIM);
+        (&mut b[..n], &*a, c * DIM)
+    };
+    let x = |l: usize| &src[offset + l * DIM..offset + l * DIM + n];
+    (dst, x(0), x(1), x(2))
 }
 
 /// Copies the upper triangle of `p` onto its lower one.
@@ -719,7 +740,10 @@ mod tests {
         let (blocks, n) = ekf.transition_blocks(dt);
         let phi = ekf.transition(dt);
         let dense = phi * p * phi.transpose();
-        assert!((InvariantEkf::sandwich(&blocks[..n], &p) - dense).amax() < 1e-12);
+        let mut sandwich = p;
+        InvariantEkf::sandwich(&blocks[..n], &mut sandwich);
+        assert!((sandwich - dense).amax() < 1e-12);
+        assert_symmetric(&sandwich);
     }
 
     #[test]
