@@ -133,7 +133,8 @@ fn so3_log(r: &Matrix3<f64>) -> Vector3<f64> {
 /// Re-orthonormalises a rotation matrix that may be far from orthonormal (the initial state): the rotation
 /// nearest to `r`, by nalgebra's iteration (`Rotation3::from_matrix_eps`) to machine precision.
 fn orthonormalize(r: &Matrix3<f64>) -> Matrix3<f64> {
-    let rot = nalgebra::Rotation3::from_matrix_eps(r, f64::EPSILON, 0, nalgebra::Rotation3::identity());
+    let rot =
+        nalgebra::Rotation3::from_matrix_eps(r, f64::EPSILON, 0, nalgebra::Rotation3::identity());
     *rot.matrix()
 }
 
@@ -359,25 +360,35 @@ impl InvariantEkf {
     fn propagate_covariance(&mut self, dt: f64, stance: [bool; 2], imu_r_sole: &[Matrix3<f64>; 2]) {
         let (blocks, n_blocks) = self.transition_blocks(dt);
         let r = self.rot;
-        // Gyro noise enters every group block through Ad_X̂: [R; v×R; p×R; d_l×R; d_r×R].
-        let mut g_gyro = SMatrix::<f64, NGYRO, 3>::zeros();
-        g_gyro.fixed_view_mut::<3, 3>(PHI, 0).copy_from(&r);
-        g_gyro
-            .fixed_view_mut::<3, 3>(VEL, 0)
-            .copy_from(&(skew(&self.vel) * r));
-        g_gyro
-            .fixed_view_mut::<3, 3>(POS, 0)
-            .copy_from(&(skew(&self.pos) * r));
-        for (foot, &row) in FOOT.iter().enumerate() {
-            g_gyro
-                .fixed_view_mut::<3, 3>(row, 0)
-                .copy_from(&(skew(&self.feet[foot]) * r));
+        // Gyro noise enters every group block through Ad_X̂: G = [R; v×R; p×R; d_l×R; d_r×R] (15×3), and
+        // G Q_g Gᵀ dt = Σ_k σ_k² g_k g_kᵀ dt with Q_g diagonal (its upper triangle, mirrored).
+        let mut g = [[0.0; NGYRO]; 3];
+        let levers = [
+            None,
+            Some(self.vel),
+            Some(self.pos),
+            Some(self.feet[0]),
+            Some(self.feet[1]),
+        ];
+        for (n, lever) in levers.iter().enumerate() {
+            let block = lever.map_or(r, |l| skew(&l) * r);
+            for (k, gk) in g.iter_mut().enumerate() {
+                gk[3 * n..3 * n + 3].copy_from_slice(block.column(k).as_slice());
+            }
         }
-        let qg = g_gyro * self.gyro_var * g_gyro.transpose() * dt;
         let p = &mut self.cov;
-        {
-            let mut group = p.fixed_view_mut::<NGYRO, NGYRO>(0, 0);
-            group += qg;
+        for (k, gk) in g.iter().enumerate() {
+            let s = self.gyro_var[(k, k)] * dt;
+            for j in 0..NGYRO {
+                let a = s * gk[j];
+                for i in 0..=j {
+                    let q = a * gk[i];
+                    p[(i, j)] += q;
+                    if i != j {
+                        p[(j, i)] += q;
+                    }
+                }
+            }
         }
         let mut add = |i: usize, m: Matrix3<f64>| {
             let mut block = p.fixed_view_mut::<3, 3>(i, i);
@@ -581,7 +592,11 @@ impl InvariantEkf {
 /// The first `j + 1` entries of column `j` (mutable) and of columns `c`, `c + 1`, `c + 2` (`j` not among
 /// them) of a column-major `DIM × DIM` storage.
 #[allow(clippy::type_complexity)]
-fn column_and_sources(data: &mut [f64], j: usize, c: usize) -> (&mut [f64], &[f64], &[f64], &[f64]) {
+fn column_and_sources(
+    data: &mut [f64],
+    j: usize,
+    c: usize,
+) -> (&mut [f64], &[f64], &[f64], &[f64]) {
     let n = j + 1;
     let (dst, src, offset) = if c > j {
         let (a, b) = data.split_at_mut(c * DIM);
@@ -660,8 +675,18 @@ mod tests {
             for foot in 0..2 {
                 put(FOOT[foot], 0, skew(&ekf.feet[foot]) * r, &ekf.gyro_var);
                 if stance[foot] {
-                    put(FOOT[foot], 6 + 3 * foot, r * imu_r_sole[foot], &ekf.foot_var);
-                    put(FOOT_ROT[foot], 12 + 3 * foot, ekf.foot_rot[foot], &ekf.foot_rot_var);
+                    put(
+                        FOOT[foot],
+                        6 + 3 * foot,
+                        r * imu_r_sole[foot],
+                        &ekf.foot_var,
+                    );
+                    put(
+                        FOOT_ROT[foot],
+                        12 + 3 * foot,
+                        ekf.foot_rot[foot],
+                        &ekf.foot_rot_var,
+                    );
                 }
             }
             let phi = ekf.transition(dt);
@@ -694,7 +719,8 @@ mod tests {
             let p_dense = p - k * h * p;
             let mut dense = ekf.clone();
             dense.apply(&(k * residual));
-            ekf.correct(&jac, &residual, &noise, "test").expect("correct");
+            ekf.correct(&jac, &residual, &noise, "test")
+                .expect("correct");
             assert!((ekf.cov - p_dense).amax() < 1e-14, "M = {M}");
             assert_symmetric(&ekf.cov);
             let (a, b) = (ekf.state(), dense.state());
@@ -708,8 +734,14 @@ mod tests {
         let pos_row = |k: usize| [(POS + k, -1.0), (FOOT[1] + k, 1.0), (0, 0.0)];
         let rot_row = |k: usize| [(PHI + k, -1.0), (FOOT_ROT[1] + k, 1.0), (0, 0.0)];
         check(&mut rng, [pos_row(0), pos_row(1), pos_row(2), rot_row(2)]);
-        check(&mut rng, [0, 1, 2, 3, 4, 5].map(|k| if k < 3 { pos_row(k) } else { rot_row(k - 3) }));
-        check(&mut rng, [[(PHI, 0.3), (PHI + 1, -1.2), (FOOT[0] + 2, 1.0)]]);
+        check(
+            &mut rng,
+            [0, 1, 2, 3, 4, 5].map(|k| if k < 3 { pos_row(k) } else { rot_row(k - 3) }),
+        );
+        check(
+            &mut rng,
+            [[(PHI, 0.3), (PHI + 1, -1.2), (FOOT[0] + 2, 1.0)]],
+        );
     }
 
     #[test]
@@ -722,7 +754,11 @@ mod tests {
             let perturbed = r + Matrix3::from_fn(|_, _| rng.random_range(-1e-12..1e-12));
             let nearest = orthonormalize(&perturbed);
             let fast = renormalize(&perturbed);
-            assert!((fast - nearest).amax() < 2e-15, "{}", (fast - nearest).amax());
+            assert!(
+                (fast - nearest).amax() < 2e-15,
+                "{}",
+                (fast - nearest).amax()
+            );
             assert!((fast.tr_mul(&fast) - Matrix3::identity()).amax() < 1e-15);
         }
     }

@@ -18,7 +18,9 @@ use crate::schmitt::SchmittTrigger;
 /// The estimation layer.
 ///
 /// One tick ([`Block::step`]):
-/// 1. forward kinematics from the encoders: each sole's position and orientation in the IMU frame, `imu_H_base`;
+/// 1. forward kinematics from the encoders: each sole's position and orientation in the IMU frame, `imu_H_base`
+///    (one pass per step when the IMU frame is on the base link, the robot placed at the predicted mean;
+///    two otherwise: relative to the base, then at the predicted state);
 /// 2. EKF propagation with the raw gyroscope and accelerometer ([`InvariantEkf::propagate`]; the IMU's
 ///    on-board orientation is not used);
 /// 3. the predicted robot state (base pose and mixed twist from the propagated EKF, joints as measured)
@@ -358,8 +360,8 @@ impl Estimator {
         let omega_base = omega_imu - r_base * rel.fixed_rows::<3>(3);
         let lever = s.position - world_h_base.translation.vector;
         let v_base = s.velocity - r_base * rel.fixed_rows::<3>(0) - omega_base.cross(&lever);
-        let a_imu =
-            s.rotation * (input.imu.proper_acceleration - s.accelerometer_bias) + self.model.gravity();
+        let a_imu = s.rotation * (input.imu.proper_acceleration - s.accelerometer_bias)
+            + self.model.gravity();
         let a_base = a_imu - omega_base.cross(&omega_base.cross(&lever));
         let mut twist = Vector6::zeros();
         twist.fixed_rows_mut::<3>(0).copy_from(&v_base);
