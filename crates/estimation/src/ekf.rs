@@ -360,35 +360,25 @@ impl InvariantEkf {
     fn propagate_covariance(&mut self, dt: f64, stance: [bool; 2], imu_r_sole: &[Matrix3<f64>; 2]) {
         let (blocks, n_blocks) = self.transition_blocks(dt);
         let r = self.rot;
-        // Gyro noise enters every group block through Ad_X̂: G = [R; v×R; p×R; d_l×R; d_r×R] (15×3), and
-        // G Q_g Gᵀ dt = Σ_k σ_k² g_k g_kᵀ dt with Q_g diagonal (its upper triangle, mirrored).
-        let mut g = [[0.0; NGYRO]; 3];
-        let levers = [
-            None,
-            Some(self.vel),
-            Some(self.pos),
-            Some(self.feet[0]),
-            Some(self.feet[1]),
-        ];
-        for (n, lever) in levers.iter().enumerate() {
-            let block = lever.map_or(r, |l| skew(&l) * r);
-            for (k, gk) in g.iter_mut().enumerate() {
-                gk[3 * n..3 * n + 3].copy_from_slice(block.column(k).as_slice());
-            }
+        // Gyro noise enters every group block through Ad_X̂: [R; v×R; p×R; d_l×R; d_r×R].
+        let mut g_gyro = SMatrix::<f64, NGYRO, 3>::zeros();
+        g_gyro.fixed_view_mut::<3, 3>(PHI, 0).copy_from(&r);
+        g_gyro
+            .fixed_view_mut::<3, 3>(VEL, 0)
+            .copy_from(&(skew(&self.vel) * r));
+        g_gyro
+            .fixed_view_mut::<3, 3>(POS, 0)
+            .copy_from(&(skew(&self.pos) * r));
+        for (foot, &row) in FOOT.iter().enumerate() {
+            g_gyro
+                .fixed_view_mut::<3, 3>(row, 0)
+                .copy_from(&(skew(&self.feet[foot]) * r));
         }
+        let qg = g_gyro * self.gyro_var * g_gyro.transpose() * dt;
         let p = &mut self.cov;
-        for (k, gk) in g.iter().enumerate() {
-            let s = self.gyro_var[(k, k)] * dt;
-            for j in 0..NGYRO {
-                let a = s * gk[j];
-                for i in 0..=j {
-                    let q = a * gk[i];
-                    p[(i, j)] += q;
-                    if i != j {
-                        p[(j, i)] += q;
-                    }
-                }
-            }
+        {
+            let mut group = p.fixed_view_mut::<NGYRO, NGYRO>(0, 0);
+            group += qg;
         }
         let mut add = |i: usize, m: Matrix3<f64>| {
             let mut block = p.fixed_view_mut::<3, 3>(i, i);
