@@ -319,27 +319,28 @@ impl InvariantEkf {
     }
 
     /// `P ← Φ P Φᵀ` in place, with `Φ = I + N` given by its 3×3 blocks, on the column-major storage
-    /// (`P[(i, j)]` at `j·DIM + i`): `M = P + N P` (block rows, column by column from a copy of the
-    /// column), then `M + M Nᵀ` (block columns) on the upper triangle only, which is then copied onto the
-    /// lower one (the result is exactly symmetric). The column pass writes the destination columns in an
-    /// order that leaves every source column unchanged until it has been read: the feet's and `p`'s
-    /// first, then `v`'s (a source of `p`'s), then `φ`'s (a source of both).
+    /// (`P[(i, j)]` at `j·DIM + i`): `M = P + N P` (block rows), then `M + M Nᵀ` (block columns) on the
+    /// upper triangle only, which is then copied onto the lower one (the result is exactly symmetric). Both
+    /// passes write the destination rows (columns) in an order that leaves every source row (column)
+    /// unchanged until it has been read: the feet's and `p`'s first, then `v`'s (a source of `p`'s), then
+    /// `φ`'s (a source of both).
     fn sandwich(blocks: &[(usize, usize, Matrix3<f64>)], p: &mut Covariance) {
         let data = p.as_mut_slice();
-        for col in data.chunks_exact_mut(DIM) {
-            let mut x = [0.0; DIM];
-            x.copy_from_slice(col);
-            for &(r, c, ref b) in blocks {
-                for (k, d) in col[r..r + 3].iter_mut().enumerate() {
-                    *d += b[(k, 0)] * x[c] + b[(k, 1)] * x[c + 1] + b[(k, 2)] * x[c + 2];
-                }
-            }
-        }
         let last = |r: usize| match r {
             PHI => 2,
             VEL => 1,
             _ => 0,
         };
+        for pass in 0..3 {
+            for &(r, c, ref b) in blocks.iter().filter(|(r, _, _)| last(*r) == pass) {
+                for col in data.chunks_exact_mut(DIM) {
+                    let x = [col[c], col[c + 1], col[c + 2]];
+                    for (k, d) in col[r..r + 3].iter_mut().enumerate() {
+                        *d += b[(k, 0)] * x[0] + b[(k, 1)] * x[1] + b[(k, 2)] * x[2];
+                    }
+                }
+            }
+        }
         for pass in 0..3 {
             for &(r, c, ref b) in blocks.iter().filter(|(r, _, _)| last(*r) == pass) {
                 for k in 0..3 {
