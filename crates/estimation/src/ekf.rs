@@ -139,8 +139,8 @@ fn orthonormalize(r: &Matrix3<f64>) -> Matrix3<f64> {
 }
 
 /// Re-orthonormalises `r`, a product of rotations that is orthonormal up to rounding (`‖RᵀR − I‖` of a few
-/// ulps), by one step of the Newton–Schulz iteration for the polar factor, `R ← ½ R (3I − RᵀR)`
-/// (`E = RᵀR − I` symmetric): the error `E = RᵀR − I` becomes `O(E²)`, below rounding, so the result is the
+/// ulps), by one step of the Newton–Schulz iteration for the polar factor, `R ← ½ R (3I − RᵀR)`: the
+/// symmetric error `E = RᵀR − I` becomes `O(E²)`, below rounding, so the result is the
 /// nearest rotation (what nalgebra's `Rotation3::from_matrix_eps` iterates to) to rounding. Two 3×3 products
 /// instead of nalgebra's iteration (docs/performance.md, "Estimation layer, 2026-12-02").
 fn renormalize(r: &Matrix3<f64>) -> Matrix3<f64> {
