@@ -35,8 +35,8 @@ const FOOT: [usize; 2] = [9, 12];
 const FOOT_ROT: [usize; 2] = [15, 18];
 const BG: usize = 21;
 const BA: usize = 24;
-/// Size of the group part of the error state.
-const NG: usize = 21;
+/// Rows of the error state the gyroscope noise enters, `(φ, v, p, d_l, d_r)` (`ψ` has its own noise).
+const NGYRO: usize = 15;
 
 /// The filter's state and covariance, with its noise model.
 #[derive(Debug, Clone)]
@@ -130,19 +130,22 @@ fn so3_log(r: &Matrix3<f64>) -> Vector3<f64> {
     vee * scale
 }
 
-/// Re-orthonormalises a rotation matrix: the rotation nearest to `r`, by nalgebra's iteration
-/// (`Rotation3::from_matrix_eps`) to machine precision, started from the identity.
+/// Re-orthonormalises a rotation matrix that may be far from orthonormal (the initial state): the rotation
+/// nearest to `r`, by nalgebra's iteration (`Rotation3::from_matrix_eps`) to machine precision.
 fn orthonormalize(r: &Matrix3<f64>) -> Matrix3<f64> {
-    orthonormalize_near(r, &Matrix3::identity())
+    let rot =
+        nalgebra::Rotation3::from_matrix_eps(r, f64::EPSILON, 0, nalgebra::Rotation3::identity());
+    *rot.matrix()
 }
 
-/// [`orthonormalize`] started from `guess`, a rotation near `r`: the filter's rotation before an
-/// increment, from which the iteration needs fewer steps than from the identity (the same rotation to
-/// rounding, not bit for bit; measured, docs/performance.md: 147 → 116 M instructions in a 2 s walk).
-fn orthonormalize_near(r: &Matrix3<f64>, guess: &Matrix3<f64>) -> Matrix3<f64> {
-    let guess = nalgebra::Rotation3::from_matrix_unchecked(*guess);
-    let rot = nalgebra::Rotation3::from_matrix_eps(r, f64::EPSILON, 0, guess);
-    *rot.matrix()
+/// Re-orthonormalises `r`, a product of rotations that is orthonormal up to rounding (`‖RᵀR − I‖` of a few
+/// ulps), by one step of the Newton–Schulz iteration for the polar factor, `R ← ½ R (3I − RᵀR)`: the
+/// symmetric error `E = RᵀR − I` becomes `O(E²)`, below rounding, so the result is the
+/// nearest rotation (what nalgebra's `Rotation3::from_matrix_eps` iterates to) to rounding. Two 3×3 products
+/// instead of nalgebra's iteration (docs/performance.md, "Estimation layer, 2026-12-02").
+fn renormalize(r: &Matrix3<f64>) -> Matrix3<f64> {
+    let e = r.tr_mul(r);
+    r * (Matrix3::identity() * 3.0 - e) * 0.5
 }
 
 impl InvariantEkf {
@@ -256,14 +259,27 @@ impl InvariantEkf {
         stance: [bool; 2],
         imu_r_sole: &[Matrix3<f64>; 2],
     ) {
+        self.propagate_covariance(dt, stance, imu_r_sole);
+        let predicted = self.predicted_state(gyro, acc, dt);
+        self.rot = predicted.rotation;
+        self.vel = predicted.velocity;
+        self.pos = predicted.position;
+    }
+
+    /// The mean that [`Self::propagate`] leads to, bit for bit, without changing the filter: `R⁺ = R Exp(ω dt)`,
+    /// `v⁺ = v + (R a + g) dt`, `p⁺ = p + v dt + ½ (R a + g) dt²` with `ω = ω̃ − b_g`, `a = ã − b_a`
+    /// [Hartley 2020]. Lets a caller place the robot at the predicted state before the propagation.
+    pub fn predicted_state(&self, gyro: &Vector3<f64>, acc: &Vector3<f64>, dt: f64) -> EkfState {
         let w = gyro - self.gyro_bias;
         let a = acc - self.acc_bias;
-        self.propagate_covariance(dt, stance, imu_r_sole);
         let acc_world = self.rot * a + self.gravity;
         let (exp_w, _) = so3_exp_and_jacobian(&(w * dt));
-        self.pos += self.vel * dt + acc_world * (0.5 * dt * dt);
-        self.vel += acc_world * dt;
-        self.rot = orthonormalize_near(&(self.rot * exp_w), &self.rot);
+        EkfState {
+            rotation: renormalize(&(self.rot * exp_w)),
+            velocity: self.vel + acc_world * dt,
+            position: self.pos + (self.vel * dt + acc_world * (0.5 * dt * dt)),
+            ..self.state()
+        }
     }
 
     /// The off-identity 3×3 blocks `(row, column, block)` of `Φ = I + A dt + ½ A² dt²`, the transition of
@@ -302,28 +318,51 @@ impl InvariantEkf {
         phi
     }
 
-    /// `Φ P Φᵀ` with `Φ = I + N` given by its blocks: `M = P + N P`, then `M + M Nᵀ`.
-    fn sandwich(blocks: &[(usize, usize, Matrix3<f64>)], p: &Covariance) -> Covariance {
-        let mut m = *p;
-        for (r, c, b) in blocks {
-            let rows = b * p.fixed_view::<3, DIM>(*c, 0);
-            let mut dst = m.fixed_view_mut::<3, DIM>(*r, 0);
-            dst += rows;
+    /// `P ← Φ P Φᵀ` in place, with `Φ = I + N` given by its 3×3 blocks, on the column-major storage
+    /// (`P[(i, j)]` at `j·DIM + i`): `M = P + N P` (block rows), then `M + M Nᵀ` (block columns) on the
+    /// upper triangle only, which is then copied onto the lower one (the result is exactly symmetric). Both
+    /// passes write the destination rows (columns) in an order that leaves every source row (column)
+    /// unchanged until it has been read: the feet's and `p`'s first, then `v`'s (a source of `p`'s), then
+    /// `φ`'s (a source of both).
+    fn sandwich(blocks: &[(usize, usize, Matrix3<f64>)], p: &mut Covariance) {
+        let data = p.as_mut_slice();
+        let last = |r: usize| match r {
+            PHI => 2,
+            VEL => 1,
+            _ => 0,
+        };
+        for pass in 0..3 {
+            for &(r, c, ref b) in blocks.iter().filter(|(r, _, _)| last(*r) == pass) {
+                for col in data.chunks_exact_mut(DIM) {
+                    let x = [col[c], col[c + 1], col[c + 2]];
+                    for (k, d) in col[r..r + 3].iter_mut().enumerate() {
+                        *d += b[(k, 0)] * x[0] + b[(k, 1)] * x[1] + b[(k, 2)] * x[2];
+                    }
+                }
+            }
         }
-        let mut out = m;
-        for (r, c, b) in blocks {
-            let cols = m.fixed_view::<DIM, 3>(0, *c) * b.transpose();
-            let mut dst = out.fixed_view_mut::<DIM, 3>(0, *r);
-            dst += cols;
+        for pass in 0..3 {
+            for &(r, c, ref b) in blocks.iter().filter(|(r, _, _)| last(*r) == pass) {
+                for k in 0..3 {
+                    let j = r + k;
+                    let (dst, x0, x1, x2) = column_and_sources(data, j, c);
+                    let (b0, b1, b2) = (b[(k, 0)], b[(k, 1)], b[(k, 2)]);
+                    for (i, y) in dst.iter_mut().enumerate() {
+                        *y += b0 * x0[i];
+                        *y += b1 * x1[i];
+                        *y += b2 * x2[i];
+                    }
+                }
+            }
         }
-        out
+        mirror_upper(p);
     }
 
     fn propagate_covariance(&mut self, dt: f64, stance: [bool; 2], imu_r_sole: &[Matrix3<f64>; 2]) {
         let (blocks, n_blocks) = self.transition_blocks(dt);
         let r = self.rot;
         // Gyro noise enters every group block through Ad_X̂: [R; v×R; p×R; d_l×R; d_r×R].
-        let mut g_gyro = SMatrix::<f64, NG, 3>::zeros();
+        let mut g_gyro = SMatrix::<f64, NGYRO, 3>::zeros();
         g_gyro.fixed_view_mut::<3, 3>(PHI, 0).copy_from(&r);
         g_gyro
             .fixed_view_mut::<3, 3>(VEL, 0)
@@ -337,9 +376,9 @@ impl InvariantEkf {
                 .copy_from(&(skew(&self.feet[foot]) * r));
         }
         let qg = g_gyro * self.gyro_var * g_gyro.transpose() * dt;
-        let mut p = self.cov;
+        let p = &mut self.cov;
         {
-            let mut group = p.fixed_view_mut::<NG, NG>(0, 0);
+            let mut group = p.fixed_view_mut::<NGYRO, NGYRO>(0, 0);
             group += qg;
         }
         let mut add = |i: usize, m: Matrix3<f64>| {
@@ -359,8 +398,7 @@ impl InvariantEkf {
             add(BG, self.gyro_bias_var);
             add(BA, self.acc_bias_var);
         }
-        self.cov = Self::sandwich(&blocks[..n_blocks], &p);
-        symmetrize(&mut self.cov);
+        Self::sandwich(&blocks[..n_blocks], &mut self.cov);
     }
 
     /// Places foot `foot` by kinematics: contact point `d = p + R h` and sole orientation `F = R R_h`, with
@@ -418,41 +456,31 @@ impl InvariantEkf {
     /// compliant contact would pull them. Both parts go in one correction (4 or 6 rows).
     pub fn update_foot(&mut self, foot: usize, h: &Vector3<f64>, r_h: &Matrix3<f64>) -> Result<()> {
         let residual = self.rot * h - (self.feet[foot] - self.pos);
+        // Row k of the position part: −e_k at p, +e_k at d.
+        let pos_row = |k: usize| [(POS + k, -1.0), (FOOT[foot] + k, 1.0), (0, 0.0)];
         if !self.foot_orientation {
-            let mut jac = SMatrix::<f64, 3, DIM>::zeros();
-            for k in 0..3 {
-                jac[(k, POS + k)] = -1.0;
-                jac[(k, FOOT[foot] + k)] = 1.0;
-            }
             let noise = Matrix3::identity() * self.kin_var;
+            let jac = [0, 1, 2].map(pos_row);
             return self.correct(&jac, &residual, &noise, "foot kinematics");
         }
         let rot_residual = so3_log(&(self.rot * r_h * self.foot_rot[foot].transpose()));
+        let rot_row = |k: usize| [(PHI + k, -1.0), (FOOT_ROT[foot] + k, 1.0), (0, 0.0)];
         if !self.foot_tilt {
             // Heading only: the world-z row of the orientation residual.
-            let mut jac = SMatrix::<f64, 4, DIM>::zeros();
-            let mut r4 = SVector::<f64, 4>::zeros();
-            let mut noise = SMatrix::<f64, 4, 4>::zeros();
-            for k in 0..3 {
-                jac[(k, POS + k)] = -1.0;
-                jac[(k, FOOT[foot] + k)] = 1.0;
-                r4[k] = residual[k];
-                noise[(k, k)] = self.kin_var;
-            }
-            jac[(3, PHI + 2)] = -1.0;
-            jac[(3, FOOT_ROT[foot] + 2)] = 1.0;
-            r4[3] = rot_residual.z;
-            noise[(3, 3)] = self.kin_rot_var;
+            let jac = [pos_row(0), pos_row(1), pos_row(2), rot_row(2)];
+            let r4 = SVector::<f64, 4>::new(residual.x, residual.y, residual.z, rot_residual.z);
+            let noise = SMatrix::<f64, 4, 4>::from_diagonal(&SVector::<f64, 4>::new(
+                self.kin_var,
+                self.kin_var,
+                self.kin_var,
+                self.kin_rot_var,
+            ));
             return self.correct(&jac, &r4, &noise, "foot kinematics");
         }
-        let mut jac = SMatrix::<f64, 6, DIM>::zeros();
+        let jac = [0, 1, 2, 3, 4, 5].map(|k| if k < 3 { pos_row(k) } else { rot_row(k - 3) });
         let mut r6 = SVector::<f64, 6>::zeros();
         let mut noise = SMatrix::<f64, 6, 6>::zeros();
         for k in 0..3 {
-            jac[(k, POS + k)] = -1.0;
-            jac[(k, FOOT[foot] + k)] = 1.0;
-            jac[(3 + k, PHI + k)] = -1.0;
-            jac[(3 + k, FOOT_ROT[foot] + k)] = 1.0;
             r6[k] = residual[k];
             r6[3 + k] = rot_residual[k];
             noise[(k, k)] = self.kin_var;
@@ -467,56 +495,65 @@ impl InvariantEkf {
     /// the height drift the point-contact model leaves unobservable.
     pub fn update_ground_height(&mut self, foot: usize, height: f64, sigma: f64) -> Result<()> {
         let d = self.feet[foot];
-        let mut jac = SMatrix::<f64, 1, DIM>::zeros();
-        jac[(0, PHI)] = d.y;
-        jac[(0, PHI + 1)] = -d.x;
-        jac[(0, FOOT[foot] + 2)] = 1.0;
+        let jac = [[(PHI, d.y), (PHI + 1, -d.x), (FOOT[foot] + 2, 1.0)]];
         let residual = SVector::<f64, 1>::new(height - d.z);
         let noise = SMatrix::<f64, 1, 1>::new(sigma * sigma);
         self.correct(&jac, &residual, &noise, "flat ground")
     }
 
-    /// Kalman correction: `K = P Hᵀ S⁻¹`, `δ = K r`, `X̂ ← Exp(δ) X̂`, `F̂ ← Exp(δ_ψ) F̂`, `b̂ ← b̂ + δ_b`, `P ← P − K H P`
-    /// (symmetrised). Fails, changing nothing, if `S` is not positive definite.
+    /// Kalman correction: `K = P Hᵀ S⁻¹`, `δ = K r`, `X̂ ← Exp(δ) X̂`, `F̂ ← Exp(δ_ψ) F̂`, `b̂ ← b̂ + δ_b`,
+    /// `P ← P − K H P`. Fails, changing nothing, if `S = H P Hᵀ + N` is not positive definite.
+    ///
+    /// `jac` holds `H` by rows, each as at most three `(column, coefficient)` pairs (zero coefficients are
+    /// padding). With the Cholesky factor `S = L Lᵀ` and `W = P Hᵀ L⁻ᵀ` (27×M), `K H P = W Wᵀ` and
+    /// `δ = W L⁻¹ r`: the covariance update `P ← P − W Wᵀ` is symmetric by construction (bit for bit: each
+    /// entry sums the same products in the same order as its mirror), and costs `27² M` multiply-adds.
     fn correct<const M: usize>(
         &mut self,
-        jac: &SMatrix<f64, M, DIM>,
+        jac: &[[(usize, f64); 3]; M],
         residual: &SVector<f64, M>,
         noise: &SMatrix<f64, M, M>,
         what: &'static str,
     ) -> Result<()> {
-        // `P Hᵀ` and `H P Hᵀ` over the nonzeros of `H` (a few ±1 and the flat-ground row's lever arms).
+        // `P Hᵀ` and `S = H P Hᵀ + N` over the nonzeros of `H`.
         let mut pht = SMatrix::<f64, DIM, M>::zeros();
-        let mut s = *noise;
-        for k in 0..M {
-            for j in 0..DIM {
-                let h = jac[(k, j)];
-                if h != 0.0 {
-                    pht.column_mut(k).axpy(h, &self.cov.column(j), 1.0);
-                }
+        for (k, row) in jac.iter().enumerate() {
+            for &(j, h) in row.iter().filter(|(_, h)| *h != 0.0) {
+                pht.column_mut(k).axpy(h, &self.cov.column(j), 1.0);
             }
         }
-        for k in 0..M {
-            for j in 0..DIM {
-                let h = jac[(k, j)];
-                if h != 0.0 {
-                    for l in 0..M {
-                        s[(k, l)] += h * pht[(j, l)];
-                    }
+        let mut s = *noise;
+        for (k, row) in jac.iter().enumerate() {
+            for &(j, h) in row.iter().filter(|(_, h)| *h != 0.0) {
+                for l in 0..M {
+                    s[(k, l)] += h * pht[(j, l)];
                 }
             }
         }
         let chol = s
             .cholesky()
             .ok_or(EstimatorError::SingularInnovation { what })?;
-        // K = P Hᵀ S⁻¹  ⇔  S Kᵀ = H P.
-        let kt = chol.solve(&pht.transpose());
-        let delta = kt.transpose() * residual;
-        for k in 0..M {
-            self.cov
-                .ger(-1.0, &kt.row(k).transpose(), &pht.column(k), 1.0);
+        let l = chol.l_dirty();
+        // Wᵀ = L⁻¹ H P and z = L⁻¹ r (forward substitutions; L is invertible).
+        let mut wt = pht.transpose();
+        let mut z = *residual;
+        if !(l.solve_lower_triangular_mut(&mut wt) && l.solve_lower_triangular_mut(&mut z)) {
+            return Err(EstimatorError::SingularInnovation { what });
         }
-        symmetrize(&mut self.cov);
+        let w = wt.transpose();
+        let delta = w * z;
+        // Upper triangle, column by column, then mirrored.
+        let (cov, w) = (self.cov.as_mut_slice(), w.as_slice());
+        for (j, col) in cov.chunks_exact_mut(DIM).enumerate() {
+            let a: [f64; M] = std::array::from_fn(|k| w[k * DIM + j]);
+            let wk: [&[f64]; M] = std::array::from_fn(|k| &w[k * DIM..k * DIM + j + 1]);
+            for (i, y) in col[..=j].iter_mut().enumerate() {
+                for k in 0..M {
+                    *y -= a[k] * wk[k][i];
+                }
+            }
+        }
+        mirror_upper(&mut self.cov);
         self.apply(&delta);
         Ok(())
     }
@@ -525,7 +562,7 @@ impl InvariantEkf {
     fn apply(&mut self, delta: &SVector<f64, DIM>) {
         let phi = delta.fixed_rows::<3>(PHI).into_owned();
         let (r, jl) = so3_exp_and_jacobian(&phi);
-        self.rot = orthonormalize_near(&(r * self.rot), &self.rot);
+        self.rot = renormalize(&(r * self.rot));
         self.vel = r * self.vel + jl * delta.fixed_rows::<3>(VEL);
         self.pos = r * self.pos + jl * delta.fixed_rows::<3>(POS);
         for (foot, &row) in FOOT.iter().enumerate() {
@@ -543,12 +580,31 @@ impl InvariantEkf {
     }
 }
 
-fn symmetrize(p: &mut Covariance) {
-    for r in 0..DIM {
-        for c in (r + 1)..DIM {
-            let v = 0.5 * (p[(r, c)] + p[(c, r)]);
-            p[(r, c)] = v;
-            p[(c, r)] = v;
+/// The first `j + 1` entries of column `j` (mutable) and of columns `c`, `c + 1`, `c + 2` (`j` not among
+/// them) of a column-major `DIM × DIM` storage.
+#[allow(clippy::type_complexity)]
+fn column_and_sources(
+    data: &mut [f64],
+    j: usize,
+    c: usize,
+) -> (&mut [f64], &[f64], &[f64], &[f64]) {
+    let n = j + 1;
+    let (dst, src, offset) = if c > j {
+        let (a, b) = data.split_at_mut(c * DIM);
+        (&mut a[j * DIM..j * DIM + n], &*b, 0)
+    } else {
+        let (a, b) = data.split_at_mut(j * DIM);
+        (&mut b[..n], &*a, c * DIM)
+    };
+    let x = |l: usize| &src[offset + l * DIM..offset + l * DIM + n];
+    (dst, x(0), x(1), x(2))
+}
+
+/// Copies the upper triangle of `p` onto its lower one.
+fn mirror_upper(p: &mut Covariance) {
+    for c in 1..DIM {
+        for r in 0..c {
+            p[(c, r)] = p[(r, c)];
         }
     }
 }
@@ -556,6 +612,147 @@ fn symmetrize(p: &mut Covariance) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn random_vec(rng: &mut ChaCha8Rng, scale: f64) -> Vector3<f64> {
+        Vector3::from_fn(|_, _| rng.random_range(-scale..scale))
+    }
+
+    fn random_rot(rng: &mut ChaCha8Rng) -> Matrix3<f64> {
+        so3_exp_and_jacobian(&random_vec(rng, 2.0)).0
+    }
+
+    /// A filter at a random state with a random (symmetric positive definite) covariance.
+    fn random_filter(rng: &mut ChaCha8Rng) -> InvariantEkf {
+        let mut ekf = InvariantEkf::new(&EkfConfig::default(), Vector3::new(0.0, 0.0, -9.81));
+        ekf.rot = random_rot(rng);
+        ekf.vel = random_vec(rng, 1.0);
+        ekf.pos = random_vec(rng, 3.0);
+        ekf.feet = [random_vec(rng, 3.0), random_vec(rng, 3.0)];
+        ekf.foot_rot = [random_rot(rng), random_rot(rng)];
+        let a = Covariance::from_fn(|_, _| rng.random_range(-0.1..0.1));
+        ekf.cov = a * a.transpose() + Covariance::identity() * 1e-3;
+        ekf
+    }
+
+    fn assert_symmetric(p: &Covariance) {
+        assert_eq!(*p, p.transpose(), "not exactly symmetric");
+    }
+
+    /// `P⁻ = Φ (P + G Q_c Gᵀ dt) Φᵀ` with the dense `Φ` and the dense noise input `G` (27×24: gyroscope,
+    /// accelerometer, the feet's linear and angular velocity noise, the bias random walks).
+    #[test]
+    fn the_structured_propagation_equals_the_dense_textbook_form() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for stance in [[true, true], [true, false], [false, false]] {
+            let mut ekf = random_filter(&mut rng);
+            let imu_r_sole = [random_rot(&mut rng), random_rot(&mut rng)];
+            let dt = 5e-4;
+            let mut g = SMatrix::<f64, DIM, 24>::zeros();
+            let mut qc = SMatrix::<f64, 24, 24>::zeros();
+            let r = ekf.rot;
+            let mut put = |row: usize, col: usize, b: Matrix3<f64>, var: &Matrix3<f64>| {
+                g.fixed_view_mut::<3, 3>(row, col).copy_from(&b);
+                qc.fixed_view_mut::<3, 3>(col, col).copy_from(var);
+            };
+            put(PHI, 0, r, &ekf.gyro_var);
+            put(VEL, 0, skew(&ekf.vel) * r, &ekf.gyro_var);
+            put(POS, 0, skew(&ekf.pos) * r, &ekf.gyro_var);
+            put(VEL, 3, r, &ekf.acc_var);
+            put(BG, 18, Matrix3::identity(), &ekf.gyro_bias_var);
+            put(BA, 21, Matrix3::identity(), &ekf.acc_bias_var);
+            for foot in 0..2 {
+                put(FOOT[foot], 0, skew(&ekf.feet[foot]) * r, &ekf.gyro_var);
+                if stance[foot] {
+                    put(
+                        FOOT[foot],
+                        6 + 3 * foot,
+                        r * imu_r_sole[foot],
+                        &ekf.foot_var,
+                    );
+                    put(
+                        FOOT_ROT[foot],
+                        12 + 3 * foot,
+                        ekf.foot_rot[foot],
+                        &ekf.foot_rot_var,
+                    );
+                }
+            }
+            let phi = ekf.transition(dt);
+            let expected = phi * (ekf.cov + g * qc * g.transpose() * dt) * phi.transpose();
+            ekf.propagate_covariance(dt, stance, &imu_r_sole);
+            assert!((ekf.cov - expected).amax() < 1e-14, "{stance:?}");
+            assert_symmetric(&ekf.cov);
+        }
+    }
+
+    /// `K = P Hᵀ (H P Hᵀ + N)⁻¹`, `δ = K r`, `P ← P − K H P` with dense matrices, against [`InvariantEkf::correct`]
+    /// on the foot-kinematics (4 and 6 rows) and flat-ground (1 row) Jacobians.
+    #[test]
+    fn the_factored_correction_equals_the_dense_textbook_form() {
+        fn check<const M: usize>(rng: &mut ChaCha8Rng, jac: [[(usize, f64); 3]; M]) {
+            let mut ekf = random_filter(rng);
+            let residual = SVector::<f64, M>::from_fn(|_, _| rng.random_range(-0.01..0.01));
+            let noise = SMatrix::<f64, M, M>::from_diagonal(&SVector::from_fn(|_, _| {
+                rng.random_range(1e-6..1e-4)
+            }));
+            let mut h = SMatrix::<f64, M, DIM>::zeros();
+            for (k, row) in jac.iter().enumerate() {
+                for &(j, v) in row {
+                    h[(k, j)] += v;
+                }
+            }
+            let p = ekf.cov;
+            let s = h * p * h.transpose() + noise;
+            let k = p * h.transpose() * s.try_inverse().expect("S invertible");
+            let p_dense = p - k * h * p;
+            let mut dense = ekf.clone();
+            dense.apply(&(k * residual));
+            ekf.correct(&jac, &residual, &noise, "test")
+                .expect("correct");
+            assert!((ekf.cov - p_dense).amax() < 1e-14, "M = {M}");
+            assert_symmetric(&ekf.cov);
+            let (a, b) = (ekf.state(), dense.state());
+            assert!((a.rotation - b.rotation).amax() < 1e-14);
+            assert!((a.position - b.position).amax() < 1e-14);
+            assert!((a.feet[1] - b.feet[1]).amax() < 1e-14);
+            assert!((a.foot_rotations[0] - b.foot_rotations[0]).amax() < 1e-14);
+            assert!((a.gyro_bias - b.gyro_bias).amax() < 1e-14);
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let pos_row = |k: usize| [(POS + k, -1.0), (FOOT[1] + k, 1.0), (0, 0.0)];
+        let rot_row = |k: usize| [(PHI + k, -1.0), (FOOT_ROT[1] + k, 1.0), (0, 0.0)];
+        check(&mut rng, [pos_row(0), pos_row(1), pos_row(2), rot_row(2)]);
+        check(
+            &mut rng,
+            [0, 1, 2, 3, 4, 5].map(|k| if k < 3 { pos_row(k) } else { rot_row(k - 3) }),
+        );
+        check(
+            &mut rng,
+            [[(PHI, 0.3), (PHI + 1, -1.2), (FOOT[0] + 2, 1.0)]],
+        );
+    }
+
+    #[test]
+    fn renormalize_gives_the_nearest_rotation() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..100 {
+            let r = random_rot(&mut rng);
+            // A product of rotations drifts by a few ulps; a perturbation of 1e-12 is far beyond. The two
+            // agree to a few ulps (rounding of two different computations).
+            let perturbed = r + Matrix3::from_fn(|_, _| rng.random_range(-1e-12..1e-12));
+            let nearest = orthonormalize(&perturbed);
+            let fast = renormalize(&perturbed);
+            assert!(
+                (fast - nearest).amax() < 2e-15,
+                "{}",
+                (fast - nearest).amax()
+            );
+            assert!((fast.tr_mul(&fast) - Matrix3::identity()).amax() < 1e-15);
+        }
+    }
 
     #[test]
     fn the_block_sandwich_equals_the_dense_product() {
@@ -570,7 +767,10 @@ mod tests {
         let (blocks, n) = ekf.transition_blocks(dt);
         let phi = ekf.transition(dt);
         let dense = phi * p * phi.transpose();
-        assert!((InvariantEkf::sandwich(&blocks[..n], &p) - dense).amax() < 1e-12);
+        let mut sandwich = p;
+        InvariantEkf::sandwich(&blocks[..n], &mut sandwich);
+        assert!((sandwich - dense).amax() < 1e-12);
+        assert_symmetric(&sandwich);
     }
 
     #[test]

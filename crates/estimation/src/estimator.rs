@@ -10,7 +10,7 @@ use stride_block::Block;
 use stride_model::{ExternalWrench, FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 
 use crate::config::EstimatorConfig;
-use crate::ekf::InvariantEkf;
+use crate::ekf::{EkfState, InvariantEkf};
 use crate::error::{check_positive, EstimatorError, Result};
 use crate::io::{EstimatorInput, EstimatorOutput};
 use crate::schmitt::SchmittTrigger;
@@ -18,7 +18,9 @@ use crate::schmitt::SchmittTrigger;
 /// The estimation layer.
 ///
 /// One tick ([`Block::step`]):
-/// 1. forward kinematics from the encoders: each sole's position and orientation in the IMU frame, `imu_H_base`;
+/// 1. forward kinematics from the encoders: each sole's position and orientation in the IMU frame, `imu_H_base`
+///    (one pass per step when the IMU frame is on the base link, the robot placed at the predicted mean;
+///    two otherwise: relative to the base, then at the predicted state);
 /// 2. EKF propagation with the raw gyroscope and accelerometer ([`InvariantEkf::propagate`]; the IMU's
 ///    on-board orientation is not used);
 /// 3. the predicted robot state (base pose and mixed twist from the propagated EKF, joints as measured)
@@ -55,6 +57,8 @@ pub struct Estimator {
     soles: [FrameId; 2],
     imu: FrameId,
     base: FrameId,
+    /// `imu_H_base` when the IMU frame is on the base link (constant; one kinematics pass per step).
+    imu_on_base: Option<Isometry3<f64>>,
     foot_sensors: [usize; 2],
     /// For each sensor, which soles lie on its child side.
     sensor_feet: Vec<[bool; 2]>,
@@ -109,6 +113,9 @@ impl Estimator {
         let base = frame("root link", model.root_link())?;
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_representation(VelocityRepresentation::Mixed);
+        // At the zero state (base at the identity) as in `relative_kinematics`, so bit for bit the same.
+        let imu_on_base = (model.frames()[imu.index()].link == model.frames()[base.index()].link)
+            .then(|| kd.relative_transform(imu, base));
         let n_ft = model.ft_sensors().len();
         let mut sensor_feet = vec![[false; 2]; n_ft];
         let mut map = Matrix6::zeros();
@@ -168,6 +175,7 @@ impl Estimator {
             soles,
             imu,
             base,
+            imu_on_base,
             foot_sensors,
             sensor_feet,
             wrench_maps: [Matrix6::zeros(); 2],
@@ -332,13 +340,14 @@ impl Estimator {
         })
     }
 
-    /// Base pose, mixed twist and linear acceleration from the EKF's IMU state (steps 3 and 9).
+    /// Base pose, mixed twist and linear acceleration from the EKF's IMU state `s` (steps 3 and 9), with
+    /// `imu_H_base` and the IMU's velocity due to the joints from `kin`.
     fn base_from_imu(
         &self,
+        s: &EkfState,
         kin: &RelativeKinematics,
         input: &EstimatorInput,
     ) -> (Isometry3<f64>, Vector6<f64>, Vector3<f64>) {
-        let s = self.ekf.state();
         let world_h_imu = Isometry3::from_parts(
             Translation3::from(s.position),
             UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(s.rotation)),
@@ -346,11 +355,13 @@ impl Estimator {
         let world_h_base = world_h_imu * kin.imu_h_base;
         let r_base: Matrix3<f64> = *world_h_base.rotation.to_rotation_matrix().matrix();
         let rel = kin.imu_velocity_from_joints;
-        let omega_imu = self.ekf.angular_velocity_world(&input.imu.angular_velocity);
+        // ω = R (ω̃ − b_g), a = R (ã − b_a) + g ([`InvariantEkf::angular_velocity_world`] at state `s`).
+        let omega_imu = s.rotation * (input.imu.angular_velocity - s.gyro_bias);
         let omega_base = omega_imu - r_base * rel.fixed_rows::<3>(3);
         let lever = s.position - world_h_base.translation.vector;
         let v_base = s.velocity - r_base * rel.fixed_rows::<3>(0) - omega_base.cross(&lever);
-        let a_imu = self.ekf.acceleration_world(&input.imu.proper_acceleration);
+        let a_imu = s.rotation * (input.imu.proper_acceleration - s.accelerometer_bias)
+            + self.model.gravity();
         let a_base = a_imu - omega_base.cross(&omega_base.cross(&lever));
         let mut twist = Vector6::zeros();
         twist.fixed_rows_mut::<3>(0).copy_from(&v_base);
@@ -358,18 +369,73 @@ impl Estimator {
         (world_h_base, twist, a_base)
     }
 
-    /// Steps 3–4: the predicted readings and the foot wrenches (world orientation, about the soles).
-    fn foot_wrenches(
+    /// Steps 1–3: kinematics, EKF propagation, and the robot placed at the predicted state (`self.kd`,
+    /// with `self.nu_dot` its acceleration). Returns the kinematics and the soles' orientations in the IMU
+    /// frame.
+    ///
+    /// With the IMU frame on the base link, one kinematics pass: `imu_H_base` is constant and the joints do
+    /// not move the IMU relative to the base, so the base pose and twist follow from the predicted mean
+    /// ([`InvariantEkf::predicted_state`], the state [`InvariantEkf::propagate`] then reaches bit for bit),
+    /// and the soles relative to the IMU are read from the placed robot (the same to rounding as from a pass
+    /// with the base at the identity). Otherwise a first pass relative to the base gives them.
+    fn predict(
         &mut self,
+        input: &EstimatorInput,
+        dt: f64,
+    ) -> Result<(RelativeKinematics, [Matrix3<f64>; 2])> {
+        let imu = &input.imu;
+        let (gyro, acc) = (&imu.angular_velocity, &imu.proper_acceleration);
+        let kin = match self.imu_on_base {
+            Some(imu_h_base) => {
+                let mut kin = RelativeKinematics {
+                    imu_h_sole: [Isometry3::identity(); 2],
+                    imu_h_base,
+                    imu_velocity_from_joints: Vector6::zeros(),
+                };
+                let predicted = self.ekf.predicted_state(gyro, acc, dt);
+                self.place_robot(&predicted, &kin, input)?;
+                kin.imu_h_sole = self.soles.map(|s| self.kd.relative_transform(self.imu, s));
+                kin
+            }
+            None => self.relative_kinematics(input)?,
+        };
+        let imu_r_sole = kin
+            .imu_h_sole
+            .map(|h| *h.rotation.to_rotation_matrix().matrix());
+        self.ekf
+            .propagate(gyro, acc, dt, self.output.contacts, &imu_r_sole);
+        if self.imu_on_base.is_none() {
+            self.place_robot(&self.ekf.state(), &kin, input)?;
+        }
+        Ok((kin, imu_r_sole))
+    }
+
+    /// Step 3: the robot at EKF state `s` (base pose and mixed twist, joints as measured) in `self.kd`, and
+    /// its acceleration in `self.nu_dot` (base linear acceleration only).
+    fn place_robot(
+        &mut self,
+        s: &EkfState,
         kin: &RelativeKinematics,
         input: &EstimatorInput,
-    ) -> Result<[Vector6<f64>; 2]> {
-        let (pose, twist, acc) = self.base_from_imu(kin, input);
+    ) -> Result<()> {
+        let (pose, twist, acc) = self.base_from_imu(s, kin, input);
         self.scratch.base_pose = pose;
         self.scratch.base_velocity = twist;
+        self.scratch
+            .joint_positions
+            .copy_from(&input.joint_positions);
+        self.scratch
+            .joint_velocities
+            .copy_from(&input.joint_velocities);
         self.kd.set_state(&self.scratch)?;
         self.nu_dot.fill(0.0);
         self.nu_dot.fixed_rows_mut::<3>(0).copy_from(&acc);
+        Ok(())
+    }
+
+    /// Step 4: the predicted readings and the foot wrenches (world orientation, about the soles), with the
+    /// robot placed by [`Self::predict`].
+    fn foot_wrenches(&mut self, input: &EstimatorInput) -> Result<[Vector6<f64>; 2]> {
         self.kd
             .ft_sensor_wrenches(&self.nu_dot, &[], &mut self.predicted)?;
         let mut wrenches = [Vector6::zeros(); 2];
@@ -481,19 +547,9 @@ impl Block for Estimator {
 
     fn step(&mut self, input: &EstimatorInput) -> Result<&EstimatorOutput> {
         let dt = self.check_input(input)?;
-        let kin = self.relative_kinematics(input)?;
-        let imu_r_sole = kin
-            .imu_h_sole
-            .map(|h| *h.rotation.to_rotation_matrix().matrix());
+        let (kin, imu_r_sole) = self.predict(input, dt)?;
         let h = kin.imu_h_sole.map(|h| h.translation.vector);
-        self.ekf.propagate(
-            &input.imu.angular_velocity,
-            &input.imu.proper_acceleration,
-            dt,
-            self.output.contacts,
-            &imu_r_sole,
-        );
-        let wrenches = self.foot_wrenches(&kin, input)?;
+        let wrenches = self.foot_wrenches(input)?;
         for foot in 0..2 {
             let contact = self.triggers[foot].update(wrenches[foot].z, input.time_ns);
             if contact {
@@ -514,7 +570,7 @@ impl Block for Estimator {
         }
         self.update_offsets(input, &wrenches, dt);
         self.joint_torques(&wrenches)?;
-        let (pose, twist, _) = self.base_from_imu(&kin, input);
+        let (pose, twist, _) = self.base_from_imu(&self.ekf.state(), &kin, input);
         let out = &mut self.output;
         out.state.base_pose = pose;
         out.state.base_velocity = twist;
