@@ -2,14 +2,14 @@
 //! point (normal spring-damper that never pulls, Coulomb friction with a stick-slip tangential spring), with
 //! its linearisation for the implicit step.
 
-use nalgebra::{DMatrix, Isometry3, Matrix3, Matrix6, Point3, Rotation3, Vector3, Vector6};
+use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Matrix6, Point3, Rotation3, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 use stride_model::spatial::skew;
 use stride_model::{FrameId, Model};
 
 use crate::config::{ContactConfig, ContactSurfaceConfig, GroundConfig};
 use crate::error::{find_frame, SimError};
-use crate::linalg::{ang, join, lin};
+use crate::linalg::{ang, join, lin, TreeCholesky, TreeMatrix};
 
 /// The ground: the plane through `origin` with unit `normal` (pointing out of the ground).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,6 +59,17 @@ pub enum ContactMode {
     Sticking,
     /// In contact and slipping: tangential force on the friction cone.
     Sliding,
+}
+
+/// What a solve of the implicit step changed in a contact point's law, ordered by reach.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) enum Change {
+    /// Nothing: the step's linearisation holds.
+    None,
+    /// The force at the start of the step (a sliding point's normal-force estimate): the right-hand side.
+    Force,
+    /// The mode (separated, sticking, sliding): the stiffness and damping too.
+    Mode,
 }
 
 /// Per-point contact parameters (already multiplied by the point's share of the surface area).
@@ -171,6 +182,20 @@ pub(crate) struct Surface {
     pub(crate) columns: Vec<usize>,
     /// `G₆ J` over `columns` (6 × nv scratch of the implicit assembly).
     pub(crate) scratch: DMatrix<f64>,
+    /// Branch of the tree factorisation that holds the surface's joints (`None`: only the base moves it).
+    pub(crate) branch: Option<usize>,
+    /// What of the linearisation must be redone: all of it at the start of a step, then what the points'
+    /// changes in the last solve reach.
+    pub(crate) stale: Change,
+    /// Some point touches: the terms below apply.
+    active: bool,
+    /// The linearised contact stiffness `K₆` (about the surface origin), N/m, N·m/rad.
+    stiffness: Matrix6<f64>,
+    /// The surface's terms of the implicit system from the last linearisation: `Jᵀ (W₀ − dt K₆ V)` for each
+    /// of `columns`, and the entries of `Jᵀ G₆ J` in the tree pattern as (place in [`TreeMatrix::values`],
+    /// value).
+    rhs_terms: Vec<f64>,
+    matrix_terms: Vec<(usize, f64)>,
     /// `J ν̇` over `columns`, m/s², rad/s².
     pub(crate) acceleration: Vector6<f64>,
     /// Contact wrench of the explicit step, about the surface origin, N, N·m.
@@ -198,6 +223,12 @@ impl Surface {
             jacobian: DMatrix::zeros(6, nv),
             columns: Vec::with_capacity(nv),
             scratch: DMatrix::zeros(6, nv),
+            branch: None,
+            stale: Change::Mode,
+            active: false,
+            stiffness: Matrix6::zeros(),
+            rhs_terms: Vec::with_capacity(nv),
+            matrix_terms: Vec::with_capacity(nv * (nv + 1) / 2),
             acceleration: Vector6::zeros(),
             wrench: Vector6::zeros(),
         }
@@ -220,6 +251,67 @@ impl Surface {
             {
                 self.columns.push(c);
             }
+        }
+    }
+
+    /// Keeps the implicit step's matrix terms of the linearised contact `(K₆, D₆)` ([`surface_matrices`];
+    /// `None`: no point touches): `Jᵀ G₆ J` with `G₆ = dt² K₆ + dt D₆` over the pattern of `tree` (the
+    /// columns lie on one root path, increasing). Follow with [`Surface::set_rhs`].
+    pub(crate) fn set_matrices(
+        &mut self,
+        matrices: Option<(Matrix6<f64>, Matrix6<f64>)>,
+        dt: f64,
+        tree: &TreeCholesky,
+    ) {
+        self.active = matrices.is_some();
+        let Some((k6, d6)) = matrices else {
+            return;
+        };
+        self.stiffness = k6;
+        let g6 = k6 * (dt * dt) + d6 * dt;
+        self.matrix_terms.clear();
+        for &c in &self.columns {
+            let col = self.jacobian.fixed_view::<6, 1>(0, c);
+            self.scratch
+                .fixed_view_mut::<6, 1>(0, c)
+                .copy_from(&(g6 * col));
+        }
+        for (n, &c) in self.columns.iter().enumerate() {
+            let gc = self.scratch.fixed_view::<6, 1>(0, c);
+            let entry = |r: usize| self.jacobian.fixed_view::<6, 1>(0, r).dot(&gc);
+            self.matrix_terms
+                .push((tree.diagonal_index(c), entry(c)));
+            for &r in &self.columns[n + 1..] {
+                self.matrix_terms.push((tree.index(c, r), entry(r)));
+            }
+        }
+    }
+
+    /// Keeps the right-hand side terms `Jᵀ (W₀ − dt K₆ V)` of the start wrench `W₀` ([`start_wrench`]) with the
+    /// stiffness of the last [`Surface::set_matrices`].
+    pub(crate) fn set_rhs(&mut self, w0: &Vector6<f64>, dt: f64) {
+        if !self.active {
+            return;
+        }
+        let w = w0 - self.stiffness * self.twist * dt;
+        self.rhs_terms.clear();
+        for &c in &self.columns {
+            self.rhs_terms
+                .push(self.jacobian.fixed_view::<6, 1>(0, c).dot(&w));
+        }
+    }
+
+    /// Adds the terms of the last [`Surface::set_matrices`] and [`Surface::set_rhs`] to the implicit system and its right-hand side.
+    pub(crate) fn add_to(&self, system: &mut TreeMatrix, rhs: &mut DVector<f64>) {
+        if !self.active {
+            return;
+        }
+        for (&c, r) in self.columns.iter().zip(&self.rhs_terms) {
+            rhs[c] += r;
+        }
+        let values = system.values_mut();
+        for &(i, v) in &self.matrix_terms {
+            values[i] += v;
         }
     }
 }
@@ -400,17 +492,17 @@ impl Point {
     /// After an implicit solve: the end-of-step force `f = f₀ − K v⁺ dt − D a dt` (`a` the point's acceleration
     /// from the surface's `J ν̇`), and the mode the solution implies: a pulling point separates, a sticking
     /// point outside the friction cone slides, a sliding point whose slip reverses sticks, a sliding point
-    /// whose normal force moved updates its estimate. Returns whether the point's mode or estimate changed.
+    /// whose normal force moved updates its estimate. Returns what changed.
     pub(crate) fn settle(
         &mut self,
         surface_acceleration: &Vector6<f64>,
         ground: &GroundPlane,
         dt: f64,
-    ) -> bool {
+    ) -> Change {
         if self.mode == ContactMode::Separated {
             self.force = Vector3::zeros();
             self.velocity_end = self.velocity;
-            return false;
+            return Change::None;
         }
         let n = ground.normal;
         let acc = lin(surface_acceleration) + ang(surface_acceleration).cross(&self.arm);
@@ -423,37 +515,37 @@ impl Point {
         if fn_end < 0.0 {
             self.mode = ContactMode::Separated;
             self.force = Vector3::zeros();
-            return true;
+            return Change::Mode;
         }
         match self.mode {
             ContactMode::Sticking => self.leave_cone(&ground.tangential(&f), fn_end),
             ContactMode::Sliding => self.stop_or_track_slip(ground, &v_end, fn_end),
-            ContactMode::Separated => false,
+            ContactMode::Separated => Change::None,
         }
     }
 
     /// A sticking point whose tangential force `ft` exceeds the cone `μ f_n` starts sliding along `ft`.
-    fn leave_cone(&mut self, ft: &Vector3<f64>, fn_end: f64) -> bool {
+    fn leave_cone(&mut self, ft: &Vector3<f64>, fn_end: f64) -> Change {
         let ftn = ft.norm();
         if ftn > self.law.friction * fn_end * (1.0 + 1e-12) && ftn > 0.0 {
             self.mode = ContactMode::Sliding;
             self.slide_direction = ft / ftn;
             self.normal_force_estimate = fn_end;
-            true
+            Change::Mode
         } else {
-            false
+            Change::None
         }
     }
 
     /// A sliding point whose end velocity runs along the friction force (the slip stopped within the step)
     /// sticks again with its spring on the cone; otherwise its normal force estimate follows `fn_end`
-    /// (to 1e-6 relative).
+    /// (to 1e-6 relative), which changes only its force at the start of the step.
     fn stop_or_track_slip(
         &mut self,
         ground: &GroundPlane,
         v_end: &Vector3<f64>,
         fn_end: f64,
-    ) -> bool {
+    ) -> Change {
         let mu = self.law.friction;
         let vt = ground.tangential(v_end);
         if vt.dot(&self.slide_direction) > 1e-9 {
@@ -463,14 +555,14 @@ impl Point {
                     + self.slide_direction
                         * (mu * self.normal_force_estimate / self.law.tangential_stiffness),
             );
-            true
+            Change::Mode
         } else if (fn_end - self.normal_force_estimate).abs()
             > 1e-6 * (1.0 + self.normal_force_estimate)
         {
             self.normal_force_estimate = fn_end;
-            true
+            Change::Force
         } else {
-            false
+            Change::None
         }
     }
 
@@ -518,17 +610,15 @@ pub(crate) fn build_surfaces(
     Ok((surfaces, points))
 }
 
-/// The linearised contact of one surface for the implicit step: `(K₆, D₆, W₀)` with `K₆ = Σ Pᵢᵀ Kᵢ Pᵢ`,
-/// `D₆ = Σ Pᵢᵀ Dᵢ Pᵢ`, `Pᵢ = [I, −(rᵢ×)]` (surface twist → point velocity) and `W₀ = Σ [f₀ᵢ; rᵢ × f₀ᵢ]` the
-/// wrench at the start of the step about the surface origin. `None` when every point is separated. Stores each
-/// point's `f₀`.
-pub(crate) fn linearize_surface(
-    points: &mut [Point],
+/// The linearised contact stiffness and damping of one surface for the implicit step: `(K₆, D₆)` with
+/// `K₆ = Σ Pᵢᵀ Kᵢ Pᵢ`, `D₆ = Σ Pᵢᵀ Dᵢ Pᵢ`, `Pᵢ = [I, −(rᵢ×)]` (surface twist → point velocity), over the points
+/// in contact in their current modes. `None` when every point is separated.
+pub(crate) fn surface_matrices(
+    points: &[Point],
     ground: &GroundPlane,
-) -> Option<(Matrix6<f64>, Matrix6<f64>, Vector6<f64>)> {
+) -> Option<(Matrix6<f64>, Matrix6<f64>)> {
     let mut k6 = Matrix6::zeros();
     let mut d6 = Matrix6::zeros();
-    let mut w0 = Vector6::zeros();
     let mut active = false;
     for p in points {
         if p.mode == ContactMode::Separated {
@@ -536,14 +626,26 @@ pub(crate) fn linearize_surface(
         }
         active = true;
         let (k, d) = p.law.matrices(p.mode, &ground.normal);
-        let f0 = p.start_force(ground);
         let r = skew(&p.arm);
         add_point_matrix(&mut k6, &k, &r);
         add_point_matrix(&mut d6, &d, &r);
+    }
+    active.then_some((k6, d6))
+}
+
+/// The contact wrench of one surface at the start of the step about its origin, `W₀ = Σ [f₀ᵢ; rᵢ × f₀ᵢ]` over
+/// the points in contact in their current modes (N, N·m). Stores each point's `f₀`.
+pub(crate) fn start_wrench(points: &mut [Point], ground: &GroundPlane) -> Vector6<f64> {
+    let mut w0 = Vector6::zeros();
+    for p in points {
+        if p.mode == ContactMode::Separated {
+            continue;
+        }
+        let f0 = p.start_force(ground);
         let t = p.arm.cross(&f0);
         w0 += join(&f0, &t);
     }
-    active.then_some((k6, d6, w0))
+    w0
 }
 
 /// `m6 += Pᵀ K P` with `P = [I, −R]`, `R = (r×)`: `[K, −K R; R K, −R K R]`.
