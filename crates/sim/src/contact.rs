@@ -2,7 +2,9 @@
 //! point (normal spring-damper that never pulls, Coulomb friction with a stick-slip tangential spring), with
 //! its linearisation for the implicit step.
 
-use nalgebra::{DMatrix, DVector, Isometry3, Matrix3, Matrix6, Point3, Rotation3, Vector3, Vector6};
+use nalgebra::{
+    DMatrix, DVector, Isometry3, Matrix3, Matrix6, Point3, Rotation3, Vector3, Vector6,
+};
 use serde::{Deserialize, Serialize};
 use stride_model::spatial::skew;
 use stride_model::{FrameId, Model};
@@ -180,8 +182,8 @@ pub(crate) struct Surface {
     pub(crate) jacobian: DMatrix<f64>,
     /// Indices of the non-zero columns of `jacobian`.
     pub(crate) columns: Vec<usize>,
-    /// `G₆ J` over `columns` (6 × nv scratch of the implicit assembly).
-    pub(crate) scratch: DMatrix<f64>,
+    /// The columns of `J` and of `G₆ J` over `columns` (scratch of the implicit assembly).
+    column_scratch: Vec<(Vector6<f64>, Vector6<f64>)>,
     /// Branch of the tree factorisation that holds the surface's joints (`None`: only the base moves it).
     pub(crate) branch: Option<usize>,
     /// What of the linearisation must be redone: all of it at the start of a step, then what the points'
@@ -222,7 +224,7 @@ impl Surface {
             ft_pose: Isometry3::identity(),
             jacobian: DMatrix::zeros(6, nv),
             columns: Vec::with_capacity(nv),
-            scratch: DMatrix::zeros(6, nv),
+            column_scratch: Vec::with_capacity(nv),
             branch: None,
             stale: Change::Mode,
             active: false,
@@ -269,20 +271,21 @@ impl Surface {
         };
         self.stiffness = k6;
         let g6 = k6 * (dt * dt) + d6 * dt;
-        self.matrix_terms.clear();
+        self.column_scratch.clear();
         for &c in &self.columns {
-            let col = self.jacobian.fixed_view::<6, 1>(0, c);
-            self.scratch
-                .fixed_view_mut::<6, 1>(0, c)
-                .copy_from(&(g6 * col));
+            let col: Vector6<f64> = self.jacobian.fixed_view::<6, 1>(0, c).into_owned();
+            self.column_scratch.push((col, g6 * col));
         }
+        self.matrix_terms.clear();
         for (n, &c) in self.columns.iter().enumerate() {
-            let gc = self.scratch.fixed_view::<6, 1>(0, c);
-            let entry = |r: usize| self.jacobian.fixed_view::<6, 1>(0, r).dot(&gc);
+            let gc = &self.column_scratch[n].1;
             self.matrix_terms
-                .push((tree.diagonal_index(c), entry(c)));
-            for &r in &self.columns[n + 1..] {
-                self.matrix_terms.push((tree.index(c, r), entry(r)));
+                .push((tree.diagonal_index(c), self.column_scratch[n].0.dot(gc)));
+            for (&r, (jr, _)) in self.columns[n + 1..]
+                .iter()
+                .zip(&self.column_scratch[n + 1..])
+            {
+                self.matrix_terms.push((tree.index(c, r), jr.dot(gc)));
             }
         }
     }
@@ -612,25 +615,91 @@ pub(crate) fn build_surfaces(
 
 /// The linearised contact stiffness and damping of one surface for the implicit step: `(K₆, D₆)` with
 /// `K₆ = Σ Pᵢᵀ Kᵢ Pᵢ`, `D₆ = Σ Pᵢᵀ Dᵢ Pᵢ`, `Pᵢ = [I, −(rᵢ×)]` (surface twist → point velocity), over the points
-/// in contact in their current modes. `None` when every point is separated.
+/// in contact in their current modes ([`PointLaw::matrices`]). `None` when every point is separated.
 pub(crate) fn surface_matrices(
     points: &[Point],
     ground: &GroundPlane,
 ) -> Option<(Matrix6<f64>, Matrix6<f64>)> {
-    let mut k6 = Matrix6::zeros();
-    let mut d6 = Matrix6::zeros();
+    let n = ground.normal;
+    let mut stiffness = PointSum::default();
+    let mut damping = PointSum::default();
     let mut active = false;
     for p in points {
-        if p.mode == ContactMode::Separated {
-            continue;
-        }
+        let law = &p.law;
+        // `K = α I + β n nᵀ` and the same for `D`, as in `PointLaw::matrices`.
+        let ((k_alpha, k_beta), (d_alpha, d_beta)) = match p.mode {
+            ContactMode::Separated => continue,
+            ContactMode::Sticking => (
+                (
+                    law.tangential_stiffness,
+                    law.normal_stiffness - law.tangential_stiffness,
+                ),
+                (
+                    law.tangential_damping,
+                    law.normal_damping - law.tangential_damping,
+                ),
+            ),
+            ContactMode::Sliding => ((0.0, law.normal_stiffness), (0.0, law.normal_damping)),
+        };
         active = true;
-        let (k, d) = p.law.matrices(p.mode, &ground.normal);
-        let r = skew(&p.arm);
-        add_point_matrix(&mut k6, &k, &r);
-        add_point_matrix(&mut d6, &d, &r);
+        let u = join(&n, &p.arm.cross(&n));
+        stiffness.add(k_alpha, k_beta, &p.arm, &u);
+        damping.add(d_alpha, d_beta, &p.arm, &u);
     }
-    active.then_some((k6, d6))
+    active.then(|| (stiffness.matrix(), damping.matrix()))
+}
+
+/// The sum `Σ Pᵀ (α I + β n nᵀ) P` over the points of a surface, `P = [I, −R]`, `R = (r×)`: each point adds
+/// `α [I, −R; R, −R²] + β u uᵀ` with `u = Pᵀ n = [n; r × n]` and `−R² = |r|² I − r rᵀ`, kept as the sums of
+/// `α`, `α r`, `α (|r|² I − r rᵀ)` and `β u uᵀ` (its upper triangle, row by row).
+#[derive(Default)]
+struct PointSum {
+    alpha: f64,
+    alpha_r: Vector3<f64>,
+    alpha_rr: Matrix3<f64>,
+    beta_uu: [f64; 21],
+}
+
+impl PointSum {
+    /// Adds a point at `r` (from the surface origin) with `α`, `β` and `u`.
+    fn add(&mut self, alpha: f64, beta: f64, r: &Vector3<f64>, u: &Vector6<f64>) {
+        if alpha != 0.0 {
+            self.alpha += alpha;
+            self.alpha_r += r * alpha;
+            self.alpha_rr += (Matrix3::identity() * r.norm_squared() - r * r.transpose()) * alpha;
+        }
+        let mut e = 0;
+        for i in 0..6 {
+            let bu = beta * u[i];
+            for j in i..6 {
+                self.beta_uu[e] += bu * u[j];
+                e += 1;
+            }
+        }
+    }
+
+    /// The 6×6 sum.
+    fn matrix(&self) -> Matrix6<f64> {
+        let mut m = Matrix6::zeros();
+        let mut e = 0;
+        for i in 0..6 {
+            for j in i..6 {
+                m[(i, j)] = self.beta_uu[e];
+                m[(j, i)] = self.beta_uu[e];
+                e += 1;
+            }
+        }
+        let r = skew(&self.alpha_r);
+        for i in 0..3 {
+            m[(i, i)] += self.alpha;
+            for j in 0..3 {
+                m[(i, j + 3)] -= r[(i, j)];
+                m[(i + 3, j)] += r[(i, j)];
+                m[(i + 3, j + 3)] += self.alpha_rr[(i, j)];
+            }
+        }
+        m
+    }
 }
 
 /// The contact wrench of one surface at the start of the step about its origin, `W₀ = Σ [f₀ᵢ; rᵢ × f₀ᵢ]` over
@@ -648,21 +717,6 @@ pub(crate) fn start_wrench(points: &mut [Point], ground: &GroundPlane) -> Vector
     w0
 }
 
-/// `m6 += Pᵀ K P` with `P = [I, −R]`, `R = (r×)`: `[K, −K R; R K, −R K R]`.
-fn add_point_matrix(m6: &mut Matrix6<f64>, k: &Matrix3<f64>, r: &Matrix3<f64>) {
-    let kr = k * r;
-    let rk = r * k;
-    let rkr = r * kr;
-    for i in 0..3 {
-        for j in 0..3 {
-            m6[(i, j)] += k[(i, j)];
-            m6[(i, j + 3)] -= kr[(i, j)];
-            m6[(i + 3, j)] += rk[(i, j)];
-            m6[(i + 3, j + 3)] -= rkr[(i, j)];
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -677,6 +731,58 @@ mod tests {
         let l = 0.2;
         let m: f64 = trapezoid_nodes(2001, l).map(|(x, w)| w * x * x).sum();
         assert!((m - l * l / 12.0).abs() < 1e-6 * l * l);
+    }
+
+    #[test]
+    fn surface_matrices_are_the_sum_of_the_point_matrices() {
+        let ground = GroundPlane::from_config(&GroundConfig {
+            height: 0.0,
+            inclination: [0.05, -0.1],
+        });
+        let law = PointLaw {
+            normal_stiffness: 3e5,
+            normal_damping: 2e3,
+            tangential_stiffness: 1e5,
+            tangential_damping: 5e2,
+            friction: 0.8,
+        };
+        let spec = PointSpec {
+            local: Vector3::zeros(),
+            weight: 1.0,
+            law,
+        };
+        let mut points = Vec::new();
+        for (k, mode) in [
+            ContactMode::Sticking,
+            ContactMode::Sliding,
+            ContactMode::Separated,
+            ContactMode::Sticking,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let mut p = Point::new(0, &spec);
+            p.arm = Vector3::new(0.1 * k as f64 - 0.12, 0.03 * k as f64, -0.02);
+            p.mode = mode;
+            points.push(p);
+        }
+        let (k6, d6) = surface_matrices(&points, &ground).expect("touching");
+        let (mut k_ref, mut d_ref) = (Matrix6::zeros(), Matrix6::zeros());
+        for p in &points {
+            let (k, d) = p.law.matrices(p.mode, &ground.normal);
+            let mut map = nalgebra::Matrix3x6::zeros();
+            map.fixed_view_mut::<3, 3>(0, 0)
+                .copy_from(&Matrix3::identity());
+            map.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-skew(&p.arm)));
+            k_ref += map.transpose() * k * map;
+            d_ref += map.transpose() * d * map;
+        }
+        assert!((k6 - k_ref).norm() < 1e-9 * k_ref.norm(), "{k6} vs {k_ref}");
+        assert!((d6 - d_ref).norm() < 1e-9 * d_ref.norm(), "{d6} vs {d_ref}");
+        for p in &mut points {
+            p.mode = ContactMode::Separated;
+        }
+        assert!(surface_matrices(&points, &ground).is_none());
     }
 
     #[test]

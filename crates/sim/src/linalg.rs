@@ -503,14 +503,25 @@ mod tests {
         assert_eq!(x, y);
         assert!((&changed * &x - &b).norm() < 1e-10);
         // A forest and a single chain factorise too (no trunk, no branch).
-        for parent in [vec![None, Some(0), None, Some(2)], vec![None, Some(0), Some(1)]] {
+        for parent in [
+            vec![None, Some(0), None, Some(2)],
+            vec![None, Some(0), Some(1)],
+        ] {
             let mut tree = TreeCholesky::new(parent.clone()).unwrap();
             let n = parent.len();
             let h = DMatrix::from_fn(n, n, |r, c| {
-                let related = r == c || parent[r] == Some(c) || parent[c] == Some(r)
+                let related = r == c
+                    || parent[r] == Some(c)
+                    || parent[c] == Some(r)
                     || (parent[r].and_then(|p| parent[p]) == Some(c))
                     || (parent[c].and_then(|p| parent[p]) == Some(r));
-                if r == c { 4.0 } else if related { 0.5 } else { 0.0 }
+                if r == c {
+                    4.0
+                } else if related {
+                    0.5
+                } else {
+                    0.0
+                }
             });
             let mut packed = tree.matrix();
             tree.gather(&h, &mut packed);

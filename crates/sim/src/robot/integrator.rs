@@ -67,7 +67,10 @@ impl SimRobot {
         for s in &mut self.surfaces {
             self.kd.frame_jacobian(s.frame, &mut s.jacobian)?;
             s.find_columns();
-            s.branch = s.columns.last().and_then(|c| self.factorization.branch_of(*c));
+            s.branch = s
+                .columns
+                .last()
+                .and_then(|c| self.factorization.branch_of(*c));
             s.stale = Change::Mode;
         }
         for p in &mut self.points {
@@ -152,7 +155,11 @@ impl SimRobot {
         for s in &mut self.surfaces {
             let points = &mut self.points[s.points()];
             if s.stale == Change::Mode {
-                s.set_matrices(surface_matrices(points, &self.ground), self.dt, &self.factorization);
+                s.set_matrices(
+                    surface_matrices(points, &self.ground),
+                    self.dt,
+                    &self.factorization,
+                );
                 if let Some(b) = s.branch {
                     self.changed_branches[b] = true;
                 }
