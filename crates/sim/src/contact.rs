@@ -2,14 +2,16 @@
 //! point (normal spring-damper that never pulls, Coulomb friction with a stick-slip tangential spring), with
 //! its linearisation for the implicit step.
 
-use nalgebra::{DMatrix, Isometry3, Matrix3, Matrix6, Point3, Rotation3, Vector3, Vector6};
+use nalgebra::{
+    DMatrix, DVector, Isometry3, Matrix3, Matrix6, Point3, Rotation3, Vector3, Vector6,
+};
 use serde::{Deserialize, Serialize};
 use stride_model::spatial::skew;
 use stride_model::{FrameId, Model};
 
 use crate::config::{ContactConfig, ContactSurfaceConfig, GroundConfig};
 use crate::error::{find_frame, SimError};
-use crate::linalg::{ang, join, lin};
+use crate::linalg::{ang, join, lin, TreeCholesky, TreeMatrix};
 
 /// The ground: the plane through `origin` with unit `normal` (pointing out of the ground).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,6 +61,17 @@ pub enum ContactMode {
     Sticking,
     /// In contact and slipping: tangential force on the friction cone.
     Sliding,
+}
+
+/// What a solve of the implicit step changed in a contact point's law, ordered by reach.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) enum Change {
+    /// Nothing: the step's linearisation holds.
+    None,
+    /// The force at the start of the step (a sliding point's normal-force estimate): the right-hand side.
+    Force,
+    /// The mode (separated, sticking, sliding): the stiffness and damping too.
+    Mode,
 }
 
 /// Per-point contact parameters (already multiplied by the point's share of the surface area).
@@ -169,8 +182,22 @@ pub(crate) struct Surface {
     pub(crate) jacobian: DMatrix<f64>,
     /// Indices of the non-zero columns of `jacobian`.
     pub(crate) columns: Vec<usize>,
-    /// `G₆ J` over `columns` (6 × nv scratch of the implicit assembly).
-    pub(crate) scratch: DMatrix<f64>,
+    /// The columns of `J` and of `G₆ J` over `columns` (scratch of the implicit assembly).
+    column_scratch: Vec<(Vector6<f64>, Vector6<f64>)>,
+    /// Branch of the tree factorisation that holds the surface's joints (`None`: only the base moves it).
+    pub(crate) branch: Option<usize>,
+    /// What of the linearisation must be redone: all of it at the start of a step, then what the points'
+    /// changes in the last solve reach.
+    pub(crate) stale: Change,
+    /// Some point touches: the terms below apply.
+    active: bool,
+    /// The linearised contact stiffness `K₆` (about the surface origin), N/m, N·m/rad.
+    stiffness: Matrix6<f64>,
+    /// The surface's terms of the implicit system from the last linearisation: `Jᵀ (W₀ − dt K₆ V)` for each
+    /// of `columns`, and the entries of `Jᵀ G₆ J` in the tree pattern as (place in [`TreeMatrix::values`],
+    /// value).
+    rhs_terms: Vec<f64>,
+    matrix_terms: Vec<(usize, f64)>,
     /// `J ν̇` over `columns`, m/s², rad/s².
     pub(crate) acceleration: Vector6<f64>,
     /// Contact wrench of the explicit step, about the surface origin, N, N·m.
@@ -197,7 +224,13 @@ impl Surface {
             ft_pose: Isometry3::identity(),
             jacobian: DMatrix::zeros(6, nv),
             columns: Vec::with_capacity(nv),
-            scratch: DMatrix::zeros(6, nv),
+            column_scratch: Vec::with_capacity(nv),
+            branch: None,
+            stale: Change::Mode,
+            active: false,
+            stiffness: Matrix6::zeros(),
+            rhs_terms: Vec::with_capacity(nv),
+            matrix_terms: Vec::with_capacity(nv * (nv + 1) / 2),
             acceleration: Vector6::zeros(),
             wrench: Vector6::zeros(),
         }
@@ -220,6 +253,68 @@ impl Surface {
             {
                 self.columns.push(c);
             }
+        }
+    }
+
+    /// Keeps the implicit step's matrix terms of the linearised contact `(K₆, D₆)` ([`surface_matrices`];
+    /// `None`: no point touches): `Jᵀ G₆ J` with `G₆ = dt² K₆ + dt D₆` over the pattern of `tree` (the
+    /// columns lie on one root path, increasing). Follow with [`Surface::set_rhs`].
+    pub(crate) fn set_matrices(
+        &mut self,
+        matrices: Option<(Matrix6<f64>, Matrix6<f64>)>,
+        dt: f64,
+        tree: &TreeCholesky,
+    ) {
+        self.active = matrices.is_some();
+        let Some((k6, d6)) = matrices else {
+            return;
+        };
+        self.stiffness = k6;
+        let g6 = k6 * (dt * dt) + d6 * dt;
+        self.column_scratch.clear();
+        for &c in &self.columns {
+            let col: Vector6<f64> = self.jacobian.fixed_view::<6, 1>(0, c).into_owned();
+            self.column_scratch.push((col, g6 * col));
+        }
+        self.matrix_terms.clear();
+        for (n, &c) in self.columns.iter().enumerate() {
+            let gc = &self.column_scratch[n].1;
+            self.matrix_terms
+                .push((tree.diagonal_index(c), self.column_scratch[n].0.dot(gc)));
+            for (&r, (jr, _)) in self.columns[n + 1..]
+                .iter()
+                .zip(&self.column_scratch[n + 1..])
+            {
+                self.matrix_terms.push((tree.index(c, r), jr.dot(gc)));
+            }
+        }
+    }
+
+    /// Keeps the right-hand side terms `Jᵀ (W₀ − dt K₆ V)` of the start wrench `W₀` ([`start_wrench`]) with the
+    /// stiffness of the last [`Surface::set_matrices`].
+    pub(crate) fn set_rhs(&mut self, w0: &Vector6<f64>, dt: f64) {
+        if !self.active {
+            return;
+        }
+        let w = w0 - self.stiffness * self.twist * dt;
+        self.rhs_terms.clear();
+        for &c in &self.columns {
+            self.rhs_terms
+                .push(self.jacobian.fixed_view::<6, 1>(0, c).dot(&w));
+        }
+    }
+
+    /// Adds the terms of the last [`Surface::set_matrices`] and [`Surface::set_rhs`] to the implicit system and its right-hand side.
+    pub(crate) fn add_to(&self, system: &mut TreeMatrix, rhs: &mut DVector<f64>) {
+        if !self.active {
+            return;
+        }
+        for (&c, r) in self.columns.iter().zip(&self.rhs_terms) {
+            rhs[c] += r;
+        }
+        let values = system.values_mut();
+        for &(i, v) in &self.matrix_terms {
+            values[i] += v;
         }
     }
 }
@@ -400,17 +495,17 @@ impl Point {
     /// After an implicit solve: the end-of-step force `f = f₀ − K v⁺ dt − D a dt` (`a` the point's acceleration
     /// from the surface's `J ν̇`), and the mode the solution implies: a pulling point separates, a sticking
     /// point outside the friction cone slides, a sliding point whose slip reverses sticks, a sliding point
-    /// whose normal force moved updates its estimate. Returns whether the point's mode or estimate changed.
+    /// whose normal force moved updates its estimate. Returns what changed.
     pub(crate) fn settle(
         &mut self,
         surface_acceleration: &Vector6<f64>,
         ground: &GroundPlane,
         dt: f64,
-    ) -> bool {
+    ) -> Change {
         if self.mode == ContactMode::Separated {
             self.force = Vector3::zeros();
             self.velocity_end = self.velocity;
-            return false;
+            return Change::None;
         }
         let n = ground.normal;
         let acc = lin(surface_acceleration) + ang(surface_acceleration).cross(&self.arm);
@@ -423,37 +518,37 @@ impl Point {
         if fn_end < 0.0 {
             self.mode = ContactMode::Separated;
             self.force = Vector3::zeros();
-            return true;
+            return Change::Mode;
         }
         match self.mode {
             ContactMode::Sticking => self.leave_cone(&ground.tangential(&f), fn_end),
             ContactMode::Sliding => self.stop_or_track_slip(ground, &v_end, fn_end),
-            ContactMode::Separated => false,
+            ContactMode::Separated => Change::None,
         }
     }
 
     /// A sticking point whose tangential force `ft` exceeds the cone `μ f_n` starts sliding along `ft`.
-    fn leave_cone(&mut self, ft: &Vector3<f64>, fn_end: f64) -> bool {
+    fn leave_cone(&mut self, ft: &Vector3<f64>, fn_end: f64) -> Change {
         let ftn = ft.norm();
         if ftn > self.law.friction * fn_end * (1.0 + 1e-12) && ftn > 0.0 {
             self.mode = ContactMode::Sliding;
             self.slide_direction = ft / ftn;
             self.normal_force_estimate = fn_end;
-            true
+            Change::Mode
         } else {
-            false
+            Change::None
         }
     }
 
     /// A sliding point whose end velocity runs along the friction force (the slip stopped within the step)
     /// sticks again with its spring on the cone; otherwise its normal force estimate follows `fn_end`
-    /// (to 1e-6 relative).
+    /// (to 1e-6 relative), which changes only its force at the start of the step.
     fn stop_or_track_slip(
         &mut self,
         ground: &GroundPlane,
         v_end: &Vector3<f64>,
         fn_end: f64,
-    ) -> bool {
+    ) -> Change {
         let mu = self.law.friction;
         let vt = ground.tangential(v_end);
         if vt.dot(&self.slide_direction) > 1e-9 {
@@ -463,14 +558,14 @@ impl Point {
                     + self.slide_direction
                         * (mu * self.normal_force_estimate / self.law.tangential_stiffness),
             );
-            true
+            Change::Mode
         } else if (fn_end - self.normal_force_estimate).abs()
             > 1e-6 * (1.0 + self.normal_force_estimate)
         {
             self.normal_force_estimate = fn_end;
-            true
+            Change::Force
         } else {
-            false
+            Change::None
         }
     }
 
@@ -518,47 +613,108 @@ pub(crate) fn build_surfaces(
     Ok((surfaces, points))
 }
 
-/// The linearised contact of one surface for the implicit step: `(K₆, D₆, W₀)` with `K₆ = Σ Pᵢᵀ Kᵢ Pᵢ`,
-/// `D₆ = Σ Pᵢᵀ Dᵢ Pᵢ`, `Pᵢ = [I, −(rᵢ×)]` (surface twist → point velocity) and `W₀ = Σ [f₀ᵢ; rᵢ × f₀ᵢ]` the
-/// wrench at the start of the step about the surface origin. `None` when every point is separated. Stores each
-/// point's `f₀`.
-pub(crate) fn linearize_surface(
-    points: &mut [Point],
+/// The linearised contact stiffness and damping of one surface for the implicit step: `(K₆, D₆)` with
+/// `K₆ = Σ Pᵢᵀ Kᵢ Pᵢ`, `D₆ = Σ Pᵢᵀ Dᵢ Pᵢ`, `Pᵢ = [I, −(rᵢ×)]` (surface twist → point velocity), over the points
+/// in contact in their current modes ([`PointLaw::matrices`]). `None` when every point is separated.
+pub(crate) fn surface_matrices(
+    points: &[Point],
     ground: &GroundPlane,
-) -> Option<(Matrix6<f64>, Matrix6<f64>, Vector6<f64>)> {
-    let mut k6 = Matrix6::zeros();
-    let mut d6 = Matrix6::zeros();
-    let mut w0 = Vector6::zeros();
+) -> Option<(Matrix6<f64>, Matrix6<f64>)> {
+    let n = ground.normal;
+    let mut stiffness = PointSum::default();
+    let mut damping = PointSum::default();
     let mut active = false;
+    for p in points {
+        let law = &p.law;
+        // `K = α I + β n nᵀ` and the same for `D`, as in `PointLaw::matrices`.
+        let ((k_alpha, k_beta), (d_alpha, d_beta)) = match p.mode {
+            ContactMode::Separated => continue,
+            ContactMode::Sticking => (
+                (
+                    law.tangential_stiffness,
+                    law.normal_stiffness - law.tangential_stiffness,
+                ),
+                (
+                    law.tangential_damping,
+                    law.normal_damping - law.tangential_damping,
+                ),
+            ),
+            ContactMode::Sliding => ((0.0, law.normal_stiffness), (0.0, law.normal_damping)),
+        };
+        active = true;
+        let u = join(&n, &p.arm.cross(&n));
+        stiffness.add(k_alpha, k_beta, &p.arm, &u);
+        damping.add(d_alpha, d_beta, &p.arm, &u);
+    }
+    active.then(|| (stiffness.matrix(), damping.matrix()))
+}
+
+/// The sum `Σ Pᵀ (α I + β n nᵀ) P` over the points of a surface, `P = [I, −R]`, `R = (r×)`: each point adds
+/// `α [I, −R; R, −R²] + β u uᵀ` with `u = Pᵀ n = [n; r × n]` and `−R² = |r|² I − r rᵀ`, kept as the sums of
+/// `α`, `α r`, `α (|r|² I − r rᵀ)` and `β u uᵀ` (its upper triangle, row by row).
+#[derive(Default)]
+struct PointSum {
+    alpha: f64,
+    alpha_r: Vector3<f64>,
+    alpha_rr: Matrix3<f64>,
+    beta_uu: [f64; 21],
+}
+
+impl PointSum {
+    /// Adds a point at `r` (from the surface origin) with `α`, `β` and `u`.
+    fn add(&mut self, alpha: f64, beta: f64, r: &Vector3<f64>, u: &Vector6<f64>) {
+        if alpha != 0.0 {
+            self.alpha += alpha;
+            self.alpha_r += r * alpha;
+            self.alpha_rr += (Matrix3::identity() * r.norm_squared() - r * r.transpose()) * alpha;
+        }
+        let mut e = 0;
+        for i in 0..6 {
+            let bu = beta * u[i];
+            for j in i..6 {
+                self.beta_uu[e] += bu * u[j];
+                e += 1;
+            }
+        }
+    }
+
+    /// The 6×6 sum.
+    fn matrix(&self) -> Matrix6<f64> {
+        let mut m = Matrix6::zeros();
+        let mut e = 0;
+        for i in 0..6 {
+            for j in i..6 {
+                m[(i, j)] = self.beta_uu[e];
+                m[(j, i)] = self.beta_uu[e];
+                e += 1;
+            }
+        }
+        let r = skew(&self.alpha_r);
+        for i in 0..3 {
+            m[(i, i)] += self.alpha;
+            for j in 0..3 {
+                m[(i, j + 3)] -= r[(i, j)];
+                m[(i + 3, j)] += r[(i, j)];
+                m[(i + 3, j + 3)] += self.alpha_rr[(i, j)];
+            }
+        }
+        m
+    }
+}
+
+/// The contact wrench of one surface at the start of the step about its origin, `W₀ = Σ [f₀ᵢ; rᵢ × f₀ᵢ]` over
+/// the points in contact in their current modes (N, N·m). Stores each point's `f₀`.
+pub(crate) fn start_wrench(points: &mut [Point], ground: &GroundPlane) -> Vector6<f64> {
+    let mut w0 = Vector6::zeros();
     for p in points {
         if p.mode == ContactMode::Separated {
             continue;
         }
-        active = true;
-        let (k, d) = p.law.matrices(p.mode, &ground.normal);
         let f0 = p.start_force(ground);
-        let r = skew(&p.arm);
-        add_point_matrix(&mut k6, &k, &r);
-        add_point_matrix(&mut d6, &d, &r);
         let t = p.arm.cross(&f0);
         w0 += join(&f0, &t);
     }
-    active.then_some((k6, d6, w0))
-}
-
-/// `m6 += Pᵀ K P` with `P = [I, −R]`, `R = (r×)`: `[K, −K R; R K, −R K R]`.
-fn add_point_matrix(m6: &mut Matrix6<f64>, k: &Matrix3<f64>, r: &Matrix3<f64>) {
-    let kr = k * r;
-    let rk = r * k;
-    let rkr = r * kr;
-    for i in 0..3 {
-        for j in 0..3 {
-            m6[(i, j)] += k[(i, j)];
-            m6[(i, j + 3)] -= kr[(i, j)];
-            m6[(i + 3, j)] += rk[(i, j)];
-            m6[(i + 3, j + 3)] -= rkr[(i, j)];
-        }
-    }
+    w0
 }
 
 #[cfg(test)]
@@ -575,6 +731,58 @@ mod tests {
         let l = 0.2;
         let m: f64 = trapezoid_nodes(2001, l).map(|(x, w)| w * x * x).sum();
         assert!((m - l * l / 12.0).abs() < 1e-6 * l * l);
+    }
+
+    #[test]
+    fn surface_matrices_are_the_sum_of_the_point_matrices() {
+        let ground = GroundPlane::from_config(&GroundConfig {
+            height: 0.0,
+            inclination: [0.05, -0.1],
+        });
+        let law = PointLaw {
+            normal_stiffness: 3e5,
+            normal_damping: 2e3,
+            tangential_stiffness: 1e5,
+            tangential_damping: 5e2,
+            friction: 0.8,
+        };
+        let spec = PointSpec {
+            local: Vector3::zeros(),
+            weight: 1.0,
+            law,
+        };
+        let mut points = Vec::new();
+        for (k, mode) in [
+            ContactMode::Sticking,
+            ContactMode::Sliding,
+            ContactMode::Separated,
+            ContactMode::Sticking,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let mut p = Point::new(0, &spec);
+            p.arm = Vector3::new(0.1 * k as f64 - 0.12, 0.03 * k as f64, -0.02);
+            p.mode = mode;
+            points.push(p);
+        }
+        let (k6, d6) = surface_matrices(&points, &ground).expect("touching");
+        let (mut k_ref, mut d_ref) = (Matrix6::zeros(), Matrix6::zeros());
+        for p in &points {
+            let (k, d) = p.law.matrices(p.mode, &ground.normal);
+            let mut map = nalgebra::Matrix3x6::zeros();
+            map.fixed_view_mut::<3, 3>(0, 0)
+                .copy_from(&Matrix3::identity());
+            map.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-skew(&p.arm)));
+            k_ref += map.transpose() * k * map;
+            d_ref += map.transpose() * d * map;
+        }
+        assert!((k6 - k_ref).norm() < 1e-9 * k_ref.norm(), "{k6} vs {k_ref}");
+        assert!((d6 - d_ref).norm() < 1e-9 * d_ref.norm(), "{d6} vs {d_ref}");
+        for p in &mut points {
+            p.mode = ContactMode::Separated;
+        }
+        assert!(surface_matrices(&points, &ground).is_none());
     }
 
     #[test]

@@ -45,6 +45,6 @@ pub use config::{
 pub use contact::{surface_points, trapezoid_nodes, ContactMode, GroundPlane, PointLaw, PointSpec};
 pub use error::SimError;
 pub use io::{ContactPointState, ImuMeasurement, SimInput, SimOutput, SurfaceMeasurement};
-pub use linalg::{cholesky_in_place, cholesky_solve_in_place, TreeCholesky};
+pub use linalg::{cholesky_in_place, cholesky_solve_in_place, TreeCholesky, TreeMatrix};
 pub use noise::GaussianNoise;
 pub use robot::SimRobot;

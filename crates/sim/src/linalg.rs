@@ -66,19 +66,69 @@ pub fn cholesky_solve_in_place(l: &DMatrix<f64>, b: &mut DVector<f64>) {
     }
 }
 
+/// A symmetric matrix with the sparsity pattern of a [`TreeCholesky`], packed row by row: for every degree of
+/// freedom `k`, its diagonal entry then the entries `(k, i)` of its ancestors `i`, nearest ancestor first (the
+/// entries of the lower triangle that a kinematic tree's mass matrix may have non-zero
+/// [Featherstone 2008, §6.5]). Build it with [`TreeCholesky::matrix`]; [`TreeCholesky::diagonal_index`] and
+/// [`TreeCholesky::index`] give the place of an entry in [`TreeMatrix::values`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct TreeMatrix {
+    values: Vec<f64>,
+}
+
+impl TreeMatrix {
+    /// The entries of the pattern, row by row.
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// The entries of the pattern, to write.
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        &mut self.values
+    }
+
+    /// Copies `other` (a matrix of the same tree; no allocation).
+    pub fn copy_from(&mut self, other: &TreeMatrix) {
+        self.values.copy_from_slice(&other.values);
+    }
+}
+
 /// Cholesky factorisation `H = Lᵀ L` that exploits the branch-induced sparsity of a kinematic tree's mass
 /// matrix [Featherstone 2008, §6.5] (the "LTL" factorisation): `H[i][j]` may be non-zero only when
 /// `i` is an ancestor of `j` or the reverse, and that pattern survives the factorisation (no fill-in). Adding
 /// `Jᵀ G J` for the Jacobian of one frame keeps the pattern, since the columns of such a Jacobian lie on one
 /// path from the root.
-#[derive(Clone, Debug, PartialEq, Eq)]
+///
+/// The matrix and the factor are packed ([`TreeMatrix`]): the elimination of row `k` subtracts `l_ki` times
+/// the tail of row `k` from the row of each ancestor `i` (whose own ancestors are that tail), one contiguous
+/// AXPY per ancestor. Row `k` of `L` depends only on the rows of the subtree of `k`, so the factor is kept
+/// per **branch**: the *trunk* is the chain from the root down to the first degree of freedom with several
+/// children (the six base DoFs of a floating-base robot), the branches are the subtrees below it (the legs,
+/// the torso with arms and head). Each branch keeps its update of the trunk's rows, and
+/// [`TreeCholesky::refactor`] recomputes only the branches whose entries changed plus the small trunk: a
+/// changed contact on a foot touches only the entries of its leg and of the trunk.
+#[derive(Clone, Debug, PartialEq)]
 pub struct TreeCholesky {
-    /// `parent[k]`: the ancestor of degree of freedom `k` closest to it (`None` for the first base DoF).
+    /// `parent[k]`: the ancestor of degree of freedom `k` closest to it (`None` for a root).
     parent: Vec<Option<usize>>,
     /// Ancestors of every DoF, nearest first, concatenated; those of `k` are
     /// `ancestors[offsets[k]..offsets[k + 1]]`.
     ancestors: Vec<usize>,
     offsets: Vec<usize>,
+    /// Where row `k` starts in [`TreeMatrix::values`] (its diagonal entry): `offsets[k] + k`.
+    starts: Vec<usize>,
+    /// `starts` of each entry of `ancestors`: where the row of that ancestor starts.
+    ancestor_starts: Vec<usize>,
+    /// Number of trunk DoFs (`0..trunk`, whose rows are `values[..starts[trunk]]`).
+    trunk: usize,
+    /// Branch of each DoF (`None` on the trunk).
+    branch: Vec<Option<usize>>,
+    /// The DoFs of each branch, increasing.
+    branch_rows: Vec<Vec<usize>>,
+    /// The factor `L`.
+    factor: TreeMatrix,
+    /// Each branch's elimination update of the trunk's rows, to be subtracted from them.
+    trunk_updates: Vec<Vec<f64>>,
 }
 
 impl TreeCholesky {
@@ -92,9 +142,10 @@ impl TreeCholesky {
         {
             return None;
         }
+        let n = parent.len();
         let mut ancestors = Vec::new();
         let mut offsets = vec![0];
-        for k in 0..parent.len() {
+        for k in 0..n {
             let mut i = parent[k];
             while let Some(ii) = i {
                 ancestors.push(ii);
@@ -102,10 +153,37 @@ impl TreeCholesky {
             }
             offsets.push(ancestors.len());
         }
+        let starts: Vec<usize> = (0..=n).map(|k| offsets[k] + k).collect();
+        let ancestor_starts = ancestors.iter().map(|&i| starts[i]).collect();
+        let trunk = trunk_length(&parent);
+        let mut branch = vec![None; n];
+        let mut branch_rows: Vec<Vec<usize>> = Vec::new();
+        for k in trunk..n {
+            let b = match parent[k].and_then(|p| branch[p]) {
+                Some(b) => b,
+                None => {
+                    branch_rows.push(Vec::new());
+                    branch_rows.len() - 1
+                }
+            };
+            branch[k] = Some(b);
+            branch_rows[b].push(k);
+        }
+        let factor = TreeMatrix {
+            values: vec![0.0; starts[n]],
+        };
+        let trunk_updates = vec![vec![0.0; starts[trunk]]; branch_rows.len()];
         Some(Self {
             parent,
             ancestors,
             offsets,
+            starts,
+            ancestor_starts,
+            trunk,
+            branch,
+            branch_rows,
+            factor,
+            trunk_updates,
         })
     }
 
@@ -138,65 +216,194 @@ impl TreeCholesky {
         self.parent.is_empty()
     }
 
+    /// A zero matrix with this tree's pattern.
+    pub fn matrix(&self) -> TreeMatrix {
+        TreeMatrix {
+            values: vec![0.0; self.starts[self.len()]],
+        }
+    }
+
+    /// Where the diagonal entry `(k, k)` lies in [`TreeMatrix::values`].
+    pub fn diagonal_index(&self, k: usize) -> usize {
+        self.starts[k]
+    }
+
+    /// Where the entry `(k, ancestor)` lies in [`TreeMatrix::values`]; `ancestor` must be an ancestor of `k`.
+    pub fn index(&self, ancestor: usize, k: usize) -> usize {
+        debug_assert!(self.ancestors_of(k).contains(&ancestor));
+        self.starts[k] + self.depth(k) - self.depth(ancestor)
+    }
+
+    /// The branch of degree of freedom `k` (`None` on the trunk; see the type's documentation).
+    pub fn branch_of(&self, k: usize) -> Option<usize> {
+        self.branch[k]
+    }
+
+    /// Number of branches.
+    pub fn branch_count(&self) -> usize {
+        self.branch_rows.len()
+    }
+
+    /// Copies the pattern's entries of the dense symmetric matrix `h` (its lower triangle) into `out`.
+    pub fn gather(&self, h: &DMatrix<f64>, out: &mut TreeMatrix) {
+        let n = self.len();
+        let a = h.as_slice();
+        for k in 0..n {
+            let row = &mut out.values[self.starts[k]..self.starts[k + 1]];
+            row[0] = a[k * n + k];
+            for (v, &i) in row[1..].iter_mut().zip(self.ancestors_of(k)) {
+                *v = a[i * n + k];
+            }
+        }
+    }
+
     fn ancestors_of(&self, k: usize) -> &[usize] {
         &self.ancestors[self.offsets[k]..self.offsets[k + 1]]
     }
 
-    /// Factorises in place: afterwards the entries `(k, i)`, `i` ancestor of `k` or `i = k`, hold `L`. Only
-    /// those entries of the lower triangle are read. Returns `false` if a pivot is not positive and finite.
-    pub fn factor(&self, h: &mut DMatrix<f64>) -> bool {
-        let n = self.parent.len();
-        if h.nrows() != n || h.ncols() != n {
-            return false;
+    /// Number of ancestors of `k`.
+    fn depth(&self, k: usize) -> usize {
+        self.offsets[k + 1] - self.offsets[k]
+    }
+
+    /// Factorises `h` into the factor this value keeps. Returns `false` if a pivot is not positive and finite.
+    pub fn factor(&mut self, h: &TreeMatrix) -> bool {
+        (0..self.branch_count()).all(|b| self.factor_branch(h, b)) && self.factor_trunk(h)
+    }
+
+    /// Factorises `h` after a [`TreeCholesky::factor`] of a matrix that differed from `h` only in the entries
+    /// of the branches marked in `changed` (one flag per branch) and of the trunk: recomputes those branches
+    /// and the trunk, and gives the same factor as [`TreeCholesky::factor`] of `h`. Returns `false` if a
+    /// pivot is not positive and finite.
+    pub fn refactor(&mut self, h: &TreeMatrix, changed: &[bool]) -> bool {
+        (0..self.branch_count())
+            .filter(|b| changed[*b])
+            .all(|b| self.factor_branch(h, b))
+            && self.factor_trunk(h)
+    }
+
+    /// Eliminates the rows of branch `b` (leaves first) from `h`'s, into the factor and the branch's trunk
+    /// update.
+    fn factor_branch(&mut self, h: &TreeMatrix, b: usize) -> bool {
+        let trunk_end = self.starts[self.trunk];
+        let update = &mut self.trunk_updates[b];
+        update.fill(0.0);
+        let values = &mut self.factor.values;
+        for &k in &self.branch_rows[b] {
+            let row = self.starts[k]..self.starts[k + 1];
+            values[row.clone()].copy_from_slice(&h.values[row]);
         }
-        let a = h.as_mut_slice();
-        for k in (0..n).rev() {
-            let hkk = a[k * n + k];
-            if hkk.is_nan() || hkk <= 0.0 || hkk.is_infinite() {
+        for &k in self.branch_rows[b].iter().rev() {
+            let targets = &self.ancestor_starts[self.offsets[k]..self.offsets[k + 1]];
+            let (head, tail) = values.split_at_mut(self.starts[k]);
+            let Some(row_k) = eliminate(&mut tail[..=targets.len()]) else {
                 return false;
-            }
-            let lkk = hkk.sqrt();
-            a[k * n + k] = lkk;
-            let inv = 1.0 / lkk;
-            let anc = self.ancestors_of(k);
-            for &i in anc {
-                a[i * n + k] *= inv;
-            }
-            // The ancestors of anc[idx] are anc[idx + 1..].
-            for (idx, &i) in anc.iter().enumerate() {
-                let lki = a[i * n + k];
-                if lki != 0.0 {
-                    a[i * n + i] -= lki * lki;
-                    for &j in &anc[idx + 1..] {
-                        a[j * n + i] -= lki * a[j * n + k];
-                    }
+            };
+            for (idx, &target) in targets.iter().enumerate() {
+                let lki = row_k[idx];
+                if lki == 0.0 {
+                    continue;
+                }
+                // Row `i` (diagonal, then its ancestors) is updated by `l_ki` times row k from `l_ki` on.
+                let source = &row_k[idx..];
+                if target < trunk_end {
+                    axpy(&mut update[target..target + source.len()], lki, source);
+                } else {
+                    axpy(&mut head[target..target + source.len()], -lki, source);
                 }
             }
         }
         true
     }
 
-    /// Solves `H x = b` in place with the factor from [`TreeCholesky::factor`].
-    pub fn solve(&self, l: &DMatrix<f64>, b: &mut DVector<f64>) {
-        let n = self.parent.len();
-        let a = l.as_slice();
+    /// The trunk's rows of `h` minus every branch's update, then their elimination.
+    fn factor_trunk(&mut self, h: &TreeMatrix) -> bool {
+        let trunk_end = self.starts[self.trunk];
+        let values = &mut self.factor.values;
+        values[..trunk_end].copy_from_slice(&h.values[..trunk_end]);
+        for update in &self.trunk_updates {
+            axpy(&mut values[..trunk_end], -1.0, update);
+        }
+        for k in (0..self.trunk).rev() {
+            let targets = &self.ancestor_starts[self.offsets[k]..self.offsets[k + 1]];
+            let (head, tail) = values.split_at_mut(self.starts[k]);
+            let Some(row_k) = eliminate(&mut tail[..=targets.len()]) else {
+                return false;
+            };
+            for (idx, &target) in targets.iter().enumerate() {
+                let lki = row_k[idx];
+                if lki != 0.0 {
+                    let source = &row_k[idx..];
+                    axpy(&mut head[target..target + source.len()], -lki, source);
+                }
+            }
+        }
+        true
+    }
+
+    /// Solves `H x = b` in place with the factor of the last [`TreeCholesky::factor`] or
+    /// [`TreeCholesky::refactor`].
+    pub fn solve(&self, b: &mut DVector<f64>) {
+        let n = self.len();
+        let l = &self.factor.values;
         let x = b.as_mut_slice();
         // Lᵀ y = b.
         for k in (0..n).rev() {
-            x[k] /= a[k * n + k];
+            let row = &l[self.starts[k]..self.starts[k + 1]];
+            x[k] /= row[0];
             let xk = x[k];
-            for &i in self.ancestors_of(k) {
-                x[i] -= a[i * n + k] * xk;
+            for (&i, v) in self.ancestors_of(k).iter().zip(&row[1..]) {
+                x[i] -= v * xk;
             }
         }
         // L x = y.
         for k in 0..n {
+            let row = &l[self.starts[k]..self.starts[k + 1]];
             let mut s = x[k];
-            for &i in self.ancestors_of(k) {
-                s -= a[i * n + k] * x[i];
+            for (&i, v) in self.ancestors_of(k).iter().zip(&row[1..]) {
+                s -= v * x[i];
             }
-            x[k] = s / a[k * n + k];
+            x[k] = s / row[0];
         }
+    }
+}
+
+/// Length of the chain from the root that a tree with a single root starts with, up to and including the first
+/// node with several children or none (0 for a forest).
+fn trunk_length(parent: &[Option<usize>]) -> usize {
+    if parent.iter().filter(|p| p.is_none()).count() != 1 || parent[0].is_some() {
+        return 0;
+    }
+    let mut children = vec![0usize; parent.len()];
+    for p in parent.iter().flatten() {
+        children[*p] += 1;
+    }
+    // With parents before children, the only child of node k of the chain is k + 1.
+    (0..parent.len())
+        .find(|&k| children[k] != 1)
+        .map_or(parent.len(), |k| k + 1)
+}
+
+/// The elimination of one row `[h_kk, h_k,anc…]` (its updates from the subtree already subtracted): the
+/// diagonal becomes `l_kk = √h_kk` and the rest is divided by it. Returns the row's off-diagonal part, or
+/// `None` when the pivot `h_kk` is not positive and finite.
+fn eliminate(row: &mut [f64]) -> Option<&[f64]> {
+    let (d, rest) = row.split_first_mut()?;
+    if d.is_nan() || *d <= 0.0 || d.is_infinite() {
+        return None;
+    }
+    *d = d.sqrt();
+    let inv = 1.0 / *d;
+    for v in rest.iter_mut() {
+        *v *= inv;
+    }
+    Some(rest)
+}
+
+/// `y += a x` (same lengths).
+fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
+    for (y, x) in y.iter_mut().zip(x) {
+        *y += a * x;
     }
 }
 
@@ -263,11 +470,66 @@ mod tests {
             h += j.transpose() * j;
         }
         let b = DVector::from_fn(n, |i, _| (i as f64).sin());
-        let mut l = h.clone();
-        assert!(tree.factor(&mut l));
+        let mut tree = tree;
+        let mut packed = tree.matrix();
+        tree.gather(&h, &mut packed);
+        assert!(tree.factor(&packed));
         let mut x = b.clone();
-        tree.solve(&l, &mut x);
+        tree.solve(&mut x);
         assert!((&h * &x - &b).norm() < 1e-10);
+        // Trunk 0 - 1 - 2, branches {3, 4} and {5, 6}.
+        assert_eq!(tree.branch_count(), 2);
+        assert_eq!(tree.branch_of(2), None);
+        assert_eq!(tree.branch_of(4), Some(0));
+        assert_eq!(tree.branch_of(6), Some(1));
+        assert_eq!(packed.values()[tree.index(1, 4)], h[(4, 1)]);
+        assert_eq!(packed.values()[tree.diagonal_index(4)], h[(4, 4)]);
+
+        // Changing entries of the branch {5, 6} and of the trunk: the refactorisation of that branch and the
+        // trunk gives the factor of the new matrix, to the last bit.
+        let mut changed = h.clone();
+        for (r, c, v) in [(6, 6, 0.7), (6, 2, 0.1), (5, 0, -0.2), (1, 1, 0.3)] {
+            changed[(r, c)] += v;
+            changed[(c, r)] = changed[(r, c)];
+        }
+        tree.gather(&changed, &mut packed);
+        assert!(tree.refactor(&packed, &[false, true]));
+        let mut x = b.clone();
+        tree.solve(&mut x);
+        let mut fresh = TreeCholesky::new(parent.clone()).unwrap();
+        assert!(fresh.factor(&packed));
+        let mut y = b.clone();
+        fresh.solve(&mut y);
+        assert_eq!(x, y);
+        assert!((&changed * &x - &b).norm() < 1e-10);
+        // A forest and a single chain factorise too (no trunk, no branch).
+        for parent in [
+            vec![None, Some(0), None, Some(2)],
+            vec![None, Some(0), Some(1)],
+        ] {
+            let mut tree = TreeCholesky::new(parent.clone()).unwrap();
+            let n = parent.len();
+            let h = DMatrix::from_fn(n, n, |r, c| {
+                let related = r == c
+                    || parent[r] == Some(c)
+                    || parent[c] == Some(r)
+                    || (parent[r].and_then(|p| parent[p]) == Some(c))
+                    || (parent[c].and_then(|p| parent[p]) == Some(r));
+                if r == c {
+                    4.0
+                } else if related {
+                    0.5
+                } else {
+                    0.0
+                }
+            });
+            let mut packed = tree.matrix();
+            tree.gather(&h, &mut packed);
+            assert!(tree.factor(&packed));
+            let mut x = b.rows(0, n).into_owned();
+            tree.solve(&mut x);
+            assert!((&h * &x - b.rows(0, n)).norm() < 1e-12);
+        }
     }
 
     #[test]

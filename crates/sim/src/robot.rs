@@ -20,7 +20,7 @@ use crate::config::{IntegratorKind, JointActuatorConfig, PushConfig, SimConfig};
 use crate::contact::{build_surfaces, GroundPlane, Point, Surface};
 use crate::error::{find_frame, SimError};
 use crate::io::{ContactPointState, SimInput, SimOutput};
-use crate::linalg::{join, lin, TreeCholesky};
+use crate::linalg::{join, lin, TreeCholesky, TreeMatrix};
 use crate::push::Push;
 use crate::sensors::{Sensors, Truth};
 
@@ -71,8 +71,13 @@ pub struct SimRobot {
     initial_state: RobotState,
     mass: DMatrix<f64>,
     momentum_matrix: DMatrix<f64>,
+    /// The tree factorisation of the implicit system, the mass matrix and the system in its packed pattern,
+    /// and what a re-solve must refactorise (the system changed; in which branches of the tree).
     factorization: TreeCholesky,
-    system: DMatrix<f64>,
+    mass_packed: TreeMatrix,
+    system: TreeMatrix,
+    system_changed: bool,
+    changed_branches: Vec<bool>,
     bias: DVector<f64>,
     rhs: DVector<f64>,
     acceleration: DVector<f64>,
@@ -205,8 +210,11 @@ impl SimRobot {
             state,
             mass: DMatrix::zeros(nv, nv),
             momentum_matrix: DMatrix::zeros(6, nv),
+            mass_packed: factorization.matrix(),
+            system: factorization.matrix(),
+            system_changed: false,
+            changed_branches: vec![false; factorization.branch_count()],
             factorization,
-            system: DMatrix::zeros(nv, nv),
             bias: DVector::zeros(nv),
             rhs: DVector::zeros(nv),
             acceleration: DVector::zeros(nv),

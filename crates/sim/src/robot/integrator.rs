@@ -14,7 +14,7 @@ use stride_model::{ExternalWrench, VelocityRepresentation};
 use super::SimRobot;
 use crate::actuator::explicit_friction;
 use crate::config::IntegratorKind;
-use crate::contact::linearize_surface;
+use crate::contact::{start_wrench, surface_matrices, Change};
 use crate::error::SimError;
 use crate::io::SimInput;
 use crate::linalg::{ang, join, lin};
@@ -55,13 +55,23 @@ impl SimRobot {
     }
 
     /// One implicit step: fills `acceleration`, point forces and motor torques. Solves again while the
-    /// solution changes a contact mode or a saturation, at most `max_solves` times.
+    /// solution changes a contact mode or a saturation, at most `max_solves` times. A re-solve re-linearises
+    /// only the surfaces whose points changed, and refactorises only the branches of the tree (legs, torso)
+    /// whose entries changed ([`TreeCholesky::refactor`](crate::linalg::TreeCholesky::refactor)), or nothing
+    /// when only the right-hand side changed (a sliding point's normal-force estimate). Each solve gives the
+    /// same result as assembling and factorising the whole system again.
     pub(super) fn solve_implicit(&mut self, input: &SimInput) -> Result<Solve, SimError> {
         self.kd.mass_matrix(&mut self.mass)?;
         self.kd.bias_forces(&mut self.bias)?;
+        self.factorization.gather(&self.mass, &mut self.mass_packed);
         for s in &mut self.surfaces {
             self.kd.frame_jacobian(s.frame, &mut s.jacobian)?;
             s.find_columns();
+            s.branch = s
+                .columns
+                .last()
+                .and_then(|c| self.factorization.branch_of(*c));
+            s.stale = Change::Mode;
         }
         for p in &mut self.points {
             p.begin_implicit_step(&self.ground);
@@ -72,15 +82,24 @@ impl SimRobot {
         loop {
             self.assemble_joints(input);
             self.assemble_contacts();
-            if !self.factorization.factor(&mut self.system) {
+            let factored = if solves == 0 {
+                self.factorization.factor(&self.system)
+            } else if self.system_changed {
+                self.factorization
+                    .refactor(&self.system, &self.changed_branches)
+            } else {
+                true
+            };
+            if !factored {
                 return Err(SimError::NotPositiveDefinite {
                     time: self.time_ns as f64 * 1e-9,
                 });
             }
             self.acceleration.copy_from(&self.rhs);
-            self.factorization
-                .solve(&self.system, &mut self.acceleration);
+            self.factorization.solve(&mut self.acceleration);
             solves += 1;
+            self.changed_branches.fill(false);
+            self.system_changed = false;
             let changed = self.update_modes(input);
             if !changed || solves >= self.max_solves {
                 return Ok(Solve {
@@ -99,11 +118,12 @@ impl SimRobot {
     fn assemble_joints(&mut self, input: &SimInput) {
         let dt = self.dt;
         let nb = 6;
-        self.system.copy_from(&self.mass);
+        self.system.copy_from(&self.mass_packed);
         self.rhs.copy_from(&self.external_forces);
         self.rhs -= &self.bias;
         let q = &self.state.joint_positions;
         let qd = &self.state.joint_velocities;
+        let system = self.system.values_mut();
         for (j, a) in self.actuators.iter().enumerate() {
             let (mut kp, mut kd) = a.gains();
             let motor = if self.saturated[j] {
@@ -120,41 +140,42 @@ impl SimRobot {
             let (stick, slide) = self.friction[j].terms(a.coulomb_friction);
             let damping = a.damping + stick;
             let i = nb + j;
-            self.system[(i, i)] += a.armature + dt * (kd + damping) + dt * dt * kp;
+            system[self.factorization.diagonal_index(i)] +=
+                a.armature + dt * (kd + damping) + dt * dt * kp;
             self.rhs[i] += motor - damping * qd[j] + slide;
         }
     }
 
     /// Adds each touching surface's `Jᵀ (dt D₆ + dt² K₆) J` to the system and `Jᵀ (W₀ − dt K₆ V)` to `rhs`, over
     /// the non-zero columns of `J` only (the joints that move the surface), which keeps the branch-induced
-    /// sparsity of the mass matrix.
+    /// sparsity of the mass matrix. A surface is linearised again only as far as its points changed in the last
+    /// solve (a changed mode marks its branch in `changed_branches`); otherwise its terms of the last solve
+    /// are added.
     fn assemble_contacts(&mut self) {
-        let dt = self.dt;
         for s in &mut self.surfaces {
-            let Some((k6, d6, w0)) = linearize_surface(&mut self.points[s.points()], &self.ground)
-            else {
-                continue;
-            };
-            let g6 = k6 * (dt * dt) + d6 * dt;
-            let w = w0 - k6 * s.twist * dt;
-            for &c in &s.columns {
-                let col = s.jacobian.fixed_view::<6, 1>(0, c);
-                s.scratch
-                    .fixed_view_mut::<6, 1>(0, c)
-                    .copy_from(&(g6 * col));
-                self.rhs[c] += col.dot(&w);
-            }
-            for &c in &s.columns {
-                let gc = s.scratch.fixed_view::<6, 1>(0, c);
-                for &r in &s.columns {
-                    self.system[(r, c)] += s.jacobian.fixed_view::<6, 1>(0, r).dot(&gc);
+            let points = &mut self.points[s.points()];
+            if s.stale == Change::Mode {
+                s.set_matrices(
+                    surface_matrices(points, &self.ground),
+                    self.dt,
+                    &self.factorization,
+                );
+                if let Some(b) = s.branch {
+                    self.changed_branches[b] = true;
                 }
+                self.system_changed = true;
             }
+            if s.stale != Change::None {
+                s.set_rhs(&start_wrench(points, &self.ground), self.dt);
+            }
+            s.stale = Change::None;
+            s.add_to(&mut self.system, &mut self.rhs);
         }
     }
 
     /// After a solve: end-of-step motor torques and contact forces; switches the saturations and contact modes
-    /// that the solution violates. Returns whether anything changed (then the step is solved again).
+    /// that the solution violates (marking the surfaces to linearise again and the branches of the joints
+    /// that changed). Returns whether anything changed (then the step is solved again).
     fn update_modes(&mut self, input: &SimInput) -> bool {
         let mut changed = self.saturate_joints(input);
         changed |= self.switch_friction();
@@ -165,10 +186,20 @@ impl SimRobot {
             }
         }
         for p in &mut self.points {
-            let acceleration = self.surfaces[p.surface].acceleration;
-            changed |= p.settle(&acceleration, &self.ground, self.dt);
+            let s = &mut self.surfaces[p.surface];
+            let change = p.settle(&s.acceleration, &self.ground, self.dt);
+            s.stale = s.stale.max(change);
+            changed |= change != Change::None;
         }
         changed
+    }
+
+    /// Marks the branch of joint `j` as changed.
+    fn joint_changed(&mut self, j: usize) {
+        self.system_changed = true;
+        if let Some(b) = self.factorization.branch_of(6 + j) {
+            self.changed_branches[b] = true;
+        }
     }
 
     /// The servo torques at the end of the step, `τ_ff + kp (q_ref − q − dt q̇⁺) + kd (q̇_ref − q̇⁺)`; a joint
@@ -176,21 +207,21 @@ impl SimRobot {
     fn saturate_joints(&mut self, input: &SimInput) -> bool {
         let dt = self.dt;
         let mut changed = false;
-        let q = &self.state.joint_positions;
-        let qd = &self.state.joint_velocities;
-        for (j, a) in self.actuators.iter().enumerate() {
+        for j in 0..self.actuators.len() {
             if self.saturated[j] {
                 continue;
             }
-            let v_end = qd[j] + dt * self.acceleration[6 + j];
+            let a = &self.actuators[j];
+            let v_end = self.state.joint_velocities[j] + dt * self.acceleration[6 + j];
             let t = a.torque(
                 input.joint_torques[j],
-                input.joint_positions[j] - q[j] - dt * v_end,
+                input.joint_positions[j] - self.state.joint_positions[j] - dt * v_end,
                 input.joint_velocities[j] - v_end,
             );
             if t.abs() > a.limit {
                 self.saturated[j] = true;
                 self.motor_torques[j] = a.limit.copysign(t);
+                self.joint_changed(j);
                 changed = true;
             } else {
                 self.motor_torques[j] = t;
@@ -203,14 +234,16 @@ impl SimRobot {
     /// re-solves end). Returns whether one switched.
     fn switch_friction(&mut self) -> bool {
         let mut changed = false;
-        for (j, a) in self.actuators.iter().enumerate() {
-            if a.coulomb_friction == 0.0 || self.friction_switches[j] >= 2 {
+        for j in 0..self.actuators.len() {
+            let tau_c = self.actuators[j].coulomb_friction;
+            if tau_c == 0.0 || self.friction_switches[j] >= 2 {
                 continue;
             }
             let v_end = self.state.joint_velocities[j] + self.dt * self.acceleration[6 + j];
-            if let Some(next) = self.friction[j].switch(a.coulomb_friction, v_end) {
+            if let Some(next) = self.friction[j].switch(tau_c, v_end) {
                 self.friction[j] = next;
                 self.friction_switches[j] += 1;
+                self.joint_changed(j);
                 changed = true;
             }
         }
