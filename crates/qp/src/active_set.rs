@@ -225,16 +225,36 @@ impl ActiveSetSolver {
         self.mi = mi;
     }
 
+    /// Copies the rows in use of `E` and `C` into `nt` (constraint `i`'s normal contiguous at `i·n`) and
+    /// their norms into `norms`, reading the column-major matrices column by column.
+    fn load_rows(&mut self, qp: &DenseQp) {
+        let (n, me, mi) = (self.n, self.me, self.mi);
+        for (first, rows, used) in [(0, &qp.e, me), (me, &qp.c, mi)] {
+            let ld = rows.nrows();
+            let src = rows.as_slice();
+            for jdx in 0..n {
+                for (i, v) in src[jdx * ld..jdx * ld + used].iter().enumerate() {
+                    self.nt[(first + i) * n + jdx] = *v;
+                }
+            }
+        }
+        for i in 0..me + mi {
+            let row = &self.nt[i * n..(i + 1) * n];
+            self.norms[i] = row.iter().map(|v| v * v).sum::<f64>().sqrt();
+        }
+    }
+
     /// Cholesky `H = L Lᵀ` (lower, column-major, right-looking) then `J₀ = L⁻ᵀ`. False if `H` is not PD.
     fn factorize(&mut self, qp: &DenseQp) -> bool {
         let n = self.n;
         let l = &mut self.chol[..n * n];
+        let h = qp.h.as_slice();
         let mut max_diag: f64 = 0.0;
         for c in 0..n {
             for r in 0..n {
-                l[r + c * n] = 0.5 * (qp.h[(r, c)] + qp.h[(c, r)]);
+                l[r + c * n] = 0.5 * (h[r + c * n] + h[c + r * n]);
             }
-            max_diag = max_diag.max(qp.h[(c, c)].abs());
+            max_diag = max_diag.max(h[c + c * n].abs());
         }
         let pivot_min = 1e-14 * max_diag.max(f64::MIN_POSITIVE);
         for c in 0..n {
@@ -1077,19 +1097,7 @@ impl QpSolver for ActiveSetSolver {
         }
         let (n, me, mi) = (qp.n(), qp.n_eq(), qp.n_ineq());
         self.ensure_workspace(n, me, mi);
-        for i in 0..me + mi {
-            let col = &mut self.nt[i * n..(i + 1) * n];
-            let mut s = 0.0;
-            for (jdx, v) in col.iter_mut().enumerate() {
-                *v = if i < me {
-                    qp.e[(i, jdx)]
-                } else {
-                    qp.c[(i - me, jdx)]
-                };
-                s += *v * *v;
-            }
-            self.norms[i] = s.sqrt();
-        }
+        self.load_rows(qp);
         if !self.factorize(qp) {
             out.status = QpStatus::HessianNotPositiveDefinite;
             self.prev.clear();

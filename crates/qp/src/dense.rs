@@ -205,13 +205,18 @@ impl DenseQp {
         fn finite<'a>(mut it: impl Iterator<Item = &'a f64>) -> bool {
             it.all(|v| v.is_finite())
         }
-        if !finite(self.h.iter()) || !finite(self.g.iter()) {
+        // the rows in use of a column-major matrix: the first `used` entries of each column
+        fn finite_rows(m: &DMatrix<f64>, used: usize) -> bool {
+            let rows = m.nrows();
+            (0..m.ncols()).all(|c| finite(m.as_slice()[c * rows..c * rows + used].iter()))
+        }
+        if !finite(self.h.as_slice().iter()) || !finite(self.g.as_slice().iter()) {
             return false;
         }
-        if !finite(self.eq_matrix().iter()) || !finite(self.eq_rhs().iter()) {
+        if !finite_rows(&self.e, self.n_eq) || !finite(self.eq_rhs().iter()) {
             return false;
         }
-        if !finite(self.ineq_matrix().iter()) {
+        if !finite_rows(&self.c, self.n_ineq) {
             return false;
         }
         let sides_ok = |lo: f64, hi: f64| {

@@ -5,44 +5,71 @@
 //! [Golub 2013, §5.2]); then every solution is `x = x_p + N z` with `x_p = Q₁ R⁻ᵀ b_e` and `N = Q₂`
 //! (orthonormal, nx × (nx − m)) [Nocedal 2006, §15.3, eq. 15.15]. Soft tasks become `(A N) z = b − A x_p`,
 //! inequalities `l − C x_p ≤ (C N) z ≤ u − C x_p`, the variable bounds the rows `lb − x_p ≤ N z ≤ ub − x_p`.
-//! The reduced QP has no equality constraint and `nx − m` variables; it is solved by the same backend
+//! The reduced QP has no equality constraint and `nz = nx − m` variables; it is solved by the same backend
 //! without fallback (a failure sends the caller to the full problem).
+//!
+//! Cost per solve (what makes this path cheap; measured in docs/performance.md): only the `nz` columns of
+//! `Q` that form `N` are built (the reflectors applied to `[0; I]`, never the `nx × nx` matrix `Q`); each
+//! task is projected once as a sum over the nonzero entries of its `A`, and a task whose `A` equals an
+//! earlier task's this tick (the TSID's torque limits and torque regularization share `[M_s | −J_sᵀ]`)
+//! reuses that projection; the reduced Hessian `ρ I + Σ_soft (A N)ᵀ W (A N)` is accumulated from the stacked
+//! weighted soft rows into one triangle, straight into the backend's dense QP (no per-task Hessian, no
+//! reduced tasks); only the variables with a finite bound get a bound row. nalgebra's `gemm`
+//! (matrixmultiply) was measured faster for the dense products but allocates its packing buffers at every
+//! call, so the loops here are plain contiguous updates (docs/performance.md, "Tried and not kept").
+
+use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::QpError;
 use crate::problem::{QpProblem, QpSettings};
 use crate::status::QpStatus;
-use crate::task::{Task, TaskId, TaskKind, TaskSpec};
+use crate::task::{Task, TaskKind};
 use crate::variables::VariableSet;
 
 /// Relative pivot threshold of `R` below which `A_e` is treated as rank deficient (full path instead).
 const RANK_TOLERANCE: f64 = 1e-9;
 
+/// The image of one soft or inequality task in the reduced problem.
+struct Projected {
+    /// `(A N)ᵀ` (nz × rows): column `i` is row `i` of `A N`, contiguous.
+    pt: DMatrix<f64>,
+    /// `A x_p` (rows).
+    shift: DVector<f64>,
+    /// Earlier tasks of the same shape: when one's `A` equals this task's, its projection is reused.
+    twins: Vec<usize>,
+}
+
 /// The reduced problem of a [`QpProblem`] and the workspace of its factorization (all preallocated).
 pub(crate) struct NullSpace {
-    /// The reduced QP over the variable `null_space_coordinates` (nx − m scalars).
+    /// The reduced QP over the variable `null_space_coordinates` (nz scalars): a problem without tasks
+    /// whose dense QP is written here every solve.
     pub(crate) problem: QpProblem,
-    /// Full task index → reduced task id (`None` for the hard equalities).
-    task_of: Vec<Option<TaskId>>,
     /// Hard flags of the full tasks when the reduction was built (a change disables the path).
     hard: Vec<bool>,
-    bounds_task: TaskId,
     m: usize,
     nx: usize,
-    /// `A_eᵀ` (nx × m), overwritten by the Householder vectors.
+    nz: usize,
+    /// `A_eᵀ` (nx × m), overwritten by the Householder vectors (and the strict upper part of `R`).
     at: DMatrix<f64>,
     tau: DVector<f64>,
+    /// `b_e`, then `y = R⁻ᵀ b_e` in place.
     b_e: DVector<f64>,
-    /// `Q` (nx × nx) and `Nᵀ` (nz × nx), so that a row of N is contiguous.
-    q: DMatrix<f64>,
-    nt: DMatrix<f64>,
     /// Diagonal of `R`.
     r_diag: DVector<f64>,
+    /// `Nᵀ` (nz × nx): column `j` is row `j` of `N`, so that `A N` is a sum of contiguous columns.
+    nt: DMatrix<f64>,
+    /// Workspace of one Householder application to `N` (nz).
+    dots: DVector<f64>,
     x_p: DVector<f64>,
-    z: DVector<f64>,
-    /// Per full task: `(A N)ᵀ` (nz × rows) and `A x_p`.
-    scratch: Vec<(DMatrix<f64>, DVector<f64>)>,
+    /// Per full task: its projection (`None` for the hard equalities).
+    proj: Vec<Option<Projected>>,
+    /// Per full task, this solve: the task whose projection it uses (itself or an equal twin).
+    source: Vec<usize>,
+    /// `W^{1/2} (A N)` of every soft row, transposed (nz × soft rows), and `W^{1/2} (b − A x_p)`.
+    soft: DMatrix<f64>,
+    soft_rhs: DVector<f64>,
 }
 
 impl NullSpace {
@@ -53,9 +80,10 @@ impl NullSpace {
         nx: usize,
         settings: &QpSettings,
     ) -> Result<Option<Self>, QpError> {
+        let is_hard_eq = |t: &Task| t.kind == TaskKind::Equality && t.hard;
         let m: usize = tasks
             .iter()
-            .filter(|t| t.kind == TaskKind::Equality && t.hard)
+            .filter(|t| is_hard_eq(t))
             .map(|t| t.rows())
             .sum();
         if m == 0 || m >= nx {
@@ -63,27 +91,12 @@ impl NullSpace {
         }
         let nz = nx - m;
         let mut vars = VariableSet::new();
-        let z = vars.add("null_space_coordinates", nz)?;
-        let mut specs = Vec::new();
-        let mut task_of = Vec::new();
-        for t in tasks {
-            match (t.kind, t.hard) {
-                (TaskKind::Equality, true) => task_of.push(None),
-                (TaskKind::Equality, false) => {
-                    task_of.push(Some(TaskId(specs.len())));
-                    specs.push(
-                        TaskSpec::equality(&t.name, &[z], t.rows())
-                            .soft_weights(t.weight.as_slice()),
-                    );
-                }
-                (TaskKind::Inequality, _) => {
-                    task_of.push(Some(TaskId(specs.len())));
-                    specs.push(TaskSpec::inequality(&t.name, &[z], t.rows()));
-                }
-            }
-        }
-        let bounds_task = TaskId(specs.len());
-        specs.push(TaskSpec::inequality("variable_bounds", &[z], nx));
+        vars.add("null_space_coordinates", nz)?;
+        let ineq_rows: usize = tasks
+            .iter()
+            .filter(|t| t.kind == TaskKind::Inequality)
+            .map(|t| t.rows())
+            .sum();
         let mut settings = settings.clone();
         // no hard equality is left to relax: failures go to the full problem
         settings.fallback = false;
@@ -91,52 +104,72 @@ impl NullSpace {
         // unconstrained minimum) is faster than re-imposing the previous active set (IK 7 µs vs 87 µs,
         // TSID 41 µs vs 68 µs on the bundled model)
         settings.active_set.warm_start = false;
-        let mut problem = QpProblem::new(vars, specs, settings)?;
-        // size the backend's workspace, then forget the solve
-        let _ = problem.solve();
-        problem.reset_warm_start();
+        let problem = QpProblem::raw(vars, ineq_rows + nx, settings)?;
+        let soft_rows: usize = tasks
+            .iter()
+            .filter(|t| t.kind == TaskKind::Equality && !t.hard)
+            .map(|t| t.rows())
+            .sum();
+        let proj = tasks
+            .iter()
+            .enumerate()
+            .map(|(k, t)| {
+                (!is_hard_eq(t)).then(|| Projected {
+                    pt: DMatrix::zeros(nz, t.rows()),
+                    shift: DVector::zeros(t.rows()),
+                    twins: (0..k)
+                        .filter(|&e| {
+                            let o = &tasks[e];
+                            !is_hard_eq(o) && o.rows() == t.rows() && o.blocks == t.blocks
+                        })
+                        .collect(),
+                })
+            })
+            .collect();
         Ok(Some(NullSpace {
             problem,
-            task_of,
             hard: tasks.iter().map(|t| t.hard).collect(),
-            bounds_task,
             m,
             nx,
+            nz,
             at: DMatrix::zeros(nx, m),
             tau: DVector::zeros(m),
             b_e: DVector::zeros(m),
-            q: DMatrix::zeros(nx, nx),
-            nt: DMatrix::zeros(nz, nx),
             r_diag: DVector::zeros(m),
+            nt: DMatrix::zeros(nz, nx),
+            dots: DVector::zeros(nz),
             x_p: DVector::zeros(nx),
-            z: DVector::zeros(nz),
-            scratch: tasks
-                .iter()
-                .map(|t| (DMatrix::zeros(nz, t.rows()), DVector::zeros(t.rows())))
-                .collect(),
+            proj,
+            source: (0..tasks.len()).collect(),
+            soft: DMatrix::zeros(nz, soft_rows),
+            soft_rhs: DVector::zeros(soft_rows),
         }))
     }
 
-    /// Copies the hard equality rows into `A_eᵀ` and `b_e`.
+    /// Copies the hard equality rows into `A_eᵀ` and `b_e` (column by column of each task's `A`).
     fn gather(&mut self, tasks: &[Task]) {
         let nx = self.nx;
-        let mut row = 0;
+        let at = self.at.as_mut_slice();
+        let mut row0 = 0;
         for t in tasks
             .iter()
             .filter(|t| t.kind == TaskKind::Equality && t.hard)
         {
-            for i in 0..t.rows() {
-                if t.width != nx {
-                    self.at.column_mut(row).fill(0.0);
-                }
-                for (range, offset) in &t.blocks {
-                    for (k, j) in range.clone().enumerate() {
-                        self.at[(j, row)] = t.a[(i, offset + k)];
+            let rows = t.rows();
+            if t.width != nx {
+                at[row0 * nx..(row0 + rows) * nx].fill(0.0);
+            }
+            let a = t.a.as_slice();
+            for (range, offset) in &t.blocks {
+                for (k, j) in range.clone().enumerate() {
+                    let col = &a[(offset + k) * rows..(offset + k + 1) * rows];
+                    for (i, v) in col.iter().enumerate() {
+                        at[(row0 + i) * nx + j] = *v;
                     }
                 }
-                self.b_e[row] = t.b[i];
-                row += 1;
             }
+            self.b_e.as_mut_slice()[row0..row0 + rows].copy_from_slice(t.b.as_slice());
+            row0 += rows;
         }
     }
 
@@ -171,31 +204,49 @@ impl NullSpace {
         (0..m).all(|k| self.r_diag[k].abs() > RANK_TOLERANCE * max_diag)
     }
 
-    /// Forms `Q = H_0 … H_{m−1} I`, `x_p = Q₁ R⁻ᵀ b_e` and `Nᵀ` from the factorization.
-    fn particular_and_basis(&mut self) {
-        let (nx, m) = (self.nx, self.m);
+    /// `Nᵀ = (H_0 ⋯ H_{m−1} [0; I])ᵀ`: the last `nz` columns of `Q`, one reflector at a time on all of them
+    /// (`N ← N − τ_k v_k (v_kᵀ N)`, `v_k` on rows `k..nx`); `Q₁` is never formed.
+    fn basis(&mut self) {
+        let (nx, m, nz) = (self.nx, self.m, self.nz);
         let at = self.at.as_slice();
-        let q = self.q.as_mut_slice();
-        q.fill(0.0);
-        for i in 0..nx {
-            q[i * nx + i] = 1.0;
+        let nt = self.nt.as_mut_slice();
+        nt.fill(0.0);
+        for r in 0..nz {
+            nt[(m + r) * nz + r] = 1.0;
         }
+        let dots = self.dots.as_mut_slice();
         for k in (0..m).rev() {
             let vk = &at[k * nx + k..(k + 1) * nx];
+            // dots = τ_k N[k.., :]ᵀ v_k (rows of N are the contiguous columns of Nᵀ)
+            dots.fill(0.0);
+            for (jj, &v) in vk.iter().enumerate() {
+                if v != 0.0 {
+                    let row = &nt[(k + jj) * nz..(k + jj + 1) * nz];
+                    for (d, n) in dots.iter_mut().zip(row) {
+                        *d += v * n;
+                    }
+                }
+            }
             let tau = self.tau[k];
-            // columns c < k of H_{k+1}…I are unit vectors e_c with zero rows ≥ k+1… only rows ≥ k matter
-            for c in k..nx {
-                let col = &mut q[c * nx + k..(c + 1) * nx];
-                let dot: f64 = vk.iter().zip(col.iter()).map(|(a, b)| a * b).sum();
-                if dot != 0.0 {
-                    let f = tau * dot;
-                    for (x, v) in col.iter_mut().zip(vk.iter()) {
-                        *x -= f * v;
+            for d in dots.iter_mut() {
+                *d *= tau;
+            }
+            for (jj, &v) in vk.iter().enumerate() {
+                if v != 0.0 {
+                    let row = &mut nt[(k + jj) * nz..(k + jj + 1) * nz];
+                    for (n, d) in row.iter_mut().zip(dots.iter()) {
+                        *n -= v * d;
                     }
                 }
             }
         }
-        // forward substitution Rᵀ y = b_e (R: diagonal in r_diag, strict upper part in at); y overwrites b_e
+    }
+
+    /// `x_p = Q₁ R⁻ᵀ b_e = H_0 ⋯ H_{m−1} [y; 0]` with `Rᵀ y = b_e` (forward substitution; `R`: diagonal in
+    /// `r_diag`, strict upper part in `at`).
+    fn particular(&mut self) {
+        let (nx, m) = (self.nx, self.m);
+        let at = self.at.as_slice();
         for k in 0..m {
             let mut s = self.b_e[k];
             for j in 0..k {
@@ -203,37 +254,30 @@ impl NullSpace {
             }
             self.b_e[k] = s / self.r_diag[k];
         }
-        // x_p = Q₁ y
-        self.x_p.fill(0.0);
-        for k in 0..m {
-            let yk = self.b_e[k];
-            let col = &q[k * nx..(k + 1) * nx];
-            for (x, c) in self.x_p.as_mut_slice().iter_mut().zip(col.iter()) {
-                *x += yk * c;
-            }
-        }
-        // Nᵀ (nz × nx): entry (r, j) = Q[j, m + r]
-        let nz = nx - m;
-        let nt = self.nt.as_mut_slice();
-        for j in 0..nx {
-            for r in 0..nz {
-                nt[j * nz + r] = q[(m + r) * nx + j];
+        let x = self.x_p.as_mut_slice();
+        x.fill(0.0);
+        x[..m].copy_from_slice(&self.b_e.as_slice()[..m]);
+        for k in (0..m).rev() {
+            let vk = &at[k * nx + k..(k + 1) * nx];
+            let tail = &mut x[k..];
+            let dot: f64 = vk.iter().zip(tail.iter()).map(|(a, b)| a * b).sum();
+            let f = self.tau[k] * dot;
+            for (xv, v) in tail.iter_mut().zip(vk) {
+                *xv -= f * v;
             }
         }
     }
 
-    /// `out_t = (A N)ᵀ` (nz × rows) and `shift = A x_p` for one task, skipping zero entries of `A`.
-    fn project(
-        task: &Task,
-        nt: &DMatrix<f64>,
-        x_p: &DVector<f64>,
-        out_t: &mut DMatrix<f64>,
-        shift: &mut [f64],
-    ) {
+    /// `pt = (A N)ᵀ` (nz × rows) and `shift = A x_p` for one task, as a sum over the nonzero entries of `A`
+    /// (rows of `N`, contiguous columns of `Nᵀ`, scaled and added): the task matrices are sparse (posture and
+    /// wrench rows are selections, Jacobians have zero columns off their chains, `M_s` zero blocks between
+    /// branches).
+    fn project(task: &Task, nt: &DMatrix<f64>, x_p: &DVector<f64>, p: &mut Projected) {
         let nz = nt.nrows();
         let rows = task.a.nrows();
         let nt = nt.as_slice();
-        let out = out_t.as_mut_slice();
+        let out = p.pt.as_mut_slice();
+        let shift = p.shift.as_mut_slice();
         out.fill(0.0);
         shift.fill(0.0);
         let a_s = task.a.as_slice();
@@ -254,35 +298,101 @@ impl NullSpace {
         }
     }
 
-    /// Writes the reduced tasks (and the reduced variable bounds) from the full ones.
-    fn write_reduced(&mut self, tasks: &[Task], lower: &DVector<f64>, upper: &DVector<f64>) {
-        for (k, (t, id)) in tasks.iter().zip(&self.task_of).enumerate() {
-            let Some(id) = *id else { continue };
-            let (a_red, shift) = &mut self.scratch[k];
-            Self::project(t, &self.nt, &self.x_p, a_red, shift.as_mut_slice());
-            let r = self.problem.task_mut(id);
-            r.a.tr_copy_from(a_red);
-            match t.kind {
-                TaskKind::Equality => {
-                    r.weight.copy_from(&t.weight);
-                    for i in 0..t.rows() {
-                        r.b[i] = t.b[i] - shift[i];
-                    }
+    /// Projects every soft and inequality task (once per distinct `A`, see [`Projected::twins`]).
+    fn project_all(&mut self, tasks: &[Task]) {
+        for k in 0..tasks.len() {
+            let Some(p) = &self.proj[k] else { continue };
+            let twin = p
+                .twins
+                .iter()
+                .copied()
+                .find(|&e| tasks[e].a.as_slice() == tasks[k].a.as_slice());
+            self.source[k] = match twin {
+                Some(e) => self.source[e],
+                None => {
+                    let p = self.proj[k].as_mut().expect("checked above");
+                    Self::project(&tasks[k], &self.nt, &self.x_p, p);
+                    k
                 }
+            };
+        }
+    }
+
+    /// Stacks the soft rows scaled by the square roots of their weights: column `i` of `soft` is
+    /// `√w_i (a_i N)ᵀ`, `soft_rhs[i] = √w_i (b_i − a_i x_p)`, so that the soft cost is
+    /// `½‖Sᵀ z − r̃‖²` up to a constant. Returns the number of rows.
+    fn stack_soft_rows(&mut self, tasks: &[Task]) -> usize {
+        let nz = self.nz;
+        let mut col = 0;
+        for (k, t) in tasks.iter().enumerate() {
+            if t.kind != TaskKind::Equality || t.hard {
+                continue;
+            }
+            let p = self.proj[self.source[k]]
+                .as_ref()
+                .expect("soft tasks are projected");
+            for i in 0..t.rows() {
+                let w = t.weight[i].sqrt();
+                let src = &p.pt.as_slice()[i * nz..(i + 1) * nz];
+                let dst = &mut self.soft.as_mut_slice()[col * nz..(col + 1) * nz];
+                for (d, v) in dst.iter_mut().zip(src) {
+                    *d = w * v;
+                }
+                self.soft_rhs[col] = w * (t.b[i] - p.shift[i]);
+                col += 1;
+            }
+        }
+        col
+    }
+
+    /// Writes the reduced dense QP: Hessian `ρ I + Σ_soft (A N)ᵀ W (A N)`, gradient
+    /// `−Σ_soft (A N)ᵀ W (b − A x_p)`, the projected inequality rows and one bound row per variable with a
+    /// finite bound.
+    fn write_reduced(&mut self, tasks: &[Task], lower: &DVector<f64>, upper: &DVector<f64>) {
+        let nz = self.nz;
+        let rho = self.problem.settings().regularization;
+        let soft_rows = self.stack_soft_rows(tasks);
+        let qp = self.problem.dense_mut();
+        qp.h.fill(0.0);
+        qp.h.fill_diagonal(rho);
+        qp.g.fill(0.0);
+        if soft_rows > 0 {
+            // H += S Sᵀ (lower triangle, one soft row at a time), g = −S r̃
+            add_lower_gram(
+                qp.h.as_mut_slice(),
+                &self.soft.as_slice()[..nz * soft_rows],
+                nz,
+            );
+            let s = self.soft.columns(0, soft_rows);
+            qp.g.gemv(-1.0, &s, &self.soft_rhs.rows(0, soft_rows), 0.0);
+        }
+        let mut row = 0;
+        for (k, t) in tasks.iter().enumerate() {
+            let Some(p) = &self.proj[self.source[k]] else {
+                continue;
+            };
+            match t.kind {
+                TaskKind::Equality => {}
                 TaskKind::Inequality => {
                     for i in 0..t.rows() {
-                        r.lower[i] = t.lower[i] - shift[i];
-                        r.upper[i] = t.upper[i] - shift[i];
+                        set_row(&mut qp.c, row, &p.pt.as_slice()[i * nz..(i + 1) * nz]);
+                        qp.l[row] = t.lower[i] - p.shift[i];
+                        qp.u[row] = t.upper[i] - p.shift[i];
+                        row += 1;
                     }
                 }
             }
         }
-        let r = self.problem.task_mut(self.bounds_task);
-        r.a.tr_copy_from(&self.nt);
         for j in 0..self.nx {
-            r.lower[j] = lower[j] - self.x_p[j];
-            r.upper[j] = upper[j] - self.x_p[j];
+            if lower[j].is_finite() || upper[j].is_finite() {
+                set_row(&mut qp.c, row, &self.nt.as_slice()[j * nz..(j + 1) * nz]);
+                qp.l[row] = lower[j] - self.x_p[j];
+                qp.u[row] = upper[j] - self.x_p[j];
+                row += 1;
+            }
         }
+        // the capacity holds every inequality row and every bound, so this cannot fail
+        let _ = qp.set_n_ineq(row);
     }
 
     /// Factors, fills and solves the reduced problem; on an exact solve writes `x = x_p + N z` and returns
@@ -296,6 +406,7 @@ impl NullSpace {
         upper: &DVector<f64>,
         x: &mut DVector<f64>,
     ) -> Option<(QpStatus, usize)> {
+        let start = Instant::now();
         if tasks.iter().zip(&self.hard).any(|(t, &h)| t.hard != h) {
             return None;
         }
@@ -303,22 +414,49 @@ impl NullSpace {
         if !self.householder() {
             return None;
         }
-        self.particular_and_basis();
+        self.basis();
+        self.particular();
+        self.project_all(tasks);
         self.write_reduced(tasks, lower, upper);
-        let ok = self.problem.solve().is_ok();
-        let sol = self.problem.solution();
+        let sol = self.problem.solve_dense(start);
         // anything short of an exact solve goes to the full problem
-        if !ok || sol.status != QpStatus::Solved || !sol.x.iter().all(|v| v.is_finite()) {
+        if sol.status != QpStatus::Solved || !sol.x.iter().all(|v| v.is_finite()) {
             return None;
         }
-        self.z.copy_from(&sol.x);
+        let (z, nz) = (sol.x.as_slice(), self.nz);
         for j in 0..self.nx {
-            let mut s = self.x_p[j];
-            for r in 0..self.z.len() {
-                s += self.nt[(r, j)] * self.z[r];
-            }
-            x[j] = s;
+            let row = &self.nt.as_slice()[j * nz..(j + 1) * nz];
+            x[j] = self.x_p[j] + row.iter().zip(z).map(|(n, z)| n * z).sum::<f64>();
         }
         Some((sol.status, sol.iterations))
+    }
+}
+
+/// Writes `values` into row `row` of the column-major matrix `m`.
+fn set_row(m: &mut DMatrix<f64>, row: usize, values: &[f64]) {
+    let ld = m.nrows();
+    for (c, v) in values.iter().enumerate() {
+        m.as_mut_slice()[c * ld + row] = *v;
+    }
+}
+
+/// `H += Σ_i s_i s_iᵀ` for the columns `s_i` (length `nz`) of `s`, then the upper triangle from the lower
+/// one: `H` column-major `nz × nz`; each update touches `H[c.., c]` (contiguous) only.
+fn add_lower_gram(h: &mut [f64], s: &[f64], nz: usize) {
+    for si in s.chunks_exact(nz) {
+        for c in 0..nz {
+            let f = si[c];
+            if f == 0.0 {
+                continue;
+            }
+            for (hv, sv) in h[c * nz + c..(c + 1) * nz].iter_mut().zip(&si[c..]) {
+                *hv += f * sv;
+            }
+        }
+    }
+    for c in 0..nz {
+        for r in c + 1..nz {
+            h[r * nz + c] = h[c * nz + r];
+        }
     }
 }

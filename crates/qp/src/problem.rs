@@ -290,6 +290,50 @@ impl QpProblem {
         })
     }
 
+    /// A problem without tasks over `vars`, with room for `cap_in` inequality rows and no equality row,
+    /// whose dense QP the crate writes directly ([`QpProblem::dense_mut`]) and solves as written
+    /// ([`QpProblem::solve_dense`]): the null-space path's reduced problem. Its backend's workspace is
+    /// sized here, so no solve allocates.
+    pub(crate) fn raw(
+        vars: VariableSet,
+        cap_in: usize,
+        settings: QpSettings,
+    ) -> Result<Self, QpError> {
+        let mut problem = Self::new(vars, Vec::new(), settings)?;
+        let n = problem.n();
+        problem.nominal = DenseQp::with_capacity(n, 0, cap_in);
+        problem.solver.reserve(n, 0, cap_in);
+        problem.out = SolverOutput::new(&problem.nominal);
+        Ok(problem)
+    }
+
+    /// The nominal dense QP, for writing it directly (problems built with [`QpProblem::raw`]).
+    pub(crate) fn dense_mut(&mut self) -> &mut DenseQp {
+        &mut self.nominal
+    }
+
+    /// Solves the nominal dense QP as written, without assembly nor fallback (problems built with
+    /// [`QpProblem::raw`]: no task, so the solution has no task residual and `hard_violation` covers the
+    /// variable bounds only). `start` is when the caller's solve began (for `solve_time`).
+    pub(crate) fn solve_dense(&mut self, start: Instant) -> &QpSolution {
+        self.solver.solve(&self.nominal, &mut self.out);
+        let sol = &mut self.solution;
+        sol.status = self.out.status;
+        sol.nominal_status = self.out.status;
+        sol.path = SolvePath::Nominal;
+        sol.iterations = self.out.iterations;
+        sol.warm_started = self.out.warm_started;
+        if self.out.status.is_success() {
+            sol.x.copy_from(&self.out.x);
+            sol.objective = self.out.objective;
+        } else {
+            sol.x.fill(0.0);
+            sol.objective = 0.0;
+        }
+        self.write_residuals(start);
+        &self.solution
+    }
+
     /// Adds the null-space solve path: every [`QpProblem::solve`] first eliminates the hard equality tasks
     /// (`x = x_p + N z`, see the `nullspace` module) and solves the smaller equality-free problem over `z`
     /// with the same backend; the full problem (and its relaxed fallback) is solved only when that is
@@ -310,7 +354,8 @@ impl QpProblem {
 
     /// The problem the last [`QpProblem::solve`] solved: the null-space reduced one (one variable,
     /// `null_space_coordinates`) when the solution took [`SolvePath::NullSpace`], else `self`. For
-    /// inspecting its data, dense form and KKT residuals.
+    /// inspecting its dense form, solver output and KKT residuals (the reduced problem has no tasks: its
+    /// dense QP is written directly from the full problem's tasks).
     pub fn last_solved(&self) -> &QpProblem {
         match (&self.null_space, self.used_null_space) {
             (Some(ns), true) => &ns.problem,

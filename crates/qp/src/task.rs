@@ -115,7 +115,6 @@ pub struct Task {
     pub(crate) bw: DVector<f64>,
     pub(crate) hk: DMatrix<f64>,
     pub(crate) gk: DVector<f64>,
-    pub(crate) xk: DVector<f64>,
     pub(crate) ax: DVector<f64>,
     pub(crate) nz: Vec<usize>,
 }
@@ -167,7 +166,6 @@ impl Task {
             bw: DVector::zeros(rows),
             hk: DMatrix::zeros(width, width),
             gk: DVector::zeros(width),
-            xk: DVector::zeros(width),
             ax: DVector::zeros(rows),
             nz: Vec::with_capacity(width),
         };
@@ -316,19 +314,23 @@ impl Task {
         }
     }
 
-    fn gather(&mut self, x: &DVector<f64>) {
-        for (range, offset) in &self.blocks {
-            for (k, i) in range.clone().enumerate() {
-                self.xk[offset + k] = x[i];
-            }
-        }
-    }
-
     /// Residual at `x`: `‖A x − b‖₂` for equalities, the 2-norm of the side violations for inequalities;
     /// also returns the ∞-norm.
     pub(crate) fn residual(&mut self, x: &DVector<f64>) -> (f64, f64) {
-        self.gather(x);
-        self.ax.gemv(1.0, &self.a, &self.xk, 0.0);
+        // A x as a sum of A's (contiguous) columns
+        let rows = self.rows();
+        let a = self.a.as_slice();
+        let ax = self.ax.as_mut_slice();
+        ax.fill(0.0);
+        for (range, offset) in &self.blocks {
+            for (k, j) in range.clone().enumerate() {
+                let xj = x[j];
+                let col = &a[(offset + k) * rows..(offset + k + 1) * rows];
+                for (o, v) in ax.iter_mut().zip(col) {
+                    *o += v * xj;
+                }
+            }
+        }
         let mut sq = 0.0;
         let mut inf: f64 = 0.0;
         for i in 0..self.rows() {

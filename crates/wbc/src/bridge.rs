@@ -103,7 +103,7 @@ pub(crate) fn check_weight(task: &str, weight: &Weight, rows: usize) -> Result<(
 
 /// `‖A x − b‖` (equality) or the norm of the side violations (inequality) of a task over the whole
 /// decision vector. No allocation.
-pub(crate) fn residual(task: &Task, x: &DVector<f64>) -> f64 {
+fn residual(task: &Task, x: &DVector<f64>) -> f64 {
     let a = task.a();
     let mut sum = 0.0;
     for i in 0..a.nrows() {
@@ -126,6 +126,8 @@ pub(crate) fn residual(task: &Task, x: &DVector<f64>) -> f64 {
 pub(crate) struct QpBridge {
     problem: QpProblem,
     ids: Vec<VarId>,
+    /// Whether the last solve wrote its solution to the caller's `x`.
+    solved: bool,
 }
 
 impl QpBridge {
@@ -156,6 +158,7 @@ impl QpBridge {
         Ok(QpBridge {
             problem,
             ids: layout.ids,
+            solved: false,
         })
     }
 
@@ -163,6 +166,16 @@ impl QpBridge {
     /// `null_space_coordinates`) or the full one (data, solution, KKT check).
     pub fn problem(&self) -> &QpProblem {
         self.problem.last_solved()
+    }
+
+    /// The residual of task `k` at `x` (see [`residual`]): stride-qp's, computed with the solution, when
+    /// the last [`QpBridge::solve`] wrote `x`; recomputed when it held `x`.
+    pub fn residual(&self, k: usize, x: &DVector<f64>) -> f64 {
+        if self.solved {
+            self.problem.solution().task_residuals[k]
+        } else {
+            residual(self.task(k), x)
+        }
     }
 
     /// Task `k`.
@@ -226,7 +239,8 @@ impl QpBridge {
         if sol.path == SolvePath::Relaxed {
             report.relaxed_status = Some(sol.status);
         }
-        if ok && sol.x.iter().all(|v| v.is_finite()) {
+        self.solved = ok && sol.x.iter().all(|v| v.is_finite());
+        if self.solved {
             x.copy_from(&sol.x);
             report.fallback = sol.path == SolvePath::Relaxed;
         } else {

@@ -7,7 +7,7 @@ use nalgebra::{DVector, Vector6};
 use stride_block::Block;
 use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
 
-use crate::bridge::{residual, QpBridge, VariableLayout};
+use crate::bridge::{QpBridge, VariableLayout};
 use crate::config::{check_unique_names, IkConfig, IkFeedback, Priority, TaskConfig, Weight};
 use crate::error::WbcError;
 use crate::io::{IkOutput, SolveReport, TaskResidual, WbcInput};
@@ -310,7 +310,7 @@ impl QpIk {
         let n = self.model.dof();
         for (k, slot) in self.slots.iter().enumerate() {
             let r = match slot {
-                Slot::Block(b) => residual(self.bridge.task(*b), &self.x),
+                Slot::Block(b) => self.bridge.residual(*b, &self.x),
                 Slot::PositionLimits | Slot::VelocityLimits => {
                     let mut s = 0.0;
                     for i in 0..n {

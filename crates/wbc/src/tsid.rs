@@ -15,7 +15,7 @@ use stride_block::Block;
 use stride_model::{KinDyn, Model, VelocityRepresentation};
 use stride_qp::{TaskKind, TaskSpec};
 
-use crate::bridge::{check_weight, priority_weight, residual, QpBridge, VariableLayout};
+use crate::bridge::{check_weight, priority_weight, QpBridge, VariableLayout};
 use crate::config::{check_unique_names, Foot, Priority, TaskConfig, TsidConfig, Weight};
 use crate::error::WbcError;
 use crate::ik::{check_references, check_state};
@@ -655,7 +655,7 @@ impl Tsid {
         for (k, slots) in variant.slots.iter().enumerate() {
             let mut s = 0.0;
             for &b in slots {
-                let r = residual(variant.bridge.task(b), x);
+                let r = variant.bridge.residual(b, x);
                 s += r * r;
             }
             self.output.residuals[k].residual = match self.tasks[k] {
