@@ -21,7 +21,7 @@
 //! s.t. u + b − k τ = Rᵀ(r − p_s)                                   (2 rows, the DCM dynamics)
 //!      −backward_max ≤ u_x ≤ forward_max                            (reachable box, stance frame)
 //!      lateral_min ≤ ±u_y ≤ lateral_max                             (+ right stance, − left stance)
-//!      e^{ω max(T_min, t + t_rem)} ≤ τ ≤ e^{ω T_max}                 (step duration, remaining swing)
+//!      e^{ω max(min(T_min, T_n), t + t_rem)} ≤ τ ≤ e^{ω max(T_max, T_n)}   (duration, remaining swing)
 //!      b_n − m − s ≤ b ≤ b_n + m + s,  s ≥ 0                        (DCM offset bounds, slack-softened)
 //! ```
 //!
@@ -29,7 +29,8 @@
 //! at the planned touch-down, so a DCM on the plan satisfies the equality at the nominal point and the
 //! solution is the nominal step. The timing weight is on the *relative* change of `τ`
 //! (`δτ/τ_n ≈ ω δT`), which makes `w_τ` independent of the step duration and of ω. The box is enlarged to
-//! contain the nominal step (the planner's own step is reachable by definition) and the lower `τ` bound is
+//! contain the nominal step and the duration bounds to contain `T_n` (the planner's own step is admissible by
+//! definition; the plan's first step counts from the plan start), and the lower `τ` bound is
 //! clipped to the upper one once `t + t_rem > T_max` (then the step lands `t_rem` from now). Khadiv's
 //! offset bounds come from a periodic gait [Khadiv 2020]; ours are a box of half-width `m`
 //! around the planned offset, because the plan, not a periodic gait, is the reference here.
@@ -451,10 +452,13 @@ impl StepAdjuster {
             (-c.lateral_max, -c.lateral_min)
         };
         let (x_lo, x_hi) = (-c.backward_max, c.forward_max);
+        // duration bounds enlarged to contain the nominal duration (the plan's first step counts from
+        // the plan start); the remaining-time bound stays hard
         let t_lo = c
             .step_duration_min
+            .min(input.nominal_duration)
             .max(input.time_since_touchdown + c.min_remaining_time);
-        let tau_hi = (w * c.step_duration_max).exp();
+        let tau_hi = (w * c.step_duration_max.max(input.nominal_duration)).exp();
         let tau_lo = (w * t_lo).exp();
         let lb = self.qp.lower_bounds_mut();
         lb[UX] = x_lo.min(nominal.u.x);
