@@ -25,9 +25,10 @@ use crate::goal::Goal;
 use crate::plan::Plan;
 use crate::swing::{RetargetOutcome, SwingTrajectory};
 
-/// The step of a plan that is being executed at some instant of single support.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CurrentStep {
+/// The step of a plan that is being executed at some instant of single support (borrowed from the plan:
+/// no allocation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurrentStep<'a> {
     /// The foot on the ground.
     pub stance: Foot,
     /// Its sole pose.
@@ -35,13 +36,13 @@ pub struct CurrentStep {
     /// When it touched down (the plan start for the initial stance) \[s\].
     pub stance_touchdown: f64,
     /// The swing of the other foot (lift-off, touch-down, target pose).
-    pub swing: SwingTrajectory,
+    pub swing: &'a SwingTrajectory,
 }
 
 impl Plan {
     /// The step being executed at `t` \[s\]: `None` unless `t` is inside a single support with the other
     /// foot swinging.
-    pub fn current_step(&self, t: f64) -> Option<CurrentStep> {
+    pub fn current_step(&self, t: f64) -> Option<CurrentStep<'_>> {
         let PhaseKind::SingleSupport { stance } = self.phase_at(t) else {
             return None;
         };
@@ -55,7 +56,7 @@ impl Plan {
             stance,
             stance_pose: contact.pose,
             stance_touchdown: contact.activation_time,
-            swing: swing.clone(),
+            swing,
         })
     }
 }

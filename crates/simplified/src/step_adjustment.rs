@@ -14,11 +14,15 @@
 //! ```
 //!
 //! with `p_s`, `R = R_z(ψ_s)` the stance foot position and yaw, so `u`, `b`, `k` are in the stance-foot
-//! frame. The QP over `x = [u_x, u_y, τ, b_x, b_y, s_x, s_y]` (7 variables) is
+//! frame. The ankle strategy enters as a CoP offset `δr` held until touch-down: it moves the touch-down DCM
+//! by `−δr (e^{ω(T−t)} − 1)`, linearised at the nominal duration (`α = τ_n e^{−ωt} − 1`), as the CoP
+//! feedback of [Griffin 2017] does beside the step. The QP over
+//! `x = [u_x, u_y, τ, b_x, b_y, s_x, s_y, δr_x, δr_y]` (9 variables) is
 //!
 //! ```text
-//! min  w_u ‖u − u_n‖² + (w_τ/τ_n²)(τ − τ_n)² + w_b ‖b − b_n‖² + w_s ‖s‖²
-//! s.t. u + b − k τ = Rᵀ(r − p_s)                                   (2 rows, the DCM dynamics)
+//! min  w_u ‖u − u_n‖² + (w_τ/τ_n²)(τ − τ_n)² + w_b ‖b − b_n‖² + w_s ‖s‖² + w_r ‖δr‖²
+//! s.t. u + b − k τ + α δr = Rᵀ(r − p_s)                            (2 rows, the DCM dynamics)
+//!      |δr_x| ≤ cop_x,  |δr_y| ≤ cop_y                               (CoP inside the stance sole)
 //!      −backward_max ≤ u_x ≤ forward_max                            (reachable box, stance frame)
 //!      lateral_min ≤ ±u_y ≤ lateral_max                             (+ right stance, − left stance)
 //!      e^{ω max(min(T_min, T_n), t + t_rem)} ≤ τ ≤ e^{ω max(T_max, T_n)}   (duration, remaining swing)
@@ -27,7 +31,10 @@
 //!
 //! `(u_n, T_n, b_n)` is the nominal step from the plan: `b_n = ξ_plan(T_n) − u_n` is the planned DCM offset
 //! at the planned touch-down, so a DCM on the plan satisfies the equality at the nominal point and the
-//! solution is the nominal step. The timing weight is on the *relative* change of `τ`
+//! solution is the nominal step. Small DCM errors are absorbed by `δr` (the ankle, which the DCM
+//! controller actually uses), so the step moves only once the CoP box is exhausted: without it a 1 cm DCM
+//! error early in a swing (`e^{ω(T−t)}` ≈ 15 on the bundled humanoid) moved the step by 15 cm, and the
+//! estimator's DCM noise made the nominal walk step erratically and fall. The timing weight is on the *relative* change of `τ`
 //! (`δτ/τ_n ≈ ω δT`), which makes `w_τ` independent of the step duration and of ω. The box is enlarged to
 //! contain the nominal step and the duration bounds to contain `T_n` (the planner's own step is admissible by
 //! definition; the plan's first step counts from the plan start), and the lower `τ` bound is
@@ -43,10 +50,12 @@ use nalgebra::{Rotation2, Vector2};
 use serde::{Deserialize, Serialize};
 use stride_qp::{ActiveSetSettings, ActiveSetSolver, DenseQp, QpSolver, QpStatus, SolverOutput};
 
-use crate::error::{check_finite, check_finite2, check_positive, Result, SimplifiedError};
+use crate::error::{
+    check_finite, check_finite2, check_non_negative, check_positive, Result, SimplifiedError,
+};
 
-/// Number of decision variables `[u_x, u_y, τ, b_x, b_y, s_x, s_y]`.
-pub const STEP_ADJUSTMENT_VARIABLES: usize = 7;
+/// Number of decision variables `[u_x, u_y, τ, b_x, b_y, s_x, s_y, δr_x, δr_y]`.
+pub const STEP_ADJUSTMENT_VARIABLES: usize = 9;
 const UX: usize = 0;
 const UY: usize = 1;
 const TAU: usize = 2;
@@ -54,6 +63,8 @@ const BX: usize = 3;
 const BY: usize = 4;
 const SX: usize = 5;
 const SY: usize = 6;
+const RX: usize = 7;
+const RY: usize = 8;
 
 /// Parameters of the step adjustment, sized for the bundled humanoid (`configs/robots/stride_humanoid.toml`:
 /// CoM height 0.54 m, ω ≈ 4.26 s⁻¹, nominal width 0.15 m, planner `step_length_max` 0.22 m, steps of
@@ -74,6 +85,11 @@ const SY: usize = 6;
 /// | `timing_weight` | – | 10 | `w_τ` on `((τ − τ_n)/τ_n)²` (≈ `(ω δT)²`) |
 /// | `offset_weight` | m⁻² | 1000 | `w_b` on `‖b − b_n‖²`; `w_b/w_u` = 1000 as in [Khadiv 2020]'s Bolt parameters |
 /// | `slack_weight` | m⁻² | 1e5 | `w_s` on the slacks of the offset bounds |
+/// | `cop_x` | m | 0.04 | half-length of the CoP box `δr` (stance frame x): the bundled sole is 0.20 m long; the DCM controller's ZMP may use all of it, the QP counts on less than half |
+/// | `cop_y` | m | 0.015 | half-width of the CoP box (stance frame y); the sole is 0.09 m wide |
+/// | `cop_weight` | m⁻² | 1 | `w_r` on `‖δr‖²`; with the amplification `α` ≈ 3–15 the ankle takes `α²/(α² + w_r/w_u)` of an error first |
+/// | `deadband` | m | 0.02 | the runner moves the planned touch-down only when the solution differs from it by more than this (as IHMC's 0.02 m on Atlas): DCM errors of normal walking leave the plan alone, and the plan is not rebuilt every tick |
+/// | `time_deadband` | s | 0.03 | the same for the touch-down time |
 ///
 /// `validate()` requires finite positive lengths, weights and durations, `lateral_min < lateral_max`,
 /// `step_duration_min < step_duration_max` and `min_remaining_time < step_duration_max`.
@@ -106,6 +122,16 @@ pub struct StepAdjustmentConfig {
     pub offset_weight: f64,
     /// Weight on the slacks of the offset bounds \[m⁻²\].
     pub slack_weight: f64,
+    /// Half-length of the CoP box (stance frame x) \[m\].
+    pub cop_x: f64,
+    /// Half-width of the CoP box (stance frame y) \[m\].
+    pub cop_y: f64,
+    /// Weight on the CoP offset \[m⁻²\].
+    pub cop_weight: f64,
+    /// Smallest change of the touch-down position the runner applies \[m\].
+    pub deadband: f64,
+    /// Smallest change of the touch-down time the runner applies \[s\].
+    pub time_deadband: f64,
 }
 
 impl Default for StepAdjustmentConfig {
@@ -124,6 +150,11 @@ impl Default for StepAdjustmentConfig {
             timing_weight: 10.0,
             offset_weight: 1000.0,
             slack_weight: 1e5,
+            cop_x: 0.04,
+            cop_y: 0.015,
+            cop_weight: 1.0,
+            deadband: 0.02,
+            time_deadband: 0.03,
         }
     }
 }
@@ -147,9 +178,14 @@ impl StepAdjustmentConfig {
             ("step_adjustment.timing_weight", self.timing_weight),
             ("step_adjustment.offset_weight", self.offset_weight),
             ("step_adjustment.slack_weight", self.slack_weight),
+            ("step_adjustment.cop_weight", self.cop_weight),
         ] {
             check_positive(name, v)?;
         }
+        check_non_negative("step_adjustment.cop_x", self.cop_x)?;
+        check_non_negative("step_adjustment.cop_y", self.cop_y)?;
+        check_non_negative("step_adjustment.deadband", self.deadband)?;
+        check_non_negative("step_adjustment.time_deadband", self.time_deadband)?;
         let order = |name, value, ok, reason| {
             if ok {
                 Ok(())
@@ -255,6 +291,8 @@ pub struct StepAdjustmentDiagnostics {
     pub offset: Vector2<f64>,
     /// Whether a box or duration bound is active at the solution.
     pub bound_active: bool,
+    /// CoP offset `δr` the solution counts on (world) \[m\].
+    pub cop_offset: Vector2<f64>,
 }
 
 /// The adjusted step.
@@ -370,6 +408,11 @@ impl StepAdjuster {
                 offset_slack: s,
                 offset: rot * b,
                 bound_active: ok && self.bound_active(),
+                cop_offset: if ok {
+                    rot * Vector2::new(x[RX], x[RY])
+                } else {
+                    Vector2::zeros()
+                },
             },
         };
         Ok(&self.result)
@@ -409,8 +452,10 @@ impl StepAdjuster {
             c.offset_weight,
             c.slack_weight,
             c.slack_weight,
+            c.cop_weight,
+            c.cop_weight,
         ];
-        let x_n = [u_n.x, u_n.y, tau_n, b_n.x, b_n.y, 0.0, 0.0];
+        let x_n = [u_n.x, u_n.y, tau_n, b_n.x, b_n.y, 0.0, 0.0, 0.0, 0.0];
         let h = self.qp.hessian_mut();
         h.fill(0.0);
         for (j, wj) in weights.iter().enumerate() {
@@ -423,6 +468,9 @@ impl StepAdjuster {
         let mut e = self.qp.eq_matrix_mut();
         e[(0, TAU)] = -k.x;
         e[(1, TAU)] = -k.y;
+        let alpha = (tau_n * (-w * t).exp() - 1.0).max(0.0);
+        e[(0, RX)] = alpha;
+        e[(1, RY)] = alpha;
         let mut f = self.qp.eq_rhs_mut();
         f[0] = rhs.x;
         f[1] = rhs.y;
@@ -476,6 +524,11 @@ impl StepAdjuster {
         ub[BY] = f64::INFINITY;
         ub[SX] = f64::INFINITY;
         ub[SY] = f64::INFINITY;
+        ub[RX] = c.cop_x;
+        ub[RY] = c.cop_y;
+        let lb = self.qp.lower_bounds_mut();
+        lb[RX] = -c.cop_x;
+        lb[RY] = -c.cop_y;
     }
 }
 
