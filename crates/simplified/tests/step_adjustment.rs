@@ -43,24 +43,46 @@ fn case(stance: StanceFoot, yaw: f64) -> Case {
     }
 }
 
-/// The equality-constrained minimiser when no bound is active: with `A = [I, −k, I]` over `(u, τ, b)`,
-/// weights `W = diag(w_u I, w_τ/τ_n², w_b I)` and the residual `D = Rᵀ Δ e^{ω(T_n − t)}` of the dynamics
-/// at the nominal point, `δ = W⁻¹Aᵀ(AW⁻¹Aᵀ)⁻¹D`, so `δu = M⁻¹D / w_u`, `δτ = −kᵀM⁻¹D (τ_n²/w_τ)` with
-/// `M = (1/w_u + 1/w_b) I + k kᵀ τ_n²/w_τ` (stance frame).
-fn closed_form(c: &StepAdjustmentConfig, i: &StepAdjustmentInput) -> (Vector2<f64>, f64) {
+/// The equality-constrained minimiser when no bound is active: with `A = [I, −k, I, αI]` over
+/// `(u, τ, b, δr)` (`α = e^{ω(T_n − t)} − 1`, the CoP lever), weights
+/// `W = diag(w_u I, w_τ/τ_n², w_b I, w_r I)` and the residual `D = Rᵀ Δ e^{ω(T_n − t)}` of the dynamics at
+/// the nominal point, `δ = W⁻¹Aᵀ(AW⁻¹Aᵀ)⁻¹D`, so `δu = M⁻¹D / w_u`, `δτ = −kᵀM⁻¹D (τ_n²/w_τ)` with
+/// `M = (1/w_u + 1/w_b + α²/w_r) I + k kᵀ τ_n²/w_τ` (stance frame). `ankle = false`: the CoP box is
+/// zero, `δr` is fixed and the `α²/w_r` term drops.
+fn closed_form(
+    c: &StepAdjustmentConfig,
+    i: &StepAdjustmentInput,
+    ankle: bool,
+) -> (Vector2<f64>, f64, Vector2<f64>) {
     let rot = Rotation2::new(i.stance_yaw);
     let delta = i.dcm - planned_of(i);
     let d = rot.inverse() * delta * (OMEGA * (T_NOM - T_NOW)).exp();
     let k = rot.inverse() * (i.dcm - i.stance_cop) * (-OMEGA * T_NOW).exp();
     let tau_n = (OMEGA * T_NOM).exp();
     let wt = c.timing_weight / (tau_n * tau_n);
-    let m = Matrix2::identity() * (1.0 / c.step_weight + 1.0 / c.offset_weight)
+    let alpha = (OMEGA * (T_NOM - T_NOW)).exp() - 1.0;
+    let lever = if ankle {
+        alpha * alpha / c.cop_weight
+    } else {
+        0.0
+    };
+    let m = Matrix2::identity() * (1.0 / c.step_weight + 1.0 / c.offset_weight + lever)
         + k * k.transpose() / wt;
     let md = m.try_inverse().unwrap() * d;
     let du = rot * md / c.step_weight;
     let dtau = -k.dot(&md) / wt;
     let duration = (tau_n + dtau).ln() / OMEGA;
-    (du, duration)
+    let dr = rot * md * alpha / c.cop_weight;
+    (du, duration, dr)
+}
+
+/// No ankle: the CoP box is zero, the step absorbs the DCM error alone (the capture-point case).
+fn no_ankle() -> StepAdjustmentConfig {
+    StepAdjustmentConfig {
+        cop_x: 0.0,
+        cop_y: 0.0,
+        ..Default::default()
+    }
 }
 
 /// The planned DCM now, recovered from the nominal offset (the inverse of `case`).
@@ -90,7 +112,7 @@ fn nominal_dcm_gives_the_nominal_step_and_timing() {
 
 #[test]
 fn dcm_offset_moves_the_step_as_the_closed_form_says() {
-    let config = StepAdjustmentConfig::default();
+    let config = no_ankle();
     for stance in [StanceFoot::Left, StanceFoot::Right] {
         for yaw in [0.0, 0.4] {
             // x and y of the world (y outward: inward, the no-crossing bound would be active), and the
@@ -102,7 +124,7 @@ fn dcm_offset_moves_the_step_as_the_closed_form_says() {
                 c.input.dcm += delta;
                 let mut adj = StepAdjuster::new(&config).unwrap();
                 let r = *adj.solve(&c.input).unwrap();
-                let (du, duration) = closed_form(&config, &c.input);
+                let (du, duration, _) = closed_form(&config, &c.input, false);
                 assert!(!r.diagnostics.bound_active, "{stance:?} {yaw} {delta:?}");
                 assert!(
                     (r.displacement - du).norm() < 1e-9,
@@ -124,7 +146,7 @@ fn with_fixed_timing_the_step_takes_the_weighted_share_of_the_amplified_offset()
     let config = StepAdjustmentConfig {
         step_duration_min: T_NOM - 1e-15,
         step_duration_max: T_NOM,
-        ..Default::default()
+        ..no_ankle()
     };
     for stance in [StanceFoot::Left, StanceFoot::Right] {
         for delta in [
@@ -142,6 +164,29 @@ fn with_fixed_timing_the_step_takes_the_weighted_share_of_the_amplified_offset()
                 "{r:?} vs {expected:?}"
             );
             assert!((r.duration - T_NOM).abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn the_ankle_takes_small_errors_first_as_the_closed_form_says() {
+    // With the CoP box free (|δr| below its bounds), the CoP lever α ≈ 7.4 takes α²/(α² + w_r/w_u) ≈ 98 %
+    // of the error: the step moves by about 2 % of the capture-point shift.
+    let config = StepAdjustmentConfig::default();
+    for stance in [StanceFoot::Left, StanceFoot::Right] {
+        for yaw in [0.0, 0.4] {
+            let outward = Rotation2::new(yaw) * Vector2::new(0.0, stance.outward());
+            for delta in [Vector2::new(0.004, 0.0), outward * 0.0015] {
+                let mut c = case(stance, yaw);
+                c.input.dcm += delta;
+                let r = *StepAdjuster::new(&config).unwrap().solve(&c.input).unwrap();
+                let (du, duration, dr) = closed_form(&config, &c.input, true);
+                assert!((r.displacement - du).norm() < 1e-9, "{r:?} vs {du:?}");
+                assert!((r.duration - duration).abs() < 1e-9);
+                assert!((r.diagnostics.cop_offset - dr).norm() < 1e-9);
+                let amplified = delta * (OMEGA * (T_NOM - T_NOW)).exp();
+                assert!(r.displacement.norm() < 0.05 * amplified.norm());
+            }
         }
     }
 }
@@ -215,10 +260,11 @@ fn kkt_holds_and_clarabel_agrees() {
             clarabel.solve(adj.qp(), &mut out);
             assert!(out.status.is_success());
             let x = &adj.solver_output().x;
-            // The step, τ and the offset to 1e-6 (relative). The slacks sit on their bound `s ≥ 0`
+            // The step, τ, the offset and the CoP offset to 1e-6 (relative). The slacks sit on their bound `s ≥ 0`
             // with a zero multiplier whenever the offset box is not violated (a degenerate active bound),
             // which an interior-point method approaches only as √μ: clarabel stops ~3e-6 m above it.
-            for j in 0..STEP_ADJUSTMENT_VARIABLES - 2 {
+            const SLACKS: [usize; 2] = [5, 6];
+            for j in (0..STEP_ADJUSTMENT_VARIABLES).filter(|j| !SLACKS.contains(j)) {
                 let scale = 1.0 + x[j].abs();
                 assert!(
                     (out.x[j] - x[j]).abs() < 1e-6 * scale,
@@ -227,7 +273,7 @@ fn kkt_holds_and_clarabel_agrees() {
                     x[j]
                 );
             }
-            for j in STEP_ADJUSTMENT_VARIABLES - 2..STEP_ADJUSTMENT_VARIABLES {
+            for j in SLACKS {
                 assert!(
                     (out.x[j] - x[j]).abs() < 1e-5,
                     "slack {j}: {} vs {}",
