@@ -52,7 +52,7 @@ impl Plan {
             .partition_point(|s| s.lift_time <= t)
             .checked_sub(1)?;
         let swing = &swings[i];
-        (t < swing.land_time).then(|| CurrentStep {
+        (t < swing.land_time).then_some(CurrentStep {
             stance,
             stance_pose: contact.pose,
             stance_touchdown: contact.activation_time,
