@@ -93,7 +93,11 @@ fn a_forward_push_that_fells_the_walk_is_survived_with_step_adjustment() {
         &options(&s, "on"),
     )
     .unwrap();
-    assert!(matches!(off.outcome, Outcome::Fell { .. }), "{}", off.render());
+    assert!(
+        matches!(off.outcome, Outcome::Fell { .. }),
+        "{}",
+        off.render()
+    );
     assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
     assert!(on.goal_distance.unwrap() < 0.05, "{}", on.render());
     // the difference is the adjusted steps: the two steps during the push were moved (measured: by 2–4 cm
@@ -117,5 +121,9 @@ fn a_forward_push_that_fells_the_walk_is_survived_with_step_adjustment() {
     );
     let strong = Scenario::load(&s.write("strong.toml", &top)).unwrap();
     let strong = run_scenario(&strong, &options(&s, "strong")).unwrap();
-    assert!(matches!(strong.outcome, Outcome::Fell { .. }), "{}", strong.render());
+    assert!(
+        matches!(strong.outcome, Outcome::Fell { .. }),
+        "{}",
+        strong.render()
+    );
 }
