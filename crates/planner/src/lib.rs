@@ -55,6 +55,7 @@
 //!   α of [Romualdi 2022, eq. 10.2.3] is implied by the final double support rather than set.
 //! * Swing feet: minimum-jerk quintics [Romualdi 2022, eq. D.3.6] with an apex knot for the height, minimum-jerk geodesic on SO(3).
 
+pub mod adjust;
 mod build;
 pub mod config;
 pub mod contacts;
@@ -68,6 +69,7 @@ pub mod swing;
 mod unicycle;
 pub mod verify;
 
+pub use adjust::{CurrentStep, StepAdjustmentRequest};
 pub use config::{DcmInterpolation, FirstSwingFoot, PlanVerification, PlannerConfig};
 pub use contacts::{ContactList, Foot, Phase, PhaseKind, PlannedContact};
 pub use error::PlannerError;
@@ -75,5 +77,5 @@ pub use geometry::{Pose2, SupportPolygon};
 pub use goal::{Goal, Waypoint};
 pub use plan::{FootSample, Plan, PlanOutcome, PlanReport, PlanSample};
 pub use planner::{plan_from_standing, Planner, PlannerInput};
-pub use swing::{SwingShape, SwingTrajectory};
+pub use swing::{RetargetOutcome, SwingShape, SwingTrajectory};
 pub use verify::{Invariant, InvariantViolation, VerifyReport};

@@ -4,6 +4,7 @@ use std::time::Duration;
 
 use nalgebra::{Isometry3, Vector2};
 
+use crate::adjust::{adjusted_plan, StepAdjustmentRequest};
 use crate::build::{build_plan, xy, StartState};
 use crate::config::{check_gravity, PlannerConfig};
 use crate::contacts::{ContactList, Phase, PhaseKind, PlannedContact};
@@ -265,6 +266,43 @@ impl Planner {
         self.verify(&merged)?;
         self.plan = Some(merged);
         Ok(m)
+    }
+
+    /// Moves the touch-down of the swinging foot at `request.time` (inside a single support) to
+    /// `request.target` at `request.land_time`, retargeting the swing mid-air and replanning everything
+    /// after the new touch-down towards `goal` (see [`crate::adjust`]). Returns whether the plan changed
+    /// (`false`: the swing is frozen near touch-down, or the request asks for no change). On error the
+    /// current plan is unchanged.
+    ///
+    /// The adjusted plan is verified like every plan, except that the adjusted step itself may be longer
+    /// than `step_length_max` and shorter than `step_duration_min` (the caller's step-adjustment box and
+    /// duration limits bound it): the verification bounds are widened to exactly that step.
+    pub fn adjust_step(
+        &mut self,
+        request: &StepAdjustmentRequest,
+        goal: &Goal,
+    ) -> Result<bool, PlannerError> {
+        goal.validate()?;
+        let plan = self.plan.as_ref().ok_or(PlannerError::NoPlan)?;
+        check_time("request.time", request.time)?;
+        check_time("request.land_time", request.land_time)?;
+        let omega = self.config.omega(self.gravity);
+        let Some(adjusted) = adjusted_plan(&self.config, omega, plan, request, goal)? else {
+            return Ok(false);
+        };
+        if self.config.verify_plans.enabled() {
+            let step = plan
+                .current_step(request.time)
+                .ok_or(PlannerError::NoMergePoint { time: request.time })?;
+            let length = (request.target - xy(&step.stance_pose)).norm();
+            let duration = request.land_time - step.stance_touchdown;
+            let mut cfg = self.config.clone();
+            cfg.step_length_max = cfg.step_length_max.max(length + 1e-9);
+            cfg.step_duration_min = cfg.step_duration_min.min(duration - 1e-9);
+            adjusted.verify(&cfg, VERIFY_SAMPLING_PERIOD)?;
+        }
+        self.plan = Some(adjusted);
+        Ok(true)
     }
 
     /// Verifies `plan` when [`PlannerConfig::verify_plans`] is enabled in this build.

@@ -138,6 +138,46 @@ pub struct SwingTrajectory {
     z_up: Quintic,
     z_down: Quintic,
     rotation_log: Vector3<f64>,
+    /// Apex and touch-down times of the swing as first built, before any retarget \[s\].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    base_timing: Option<(f64, f64)>,
+    /// Mid-swing retargets in time order ([`SwingTrajectory::retarget`]); empty for a planned swing.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    retargets: Vec<SwingRetarget>,
+}
+
+/// One mid-swing retarget: from `time` on, these pieces replace the trajectory before it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct SwingRetarget {
+    /// Retarget instant \[s\]; the quintics below are in local time `t − time`.
+    time: f64,
+    x: Quintic,
+    y: Quintic,
+    /// New height profile, or `None` to keep the previous one (the touch-down time did not change).
+    z: Option<HeightProfile>,
+    /// New orientation blend `s` (from its value at `time` to 1), or `None` to keep the previous one.
+    blend: Option<Quintic>,
+}
+
+/// A height profile after a retarget: `first` over `[time, switch]`, `second` over `[switch, land]`
+/// (local time of each piece from its start).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+struct HeightProfile {
+    first: Quintic,
+    switch: f64,
+    second: Quintic,
+}
+
+/// What [`SwingTrajectory::retarget`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RetargetOutcome {
+    /// The rest of the swing now goes to the new target.
+    Retargeted,
+    /// Same target and touch-down time: nothing changed.
+    Unchanged,
+    /// Less than the minimum remaining time is left (or `t` is not inside the swing): nothing changed.
+    Frozen,
 }
 
 impl SwingTrajectory {
@@ -217,23 +257,28 @@ impl SwingTrajectory {
             z_up,
             z_down,
             rotation_log,
+            base_timing: None,
+            retargets: Vec::new(),
         }
     }
 
     /// Pose, twist and acceleration at time `t` (clamped to \[lift_time, land_time\]; NaN reads as lift-off).
+    /// After a retarget, times before it give the trajectory as it was, times after it the retargeted one.
     pub fn evaluate(&self, t: f64) -> FootState {
         let duration = self.land_time - self.lift_time;
         let tau = (t - self.lift_time).clamp(0.0, duration);
         let tau = if tau.is_nan() { 0.0 } else { tau };
-        let x = eval_quintic(&self.x, tau);
-        let y = eval_quintic(&self.y, tau);
-        let d1 = self.apex_time - self.lift_time;
-        let z = if tau <= d1 {
-            eval_quintic(&self.z_up, tau)
-        } else {
-            eval_quintic(&self.z_down, tau - d1)
+        let t = self.lift_time + tau;
+        let piece = self.retargets.partition_point(|r| r.time <= t);
+        let (x, y) = match piece.checked_sub(1).map(|k| &self.retargets[k]) {
+            Some(r) => (
+                eval_quintic(&r.x, t - r.time),
+                eval_quintic(&r.y, t - r.time),
+            ),
+            None => (eval_quintic(&self.x, tau), eval_quintic(&self.y, tau)),
         };
-        let [s, ds, dds] = min_jerk_blend(tau, duration);
+        let z = self.height_at(piece, t);
+        let [s, ds, dds] = self.blend_at(piece, t);
         let rotation =
             UnitQuaternion::from_scaled_axis(self.rotation_log * s) * self.start.rotation;
         let omega = self.rotation_log * ds;
@@ -243,5 +288,186 @@ impl SwingTrajectory {
             twist: Vector6::new(x[1], y[1], z[1], omega.x, omega.y, omega.z),
             acceleration: Vector6::new(x[2], y[2], z[2], omega_dot.x, omega_dot.y, omega_dot.z),
         }
+    }
+
+    /// Apex and touch-down times of the swing as first built \[s\].
+    fn base_times(&self) -> (f64, f64) {
+        self.base_timing.unwrap_or((self.apex_time, self.land_time))
+    }
+
+    /// Height, its rate and acceleration at `t` from the last height profile among the first `pieces`
+    /// retargets (or the original one).
+    fn height_at(&self, pieces: usize, t: f64) -> [f64; 4] {
+        let latest = self.retargets[..pieces]
+            .iter()
+            .rev()
+            .find_map(|r| r.z.map(|z| (r.time, z)));
+        match latest {
+            Some((start, z)) if t <= z.switch => eval_quintic(&z.first, t - start),
+            Some((_, z)) => eval_quintic(&z.second, t - z.switch),
+            None => {
+                let (apex, _) = self.base_times();
+                if t <= apex {
+                    eval_quintic(&self.z_up, t - self.lift_time)
+                } else {
+                    eval_quintic(&self.z_down, t - apex)
+                }
+            }
+        }
+    }
+
+    /// Orientation blend `[s, ṡ, s̈]` at `t` from the last blend among the first `pieces` retargets (or
+    /// the original minimum-jerk one).
+    fn blend_at(&self, pieces: usize, t: f64) -> [f64; 3] {
+        let latest = self.retargets[..pieces]
+            .iter()
+            .rev()
+            .find_map(|r| r.blend.map(|b| (r.time, b)));
+        match latest {
+            Some((start, b)) => {
+                let v = eval_quintic(&b, t - start);
+                [v[0], v[1], v[2]]
+            }
+            None => {
+                let (_, land) = self.base_times();
+                min_jerk_blend(t - self.lift_time, land - self.lift_time)
+            }
+        }
+    }
+
+    /// Retargets the rest of the swing at `t` \[s\] to touch down at `target` (world position of the sole;
+    /// the orientation target is unchanged) at `land_time` \[s\] [Griffin 2017]. From the *desired* state at
+    /// `t` (position, velocity, acceleration), one quintic per horizontal axis reaches `target` with zero
+    /// velocity and acceleration [Romualdi 2022, eq. D.3.6], so position, velocity and acceleration are
+    /// continuous at `t`. If the touch-down time or height changes, the height is regenerated too: before
+    /// the apex a quintic to the same apex height (zero vertical velocity) at the apex time scaled with the
+    /// remaining time, then a quintic to the ground landing with `landing_velocity`; after the apex one
+    /// quintic down (or, if that would dip below the ground, a hold then a descent); the orientation blend goes from its current state to 1 at the new touch-down.
+    /// Otherwise the height and orientation profiles are kept.
+    ///
+    /// Frozen (nothing changes) when `t` is not strictly inside the swing or when less than
+    /// `min_remaining` \[s\] is left before the current or the new touch-down. Allocates (one retarget
+    /// record); meant for planner events, not for every control tick of a long swing.
+    pub fn retarget(
+        &mut self,
+        t: f64,
+        target: Vector3<f64>,
+        land_time: f64,
+        min_remaining: f64,
+    ) -> RetargetOutcome {
+        let finite = t.is_finite() && land_time.is_finite() && target.iter().all(|v| v.is_finite());
+        let inside = t > self.lift_time && t < self.land_time;
+        if !finite || !inside || self.land_time - t < min_remaining || land_time - t < min_remaining
+        {
+            return RetargetOutcome::Frozen;
+        }
+        let old_target = self.end.translation.vector;
+        let retime = land_time != self.land_time || target.z != old_target.z;
+        if target == old_target && !retime {
+            return RetargetOutcome::Unchanged;
+        }
+        let now = self.evaluate(t);
+        let (p, v, a) = (
+            now.pose.translation.vector,
+            now.twist.xyz(),
+            now.acceleration.xyz(),
+        );
+        let d = land_time - t;
+        let x = quintic(p.x, v.x, a.x, target.x, 0.0, 0.0, d);
+        let y = quintic(p.y, v.y, a.y, target.y, 0.0, 0.0, d);
+        let (z, blend) = if retime {
+            let z = self.height_retarget(t, [p.z, v.z, a.z], target.z, land_time);
+            let pieces = self.retargets.partition_point(|r| r.time <= t);
+            let [s, ds, dds] = self.blend_at(pieces, t);
+            (Some(z), Some(quintic(s, ds, dds, 1.0, 0.0, 0.0, d)))
+        } else {
+            (None, None)
+        };
+        if self.base_timing.is_none() {
+            self.base_timing = Some((self.apex_time, self.land_time));
+        }
+        if let Some(z) = &z {
+            if t < self.apex_time {
+                self.apex_time = z.switch;
+            }
+        }
+        self.retargets.retain(|r| r.time < t);
+        self.retargets.push(SwingRetarget {
+            time: t,
+            x,
+            y,
+            z,
+            blend,
+        });
+        self.end.translation.vector = target;
+        self.land_time = land_time;
+        RetargetOutcome::Retargeted
+    }
+
+    /// The height profile of a retarget at `t` from the vertical state `[z, ż, z̈]` to `ground` at `land`.
+    fn height_retarget(&self, t: f64, z: [f64; 3], ground: f64, land: f64) -> HeightProfile {
+        if t < self.apex_time {
+            let scale = (land - t) / (self.land_time - t);
+            let switch = t + (self.apex_time - t) * scale;
+            HeightProfile {
+                first: quintic(z[0], z[1], z[2], self.apex_height, 0.0, 0.0, switch - t),
+                switch,
+                second: quintic(
+                    self.apex_height,
+                    0.0,
+                    0.0,
+                    ground,
+                    self.landing_velocity,
+                    0.0,
+                    land - switch,
+                ),
+            }
+        } else {
+            self.descent_retarget(t, z, ground, land)
+        }
+    }
+
+    /// After the apex: one quintic down from `[z, ż, z̈]`, unless it dips below the ground (a descent
+    /// stretched in time must first brake); then a hold at a height between the current one and the apex
+    /// (reached with zero rate after a share of the remaining time) followed by a minimum-jerk descent,
+    /// the first candidate that stays within \[ground, apex\].
+    fn descent_retarget(&self, t: f64, z: [f64; 3], ground: f64, land: f64) -> HeightProfile {
+        let d = land - t;
+        let lv = self.landing_velocity;
+        let down = quintic(z[0], z[1], z[2], ground, lv, 0.0, d);
+        let inside = |q: &Quintic, len: f64| {
+            let (lo, hi) = quintic_range(q, len);
+            lo >= ground - 1e-12 && hi <= self.apex_height.max(z[0]) + 1e-12
+        };
+        if inside(&down, d) {
+            return HeightProfile {
+                first: down,
+                switch: land,
+                second: down,
+            };
+        }
+        for share in [0.25, 0.4, 0.55] {
+            for hold in [z[0], 0.5 * (z[0] + self.apex_height), self.apex_height] {
+                let first = quintic(z[0], z[1], z[2], hold, 0.0, 0.0, share * d);
+                let second = quintic(hold, 0.0, 0.0, ground, lv, 0.0, (1.0 - share) * d);
+                if inside(&first, share * d) && inside(&second, (1.0 - share) * d) {
+                    return HeightProfile {
+                        first,
+                        switch: t + share * d,
+                        second,
+                    };
+                }
+            }
+        }
+        HeightProfile {
+            first: down,
+            switch: land,
+            second: down,
+        }
+    }
+
+    /// Number of mid-swing retargets applied to this swing.
+    pub fn retarget_count(&self) -> usize {
+        self.retargets.len()
     }
 }

@@ -29,6 +29,7 @@ pub mod setup;
 pub mod sim_plant;
 pub mod sink;
 pub mod stack;
+pub mod step_adjust;
 pub mod summary;
 pub mod sweep;
 pub mod sweep_cmd;

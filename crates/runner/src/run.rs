@@ -343,6 +343,17 @@ impl<'a> Loop<'a> {
         if let Some(log) = self.log.as_mut() {
             log.simplified(t, &self.stack, time)?;
         }
+        if let Some(adjusted) = self.stack.adjusted_footstep.take() {
+            if let Some(log) = self.log.as_mut() {
+                log.adjusted_footstep(t, &adjusted)?;
+            }
+            let [dx, dy] = adjusted.displacement;
+            let detail = format!(
+                "{} footstep moved by ({dx:.3}, {dy:.3}) m, touch-down {:.3} s (planned {:.3} s)",
+                adjusted.foot, adjusted.touchdown_time, adjusted.nominal_touchdown_time
+            );
+            self.event(t, "step_adjustment", detail)?;
+        }
         if let Some(message) = held {
             let detail = format!("simplified layer held its references: {message}");
             self.event(t, "hold", detail)?;

@@ -31,6 +31,7 @@ struct Topics {
     planner_input: TopicId,
     planner_references: TopicId,
     planner_footsteps: TopicId,
+    planner_adjusted_footsteps: TopicId,
     simplified_input: TopicId,
     simplified_output: TopicId,
     simplified_timing: TopicId,
@@ -57,6 +58,11 @@ impl Topics {
             planner_input: w.topic("/planner/input", "stride.planner.Input", None)?,
             planner_references: w.topic("/planner/references", "stride.planner.Sample", None)?,
             planner_footsteps: w.topic("/planner/footsteps", "stride.planner.Footsteps", None)?,
+            planner_adjusted_footsteps: w.topic(
+                "/planner/adjusted_footsteps",
+                "stride.planner.AdjustedFootstep",
+                None,
+            )?,
             simplified_input: w.topic("/simplified/input", "stride.simplified.Input", None)?,
             simplified_output: w.topic("/simplified/output", "stride.simplified.Output", None)?,
             simplified_timing: w.topic("/simplified/timing", "stride.Timing", None)?,
@@ -344,6 +350,15 @@ impl LogSink {
                 .collect(),
         };
         self.write(|tp| tp.planner_footsteps, t, &steps)
+    }
+
+    /// `/planner/adjusted_footsteps`: a footstep adjustment applied to the plan.
+    pub(crate) fn adjusted_footstep(
+        &mut self,
+        t: u64,
+        msg: &crate::step_adjust::AdjustedFootstepMsg,
+    ) -> Result<(), LogError> {
+        self.write(|tp| tp.planner_adjusted_footsteps, t, msg)
     }
 
     /// `/planner/references`, `/simplified/input`, `/simplified/output`, `/simplified/timing` after a

@@ -23,7 +23,7 @@ use stride_planner::geometry::wrap_angle;
 use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
 use stride_simplified::{
     feet_support_polygon, measured_zmp, FootRectangle, FootWrench, HorizonSample,
-    SimplifiedController, SimplifiedInput, SimplifiedOutput, SupportPolygon,
+    SimplifiedController, SimplifiedInput, SimplifiedOutput, StepAdjuster, SupportPolygon,
 };
 use stride_wbc::{QpIk, Tsid, WbcInput};
 
@@ -31,6 +31,7 @@ use crate::config::{ControlMode, EstimationKind, Goal, Scenario};
 use crate::error::RunError;
 use crate::robot::{JointCommand, Measurement};
 use crate::setup::frame_of;
+use crate::step_adjust::{AdjustedFootstepMsg, StepTracker};
 
 /// The whole-body controller of the configured control mode.
 #[allow(clippy::large_enum_variant)]
@@ -209,6 +210,14 @@ pub struct Stack {
     pub truth: Measured,
     events: Vec<GoalEvent>,
     next_event: usize,
+    /// The goal the planner works towards (the last one handed to it).
+    goal: PlannerGoal,
+    /// The step-adjustment QP (`simplified.step_adjustment.enabled`), with the nominal of the step in
+    /// progress.
+    step_adjustment: Option<(StepAdjuster, StepTracker)>,
+    /// The footstep adjusted at the last simplified tick, for `/planner/adjusted_footsteps` (taken by the
+    /// scheduler).
+    pub adjusted_footstep: Option<AdjustedFootstepMsg>,
     /// Fallback/hold counters: simplified errors held, wbc QP fallbacks, wbc holds.
     pub counters: Counters,
 }
@@ -224,6 +233,10 @@ pub struct Counters {
     pub wbc_holds: u64,
     /// Planner replans.
     pub replans: u64,
+    /// Footstep adjustments applied to the plan.
+    pub step_adjustments: u64,
+    /// Footstep adjustments the planner refused (the plan was kept).
+    pub step_adjustment_failures: u64,
 }
 
 impl Stack {
@@ -296,6 +309,14 @@ impl Stack {
             truth: Measured::default(),
             events: goal_events(&c.goal),
             next_event: 0,
+            goal: PlannerGoal::Stand,
+            step_adjustment: if c.simplified.step_adjustment.enabled {
+                let adjuster = StepAdjuster::new(&c.simplified.step_adjustment)?;
+                Some((adjuster, StepTracker::default()))
+            } else {
+                None
+            },
+            adjusted_footstep: None,
             counters: Counters::default(),
             kd,
             model,
@@ -436,6 +457,9 @@ impl Stack {
         if self.planner.plan().is_some() {
             self.counters.replans += 1;
         }
+        if let Some(g) = &goal {
+            self.goal = g.clone();
+        }
         self.planner_input = PlannerInput {
             time: Duration::from_nanos(time_ns),
             goal,
@@ -458,8 +482,9 @@ impl Stack {
     /// references are held and the error is returned as `Ok(Some(message))` for the event log.
     pub fn simplified_tick(&mut self, time_ns: u64) -> Result<Option<String>, RunError> {
         self.sample_plan(time_ns)?;
+        self.measure_dcm(self.plan_sample.omega);
+        self.adjust_step(time_ns);
         let s = self.plan_sample;
-        self.measure_dcm(s.omega);
         let contacts = [s.left.in_contact, s.right.in_contact];
         let polygon = Self::polygon_of(
             &self.measured.soles,
@@ -517,6 +542,34 @@ impl Stack {
                 self.counters.simplified_holds += 1;
                 Ok(Some(e.to_string()))
             }
+        }
+    }
+
+    /// The step adjustment of one simplified tick (when enabled): during single support, the QP's touch-down
+    /// and time from the measured DCM, applied to the plan (swing retargeted, later steps replanned) when
+    /// they differ from the planned ones by more than the dead bands. A refusal by the planner keeps the
+    /// plan (counted).
+    fn adjust_step(&mut self, time_ns: u64) {
+        let Some((adjuster, tracker)) = self.step_adjustment.as_mut() else {
+            return;
+        };
+        let Some(plan) = self.planner.plan() else {
+            return;
+        };
+        let t = time_ns as f64 * 1e-9;
+        let Some(request) =
+            tracker.request(plan, adjuster, &self.measured.dcm, &self.plan_sample, t)
+        else {
+            return;
+        };
+        match self.planner.adjust_step(&request, &self.goal) {
+            Ok(true) => {
+                self.counters.step_adjustments += 1;
+                self.adjusted_footstep =
+                    Some(tracker.applied(&request, adjuster.result(), &self.measured.dcm));
+            }
+            Ok(false) => {}
+            Err(_) => self.counters.step_adjustment_failures += 1,
         }
     }
 

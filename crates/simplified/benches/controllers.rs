@@ -177,7 +177,35 @@ fn cpu_time_report() {
     }
 }
 
-criterion_group!(group, benches);
+/// The step-adjustment QP: the nominal case (no bound active) and a push that activates the box and the
+/// timing bounds, each solved cold (a fresh solver's first solve is not measured: the solver is reused).
+fn step_adjustment(c: &mut Criterion) {
+    let base = StepAdjustmentInput {
+        dcm: Vector2::new(0.33, 0.0912),
+        omega: OMEGA,
+        stance: StanceFoot::Left,
+        stance_position: Vector2::new(0.3, 0.075),
+        stance_yaw: 0.0,
+        stance_cop: Vector2::new(0.31, 0.075),
+        nominal_step: Vector2::new(0.4, -0.075),
+        nominal_offset: Vector2::new(0.0, 0.05),
+        time_since_touchdown: 0.5,
+        nominal_duration: 1.0,
+    };
+    for (name, push) in [
+        ("step_adjustment_small_error", 0.005),
+        ("step_adjustment_large_push", -0.15),
+    ] {
+        let mut adj = StepAdjuster::new(&StepAdjustmentConfig::default()).unwrap();
+        let mut input = base;
+        input.dcm.y += push;
+        c.bench_function(name, |b| {
+            b.iter(|| *adj.solve(black_box(&input)).unwrap());
+        });
+    }
+}
+
+criterion_group!(group, benches, step_adjustment);
 
 fn main() {
     cpu_time_report();

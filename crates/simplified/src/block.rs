@@ -13,6 +13,7 @@ use crate::dcm_predictive::{
 use crate::error::{check_finite, Result, SimplifiedError};
 use crate::lipm::{check_omega, check_point};
 use crate::polygon::SupportPolygon;
+use crate::step_adjustment::StepAdjustmentConfig;
 use crate::zmp_com::{ZmpComConfig, ZmpComController, ZmpComGains};
 
 /// Which DCM controller the layer runs.
@@ -34,6 +35,7 @@ pub enum DcmControllerKind {
 /// | `instantaneous` | see [`DcmInstantaneousConfig`] | `kp` 1.2, `ki` 0, `integral_limit` 0.03 m |
 /// | `predictive` | see [`DcmPredictiveConfig`] | `horizon` 2 s, `dcm_weight` 7500, `zmp_rate_weight` 9e4, … |
 /// | `zmp_com` | see [`ZmpComConfig`] | walking `{k_zmp 1.5, k_com 5}`, standing `{1.0, 4.0}`, `transition_time` 0.05 s |
+/// | `step_adjustment` | see [`StepAdjustmentConfig`] | `enabled` false; box, durations and weights of the step-adjustment QP (used by the runner) |
 ///
 /// ```toml
 /// dcm_controller = "predictive"
@@ -53,6 +55,8 @@ pub struct SimplifiedConfig {
     pub predictive: DcmPredictiveConfig,
     /// Parameters of the ZMP-CoM controller (always used).
     pub zmp_com: ZmpComConfig,
+    /// Step adjustment (the runner runs it during single support when `enabled`).
+    pub step_adjustment: StepAdjustmentConfig,
 }
 
 impl SimplifiedConfig {
@@ -60,7 +64,8 @@ impl SimplifiedConfig {
     pub fn validate(&self) -> Result<()> {
         self.instantaneous.validate()?;
         self.predictive.validate()?;
-        self.zmp_com.validate()
+        self.zmp_com.validate()?;
+        self.step_adjustment.validate()
     }
 }
 

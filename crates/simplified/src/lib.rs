@@ -47,6 +47,13 @@
 //! [`measured_zmp`] (global ZMP from the feet wrenches), [`SupportPolygon`] (hull, point-in-polygon,
 //! projection, half-planes), [`FootRectangle`] and [`feet_support_polygon`].
 //!
+//! # Step adjustment
+//!
+//! [`StepAdjuster`] (config [`StepAdjustmentConfig`], section `[step_adjustment]`, off by default): the
+//! next touch-down position and the step duration from the measured DCM, a 7-variable QP after
+//! [Khadiv 2020] solved by stride-qp's active-set solver without allocation. The runner calls it during
+//! single support and retargets the swing foot.
+//!
 //! The individual controllers are usable alone: [`DcmInstantaneousController`],
 //! [`DcmPredictiveController`], [`ZmpComController`]; the bare laws [`dcm_instantaneous_law`] and
 //! [`zmp_com_law`] are exposed for analysis.
@@ -57,6 +64,7 @@ mod dcm_predictive;
 mod error;
 mod lipm;
 mod polygon;
+mod step_adjustment;
 mod wrench;
 mod zmp_com;
 
@@ -77,6 +85,10 @@ pub use lipm::{dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, Lipm
 pub use polygon::{
     feet_support_polygon, FootRectangle, SupportPolygon, MAX_HULL_POINTS, MAX_POLYGON_VERTICES,
     MIN_POLYGON_AREA,
+};
+pub use step_adjustment::{
+    StanceFoot, StepAdjuster, StepAdjustment, StepAdjustmentConfig, StepAdjustmentDiagnostics,
+    StepAdjustmentInput, StepAdjustmentStatus, STEP_ADJUSTMENT_VARIABLES,
 };
 pub use wrench::{measured_zmp, FootWrench};
 pub use zmp_com::{

@@ -118,3 +118,30 @@ fn serializing_a_support_polygon_does_not_allocate() {
     let back: SupportPolygon = serde_json::from_slice(&buffer).unwrap();
     assert_eq!(back, polygon);
 }
+
+#[test]
+fn step_adjustment_does_not_allocate() {
+    let mut adj = StepAdjuster::new(&StepAdjustmentConfig::default()).unwrap();
+    let mut input = StepAdjustmentInput {
+        dcm: Vector2::new(0.35, -0.05),
+        omega: OMEGA,
+        stance: StanceFoot::Left,
+        stance_position: Vector2::new(0.3, 0.075),
+        stance_yaw: 0.1,
+        stance_cop: Vector2::new(0.31, 0.075),
+        nominal_step: Vector2::new(0.4, -0.075),
+        nominal_offset: Vector2::new(0.0, 0.05),
+        time_since_touchdown: 0.35,
+        nominal_duration: 1.0,
+    };
+    let (_, n) = ALLOC.allocations_during(|| {
+        for i in 0..200 {
+            // from the nominal case to pushes that activate the box and the timing bounds
+            input.dcm.y = -0.05 - 0.002 * i as f64;
+            input.time_since_touchdown = 0.35 + 0.004 * i as f64;
+            adj.solve(&input).unwrap();
+        }
+    });
+    assert_eq!(n, 0, "step adjustment allocated");
+    assert!(adj.result().diagnostics.bound_active);
+}

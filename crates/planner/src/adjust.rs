@@ -1,0 +1,208 @@
+//! Mid-swing step adjustment of a plan: the swinging foot is retargeted to a new touch-down (position and
+//! time) and the rest of the plan is replanned from that touch-down, the way a merge point replans
+//! [Griffin 2017; Khadiv 2020].
+//!
+//! What changes, at the adjustment time `t` (inside a single support, stance foot S, swing foot W):
+//! * W's swing: [`SwingTrajectory::retarget`] from its desired state at `t` to the new target, landing at
+//!   the new time `T` (continuous position, velocity and acceleration at `t`).
+//! * DCM/ZMP/CoM: unchanged up to `T`. The single-support segment holds the ZMP on S; its closed form is
+//!   extended (or cut) to end at `T` instead of the planned touch-down, so the plan is continuous at `t`
+//!   and at `T`.
+//! * Everything after `T`: a new plan from the state at `T` with W standing on the new target (the
+//!   unicycle re-anchored on it, as the planner's replanning does on the last touch-down) and S swinging
+//!   first, towards the same goal; it starts with a double support whose extra ZMP term makes the DCM
+//!   start exactly at the old plan's state (see [`crate::dcm`]).
+
+use nalgebra::{Vector2, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::build::{build_plan, StartState};
+use crate::config::PlannerConfig;
+use crate::contacts::{ContactList, Foot, Phase, PhaseKind};
+use crate::error::PlannerError;
+use crate::geometry::Pose2;
+use crate::goal::Goal;
+use crate::plan::Plan;
+use crate::swing::{RetargetOutcome, SwingTrajectory};
+
+/// The step of a plan that is being executed at some instant of single support (borrowed from the plan:
+/// no allocation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurrentStep<'a> {
+    /// The foot on the ground.
+    pub stance: Foot,
+    /// Its sole pose.
+    pub stance_pose: nalgebra::Isometry3<f64>,
+    /// When it touched down (the plan start for the initial stance) \[s\].
+    pub stance_touchdown: f64,
+    /// The swing of the other foot (lift-off, touch-down, target pose).
+    pub swing: &'a SwingTrajectory,
+}
+
+impl Plan {
+    /// The step being executed at `t` \[s\]: `None` unless `t` is inside a single support with the other
+    /// foot swinging.
+    pub fn current_step(&self, t: f64) -> Option<CurrentStep<'_>> {
+        let PhaseKind::SingleSupport { stance } = self.phase_at(t) else {
+            return None;
+        };
+        let contact = self.contacts(stance).active_at(t)?;
+        let swings = self.swings(stance.other());
+        let i = swings
+            .partition_point(|s| s.lift_time <= t)
+            .checked_sub(1)?;
+        let swing = &swings[i];
+        (t < swing.land_time).then_some(CurrentStep {
+            stance,
+            stance_pose: contact.pose,
+            stance_touchdown: contact.activation_time,
+            swing,
+        })
+    }
+}
+
+/// A request to move the touch-down of the swinging foot.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepAdjustmentRequest {
+    /// When \[s\] (inside the single support).
+    pub time: f64,
+    /// New touch-down position of the sole (world x, y; the height and the orientation stay) \[m\].
+    pub target: Vector2<f64>,
+    /// New touch-down time \[s\].
+    pub land_time: f64,
+    /// No retarget with less than this left before the current or the new touch-down \[s\] (freeze).
+    pub min_remaining: f64,
+}
+
+/// Adjusts `plan` (see the module documentation). `Ok(None)` when the swing is frozen or unchanged
+/// (nothing to do); errors leave the caller's plan as it was (it is not modified here).
+pub(crate) fn adjusted_plan(
+    cfg: &PlannerConfig,
+    omega: f64,
+    plan: &Plan,
+    request: &StepAdjustmentRequest,
+    goal: &Goal,
+) -> Result<Option<Plan>, PlannerError> {
+    let t = request.time;
+    let step = plan
+        .current_step(t)
+        .ok_or(PlannerError::NoMergePoint { time: t })?;
+    let swing_foot = step.stance.other();
+    let mut swing = step.swing.clone();
+    let z = swing.end.translation.z;
+    let target = Vector3::new(request.target.x, request.target.y, z);
+    match swing.retarget(t, target, request.land_time, request.min_remaining) {
+        RetargetOutcome::Retargeted => {}
+        RetargetOutcome::Unchanged | RetargetOutcome::Frozen => return Ok(None),
+    }
+    let land = swing.land_time;
+    let state = single_support_state(plan, omega, t, land);
+    let landed = Pose2::from_isometry(&swing.end);
+    let anchor_xy = landed.transform_point(Vector2::new(
+        0.0,
+        -swing_foot.side() * 0.5 * cfg.nominal_width,
+    ));
+    let (left, right, left_since, right_since) = match swing_foot {
+        Foot::Left => (swing.end, step.stance_pose, land, step.stance_touchdown),
+        Foot::Right => (step.stance_pose, swing.end, step.stance_touchdown, land),
+    };
+    let start = StartState {
+        t_start: land,
+        anchor_time: land,
+        anchor: Pose2 {
+            x: anchor_xy.x,
+            y: anchor_xy.y,
+            yaw: landed.yaw,
+        },
+        min_initial_ds: 0.5
+            * (1.0 - cfg.merge_point_fraction)
+            * cfg.double_support_fraction
+            * cfg.step_duration_min,
+        left,
+        right,
+        left_since,
+        right_since,
+        zmp0: state.zmp,
+        dcm0: state.dcm,
+        com0: state.com,
+        ground: plan.ground_height,
+        first_swing: Some(step.stance),
+    };
+    let new = build_plan(cfg, omega, &start, goal)?;
+    Ok(Some(splice(plan, new, t, swing)))
+}
+
+/// The old plan's DCM/ZMP/CoM at `land`, with the single-support segment at `t` extended to `land`.
+fn single_support_state(plan: &Plan, omega: f64, t: f64, land: f64) -> crate::dcm::PlanarState {
+    let i = plan.segments.partition_point(|s| s.start <= t).max(1) - 1;
+    let mut seg = plan.segments[i].clone();
+    seg.duration = Some(land - seg.start);
+    seg.evaluate_local(land - seg.start, omega)
+}
+
+/// The old plan up to `t` (its single-support segment and phase stretched to the new touch-down), the
+/// retargeted `swing`, then `new` from the touch-down on.
+fn splice(old: &Plan, new: Plan, t: f64, swing: SwingTrajectory) -> Plan {
+    let land = swing.land_time;
+    let mut segments: Vec<_> = old
+        .segments
+        .iter()
+        .filter(|s| s.start <= t)
+        .cloned()
+        .collect();
+    if let Some(last) = segments.last_mut() {
+        last.duration = Some(land - last.start);
+    }
+    segments.extend(new.segments);
+    let mut phases: Vec<Phase> = old
+        .phases
+        .iter()
+        .filter(|p| p.start <= t)
+        .cloned()
+        .collect();
+    if let Some(last) = phases.last_mut() {
+        last.end = land;
+    }
+    phases.extend(new.phases);
+    let keep = |list: &ContactList, new: ContactList| {
+        let mut c: Vec<_> = list
+            .contacts
+            .iter()
+            .filter(|c| c.deactivation_time.is_some_and(|d| d <= t))
+            .cloned()
+            .collect();
+        c.extend(new.contacts);
+        ContactList {
+            foot: list.foot,
+            contacts: c,
+        }
+    };
+    let swing_foot = swing.foot;
+    let keep_swings = |foot: Foot, old: &[SwingTrajectory], new: Vec<SwingTrajectory>| {
+        let mut s: Vec<_> = old.iter().filter(|s| s.land_time <= t).cloned().collect();
+        if foot == swing_foot {
+            s.push(swing.clone());
+        }
+        s.extend(new);
+        s
+    };
+    let mut merge_times = old.merge_times.clone();
+    merge_times.push(t);
+    Plan {
+        omega: new.omega,
+        com_height: new.com_height,
+        ground_height: new.ground_height,
+        foot_length: new.foot_length,
+        foot_width: new.foot_width,
+        start_time: old.start_time,
+        end_time: new.end_time,
+        segments,
+        phases,
+        left_contacts: keep(&old.left_contacts, new.left_contacts),
+        right_contacts: keep(&old.right_contacts, new.right_contacts),
+        left_swings: keep_swings(Foot::Left, &old.left_swings, new.left_swings),
+        right_swings: keep_swings(Foot::Right, &old.right_swings, new.right_swings),
+        outcome: new.outcome,
+        merge_times,
+    }
+}

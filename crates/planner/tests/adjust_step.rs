@@ -1,0 +1,163 @@
+//! `Planner::adjust_step`: a mid-swing change of the touch-down (position and time) keeps the past,
+//! keeps DCM, CoM and the swing foot continuous, lands on the target, replans the later steps from it and
+//! still reaches the goal; the adjusted plan passes the run-time verification.
+
+mod common;
+
+use common::*;
+use nalgebra::Vector2;
+use stride_planner::{
+    Foot, Goal, PhaseKind, PlanSample, PlanVerification, Planner, PlannerConfig,
+    StepAdjustmentRequest,
+};
+
+const GOAL: Goal = Goal::Pose {
+    x: 2.0,
+    y: 0.0,
+    yaw: 0.0,
+};
+
+fn planner() -> Planner {
+    let cfg = PlannerConfig {
+        com_height: 0.54,
+        nominal_width: 0.15,
+        verify_plans: PlanVerification::Always,
+        ..Default::default()
+    };
+    let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+    let mut p = Planner::new(cfg, GRAVITY).unwrap();
+    p.start(0.0, &l, &r, &GOAL).unwrap();
+    p
+}
+
+/// The middle of the `n`-th single support.
+fn mid_single_support(p: &Planner, n: usize) -> f64 {
+    let phase = p
+        .plan()
+        .unwrap()
+        .phases
+        .iter()
+        .filter(|ph| matches!(ph.kind, PhaseKind::SingleSupport { .. }))
+        .nth(n)
+        .copied()
+        .unwrap();
+    0.5 * (phase.start + phase.end)
+}
+
+fn sample(p: &Planner, t: f64) -> PlanSample {
+    let mut s = PlanSample::default();
+    p.sample(t, &mut s).unwrap();
+    s
+}
+
+#[test]
+fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
+    for (n, shift, dt_land) in [
+        (2, Vector2::new(0.0, 0.06), -0.05),
+        (3, Vector2::new(0.05, 0.0), 0.0),
+        (4, Vector2::new(0.04, 0.03), 0.05),
+    ] {
+        let mut p = planner();
+        let t = mid_single_support(&p, n);
+        let old = p.plan().unwrap().clone();
+        let step = old.current_step(t).unwrap();
+        let swing_foot = step.stance.other();
+        let nominal = step.swing.end.translation.vector.xy();
+        // outward shifts: the sign of y follows the swing foot's side
+        let target = nominal + Vector2::new(shift.x, shift.y * swing_foot.side());
+        let land = step.swing.land_time + dt_land;
+        let request = StepAdjustmentRequest {
+            time: t,
+            target,
+            land_time: land,
+            min_remaining: 0.1,
+        };
+        assert!(p.adjust_step(&request, &GOAL).unwrap(), "step {n}");
+        let new = p.plan().unwrap();
+        // the past is unchanged
+        for k in 0..=50 {
+            let tk = t * k as f64 / 50.0;
+            assert_eq!(sample(&p, tk).dcm_position, {
+                let mut s = PlanSample::default();
+                old.sample(tk, &mut s);
+                s.dcm_position
+            });
+        }
+        // continuity of DCM, CoM and the swing foot across t and across the new touch-down
+        for tc in [t, land] {
+            let (a, b) = (sample(&p, tc - 1e-7), sample(&p, tc + 1e-7));
+            assert!(
+                (a.dcm_position - b.dcm_position).norm() < 1e-6,
+                "DCM at {tc}"
+            );
+            assert!(
+                (a.com_position - b.com_position).norm() < 1e-6,
+                "CoM at {tc}"
+            );
+            assert!(
+                (a.com_velocity - b.com_velocity).norm() < 1e-5,
+                "CoM velocity at {tc}"
+            );
+            let (fa, fb) = (a.foot(swing_foot), b.foot(swing_foot));
+            let dp = (fa.pose.translation.vector - fb.pose.translation.vector).norm();
+            assert!(dp < 1e-6, "swing foot position at {tc}: {dp}");
+            assert!(
+                (fa.twist - fb.twist).norm() < 1e-4,
+                "swing foot velocity at {tc}"
+            );
+        }
+        // lands on the target at the new time, and stays there
+        let s = sample(&p, land);
+        let f = s.foot(swing_foot);
+        assert!(f.in_contact);
+        assert!((f.pose.translation.vector.xy() - target).norm() < 1e-12);
+        let contact = new.contacts(swing_foot).active_at(land + 0.01).unwrap();
+        assert_eq!(contact.activation_time, land);
+        assert!((contact.pose.translation.vector.xy() - target).norm() < 1e-12);
+        assert!(!sample(&p, land - 0.01).foot(swing_foot).in_contact);
+        // the stance foot swings next, and the walk still ends at the goal
+        let next = new
+            .phases
+            .iter()
+            .find(|ph| ph.start >= land && ph.kind != PhaseKind::DoubleSupport)
+            .unwrap();
+        assert_eq!(next.kind, PhaseKind::SingleSupport { stance: swing_foot });
+        let l = new.contacts(Foot::Left).contacts.last().unwrap().pose;
+        let r = new.contacts(Foot::Right).contacts.last().unwrap().pose;
+        let mid = (l.translation.vector + r.translation.vector) * 0.5;
+        assert!((mid.x - 2.0).abs() < 0.02 && mid.y.abs() < 0.02, "{mid:?}");
+        // the LIPM relations and the swing shapes hold on the whole adjusted plan (the step bounds are
+        // the adjustment's, checked by `adjust_step`'s own verification)
+        check_dynamics(p.config(), new, 0.01);
+        check_swings(p.config(), new);
+    }
+}
+
+#[test]
+fn frozen_and_unchanged_requests_leave_the_plan() {
+    let mut p = planner();
+    let t = mid_single_support(&p, 2);
+    let old = p.plan().unwrap().clone();
+    let step = old.current_step(t).unwrap();
+    let same = StepAdjustmentRequest {
+        time: t,
+        target: step.swing.end.translation.vector.xy(),
+        land_time: step.swing.land_time,
+        min_remaining: 0.1,
+    };
+    assert!(!p.adjust_step(&same, &GOAL).unwrap());
+    let late = StepAdjustmentRequest {
+        time: step.swing.land_time - 0.05,
+        target: same.target + Vector2::new(0.05, 0.0),
+        ..same
+    };
+    assert!(!p.adjust_step(&late, &GOAL).unwrap());
+    assert_eq!(p.plan().unwrap(), &old);
+    // outside single support: an error, the plan unchanged
+    let ds = StepAdjustmentRequest {
+        time: step.swing.land_time + 0.01,
+        ..late
+    };
+    assert!(p.adjust_step(&ds, &GOAL).is_err());
+    assert_eq!(p.plan().unwrap(), &old);
+}

@@ -1,0 +1,171 @@
+//! The runner's side of the step adjustment (issue 13 part 1): which step is in progress and its nominal
+//! (planned before any adjustment), the step-adjustment QP's input from the plan and the measured DCM, the
+//! dead bands, and the `/planner/adjusted_footsteps` record.
+//!
+//! Per simplified tick in single support: the QP ([`stride_simplified::StepAdjuster`], [Khadiv 2020]) gets
+//! the measured DCM, the stance foot, the planned single-support ZMP (held until touch-down), the nominal
+//! touch-down `u_n`, the nominal offset `b_n = ξ_plan(T_n) − u_n`, the time since the stance foot touched
+//! down and the nominal step duration. Its touch-down and time go to [`stride_planner::Planner::adjust_step`]
+//! when they differ from the planned ones by more than `deadband` / `time_deadband`.
+
+use nalgebra::Vector2;
+use serde::Serialize;
+use stride_planner::{Foot, Plan, PlanSample, StepAdjustmentRequest};
+use stride_qp::QpStatus;
+use stride_simplified::{
+    StanceFoot, StepAdjuster, StepAdjustment, StepAdjustmentInput, StepAdjustmentStatus,
+};
+
+/// The step in progress: its nominal and what the plan currently has.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct TrackedStep {
+    /// Lift-off time of the swing \[s\] (identifies the step; a retarget keeps it).
+    lift: f64,
+    swing_foot: Foot,
+    stance_touchdown: f64,
+    nominal_target: Vector2<f64>,
+    nominal_land: f64,
+    nominal_offset: Vector2<f64>,
+    /// Touch-down position and time the plan has now \[m, s\].
+    target: Vector2<f64>,
+    land: f64,
+}
+
+/// Follows the steps of the plan; no allocation.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepTracker {
+    step: Option<TrackedStep>,
+}
+
+impl StepTracker {
+    /// The adjustment to apply at `t` \[s\], if any: `None` outside single support, with less than
+    /// `min_remaining_time` before the planned touch-down (frozen), when the QP falls back or when its
+    /// answer is within the dead bands of what the plan has.
+    pub fn request(
+        &mut self,
+        plan: &Plan,
+        adjuster: &mut StepAdjuster,
+        dcm: &Vector2<f64>,
+        sample: &PlanSample,
+        t: f64,
+    ) -> Option<StepAdjustmentRequest> {
+        let Some(step) = plan.current_step(t) else {
+            self.step = None;
+            return None;
+        };
+        let lift = step.swing.lift_time;
+        let tracked = match self.step {
+            Some(s) if s.lift == lift && s.swing_foot == step.swing.foot => s,
+            _ => {
+                let target = step.swing.end.translation.vector.xy();
+                let land = step.swing.land_time;
+                let s = TrackedStep {
+                    lift,
+                    swing_foot: step.swing.foot,
+                    stance_touchdown: step.stance_touchdown,
+                    nominal_target: target,
+                    nominal_land: land,
+                    nominal_offset: plan.planar_at(land).dcm - target,
+                    target,
+                    land,
+                };
+                self.step = Some(s);
+                s
+            }
+        };
+        // frozen near touch-down: the planner would refuse, and the QP's remaining-time bound would ask
+        // for a later touch-down than planned
+        if tracked.land - t < adjuster.config().min_remaining_time {
+            return None;
+        }
+        let input = StepAdjustmentInput {
+            dcm: *dcm,
+            omega: sample.omega,
+            stance: match step.stance {
+                Foot::Left => StanceFoot::Left,
+                Foot::Right => StanceFoot::Right,
+            },
+            stance_position: step.stance_pose.translation.vector.xy(),
+            stance_yaw: step.stance_pose.rotation.euler_angles().2,
+            stance_cop: sample.zmp.xy(),
+            nominal_step: tracked.nominal_target,
+            nominal_offset: tracked.nominal_offset,
+            time_since_touchdown: t - tracked.stance_touchdown,
+            nominal_duration: tracked.nominal_land - tracked.stance_touchdown,
+        };
+        let r = *adjuster.solve(&input).ok()?;
+        if r.diagnostics.status != StepAdjustmentStatus::Solved {
+            return None;
+        }
+        let c = adjuster.config();
+        let land = tracked.stance_touchdown + r.duration;
+        let moved = (r.touchdown - tracked.target).norm() > c.deadband;
+        let retimed = (land - tracked.land).abs() > c.time_deadband;
+        (moved || retimed).then_some(StepAdjustmentRequest {
+            time: t,
+            target: r.touchdown,
+            land_time: land,
+            min_remaining: c.min_remaining_time,
+        })
+    }
+
+    /// Records that the planner applied `request` (solved as `result`); returns the log record.
+    pub fn applied(
+        &mut self,
+        request: &StepAdjustmentRequest,
+        result: &StepAdjustment,
+        dcm: &Vector2<f64>,
+    ) -> AdjustedFootstepMsg {
+        let Some(s) = self.step.as_mut() else {
+            return AdjustedFootstepMsg::default();
+        };
+        s.target = request.target;
+        s.land = request.land_time;
+        AdjustedFootstepMsg {
+            time: request.time,
+            foot: match s.swing_foot {
+                Foot::Left => "left",
+                Foot::Right => "right",
+            },
+            nominal_position: s.nominal_target.into(),
+            position: request.target.into(),
+            displacement: (request.target - s.nominal_target).into(),
+            nominal_touchdown_time: s.nominal_land,
+            touchdown_time: request.land_time,
+            measured_dcm: (*dcm).into(),
+            offset_slack: result.diagnostics.offset_slack.into(),
+            bound_active: result.diagnostics.bound_active,
+            qp_status: result.diagnostics.qp_status,
+            iterations: result.diagnostics.iterations,
+        }
+    }
+}
+
+/// `/planner/adjusted_footsteps`: one footstep adjustment applied to the plan (world frame, SI units).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct AdjustedFootstepMsg {
+    /// When \[s\].
+    pub time: f64,
+    /// The swinging foot (`left` / `right`).
+    pub foot: &'static str,
+    /// Touch-down position of the step as planned before any adjustment \[m\].
+    pub nominal_position: [f64; 2],
+    /// Adjusted touch-down position \[m\].
+    pub position: [f64; 2],
+    /// `position − nominal_position` \[m\].
+    pub displacement: [f64; 2],
+    /// Planned touch-down time before any adjustment \[s\].
+    pub nominal_touchdown_time: f64,
+    /// Adjusted touch-down time \[s\].
+    pub touchdown_time: f64,
+    /// The measured DCM the QP used \[m\].
+    pub measured_dcm: [f64; 2],
+    /// Slacks of the DCM-offset bounds \[m\] (stance frame).
+    pub offset_slack: [f64; 2],
+    /// Whether a box or duration bound was active.
+    pub bound_active: bool,
+    /// The QP's status.
+    pub qp_status: QpStatus,
+    /// Active-set iterations.
+    pub iterations: usize,
+}
