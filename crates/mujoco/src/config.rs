@@ -23,6 +23,7 @@ pub enum Cone {
 /// | `impratio` | – | 1 | MuJoCo's default ratio of frictional to normal impedance |
 /// | `torsional_friction`, `rolling_friction` | m | 0.005, 0.0001 | MuJoCo's defaults (used with `condim` 4 and 6) |
 /// | `min_armature` | kg·m² | 0.01 | lower bound of every joint's armature (reflected rotor inertia); see below |
+/// | `joint_limits` | – | true | MuJoCo enforces the URDF's joint position limits (stride-sim does not) |
 ///
 /// **Why a minimum armature.** MuJoCo integrates the servos' velocity gain implicitly (`implicitfast`) but
 /// its constraint solver computes the contact forces with the plain mass matrix, so a damping `kd dt` much
@@ -53,6 +54,8 @@ pub struct MujocoConfig {
     pub rolling_friction: f64,
     /// Lower bound of every joint's armature \[kg·m²\].
     pub min_armature: f64,
+    /// Enforce the URDF's joint position limits.
+    pub joint_limits: bool,
 }
 
 impl Default for MujocoConfig {
@@ -66,6 +69,7 @@ impl Default for MujocoConfig {
             torsional_friction: 0.005,
             rolling_friction: 0.0001,
             min_armature: 0.01,
+            joint_limits: true,
         }
     }
 }

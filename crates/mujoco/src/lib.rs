@@ -1,7 +1,7 @@
 //! `stride-mujoco`: MuJoCo 3.17 as a plant of stride, a physics engine nobody on the team wrote.
 //!
 //! With the `mujoco` feature (it needs MuJoCo's library: `MUJOCO_DYNAMIC_LINK_DIR=$(bash
-//! tools/mujoco/setup.sh)`), [`MujocoRobot`] builds a MuJoCo model from the scenario's URDF (compiled by
+//! tools/mujoco/setup.sh)`), `MujocoRobot` builds a MuJoCo model from the scenario's URDF (compiled by
 //! MuJoCo's own URDF parser, a free joint on the root link, a ground plane, the robot's collision geometry
 //! restricted to the soles, `implicitfast`, timestep = the plant period), drives it with position servos or
 //! torque motors per the scenario's `[sim.actuation]`, applies `[[sim.pushes]]` through `xfrc_applied`, and

@@ -99,7 +99,7 @@ pub fn build(model: &Model, s: &SceneSpec<'_>) -> Result<Scene, MujocoError> {
         .add_free_joint()
         .set_name(&format!("{root}_free_joint"))
         .map_err(|e| compile_error(e.to_string()))?;
-    set_joints(model, &mut spec, s.servos, s.config.min_armature)?;
+    set_joints(model, &mut spec, s.servos, s.config)?;
     add_floor(&mut spec, s);
     add_actuators(model, &mut spec, s.servos);
     set_options(model, &mut spec, s);
@@ -108,19 +108,22 @@ pub fn build(model: &Model, s: &SceneSpec<'_>) -> Result<Scene, MujocoError> {
 }
 
 /// Passive joint dynamics from the servos: damping, armature (at least `min_armature`), Coulomb friction
-/// (`frictionloss`).
+/// (`frictionloss`); the URDF's position limits kept or dropped.
 fn set_joints(
     model: &Model,
     spec: &mut MjSpec,
     servos: &[Servo],
-    min_armature: f64,
+    config: &MujocoConfig,
 ) -> Result<(), MujocoError> {
     for (j, servo) in model.joints().iter().zip(servos) {
         let joint = spec
             .joint_mut(&j.name)
             .ok_or_else(|| MujocoError::Mismatch(format!("MuJoCo has no joint `{}`", j.name)))?;
         joint.damping_mut()[0] = servo.damping;
-        joint.set_armature(servo.armature.max(min_armature));
+        joint.set_armature(servo.armature.max(config.min_armature));
+        if !config.joint_limits {
+            joint.set_limited(MjtLimited::mjLIMITED_FALSE);
+        }
         joint.set_frictionloss(servo.coulomb_friction);
     }
     Ok(())

@@ -217,8 +217,10 @@ impl Sensors {
         out.ft_wrenches_truth.copy_from_slice(truth.ft_wrenches);
     }
 
-    /// Takes a reading of every sensor into the delay line, as [`Sensors::measure`] does, and returns the
-    /// reading of `delay_steps` steps ago. `truth.ft_wrenches` must hold one wrench per sensor of the model.
+    /// Takes a reading of every sensor into the delay line (encoders, IMU, force/torque sensors, drawing
+    /// their noise in that order) and returns the reading of `delay_steps` steps ago. After a state change
+    /// (`truth.fresh_start`) the whole line is filled with the new reading. `truth.ft_wrenches` must hold
+    /// one wrench per sensor of the model.
     pub fn record(&mut self, truth: &Truth<'_>) -> &Reading {
         let head = self.head;
         let mut fresh = std::mem::replace(&mut self.ring[head], Reading::new(0, 0));
