@@ -214,6 +214,13 @@ impl MujocoRobot {
     }
 }
 
+/// `input` into `slot` without allocating (`Clone::clone_from` of nalgebra's vectors reallocates).
+fn copy_command(slot: &mut SimInput, input: &SimInput) {
+    slot.joint_positions.copy_from(&input.joint_positions);
+    slot.joint_velocities.copy_from(&input.joint_velocities);
+    slot.joint_torques.copy_from(&input.joint_torques);
+}
+
 /// `[[sim.pushes]]` against stride's frames and MuJoCo's bodies.
 fn resolve_pushes(
     model: &Model,
@@ -284,7 +291,7 @@ impl MujocoRobot {
     pub fn step(&mut self, input: &SimInput) -> Result<&MujocoOutput, MujocoError> {
         self.check_command(input)?;
         let len = self.commands.len();
-        self.commands[self.head].clone_from(input);
+        copy_command(&mut self.commands[self.head], input);
         self.head = (self.head + 1) % len;
         // The ring holds `delay + 1` commands: the next slot to write is the oldest, written `delay` steps
         // ago (the one just written when there is no delay).
@@ -296,7 +303,7 @@ impl MujocoRobot {
             return Err(e);
         }
         self.time_ns += self.period_ns;
-        self.scratch.previous.clone_from(&self.output.state);
+        self.scratch.previous.copy_from(&self.output.state);
         crate::state::state_from_mujoco(
             self.data.qpos(),
             self.data.qvel(),
