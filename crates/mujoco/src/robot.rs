@@ -300,6 +300,8 @@ impl MujocoRobot {
         self.data.step();
         if let Err(e) = self.check_step() {
             self.restore();
+            // The slot just written held a command already applied: stepping the head back is enough.
+            self.head = (self.head + len - 1) % len;
             return Err(e);
         }
         self.time_ns += self.period_ns;

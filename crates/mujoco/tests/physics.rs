@@ -293,3 +293,33 @@ fn a_non_finite_command_is_an_error_and_changes_nothing() {
     assert_eq!(plant.output().state, before.state);
     assert_eq!(plant.output().time, before.time);
 }
+
+/// A finite command MuJoCo rejects (a position set-point beyond its `mjMAXVAL` of 1e10) raises MuJoCo's
+/// bad-ctrl warning: the step fails with it and the state of before the step is kept.
+#[test]
+fn a_mujoco_warning_fails_the_step_and_restores_the_state() {
+    let urdf = humanoid_urdf();
+    let model = Arc::new(Model::from_urdf_file(&urdf).expect("humanoid"));
+    let mut plant = plant(
+        &model,
+        &urdf,
+        &ideal_sim(10000.0, 200.0),
+        ["l_sole", "r_sole"],
+    );
+    let q = crouch(&model);
+    plant
+        .set_initial_state(&standing(&model, &q))
+        .expect("state");
+    plant.step(&SimInput::hold(&q)).expect("step");
+    let before = plant.output().clone();
+    let qpos = plant.mj_data().qpos().to_vec();
+    let mut input = SimInput::hold(&q);
+    input.joint_positions[5] = 1e12;
+    match plant.step(&input) {
+        Err(MujocoError::Warning { warning, .. }) => assert!(warning.contains("ctrl"), "{warning}"),
+        other => panic!("expected a MuJoCo warning, got {other:?}"),
+    }
+    assert_eq!(plant.output().state, before.state);
+    assert_eq!(plant.output().time, before.time);
+    assert_eq!(plant.mj_data().qpos(), qpos.as_slice());
+}
