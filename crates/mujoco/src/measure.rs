@@ -41,10 +41,8 @@ impl MujocoRobot {
                 wrench: self.output.sole_wrenches[k],
             });
         }
-        // The pushes of the step (the time still is the start of the step's).
-        self.time_ns -= self.period_ns;
-        self.active_pushes(&mut external);
-        self.time_ns += self.period_ns;
+        // The pushes of the step (active at its start time).
+        self.active_pushes(self.time_ns - self.period_ns, &mut external);
         let ft = self.kd.ft_sensor_wrenches(
             &self.scratch.nu_dot,
             &external,

@@ -389,10 +389,10 @@ impl MujocoRobot {
         }
     }
 
-    /// The pushes active at the current time as external wrenches on stride's frames (for the FT model).
-    pub(crate) fn active_pushes(&self, out: &mut Vec<ExternalWrench>) {
+    /// The pushes active at `time_ns` as external wrenches on stride's frames (for the FT model).
+    pub(crate) fn active_pushes(&self, time_ns: u64, out: &mut Vec<ExternalWrench>) {
         for p in &self.pushes {
-            if self.time_ns >= p.start_ns && self.time_ns < p.end_ns {
+            if time_ns >= p.start_ns && time_ns < p.end_ns {
                 out.push(ExternalWrench {
                     frame: p.frame,
                     wrench: p.wrench,
