@@ -56,6 +56,8 @@ pub enum PlantArg {
     Simulator,
     /// The ideal kinematic plant.
     Ideal,
+    /// MuJoCo (needs a build with `--features mujoco`).
+    Mujoco,
 }
 
 /// A layer that `stride replay` can rebuild.
@@ -110,7 +112,7 @@ pub enum Command {
         /// Do not draw the progress bar.
         #[arg(long)]
         no_progress: bool,
-        /// Override the scenario's plant (`ideal`: joint commands applied exactly, base from the stance foot, read as ground truth).
+        /// Override the scenario's plant (`ideal`: joint commands applied exactly, base from the stance foot, read as ground truth; `mujoco`: MuJoCo 3.17, needs `--features mujoco`).
         #[arg(long, value_enum)]
         plant: Option<PlantArg>,
     },

@@ -173,6 +173,7 @@ pub fn run(
         plant: plant.map(|p| match p {
             crate::cli::PlantArg::Simulator => crate::config::PlantKind::Simulator,
             crate::cli::PlantArg::Ideal => crate::config::PlantKind::Ideal,
+            crate::cli::PlantArg::Mujoco => crate::config::PlantKind::Mujoco,
         }),
         ..RunOptions::default()
     };

@@ -20,6 +20,8 @@ pub mod error;
 pub mod estimation_summary;
 pub mod log;
 pub mod model_cmd;
+#[cfg(feature = "mujoco")]
+pub mod mujoco_plant;
 pub mod plot;
 pub mod records;
 pub mod replay;

@@ -41,6 +41,10 @@ pub enum RobotError {
         /// `1 / rates.sim_hz` \[ns\].
         expected_ns: u64,
     },
+    /// The MuJoCo plant failed (build with the `mujoco` feature).
+    #[cfg(feature = "mujoco")]
+    #[error("MuJoCo plant: {0}")]
+    Mujoco(#[from] stride_mujoco::MujocoError),
     /// A robot interface outside stride (a real robot, another simulator) failed; its own words.
     #[error("robot: {0}")]
     Interface(String),

@@ -147,6 +147,7 @@ pub fn build_robot(
                 soles,
             )?)
         }
+        PlantKind::Mujoco => mujoco_robot(scenario, model, &q0)?,
         PlantKind::Ideal => {
             let state = standing_state(model, &q0, soles[0], soles[1])?;
             let period = 1_000_000_000 / u64::from(c.rates.sim_hz);
@@ -159,6 +160,51 @@ pub fn build_robot(
             )?)
         }
     })
+}
+
+/// The MuJoCo plant on the plant's URDF (`[sim.model] urdf`, else `robot.urdf`). MuJoCo compiles the URDF
+/// itself, so `[sim.model]`'s inertia changes cannot be applied: they are rejected.
+#[cfg(feature = "mujoco")]
+fn mujoco_robot(
+    scenario: &Scenario,
+    model: &Arc<Model>,
+    q0: &DVector<f64>,
+) -> Result<Box<dyn Robot>, RunError> {
+    let m = &scenario.config.sim.model;
+    if m.mass_scale != 1.0 || !m.links.is_empty() {
+        return Err(RunError::Config(scenario.invalid(
+            "sim.model",
+            "inertia changes are not supported on the MuJoCo plant (it compiles the URDF itself); expected              `mass_scale = 1` and no `[sim.model.links]` with `scenario.plant = \"mujoco\"`",
+        )));
+    }
+    let plant = load_plant_model(scenario, model)?;
+    let urdf = scenario
+        .plant_urdf_path
+        .clone()
+        .unwrap_or_else(|| scenario.urdf_path.clone());
+    let c = &scenario.config;
+    let soles = [
+        frame_of(scenario, &plant, "robot.left_sole", &c.robot.left_sole)?,
+        frame_of(scenario, &plant, "robot.right_sole", &c.robot.right_sole)?,
+    ];
+    Ok(Box::new(crate::mujoco_plant::MujocoPlant::new(
+        scenario, plant, &urdf, q0, soles,
+    )?))
+}
+
+/// Without the `mujoco` feature the MuJoCo plant is a configuration error that names the build command.
+#[cfg(not(feature = "mujoco"))]
+fn mujoco_robot(
+    scenario: &Scenario,
+    _model: &Arc<Model>,
+    _q0: &DVector<f64>,
+) -> Result<Box<dyn Robot>, RunError> {
+    Err(RunError::Config(scenario.invalid(
+        "scenario.plant",
+        "the MuJoCo plant is not in this build of stride; build it with \
+         `MUJOCO_DYNAMIC_LINK_DIR=$(bash tools/mujoco/setup.sh) cargo build --release --features mujoco` \
+         (see docs/mujoco.md), or choose `simulator` or `ideal`",
+    )))
 }
 
 /// The model frame `name`, set by the scenario key `key`; a name the model lacks is a configuration

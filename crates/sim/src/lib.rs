@@ -48,3 +48,6 @@ pub use io::{ContactPointState, ImuMeasurement, SimInput, SimOutput, SurfaceMeas
 pub use linalg::{cholesky_in_place, cholesky_solve_in_place, TreeCholesky, TreeMatrix};
 pub use noise::GaussianNoise;
 pub use robot::SimRobot;
+/// The sensor models of [`SimRobot`] for another plant (stride-mujoco): fill a [`SensorTruth`] each step and
+/// [`SensorModels::record`] returns the delayed [`SensorReading`].
+pub use sensors::{Reading as SensorReading, Sensors as SensorModels, Truth as SensorTruth};

@@ -6,6 +6,10 @@
 //! line).
 //!
 //! The contact-surface wrenches ([`Sensors::measure_surface`]) are ground truth.
+//!
+//! Another plant reuses the same models through the crate's exports [`crate::SensorModels`] (this
+//! [`Sensors`]), [`crate::SensorTruth`] and [`crate::SensorReading`]: it fills the truth and calls
+//! [`Sensors::record`] each step (stride-mujoco does, so both plants feed the estimator the same sensors).
 
 use nalgebra::{DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
 use stride_model::{JointKind, Model, RobotState};
@@ -56,11 +60,15 @@ fn uniform3(noise: &mut GaussianNoise, bound: f64) -> Vector3<f64> {
 
 /// One reading of every sensor (what the delay line holds).
 #[derive(Clone, Debug)]
-pub(crate) struct Reading {
-    joint_positions: DVector<f64>,
-    joint_velocities: DVector<f64>,
-    imu: ImuMeasurement,
-    ft_wrenches: Vec<Vector6<f64>>,
+pub struct Reading {
+    /// Encoder positions (quantised, noisy), rad or m, model joint order.
+    pub joint_positions: DVector<f64>,
+    /// Encoder velocities (differenced and low-passed, or true plus noise), rad/s or m/s.
+    pub joint_velocities: DVector<f64>,
+    /// The IMU.
+    pub imu: ImuMeasurement,
+    /// Six-axis force/torque sensors in [`Model::ft_sensors`] order (sensor frame), N, N·m.
+    pub ft_wrenches: Vec<Vector6<f64>>,
 }
 
 impl Reading {
@@ -86,28 +94,28 @@ impl Reading {
 }
 
 /// The true quantities the sensors read at the end of a step.
-pub(crate) struct Truth<'a> {
+pub struct Truth<'a> {
     /// Committed state (mixed velocities).
-    pub(crate) state: &'a RobotState,
+    pub state: &'a RobotState,
     /// `world_H_imu`.
-    pub(crate) imu_pose: Isometry3<f64>,
+    pub imu_pose: Isometry3<f64>,
     /// Mixed twist of the IMU frame, m/s, rad/s.
-    pub(crate) imu_twist: Vector6<f64>,
+    pub imu_twist: Vector6<f64>,
     /// World acceleration of the IMU origin over the step, m/s².
-    pub(crate) imu_acceleration: Vector3<f64>,
+    pub imu_acceleration: Vector3<f64>,
     /// Gravity (world), m/s².
-    pub(crate) gravity: Vector3<f64>,
+    pub gravity: Vector3<f64>,
     /// Simulated time, s.
-    pub(crate) time: f64,
+    pub time: f64,
     /// Transmitted wrench of each force/torque sensor (sensor frame, measurement direction), N, N·m.
-    pub(crate) ft_wrenches: &'a [Vector6<f64>],
+    pub ft_wrenches: &'a [Vector6<f64>],
     /// The state was just set (not reached by a step): restart the velocity filter and fill the delay line.
-    pub(crate) fresh_start: bool,
+    pub fresh_start: bool,
 }
 
 /// The sensor models and their internal state (filters, biases, offsets, the delay line).
 #[derive(Clone, Debug)]
-pub(crate) struct Sensors {
+pub struct Sensors {
     noise: GaussianNoise,
     config: SensorConfig,
     /// Step period, s.
@@ -136,8 +144,9 @@ pub(crate) struct Sensors {
 }
 
 impl Sensors {
-    /// The sensors of `model` with `config` at the step period `dt` (s). Call [`Sensors::reset`] before use.
-    pub(crate) fn new(model: &Model, config: &SensorConfig, dt: f64) -> Self {
+    /// The sensors of `model` with `config` (validated by [`crate::SimConfig::validate`]) at the step
+    /// period `dt` (s). Call [`Sensors::reset`] before use.
+    pub fn new(model: &Model, config: &SensorConfig, dt: f64) -> Self {
         let dof = model.dof();
         let step = match config.encoder.counts_per_revolution {
             0 => 0.0,
@@ -174,7 +183,7 @@ impl Sensors {
     /// Restarts the random sequence from the seed and draws the start-up errors, in this order: each
     /// force/torque sensor's offset (force then torque axes), the gyroscope bias, the accelerometer bias, the
     /// roll and pitch error, the yaw drift rate. Drifts restart at zero.
-    pub(crate) fn reset(&mut self) {
+    pub fn reset(&mut self) {
         self.noise.reset();
         let ft = &self.config.ft;
         for (offset, drift) in self.ft_offsets.iter_mut().zip(&mut self.ft_drifts) {
@@ -200,6 +209,19 @@ impl Sensors {
     /// into the delay line and copies the reading of `delay_steps` steps ago into `out`. After a state change
     /// (`truth.fresh_start`) the whole delay line is filled with the new reading (this allocates once).
     pub(crate) fn measure(&mut self, truth: &Truth<'_>, out: &mut SimOutput) {
+        let delayed = self.record(truth);
+        out.joint_positions.copy_from(&delayed.joint_positions);
+        out.joint_velocities.copy_from(&delayed.joint_velocities);
+        out.imu = delayed.imu;
+        out.ft_wrenches.copy_from_slice(&delayed.ft_wrenches);
+        out.ft_wrenches_truth.copy_from_slice(truth.ft_wrenches);
+    }
+
+    /// Takes a reading of every sensor into the delay line (encoders, IMU, force/torque sensors, drawing
+    /// their noise in that order) and returns the reading of `delay_steps` steps ago. After a state change
+    /// (`truth.fresh_start`) the whole line is filled with the new reading. `truth.ft_wrenches` must hold
+    /// one wrench per sensor of the model.
+    pub fn record(&mut self, truth: &Truth<'_>) -> &Reading {
         let head = self.head;
         let mut fresh = std::mem::replace(&mut self.ring[head], Reading::new(0, 0));
         self.read_encoders(truth, &mut fresh);
@@ -213,14 +235,8 @@ impl Sensors {
             }
         }
         self.ring[head] = fresh;
-        let len = self.ring.len();
-        let delayed = &self.ring[(head + 1) % len];
-        out.joint_positions.copy_from(&delayed.joint_positions);
-        out.joint_velocities.copy_from(&delayed.joint_velocities);
-        out.imu = delayed.imu;
-        out.ft_wrenches.copy_from_slice(&delayed.ft_wrenches);
-        out.ft_wrenches_truth.copy_from_slice(truth.ft_wrenches);
-        self.head = (head + 1) % len;
+        self.head = (head + 1) % self.ring.len();
+        &self.ring[self.head]
     }
 
     /// Encoder positions `quantise(q + n_q)` and velocities (differenced and low-passed, or true) plus `n_q̇`,

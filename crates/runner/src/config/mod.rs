@@ -72,6 +72,8 @@ pub enum PlantKind {
     Simulator,
     /// Ideal kinematic plant: joint commands applied exactly, base pose from the fixed stance foot.
     Ideal,
+    /// MuJoCo 3.17 (`stride-mujoco`; needs a build with the `mujoco` feature, see docs/mujoco.md).
+    Mujoco,
 }
 
 /// `[estimation]`: where the controllers' view of the robot comes from, and the estimation layer's
@@ -137,7 +139,7 @@ pub struct ScenarioSection {
     pub duration: f64,
     /// Position or torque control.
     pub control_mode: ControlMode,
-    /// Simulator or ideal kinematic plant.
+    /// Simulator, ideal kinematic plant or MuJoCo.
     pub plant: PlantKind,
     /// Gravity acceleration \[m/s²\] along −z of the world: the one gravity of the run, set on the model
     /// and handed to the planner, the controllers and the simulator.

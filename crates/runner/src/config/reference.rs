@@ -41,7 +41,7 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "scenario.control_mode", unit: "-", meaning: "`position` (QP-IK → joint position servos) or `torque` (TSID → joint torques)." },
     KeyDoc { key: "scenario.gravity", unit: "m/s²", meaning: "Gravity acceleration along −z of the world, > 0: the run's one gravity, set on the model and handed to the planner, the controllers and the simulator." },
     KeyDoc { key: "estimation.kind", unit: "-", meaning: "`ekf` (default): the controllers read only the estimation layer's output (stride-estimation: invariant EKF, contacts and foot wrenches from the force/torque sensors). `ground_truth`: they read the simulator's truth, for debugging only (the summary says GROUND TRUTH; required with `scenario.plant = \"ideal\"`)." },
-    KeyDoc { key: "scenario.plant", unit: "-", meaning: "`simulator` (stride-sim) or `ideal` (joint commands applied exactly, base from the fixed stance foot)." },
+    KeyDoc { key: "scenario.plant", unit: "-", meaning: "`simulator` (stride-sim), `ideal` (joint commands applied exactly, base from the fixed stance foot) or `mujoco` (MuJoCo 3.17 on the soles of the URDF, configured by the same `[sim]` section; needs a build with `--features mujoco`, see docs/mujoco.md)." },
     KeyDoc { key: "robot.urdf", unit: "-", meaning: "URDF of the robot, relative to the file that sets this key; `${NAME}` is replaced by the environment variable `NAME` (unset: a configuration error), e.g. `\"${STRIDE_ICUB_MODELS_DIR}/iCubGazeboV2_7/model.urdf\"`." },
     KeyDoc { key: "robot.left_sole", unit: "-", meaning: "Frame at the centre of the left sole (a link or frame of the model)." },
     KeyDoc { key: "robot.right_sole", unit: "-", meaning: "Frame at the centre of the right sole." },

@@ -1,0 +1,136 @@
+//! [`Robot`] implementation on MuJoCo (`stride-mujoco`, cargo feature `mujoco`).
+//!
+//! The scenario's `[sim]` section configures it as it configures stride-sim: actuation (`kp`, `kd`, effort
+//! limits, friction, delays, torque lag), sensors (`[sim.sensors]`: the same models), pushes, ground
+//! height, fall detection, the friction coefficient. The contact model is MuJoCo's own, on the URDF's
+//! collision geometry of the soles (`stride_mujoco::MujocoConfig` documents its parameters).
+
+use std::sync::Arc;
+
+use nalgebra::{DVector, Vector3};
+use stride_estimation::ImuReading;
+use stride_model::{FrameId, Model};
+use stride_mujoco::{MujocoConfig, MujocoRobot, PlantSetup};
+use stride_sim::{ActuationMode, SimInput};
+
+use crate::config::{ControlMode, Scenario};
+use crate::robot::{standing_state, JointCommand, Measurement, Robot, RobotError};
+
+/// MuJoCo behind the [`Robot`] trait: truth from MuJoCo's state and contacts, sensors from stride-sim's
+/// models fed with MuJoCo's motion (see `stride_mujoco`).
+pub struct MujocoPlant {
+    robot: MujocoRobot,
+    model: Arc<Model>,
+    input: SimInput,
+    meas: Measurement,
+}
+
+impl MujocoPlant {
+    /// Builds the MuJoCo model from `urdf` (the plant's), stepping at `scenario.sim_period()`, with every
+    /// joint in `mode`, and stands the robot at `joint_positions`: left sole level on the ground, the soles'
+    /// mid-point above the world origin, heading along +x (as the other plants start).
+    pub fn new(
+        scenario: &Scenario,
+        model: Arc<Model>,
+        urdf: &std::path::Path,
+        joint_positions: &DVector<f64>,
+        soles: [FrameId; 2],
+    ) -> Result<Self, RobotError> {
+        let c = &scenario.config;
+        let mut sim = c.sim.clone();
+        if c.scenario.control_mode == ControlMode::Torque {
+            sim.actuation.default.mode = ActuationMode::Torque;
+            for j in &mut sim.actuation.joints {
+                j.mode = Some(ActuationMode::Torque);
+            }
+        }
+        let names = soles.map(|f| model.frame_name(f).to_string());
+        let mut robot = MujocoRobot::new(
+            Arc::clone(&model),
+            &PlantSetup {
+                urdf,
+                sim: &sim,
+                mujoco: &MujocoConfig::default(),
+                soles: [&names[0], &names[1]],
+                period: scenario.sim_period(),
+            },
+        )?;
+        let mut state = standing_state(&model, joint_positions, soles[0], soles[1])?;
+        state.base_pose.translation.vector += Vector3::new(0.0, 0.0, sim.ground.height);
+        robot.set_initial_state(&state)?;
+        let mut plant = Self {
+            robot,
+            input: SimInput::hold(joint_positions),
+            meas: Measurement::new(&model),
+            model,
+        };
+        plant.read_output();
+        Ok(plant)
+    }
+
+    /// The MuJoCo plant (its model, data and contact details).
+    pub fn mujoco(&self) -> &MujocoRobot {
+        &self.robot
+    }
+
+    fn read_output(&mut self) {
+        let out = self.robot.output();
+        let m = &mut self.meas;
+        m.time_ns = u64::try_from(out.time.as_nanos()).unwrap_or(u64::MAX);
+        m.fallen = out.fallen;
+        let sensors = &mut m.sensors;
+        sensors.time_ns = m.time_ns;
+        sensors.joint_positions.copy_from(&out.joint_positions);
+        sensors.joint_velocities.copy_from(&out.joint_velocities);
+        sensors.imu = ImuReading {
+            orientation: out.imu.orientation,
+            angular_velocity: out.imu.angular_velocity,
+            proper_acceleration: out.imu.proper_acceleration,
+        };
+        for (reading, wrench) in sensors.ft_wrenches.iter_mut().zip(&out.ft_wrenches) {
+            *reading = *wrench;
+        }
+        let truth = &mut m.truth;
+        truth.state.copy_from(&out.state);
+        truth.joint_torques.copy_from(&out.joint_torques);
+        truth.saturated.copy_from_slice(&out.saturated);
+        truth.foot_wrenches = out.sole_wrenches;
+        truth.feet_in_contact = out.sole_contact;
+    }
+}
+
+impl Robot for MujocoPlant {
+    fn name(&self) -> &str {
+        "mujoco"
+    }
+    fn model(&self) -> &Arc<Model> {
+        &self.model
+    }
+    fn period_ns(&self) -> u64 {
+        self.robot.period_ns()
+    }
+    fn measurement(&self) -> &Measurement {
+        &self.meas
+    }
+    fn command(&mut self, command: &JointCommand) -> Result<(), RobotError> {
+        let n = self.model.dof();
+        for got in [command.joint_positions.len(), command.joint_torques.len()] {
+            if got != n {
+                return Err(RobotError::CommandSize { expected: n, got });
+            }
+        }
+        self.input
+            .joint_positions
+            .copy_from(&command.joint_positions);
+        self.input
+            .joint_velocities
+            .copy_from(&command.joint_velocities);
+        self.input.joint_torques.copy_from(&command.joint_torques);
+        Ok(())
+    }
+    fn advance(&mut self) -> Result<(), RobotError> {
+        self.robot.step(&self.input)?;
+        self.read_output();
+        Ok(())
+    }
+}
