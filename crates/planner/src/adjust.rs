@@ -18,11 +18,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::build::{build_plan, StartState};
 use crate::config::PlannerConfig;
-use crate::contacts::{ContactList, Foot, Phase, PhaseKind};
+use crate::contacts::{Foot, Phase, PhaseKind};
 use crate::error::PlannerError;
 use crate::geometry::Pose2;
 use crate::goal::Goal;
 use crate::plan::Plan;
+use crate::planner::spliced_plan;
 use crate::swing::{RetargetOutcome, SwingTrajectory};
 
 /// The step of a plan that is being executed at some instant of single support (borrowed from the plan:
@@ -142,7 +143,7 @@ fn single_support_state(plan: &Plan, omega: f64, t: f64, land: f64) -> crate::dc
 
 /// The old plan up to `t` (its single-support segment and phase stretched to the new touch-down), the
 /// retargeted `swing`, then `new` from the touch-down on.
-fn splice(old: &Plan, new: Plan, t: f64, swing: SwingTrajectory) -> Plan {
+fn splice(old: &Plan, mut new: Plan, t: f64, swing: SwingTrajectory) -> Plan {
     let land = swing.land_time;
     let mut segments: Vec<_> = old
         .segments
@@ -153,7 +154,7 @@ fn splice(old: &Plan, new: Plan, t: f64, swing: SwingTrajectory) -> Plan {
     if let Some(last) = segments.last_mut() {
         last.duration = Some(land - last.start);
     }
-    segments.extend(new.segments);
+    segments.append(&mut new.segments);
     let mut phases: Vec<Phase> = old
         .phases
         .iter()
@@ -163,46 +164,6 @@ fn splice(old: &Plan, new: Plan, t: f64, swing: SwingTrajectory) -> Plan {
     if let Some(last) = phases.last_mut() {
         last.end = land;
     }
-    phases.extend(new.phases);
-    let keep = |list: &ContactList, new: ContactList| {
-        let mut c: Vec<_> = list
-            .contacts
-            .iter()
-            .filter(|c| c.deactivation_time.is_some_and(|d| d <= t))
-            .cloned()
-            .collect();
-        c.extend(new.contacts);
-        ContactList {
-            foot: list.foot,
-            contacts: c,
-        }
-    };
-    let swing_foot = swing.foot;
-    let keep_swings = |foot: Foot, old: &[SwingTrajectory], new: Vec<SwingTrajectory>| {
-        let mut s: Vec<_> = old.iter().filter(|s| s.land_time <= t).cloned().collect();
-        if foot == swing_foot {
-            s.push(swing.clone());
-        }
-        s.extend(new);
-        s
-    };
-    let mut merge_times = old.merge_times.clone();
-    merge_times.push(t);
-    Plan {
-        omega: new.omega,
-        com_height: new.com_height,
-        ground_height: new.ground_height,
-        foot_length: new.foot_length,
-        foot_width: new.foot_width,
-        start_time: old.start_time,
-        end_time: new.end_time,
-        segments,
-        phases,
-        left_contacts: keep(&old.left_contacts, new.left_contacts),
-        right_contacts: keep(&old.right_contacts, new.right_contacts),
-        left_swings: keep_swings(Foot::Left, &old.left_swings, new.left_swings),
-        right_swings: keep_swings(Foot::Right, &old.right_swings, new.right_swings),
-        outcome: new.outcome,
-        merge_times,
-    }
+    phases.append(&mut new.phases);
+    spliced_plan(old, new, t, segments, phases, Some(swing))
 }

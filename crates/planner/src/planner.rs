@@ -7,7 +7,7 @@ use nalgebra::{Isometry3, Vector2};
 use crate::adjust::{adjusted_plan, StepAdjustmentRequest};
 use crate::build::{build_plan, xy, StartState};
 use crate::config::{check_gravity, PlannerConfig};
-use crate::contacts::{ContactList, Phase, PhaseKind, PlannedContact};
+use crate::contacts::{ContactList, Foot, Phase, PhaseKind, PlannedContact};
 use crate::dcm::DcmSegment;
 use crate::error::PlannerError;
 use crate::geometry::{wrap_angle, Pose2};
@@ -350,7 +350,7 @@ fn merge_point(cfg: &PlannerConfig, plan: &Plan, t: f64) -> Result<f64, PlannerE
     Err(PlannerError::NoMergePoint { time: t })
 }
 
-fn merge(old: &Plan, new: Plan, m: f64) -> Plan {
+fn merge(old: &Plan, mut new: Plan, m: f64) -> Plan {
     let mut segments: Vec<DcmSegment> = old
         .segments
         .iter()
@@ -360,9 +360,9 @@ fn merge(old: &Plan, new: Plan, m: f64) -> Plan {
     if let Some(last) = segments.last_mut() {
         last.duration = Some(m - last.start);
     }
-    segments.extend(new.segments);
+    segments.append(&mut new.segments);
     let mut phases: Vec<Phase> = old.phases.iter().filter(|p| p.start < m).cloned().collect();
-    let mut new_phases = new.phases.into_iter();
+    let mut new_phases = std::mem::take(&mut new.phases).into_iter();
     match phases.last_mut() {
         Some(last) if last.kind == PhaseKind::DoubleSupport => {
             if let Some(first) = new_phases.next() {
@@ -372,11 +372,26 @@ fn merge(old: &Plan, new: Plan, m: f64) -> Plan {
         _ => {}
     }
     phases.extend(new_phases);
+    spliced_plan(old, new, m, segments, phases, None)
+}
+
+/// The plan made of `old` up to `t` and `new` after it, given the DCM `segments` and `phases` the caller has
+/// already joined: the contacts that ended by `t` and the swings that landed by `t` are kept, then `new`'s;
+/// `current_swing` (a swing in progress at `t`, e.g. retargeted) goes between the two lists of its foot. Shared
+/// by the merge of a replan and by a step adjustment.
+pub(crate) fn spliced_plan(
+    old: &Plan,
+    new: Plan,
+    t: f64,
+    segments: Vec<DcmSegment>,
+    phases: Vec<Phase>,
+    current_swing: Option<SwingTrajectory>,
+) -> Plan {
     let keep = |list: &ContactList, new: ContactList| {
         let mut c: Vec<PlannedContact> = list
             .contacts
             .iter()
-            .filter(|c| c.deactivation_time.is_some_and(|d| d <= m))
+            .filter(|c| c.deactivation_time.is_some_and(|d| d <= t))
             .cloned()
             .collect();
         c.extend(new.contacts);
@@ -385,14 +400,15 @@ fn merge(old: &Plan, new: Plan, m: f64) -> Plan {
             contacts: c,
         }
     };
-    let keep_swings = |old: &[SwingTrajectory], new: Vec<SwingTrajectory>| {
+    let keep_swings = |foot: Foot, old: &[SwingTrajectory], new: Vec<SwingTrajectory>| {
         let mut s: Vec<SwingTrajectory> =
-            old.iter().filter(|s| s.land_time <= m).cloned().collect();
+            old.iter().filter(|s| s.land_time <= t).cloned().collect();
+        s.extend(current_swing.iter().filter(|c| c.foot == foot).cloned());
         s.extend(new);
         s
     };
     let mut merge_times = old.merge_times.clone();
-    merge_times.push(m);
+    merge_times.push(t);
     Plan {
         omega: new.omega,
         com_height: new.com_height,
@@ -405,8 +421,8 @@ fn merge(old: &Plan, new: Plan, m: f64) -> Plan {
         phases,
         left_contacts: keep(&old.left_contacts, new.left_contacts),
         right_contacts: keep(&old.right_contacts, new.right_contacts),
-        left_swings: keep_swings(&old.left_swings, new.left_swings),
-        right_swings: keep_swings(&old.right_swings, new.right_swings),
+        left_swings: keep_swings(Foot::Left, &old.left_swings, new.left_swings),
+        right_swings: keep_swings(Foot::Right, &old.right_swings, new.right_swings),
         outcome: new.outcome,
         merge_times,
     }

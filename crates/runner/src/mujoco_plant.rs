@@ -15,6 +15,7 @@ use stride_sim::{ActuationMode, SimInput};
 
 use crate::config::{ControlMode, Scenario};
 use crate::robot::{standing_state, JointCommand, Measurement, Robot, RobotError};
+use crate::sim_plant::load_command;
 
 /// MuJoCo behind the [`Robot`] trait: truth from MuJoCo's state and contacts, sensors from stride-sim's
 /// models fed with MuJoCo's motion (see `stride_mujoco`).
@@ -113,20 +114,7 @@ impl Robot for MujocoPlant {
         &self.meas
     }
     fn command(&mut self, command: &JointCommand) -> Result<(), RobotError> {
-        let n = self.model.dof();
-        for got in [command.joint_positions.len(), command.joint_torques.len()] {
-            if got != n {
-                return Err(RobotError::CommandSize { expected: n, got });
-            }
-        }
-        self.input
-            .joint_positions
-            .copy_from(&command.joint_positions);
-        self.input
-            .joint_velocities
-            .copy_from(&command.joint_velocities);
-        self.input.joint_torques.copy_from(&command.joint_torques);
-        Ok(())
+        load_command(command, self.model.dof(), &mut self.input)
     }
     fn advance(&mut self) -> Result<(), RobotError> {
         self.robot.step(&self.input)?;

@@ -139,23 +139,32 @@ impl Robot for SimPlant {
         &self.meas
     }
     fn command(&mut self, command: &JointCommand) -> Result<(), RobotError> {
-        let n = self.model.dof();
-        for got in [command.joint_positions.len(), command.joint_torques.len()] {
-            if got != n {
-                return Err(RobotError::CommandSize { expected: n, got });
-            }
-        }
-        self.input
-            .joint_positions
-            .copy_from(&command.joint_positions);
-        self.input
-            .joint_velocities
-            .copy_from(&command.joint_velocities);
-        self.input.joint_torques.copy_from(&command.joint_torques);
-        Ok(())
+        load_command(command, self.model.dof(), &mut self.input)
     }
     fn advance(&mut self) -> Result<(), RobotError> {
         self.sim.step(&self.input)?;
         self.read_output()
     }
+}
+
+/// Copies a joint command sized for `dof` joints into a simulator input (positions, velocities, torques);
+/// a command sized for another robot is an error that changes nothing. Shared by the simulated plants.
+pub(crate) fn load_command(
+    command: &JointCommand,
+    dof: usize,
+    input: &mut SimInput,
+) -> Result<(), RobotError> {
+    for got in [
+        command.joint_positions.len(),
+        command.joint_velocities.len(),
+        command.joint_torques.len(),
+    ] {
+        if got != dof {
+            return Err(RobotError::CommandSize { expected: dof, got });
+        }
+    }
+    input.joint_positions.copy_from(&command.joint_positions);
+    input.joint_velocities.copy_from(&command.joint_velocities);
+    input.joint_torques.copy_from(&command.joint_torques);
+    Ok(())
 }
