@@ -148,6 +148,9 @@ pub struct RunSummary {
     pub simplified_holds: u64,
     /// Planner replans.
     pub replans: u64,
+    /// Footsteps moved by the step adjustment (`simplified.step_adjustment`), and the adjustments the planner
+    /// refused (the plan kept).
+    pub step_adjustments: (u64, u64),
     /// Realtime mode: whole-body ticks that started late.
     pub deadline_misses: u64,
     /// Estimation errors (estimate − plant truth).
@@ -184,6 +187,7 @@ impl RunSummary {
             wbc_holds: 0,
             simplified_holds: 0,
             replans: 0,
+            step_adjustments: (0, 0),
             deadline_misses: 0,
             estimation: EstimationSummary::default(),
             log: None,
@@ -301,6 +305,13 @@ impl RunSummary {
             "  QP fallbacks {}, held commands {}, simplified holds {}, replans {}, deadline misses {}",
             self.wbc_fallbacks, self.wbc_holds, self.simplified_holds, self.replans, self.deadline_misses
         );
+        let (applied, refused) = self.step_adjustments;
+        if applied + refused > 0 {
+            let _ = writeln!(
+                s,
+                "  step adjustments {applied} (refused by the planner {refused})"
+            );
+        }
         if let Some((p, st)) = &self.log {
             let _ = writeln!(
                 s,

@@ -138,6 +138,7 @@ impl Tracker {
         s.wbc_holds = counters.wbc_holds;
         s.simplified_holds = counters.simplified_holds;
         s.replans = counters.replans;
+        s.step_adjustments = (counters.step_adjustments, counters.step_adjustment_failures);
         s.finish(self.start_mid, end, goal, wall);
         s.estimation.finish(s.distance);
         self.summary

@@ -51,6 +51,8 @@ fn without_pushes_the_default_walk_is_unchanged() {
     assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
     // the DCM errors of normal walking stay inside the ankle's share and the dead bands: no adjustment
     assert!(adjusted_footsteps(&s.path("on.mcap")).is_empty());
+    assert_eq!(on.step_adjustments, (0, 0));
+    assert!(!on.render().contains("step adjustments"));
     assert!(on.dcm_error.rms <= off.dcm_error.rms && on.dcm_error.max <= off.dcm_error.max);
     assert!(on.com_error.rms <= off.com_error.rms && on.feet_error.rms <= off.feet_error.rms);
     assert!(on.goal_distance.unwrap() <= off.goal_distance.unwrap());
@@ -110,6 +112,12 @@ fn a_forward_push_that_fells_the_walk_is_survived_with_step_adjustment() {
     let feet: std::collections::BTreeSet<_> =
         during.iter().map(|m| m["foot"].as_str().unwrap()).collect();
     assert_eq!(feet.len(), 2, "{during:?}");
+    // the summary counts what the log holds
+    assert_eq!(on.step_adjustments.0 as usize, steps.len());
+    assert_eq!(off.step_adjustments, (0, 0));
+    assert!(on
+        .render()
+        .contains(&format!("step adjustments {} (refused", steps.len())));
     // twice the push falls with the adjustment too
     let top = format!(
         "include = [{:?}]\n[[sim.pushes]]\nframe = \"chest\"\nstart = 5.0\nduration = 1.0\n\

@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::run::{Outcome, RunSummary};
 
 /// The columns after the axes, in order.
-pub const METRIC_COLUMNS: [&str; 11] = [
+pub const METRIC_COLUMNS: [&str; 12] = [
     "outcome",
     "distance",
     "goal_distance",
@@ -24,6 +24,7 @@ pub const METRIC_COLUMNS: [&str; 11] = [
     "est_final_position_error",
     "est_tilt_rms_deg",
     "est_tilt_max_deg",
+    "step_adjustments",
 ];
 
 /// One cell.
@@ -139,6 +140,7 @@ pub fn metric_cells(summary: Option<&RunSummary>, wall_s: f64) -> Vec<Cell> {
         Cell::Float(px.hypot(py)),
         Cell::Float(e.tilt_error.rms.to_degrees()),
         Cell::Float(e.tilt_error.max.to_degrees()),
+        Cell::Int(i64::try_from(s.step_adjustments.0).unwrap_or(i64::MAX)),
     ]
 }
 
