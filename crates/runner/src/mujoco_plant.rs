@@ -8,14 +8,13 @@
 use std::sync::Arc;
 
 use nalgebra::{DVector, Vector3};
-use stride_estimation::ImuReading;
 use stride_model::{FrameId, Model};
 use stride_mujoco::{MujocoConfig, MujocoRobot, PlantSetup};
 use stride_sim::{ActuationMode, SimInput};
 
 use crate::config::{ControlMode, Scenario};
 use crate::robot::{standing_state, JointCommand, Measurement, Robot, RobotError};
-use crate::sim_plant::load_command;
+use crate::sim_plant::{load_command, load_sensors, SensedOutput};
 
 /// MuJoCo behind the [`Robot`] trait: truth from MuJoCo's state and contacts, sensors from stride-sim's
 /// models fed with MuJoCo's motion (see `stride_mujoco`).
@@ -77,20 +76,17 @@ impl MujocoPlant {
     fn read_output(&mut self) {
         let out = self.robot.output();
         let m = &mut self.meas;
-        m.time_ns = u64::try_from(out.time.as_nanos()).unwrap_or(u64::MAX);
         m.fallen = out.fallen;
-        let sensors = &mut m.sensors;
-        sensors.time_ns = m.time_ns;
-        sensors.joint_positions.copy_from(&out.joint_positions);
-        sensors.joint_velocities.copy_from(&out.joint_velocities);
-        sensors.imu = ImuReading {
-            orientation: out.imu.orientation,
-            angular_velocity: out.imu.angular_velocity,
-            proper_acceleration: out.imu.proper_acceleration,
-        };
-        for (reading, wrench) in sensors.ft_wrenches.iter_mut().zip(&out.ft_wrenches) {
-            *reading = *wrench;
-        }
+        m.time_ns = load_sensors(
+            &mut m.sensors,
+            SensedOutput {
+                time: out.time,
+                joint_positions: &out.joint_positions,
+                joint_velocities: &out.joint_velocities,
+                imu: &out.imu,
+                ft_wrenches: &out.ft_wrenches,
+            },
+        );
         let truth = &mut m.truth;
         truth.state.copy_from(&out.state);
         truth.joint_torques.copy_from(&out.joint_torques);

@@ -2,11 +2,11 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use nalgebra::DVector;
+use nalgebra::{DVector, Vector6};
 use stride_block::Block;
-use stride_estimation::ImuReading;
+use stride_estimation::{EstimatorInput, ImuReading};
 use stride_model::{FrameId, KinDyn, Model};
-use stride_sim::{ActuationMode, SimConfig, SimInput, SimRobot};
+use stride_sim::{ActuationMode, ImuMeasurement, SimConfig, SimInput, SimRobot};
 
 use crate::config::ControlMode;
 use crate::robot::{JointCommand, Measurement, Robot, RobotError};
@@ -96,20 +96,17 @@ impl SimPlant {
     fn read_output(&mut self) -> Result<(), RobotError> {
         let out = self.sim.output();
         let m = &mut self.meas;
-        m.time_ns = u64::try_from(out.time.as_nanos()).unwrap_or(u64::MAX);
         m.fallen = out.fallen;
-        let sensors = &mut m.sensors;
-        sensors.time_ns = m.time_ns;
-        sensors.joint_positions.copy_from(&out.joint_positions);
-        sensors.joint_velocities.copy_from(&out.joint_velocities);
-        sensors.imu = ImuReading {
-            orientation: out.imu.orientation,
-            angular_velocity: out.imu.angular_velocity,
-            proper_acceleration: out.imu.proper_acceleration,
-        };
-        for (reading, wrench) in sensors.ft_wrenches.iter_mut().zip(&out.ft_wrenches) {
-            *reading = *wrench;
-        }
+        m.time_ns = load_sensors(
+            &mut m.sensors,
+            SensedOutput {
+                time: out.time,
+                joint_positions: &out.joint_positions,
+                joint_velocities: &out.joint_velocities,
+                imu: &out.imu,
+                ft_wrenches: &out.ft_wrenches,
+            },
+        );
         let truth = &mut m.truth;
         truth.state.copy_from(&out.state);
         truth.joint_torques.copy_from(&out.joint_torques);
@@ -167,4 +164,36 @@ pub(crate) fn load_command(
     input.joint_velocities.copy_from(&command.joint_velocities);
     input.joint_torques.copy_from(&command.joint_torques);
     Ok(())
+}
+
+/// What a simulated plant senses at the end of a step (the sensor part of its output).
+pub(crate) struct SensedOutput<'a> {
+    /// Plant time.
+    pub(crate) time: Duration,
+    /// Encoder positions \[rad\].
+    pub(crate) joint_positions: &'a DVector<f64>,
+    /// Encoder velocities \[rad/s\].
+    pub(crate) joint_velocities: &'a DVector<f64>,
+    /// The IMU's reading.
+    pub(crate) imu: &'a ImuMeasurement,
+    /// The FT sensors' readings, in model order.
+    pub(crate) ft_wrenches: &'a [Vector6<f64>],
+}
+
+/// Copies a simulated plant's sensor readings into the estimation layer's input; returns the time \[ns\].
+/// Shared by the simulated plants.
+pub(crate) fn load_sensors(sensors: &mut EstimatorInput, out: SensedOutput<'_>) -> u64 {
+    let time_ns = u64::try_from(out.time.as_nanos()).unwrap_or(u64::MAX);
+    sensors.time_ns = time_ns;
+    sensors.joint_positions.copy_from(out.joint_positions);
+    sensors.joint_velocities.copy_from(out.joint_velocities);
+    sensors.imu = ImuReading {
+        orientation: out.imu.orientation,
+        angular_velocity: out.imu.angular_velocity,
+        proper_acceleration: out.imu.proper_acceleration,
+    };
+    for (reading, wrench) in sensors.ft_wrenches.iter_mut().zip(out.ft_wrenches) {
+        *reading = *wrench;
+    }
+    time_ns
 }
