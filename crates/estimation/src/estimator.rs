@@ -324,15 +324,7 @@ impl Estimator {
 
     /// Step 1: kinematics relative to the base.
     fn relative_kinematics(&mut self, input: &EstimatorInput) -> Result<RelativeKinematics> {
-        self.scratch.base_pose = Isometry3::identity();
-        self.scratch.base_velocity = Vector6::zeros();
-        self.scratch
-            .joint_positions
-            .copy_from(&input.joint_positions);
-        self.scratch
-            .joint_velocities
-            .copy_from(&input.joint_velocities);
-        self.kd.set_state(&self.scratch)?;
+        self.set_kinematics(Isometry3::identity(), Vector6::zeros(), input)?;
         Ok(RelativeKinematics {
             imu_h_sole: self.soles.map(|s| self.kd.relative_transform(self.imu, s)),
             imu_h_base: self.kd.relative_transform(self.imu, self.base),
@@ -419,6 +411,19 @@ impl Estimator {
         input: &EstimatorInput,
     ) -> Result<()> {
         let (pose, twist, acc) = self.base_from_imu(s, kin, input);
+        self.set_kinematics(pose, twist, input)?;
+        self.nu_dot.fill(0.0);
+        self.nu_dot.fixed_rows_mut::<3>(0).copy_from(&acc);
+        Ok(())
+    }
+
+    /// `self.kd` at the base `pose` and mixed `twist` with the joints as measured.
+    fn set_kinematics(
+        &mut self,
+        pose: Isometry3<f64>,
+        twist: Vector6<f64>,
+        input: &EstimatorInput,
+    ) -> Result<()> {
         self.scratch.base_pose = pose;
         self.scratch.base_velocity = twist;
         self.scratch
@@ -428,8 +433,6 @@ impl Estimator {
             .joint_velocities
             .copy_from(&input.joint_velocities);
         self.kd.set_state(&self.scratch)?;
-        self.nu_dot.fill(0.0);
-        self.nu_dot.fixed_rows_mut::<3>(0).copy_from(&acc);
         Ok(())
     }
 

@@ -110,9 +110,7 @@ impl SimPlant {
         let truth = &mut m.truth;
         truth.state.copy_from(&out.state);
         truth.joint_torques.copy_from(&out.joint_torques);
-        for (k, saturated) in out.saturated.iter().enumerate() {
-            truth.saturated[k] = *saturated;
-        }
+        truth.saturated.copy_from_slice(&out.saturated);
         for k in 0..2 {
             let surface = self.surfaces[k].and_then(|i| out.surfaces.get(i));
             truth.feet_in_contact[k] = surface.is_some_and(|s| s.in_contact);
