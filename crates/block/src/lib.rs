@@ -28,6 +28,10 @@
 //! assert_eq!(*block.step(&1.0).unwrap(), 0.01);
 //! ```
 
+mod filter;
+
+pub use filter::{low_pass_gain, FirstOrderLowPass};
+
 /// A layer of the stack: plain data in, plain data out, no allocation after construction.
 pub trait Block {
     /// Everything the block needs for one tick (measurements, references from the layer above).

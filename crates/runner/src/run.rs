@@ -285,6 +285,9 @@ impl<'a> Loop<'a> {
         if run_simplified || run_wbc || run_planner || log_state {
             self.stack.measure(self.robot.measurement())?;
         }
+        if run_simplified || run_wbc {
+            self.stack.filter_measured_zmp(t);
+        }
         if run_planner && self.stack.planner_tick(t)? {
             self.planned(t, k == 0)?;
         }

@@ -10,13 +10,15 @@
 //! Measured quantities: the CoM position and velocity from the estimated base state and joints through
 //! the model; the DCM `ξ = x + ẋ/ω` with the plan's ω (computed once per simplified tick); the ZMP from the
 //! feet wrenches ([`stride_simplified::measured_zmp`]), falling back to the CoM's ground projection when
-//! no foot carries more than 5 % of the weight.
+//! no foot carries more than 5 % of the weight. The simplified layer reads that ZMP through a first-order
+//! low-pass filter ([`Stack::filter_measured_zmp`], `estimation.measured_zmp_cutoff`), updated at every
+//! simplified and whole-body tick.
 
 use std::sync::Arc;
 use std::time::Duration;
 
 use nalgebra::{UnitQuaternion, Vector2, Vector3, Vector6};
-use stride_block::Block;
+use stride_block::{Block, FirstOrderLowPass};
 use stride_estimation::{Estimator, EstimatorOutput};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_planner::geometry::wrap_angle;
@@ -208,6 +210,8 @@ pub struct Stack {
     /// The same quantities from the plant's truth (what the summary reports; equal to
     /// [`Stack::measured`] with the ground-truth bypass).
     pub truth: Measured,
+    /// The low-passed measured ZMP the simplified layer reads, and the time of its last sample \[ns\].
+    zmp_filter: (FirstOrderLowPass<Vector2<f64>>, u64),
     events: Vec<GoalEvent>,
     next_event: usize,
     /// The goal the planner works towards (the last one handed to it).
@@ -307,6 +311,7 @@ impl Stack {
             estimate,
             measured: Measured::default(),
             truth: Measured::default(),
+            zmp_filter: (FirstOrderLowPass::new(c.estimation.measured_zmp_cutoff), 0),
             events: goal_events(&c.goal),
             next_event: 0,
             goal: PlannerGoal::Stand,
@@ -424,6 +429,18 @@ impl Stack {
         Ok(())
     }
 
+    /// Feeds the measured ZMP of this tick ([`Stack::measure`] first) to the low-pass filter the simplified
+    /// layer reads it through (`estimation.measured_zmp_cutoff`). The scheduler calls it at every simplified
+    /// and whole-body tick, a fixed rate that does not depend on the logging rate. The filter keeps the
+    /// ZMP's noise (force/torque noise, contact chatter) out of the ZMP-CoM controller's CoM velocity
+    /// reference, which the position servos' damping turns into torque spikes (docs/estimation.md).
+    pub fn filter_measured_zmp(&mut self, time_ns: u64) {
+        let (filter, last_ns) = &mut self.zmp_filter;
+        let dt = time_ns.saturating_sub(*last_ns) as f64 * 1e-9;
+        filter.update(self.measured.zmp, dt);
+        *last_ns = time_ns;
+    }
+
     /// The measured DCM `ξ = x + ẋ/ω` \[m\] [Romualdi 2022, eq. 4.4.2] (b = 1/ω) with the plan's ω (the one rule for
     /// ω), stored in [`Stack::measured`]; called by the simplified tick after sampling the plan.
     fn measure_dcm(&mut self, omega: f64) {
@@ -507,7 +524,7 @@ impl Stack {
         i.measured_com_position = self.measured.com.xy();
         i.measured_com_velocity = self.measured.com_velocity.xy();
         i.measured_dcm = self.measured.dcm;
-        i.measured_zmp = self.measured.zmp;
+        i.measured_zmp = self.zmp_filter.0.output().unwrap_or(self.measured.zmp);
         i.support_polygon = polygon;
         i.horizon.clear();
         let n = self.simplified.horizon_samples();

@@ -12,6 +12,7 @@
 //! [`Sensors::record`] each step (stride-mujoco does, so both plants feed the estimator the same sensors).
 
 use nalgebra::{DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
+use stride_block::low_pass_gain;
 use stride_model::{JointKind, Model, RobotState};
 
 use crate::config::{SensorConfig, VelocitySource};
@@ -26,17 +27,6 @@ pub(crate) fn quantise(x: f64, step: f64) -> f64 {
         step * (x / step).round()
     } else {
         x
-    }
-}
-
-/// Gain `α = dt / (dt + 1/(2π f_c))` of the discrete first-order low-pass filter `y ← y + α (x − y)` with cut-off
-/// `cutoff` Hz at the period `dt` s (1, no filtering, when `cutoff == 0`). Its delay at low frequency is about
-/// `1/(2π f_c)`.
-pub(crate) fn low_pass_gain(dt: f64, cutoff: f64) -> f64 {
-    if cutoff > 0.0 {
-        dt / (dt + 1.0 / (std::f64::consts::TAU * cutoff))
-    } else {
-        1.0
     }
 }
 

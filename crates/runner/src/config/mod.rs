@@ -79,11 +79,13 @@ pub enum PlantKind {
 /// `[estimation]`: where the controllers' view of the robot comes from, and the estimation layer's
 /// parameters (`stride_estimation::EstimatorConfig`; its sole and IMU frames are the robot's:
 /// `robot.left_sole`, `robot.right_sole`, `sim.sensors.imu_frame`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct EstimationSection {
     /// `ekf` (default): the estimation layer; `ground_truth`: the plant's truth, for debugging only.
     pub kind: EstimationKind,
+    /// Cut-off \[Hz\] of the first-order low-pass filter on the measured ZMP the simplified layer reads (0: unfiltered).
+    pub measured_zmp_cutoff: f64,
     /// Force/torque sensor of the left foot (none: the one nearest above the sole).
     pub left_foot_ft_sensor: Option<String>,
     /// Force/torque sensor of the right foot (none: the one nearest above the sole).
@@ -94,6 +96,24 @@ pub struct EstimationSection {
     pub contact: stride_estimation::ContactConfig,
     /// Force/torque offset estimation (`stride_estimation::FtOffsetConfig`).
     pub ft_offsets: stride_estimation::FtOffsetConfig,
+}
+
+/// Default of `estimation.measured_zmp_cutoff` \[Hz\]: the middle of the band that walks on both plants
+/// (docs/estimation.md, "The measured ZMP").
+pub const DEFAULT_MEASURED_ZMP_CUTOFF: f64 = 5.0;
+
+impl Default for EstimationSection {
+    fn default() -> Self {
+        Self {
+            kind: EstimationKind::default(),
+            measured_zmp_cutoff: DEFAULT_MEASURED_ZMP_CUTOFF,
+            left_foot_ft_sensor: None,
+            right_foot_ft_sensor: None,
+            ekf: Default::default(),
+            contact: Default::default(),
+            ft_offsets: Default::default(),
+        }
+    }
 }
 
 impl EstimationSection {
@@ -661,6 +681,12 @@ impl Scenario {
                  `ground_truth` with `scenario.plant = \"ideal\"`",
             ));
         }
+        self.within(
+            "estimation.measured_zmp_cutoff",
+            c.estimation.measured_zmp_cutoff,
+            (0.0, 1000.0),
+            "Hz",
+        )?;
         self.positive("sim.model.mass_scale", c.sim.model.mass_scale, "")?;
         for (link, change) in &c.sim.model.links {
             let key = format!("sim.model.links.{link}");
