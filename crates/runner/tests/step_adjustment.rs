@@ -85,7 +85,12 @@ fn a_side_push_moves_the_swing_foot_outward_and_is_logged() {
 }
 
 #[test]
-fn a_forward_push_that_fells_the_walk_is_survived_with_step_adjustment() {
+/// 20 N forward for 1 s from 5.0 s: reached with both steps of the push adjusted, and 40 N falls with the
+/// adjustment (the two sides of its limit). Without adjustment the walk fell under this push until the
+/// simplified layer read the measured ZMP low-passed (`estimation.measured_zmp_cutoff`, 2026-12-02); it now
+/// reaches the goal too, which is asserted so that the comparison cannot silently change
+/// (docs/push-recovery.md, "The push sweep").
+fn a_forward_push_is_survived_with_both_steps_adjusted() {
     let s = Scratch::new("step_adjustment_front");
     let configs = common::root().join("configs");
     let load = |name: &str| Scenario::load(&configs.join(name)).unwrap();
@@ -95,11 +100,7 @@ fn a_forward_push_that_fells_the_walk_is_survived_with_step_adjustment() {
         &options(&s, "on"),
     )
     .unwrap();
-    assert!(
-        matches!(off.outcome, Outcome::Fell { .. }),
-        "{}",
-        off.render()
-    );
+    assert_eq!(off.outcome, Outcome::GoalReached, "{}", off.render());
     assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
     assert!(on.goal_distance.unwrap() < 0.05, "{}", on.render());
     // the difference is the adjusted steps: the two steps during the push were moved (measured: by 2–4 cm
