@@ -1,6 +1,6 @@
 //! Online estimation of the ground's `k` and `b` by recursive least squares [Romualdi 2022, §8.2.3,
-//! eq. 8.2.20–8.2.22] (a Kalman filter on `π_{t+1} = π_t`, eq. 8.2.23–8.2.24), with the covariance reset
-//! at every touch-down for grounds whose parameters change along the path [Colman and Wells 2006].
+//! eq. 8.2.20–8.2.22; Ljung 1999, §11.2] (a Kalman filter on `π_{t+1} = π_t`, eq. 8.2.23–8.2.24), with the covariance reset
+//! at every touch-down for grounds whose parameters change along the path [Colman 2006].
 
 use nalgebra::{Matrix2, Matrix6, Matrix6x2, Vector2, Vector6};
 

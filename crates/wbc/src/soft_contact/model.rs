@@ -1,6 +1,6 @@
 //! The continuum visco-elastic contact of a rectangular sole [Romualdi 2022, Lemma 1, eq. 8.1.7], its
 //! parameter regressor [eq. 8.2.17], its linearisation [Corollary 1, eq. 8.1.9–8.1.11] and its wrench rate
-//! [eq. 8.2.14].
+//! [eq. 8.2.14]. The linearisation is the linear and rotational spring-damper of [Sygulla 2020, eq. 8].
 
 use nalgebra::{Matrix3, Matrix6, Matrix6x2, Rotation3, Vector2, Vector3, Vector6};
 
