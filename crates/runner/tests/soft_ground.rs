@@ -9,11 +9,16 @@ use common::Scratch;
 use stride_runner::config::Scenario;
 use stride_runner::run::{run_scenario, Outcome, RunOptions};
 
-/// `configs/walk_soft_ground_torque.toml` with `extra` appended.
-fn soft_walk(s: &Scratch, name: &str, extra: &str) -> Scenario {
+/// A scenario file `name.toml` including `configs/walk_soft_ground_torque.toml`, with `extra` appended.
+fn soft_walk_file(s: &Scratch, name: &str, extra: &str) -> std::path::PathBuf {
     let base = common::root().join("configs/walk_soft_ground_torque.toml");
     let text = format!("include = [{:?}]\n{extra}", base.display().to_string());
-    Scenario::load(&s.write(&format!("{name}.toml"), &text)).unwrap()
+    s.write(&format!("{name}.toml"), &text)
+}
+
+/// That scenario, loaded.
+fn soft_walk(s: &Scratch, name: &str, extra: &str) -> Scenario {
+    Scenario::load(&soft_walk_file(s, name, extra)).unwrap()
 }
 
 fn options(s: &Scratch, name: &str) -> RunOptions {
@@ -65,30 +70,14 @@ fn ground_patches_reach_the_simulator_and_bad_ones_name_their_key() {
     assert_eq!(p.len(), 2);
     assert_eq!((p[1].x_min, p[1].normal_stiffness), (0.8, 2e6));
     let overlapping = patches.replacen("x_min = 0.8", "x_min = 0.7", 1);
-    let path = s.write(
-        "overlap.toml",
-        &format!(
-            "include = [{:?}]\n{overlapping}",
-            common::root()
-                .join("configs/walk_soft_ground_torque.toml")
-                .display()
-                .to_string()
-        ),
-    );
-    let error = Scenario::load(&path).unwrap_err().to_string();
+    let error = Scenario::load(&soft_walk_file(&s, "overlap", &overlapping))
+        .unwrap_err()
+        .to_string();
     assert!(error.contains("ground.patches[1]"), "{error}");
     let unknown =
         format!("{patches}[[sim.ground.patches]]\nx_min = 2.0\nx_max = 3.0\nstiffness = 1e6\n");
-    let path = s.write(
-        "unknown.toml",
-        &format!(
-            "include = [{:?}]\n{unknown}",
-            common::root()
-                .join("configs/walk_soft_ground_torque.toml")
-                .display()
-                .to_string()
-        ),
-    );
-    let error = Scenario::load(&path).unwrap_err().to_string();
+    let error = Scenario::load(&soft_walk_file(&s, "unknown", &unknown))
+        .unwrap_err()
+        .to_string();
     assert!(error.contains("stiffness"), "{error}");
 }

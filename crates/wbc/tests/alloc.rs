@@ -72,41 +72,15 @@ fn clarabel_ticks_are_reported_not_asserted() {
 
 #[test]
 fn soft_contact_model_and_ground_estimator_allocate_nothing() {
-    use nalgebra::{Rotation3, Vector3};
-    use stride_wbc::{
-        EstimatorSettings, GroundEstimator, GroundParameters, SoleGeometry, SoleState,
-    };
-    let sole = SoleGeometry {
-        length: 0.2,
-        width: 0.09,
-    };
-    let ground = GroundParameters {
-        stiffness: 1e6,
-        damping: 1e4,
-    };
-    let state = SoleState {
-        position: Vector3::new(0.01, 0.0, -0.01),
-        rotation: Rotation3::new(Vector3::new(0.02, -0.03, 0.1)),
-        linear_velocity: Vector3::new(0.01, 0.0, -0.02),
-        angular_velocity: Vector3::new(0.1, 0.2, 0.0),
-        rest_position: Vector3::zeros(),
-        rest_rotation: Rotation3::identity(),
-    };
-    let mut estimator = GroundEstimator::new(&EstimatorSettings {
-        initial: GroundParameters {
-            stiffness: 3e7,
-            damping: 3e5,
-        },
-        initial_std: [3e7, 3e5],
-        wrench_std: [2.0, 0.2],
-    })
-    .unwrap();
+    use common::soft::{rigid_guess_settings, stance_sample, GROUND, SOLE};
+    let state = stance_sample();
+    let mut estimator = stride_wbc::GroundEstimator::new(&rigid_guess_settings()).unwrap();
     let (_, n) = ALLOC.allocations_during(|| {
         for _ in 0..20 {
-            let wrench = sole.wrench(&state, &ground);
-            let _ = sole.wrench_rate(&state, &ground);
+            let wrench = SOLE.wrench(&state, &GROUND);
+            let _ = SOLE.wrench_rate(&state, &GROUND);
             estimator.touch_down();
-            assert!(estimator.update(&sole.regressor(&state), &wrench));
+            assert!(estimator.update(&SOLE.regressor(&state), &wrench));
         }
     });
     assert_eq!(n, 0, "soft-contact model and estimator allocated {n} times");

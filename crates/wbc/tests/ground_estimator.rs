@@ -5,29 +5,21 @@
 
 mod common;
 
+use common::soft::{rigid_guess_settings, SOLE};
+
 use nalgebra::{Matrix2, Rotation3, Vector2, Vector3, Vector6};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use stride_sim::GaussianNoise as GaussianSampler;
-use stride_wbc::{
-    EstimatorSettings, GroundEstimator, GroundParameters, SoleGeometry, SoleState, WbcError,
-};
+use stride_wbc::{EstimatorSettings, GroundEstimator, GroundParameters, SoleState, WbcError};
 
-const SOLE: SoleGeometry = SoleGeometry {
-    length: 0.2,
-    width: 0.09,
-};
 const WRENCH_STD: [f64; 2] = [2.0, 0.2];
 
+/// A rigid-floor guess, far from the soft grounds of Table 8.1, and the noise of the samples.
 fn settings() -> EstimatorSettings {
     EstimatorSettings {
-        // A rigid-floor guess, far from the soft grounds of Table 8.1.
-        initial: GroundParameters {
-            stiffness: 3e7,
-            damping: 3e5,
-        },
-        initial_std: [3e7, 3e5],
         wrench_std: WRENCH_STD,
+        ..rigid_guess_settings()
     }
 }
 

@@ -4,25 +4,22 @@
 //! 1 s of touch-down. Without the reset it is not. Prints the convergence table of docs/soft-ground.md
 //! (`cargo test --release -p stride-wbc --test ground_estimator_sim -- --nocapture`).
 
+mod common;
+
 use std::sync::Arc;
 use std::time::Duration;
 
-use nalgebra::{Rotation3, Vector3};
+use common::soft::{
+    at_rest, box_model, box_sim_config, rigid_guess_settings, sole_state, SOLE, SOLE_DROP,
+};
+use nalgebra::Vector3;
 use stride_block::Block;
 use stride_model::{Model, RobotState};
-use stride_sim::{
-    ContactSurfaceConfig, GaussianNoise, GroundPatchConfig, SimConfig, SimInput, SimRobot,
-};
-use stride_wbc::{EstimatorSettings, GroundEstimator, GroundParameters, SoleGeometry, SoleState};
+use stride_sim::{GaussianNoise, GroundPatchConfig, SimInput, SimRobot};
+use stride_wbc::{EstimatorSettings, GroundEstimator, GroundParameters};
 
-const SOLE: SoleGeometry = SoleGeometry {
-    length: 0.2,
-    width: 0.09,
-};
 /// Half the bundled humanoid's mass, kg.
 const MASS: f64 = 16.0;
-/// The sole frame's origin below the box centre, m.
-const SOLE_DROP: f64 = 0.025;
 /// The patches: `(x_min, x_max, k, b)`.
 const PATCHES: [(f64, f64, f64, f64); 3] = [
     (0.0, 1.0, 2e6, 1e4),
@@ -34,27 +31,9 @@ const DECIMATION: usize = 4;
 /// Force/torque measurement noise, N and N·m.
 const WRENCH_STD: [f64; 2] = [2.0, 0.2];
 
-fn box_model() -> Arc<Model> {
-    let (i_xy, i_z) = (MASS * 0.01 / 12.0, MASS * 0.05 / 12.0);
-    let urdf = format!(
-        r#"<?xml version="1.0"?>
-<robot name="box">
-  <link name="box">
-    <inertial><origin xyz="0 0 0" rpy="0 0 0"/><mass value="{MASS}"/>
-      <inertia ixx="{i_xy}" ixy="0" ixz="0" iyy="{i_xy}" iyz="0" izz="{i_z}"/></inertial>
-  </link>
-  <link name="bottom"/>
-  <joint name="bottom_fixed" type="fixed">
-    <origin xyz="0 0 -{SOLE_DROP}" rpy="0 0 0"/><parent link="box"/><child link="bottom"/>
-  </joint>
-</robot>"#
-    );
-    Arc::new(Model::from_urdf_str(&urdf).expect("box URDF loads"))
-}
-
 /// The three-patch ground under an 11 × 11 grid on the sole (its torque moments are 2 % above Lemma 1's).
 fn anisotropic_sim(model: &Arc<Model>) -> SimRobot {
-    let mut config = SimConfig::default();
+    let mut config = box_sim_config([11, 11]);
     config.ground.patches = PATCHES
         .iter()
         .map(|&(x_min, x_max, k, b)| GroundPatchConfig {
@@ -64,51 +43,23 @@ fn anisotropic_sim(model: &Arc<Model>) -> SimRobot {
             normal_damping: b,
         })
         .collect();
-    config.contact.surfaces = vec![ContactSurfaceConfig {
-        name: "sole".into(),
-        frame: "bottom".into(),
-        length: SOLE.length,
-        width: SOLE.width,
-        grid: [11, 11],
-        offset: [0.0; 3],
-        ft_sensor: None,
-    }];
-    config.sensors.imu_frame = "box".into();
-    config.fall.min_base_height = -1e9;
-    config.fall.max_tilt = 10.0;
     SimRobot::new(Arc::clone(model), config, Duration::from_micros(500)).expect("box sim")
-}
-
-/// The sole's state in a box state, at rest on the ground plane under `rest` (x, y; flat).
-fn sole_state(state: &RobotState, rest: &Vector3<f64>) -> SoleState {
-    let rotation = state.base_pose.rotation.to_rotation_matrix();
-    let arm = rotation * Vector3::new(0.0, 0.0, -SOLE_DROP);
-    let w: Vector3<f64> = state.base_velocity.fixed_rows::<3>(3).into_owned();
-    SoleState {
-        position: state.base_pose.translation.vector + arm,
-        rotation,
-        linear_velocity: state.base_velocity.fixed_rows::<3>(0) + w.cross(&arm),
-        angular_velocity: w,
-        rest_position: *rest,
-        rest_rotation: Rotation3::identity(),
-    }
 }
 
 /// Per patch: the estimates `(t since touch-down, k̂, b̂)` over 1 s, the sole set down on the patch
 /// centre at half its static sink, rocking at 0.3 rad/s; the covariance reset at touch-down when `reset`.
 fn run(reset: bool) -> Vec<Vec<(f64, GroundParameters)>> {
-    let model = box_model();
+    let model = box_model(
+        MASS,
+        [MASS * 0.01 / 12.0, MASS * 0.01 / 12.0, MASS * 0.05 / 12.0],
+    );
     let mut sim = anisotropic_sim(&model);
     let mut noise = GaussianNoise::new(7);
-    let mut estimator = GroundEstimator::new(&EstimatorSettings {
-        initial: GroundParameters {
-            stiffness: 3e7,
-            damping: 3e5,
-        },
-        initial_std: [3e7, 3e5],
+    let settings = EstimatorSettings {
         wrench_std: WRENCH_STD,
-    })
-    .expect("estimator settings");
+        ..rigid_guess_settings()
+    };
+    let mut estimator = GroundEstimator::new(&settings).expect("estimator settings");
     let input = SimInput::zeros(0);
     let mut histories = Vec::new();
     for &(x_min, x_max, k, _) in &PATCHES {
@@ -133,7 +84,7 @@ fn run(reset: bool) -> Vec<Vec<(f64, GroundParameters)>> {
             for (i, w) in wrench.iter_mut().enumerate() {
                 *w += noise.sample(WRENCH_STD[i / 3]);
             }
-            let regressor = SOLE.regressor(&sole_state(&out.state, &rest));
+            let regressor = SOLE.regressor(&sole_state(&out.state, &at_rest(rest)));
             estimator.update(&regressor, &wrench);
             history.push((step as f64 * 5e-4, estimator.estimate()));
         }

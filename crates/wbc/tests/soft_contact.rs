@@ -4,29 +4,16 @@
 
 mod common;
 
+use common::soft::{at_rest, box_model, box_sim_config, join, sole_state, GROUND, SOLE, SOLE_DROP};
+
 use std::sync::Arc;
 
 use nalgebra::{Matrix6, Rotation3, Vector3, Vector6};
 use rand::Rng;
 use stride_block::Block;
 use stride_model::{Model, RobotState};
-use stride_sim::{
-    ContactMode, ContactSurfaceConfig, IntegratorKind, SimConfig, SimInput, SimRobot,
-};
-use stride_wbc::{GroundParameters, SoleAcceleration, SoleGeometry, SoleState};
-
-const SOLE: SoleGeometry = SoleGeometry {
-    length: 0.2,
-    width: 0.09,
-};
-const GROUND: GroundParameters = GroundParameters {
-    stiffness: 1e6,
-    damping: 1e4,
-};
-
-fn join(a: &Vector3<f64>, b: &Vector3<f64>) -> Vector6<f64> {
-    Vector6::new(a.x, a.y, a.z, b.x, b.y, b.z)
-}
+use stride_sim::{ContactMode, IntegratorKind, SimInput, SimRobot};
+use stride_wbc::{GroundParameters, SoleAcceleration, SoleState};
 
 /// A random sole state: tilted by up to 0.3 rad, any yaw, displaced by up to 2 cm from rest, moving.
 fn random_state(rng: &mut impl Rng) -> SoleState {
@@ -161,15 +148,7 @@ fn the_wrench_rate_is_the_time_derivative_of_the_wrench() {
 
 #[test]
 fn corollary_1_is_the_first_order_expansion_of_lemma_1_at_rest() {
-    let rest = Vector3::new(0.3, -0.1, 0.0);
-    let base = SoleState {
-        position: rest,
-        rotation: Rotation3::identity(),
-        linear_velocity: Vector3::zeros(),
-        angular_velocity: Vector3::zeros(),
-        rest_position: rest,
-        rest_rotation: Rotation3::identity(),
-    };
+    let base = at_rest(Vector3::new(0.3, -0.1, 0.0));
     // Jacobian of the Lemma 1 wrench w.r.t. (o − ō, Θ (roll-pitch-yaw), ȯ, Θ̇ = ω at Θ = 0) by central
     // differences.
     let perturbed = |k: usize, h: f64| {
@@ -213,12 +192,8 @@ fn corollary_1_is_the_first_order_expansion_of_lemma_1_at_rest() {
 /// [Romualdi 2022, Fig. 8.3].
 fn yaw_torque_error(psi: f64) -> (f64, f64) {
     let s = SoleState {
-        position: Vector3::zeros(),
         rotation: Rotation3::from_axis_angle(&Vector3::z_axis(), psi),
-        linear_velocity: Vector3::zeros(),
-        angular_velocity: Vector3::zeros(),
-        rest_position: Vector3::zeros(),
-        rest_rotation: Rotation3::identity(),
+        ..at_rest(Vector3::zeros())
     };
     let exact = SOLE.wrench(&s, &GROUND)[5];
     let z = Vector3::zeros();
@@ -252,47 +227,17 @@ fn the_linearisation_error_grows_with_the_yaw_angle_as_in_fig_8_3() {
     }
 }
 
-/// A 2 kg box with a `bottom` frame at the centre of its lower face (the sole).
-fn box_model() -> Arc<Model> {
-    let urdf = r#"<?xml version="1.0"?>
-<robot name="box">
-  <link name="box">
-    <inertial><origin xyz="0 0 0" rpy="0 0 0"/><mass value="2"/>
-      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>
-  </link>
-  <link name="bottom"/>
-  <joint name="bottom_fixed" type="fixed">
-    <origin xyz="0 0 -0.025" rpy="0 0 0"/><parent link="box"/><child link="bottom"/>
-  </joint>
-</robot>"#;
-    Arc::new(Model::from_urdf_str(urdf).expect("box URDF loads"))
-}
-
 /// The simulator with an isotropic sticking law (tangential = normal densities, no friction limit), a fine
 /// grid on the sole and explicit forces (the wrench of a step is the one of the state it starts from): the
-/// discretisation of the density of Lemma 1 over the sole's own area.
+/// discretisation of the density of Lemma 1 over the sole's own area. A 2 kg box carries the sole.
 fn isotropic_sim(model: &Arc<Model>) -> SimRobot {
-    let mut config = SimConfig {
-        integrator: IntegratorKind::Explicit,
-        ..SimConfig::default()
-    };
+    let mut config = box_sim_config([61, 61]);
+    config.integrator = IntegratorKind::Explicit;
     config.contact.normal_stiffness = GROUND.stiffness;
     config.contact.normal_damping = GROUND.damping;
     config.contact.tangential_stiffness = GROUND.stiffness;
     config.contact.tangential_damping = GROUND.damping;
     config.contact.friction_coefficient = 1e6;
-    config.contact.surfaces = vec![ContactSurfaceConfig {
-        name: "sole".into(),
-        frame: "bottom".into(),
-        length: SOLE.length,
-        width: SOLE.width,
-        grid: [61, 61],
-        offset: [0.0; 3],
-        ft_sensor: None,
-    }];
-    config.sensors.imu_frame = "box".into();
-    config.fall.min_base_height = -1e9;
-    config.fall.max_tilt = 10.0;
     SimRobot::new(
         Arc::clone(model),
         config,
@@ -300,9 +245,6 @@ fn isotropic_sim(model: &Arc<Model>) -> SimRobot {
     )
     .expect("box sim")
 }
-
-/// The sole frame's origin below the box centre, m.
-const SOLE_DROP: f64 = 0.025;
 
 /// The base pose and twist that put the sole at `s` (its rest pose is not part of the robot state).
 fn box_state(model: &Arc<Model>, s: &SoleState) -> RobotState {
@@ -315,24 +257,9 @@ fn box_state(model: &Arc<Model>, s: &SoleState) -> RobotState {
     state
 }
 
-/// The sole's pose and mixed twist in a box state, with the given rest pose.
-fn sole_state(state: &RobotState, rest: &SoleState) -> SoleState {
-    let rotation = state.base_pose.rotation.to_rotation_matrix();
-    let arm = rotation * Vector3::new(0.0, 0.0, -SOLE_DROP);
-    let w: Vector3<f64> = state.base_velocity.fixed_rows::<3>(3).into_owned();
-    SoleState {
-        position: state.base_pose.translation.vector + arm,
-        rotation,
-        linear_velocity: state.base_velocity.fixed_rows::<3>(0) + w.cross(&arm),
-        angular_velocity: w,
-        rest_position: rest.rest_position,
-        rest_rotation: rest.rest_rotation,
-    }
-}
-
 #[test]
 fn the_simulator_grid_contact_is_a_discretisation_of_lemma_1() {
-    let model = box_model();
+    let model = box_model(2.0, [0.01; 3]);
     let mut rng = common::rng(83);
     for _ in 0..6 {
         let mut sim = isotropic_sim(&model);
@@ -390,14 +317,7 @@ fn the_simulator_grid_contact_is_a_discretisation_of_lemma_1() {
 
 #[test]
 fn rate_gain_blocks_are_the_damping_of_corollary_1_at_rest() {
-    let s = SoleState {
-        position: Vector3::zeros(),
-        rotation: Rotation3::identity(),
-        linear_velocity: Vector3::zeros(),
-        angular_velocity: Vector3::zeros(),
-        rest_position: Vector3::zeros(),
-        rest_rotation: Rotation3::identity(),
-    };
+    let s = at_rest(Vector3::zeros());
     let [_, _, bl, ba] = SOLE.linear_gains(&GROUND);
     let g = SOLE.wrench_rate(&s, &GROUND).gain;
     let mut expected = Matrix6::zeros();
