@@ -141,6 +141,7 @@ pub enum IntegratorKind {
 /// |---|---|---|---|
 /// | `height` | m | 0 | height of the plane at the world origin |
 /// | `inclination` | rad | `[0, 0]` | `[roll, pitch]` of the plane; a positive pitch makes the ground descend along +x |
+/// | `patches` | – | none | [`GroundPatchConfig`] list: strips of ground with their own normal stiffness and damping |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GroundConfig {
@@ -148,6 +149,9 @@ pub struct GroundConfig {
     pub height: f64,
     /// `[roll, pitch]` of the plane, rad.
     pub inclination: [f64; 2],
+    /// Strips `x_min ≤ x < x_max` (world) whose normal stiffness and damping densities replace
+    /// [`ContactConfig::normal_stiffness`] and [`ContactConfig::normal_damping`] (they must not overlap).
+    pub patches: Vec<GroundPatchConfig>,
 }
 
 impl Default for GroundConfig {
@@ -155,8 +159,32 @@ impl Default for GroundConfig {
         Self {
             height: 0.0,
             inclination: [0.0, 0.0],
+            patches: Vec::new(),
         }
     }
+}
+
+/// A strip of ground `x_min ≤ x < x_max` (world x of the contact point) with its own normal law: a contact
+/// point over the strip carries the densities below instead of the [`ContactConfig`] ones (the tangential
+/// law and the friction stay the [`ContactConfig`] ones). For ground whose compliance changes along the path
+/// (the anisotropic ground of [Romualdi 2022, §8.3.3]).
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `x_min`, `x_max` | m | – (required) | extent along world x, `x_min < x_max` |
+/// | `normal_stiffness` | N/m³ | – (required) | `k` over the strip (> 0) |
+/// | `normal_damping` | N·s/m³ | – (required) | `b` over the strip (≥ 0) |
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroundPatchConfig {
+    /// Start of the strip along world x (included), m.
+    pub x_min: f64,
+    /// End of the strip along world x (excluded), m.
+    pub x_max: f64,
+    /// Normal stiffness density `k`, N/m³.
+    pub normal_stiffness: f64,
+    /// Normal damping density `b`, N·s/m³.
+    pub normal_damping: f64,
 }
 
 /// The compliant contact law and the surfaces of the robot that touch the ground.
@@ -810,6 +838,7 @@ impl SimConfig {
             "ground.inclination",
             "angles must be finite and within (-90°, 90°)",
         )?;
+        self.validate_patches()?;
         let c = &self.contact;
         check(
             c.normal_stiffness.is_finite() && c.normal_stiffness > 0.0,
@@ -863,6 +892,38 @@ impl SimConfig {
                 &p,
                 "offset must be finite",
             )?;
+        }
+        Ok(())
+    }
+
+    /// The ground patches: finite extents with `x_min < x_max`, positive stiffness, non-negative damping, no
+    /// two overlapping.
+    fn validate_patches(&self) -> Result<(), SimError> {
+        let patches = &self.ground.patches;
+        for (i, p) in patches.iter().enumerate() {
+            let name = format!("ground.patches[{i}]");
+            check(
+                p.x_min.is_finite() && p.x_max.is_finite() && p.x_min < p.x_max,
+                &name,
+                "x_min and x_max must be finite with x_min < x_max",
+            )?;
+            check(
+                p.normal_stiffness.is_finite() && p.normal_stiffness > 0.0,
+                &format!("{name}.normal_stiffness"),
+                "must be > 0",
+            )?;
+            check(
+                finite_nonneg(p.normal_damping),
+                &format!("{name}.normal_damping"),
+                "must be ≥ 0",
+            )?;
+            for (j, q) in patches.iter().enumerate().take(i) {
+                check(
+                    p.x_max <= q.x_min || q.x_max <= p.x_min,
+                    &name,
+                    &format!("overlaps ground.patches[{j}]"),
+                )?;
+            }
         }
         Ok(())
     }

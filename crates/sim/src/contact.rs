@@ -12,6 +12,7 @@ use stride_model::{FrameId, Model};
 use crate::config::{ContactConfig, ContactSurfaceConfig, GroundConfig};
 use crate::error::{find_frame, SimError};
 use crate::linalg::{ang, join, lin, TreeCholesky, TreeMatrix};
+use crate::patches::NormalDensities;
 
 /// The ground: the plane through `origin` with unit `normal` (pointing out of the ground).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,6 +118,8 @@ pub struct PointSpec {
     pub local: Vector3<f64>,
     /// Its share of the surface (trapezoidal-rule weight; the weights of a surface sum to one).
     pub weight: f64,
+    /// The area it stands for (surface area × `weight`), m²: the factor from the law's densities to the law.
+    pub area: f64,
     /// The point's law.
     pub law: PointLaw,
 }
@@ -152,6 +155,7 @@ pub fn surface_points(surface: &ContactSurfaceConfig, contact: &ContactConfig) -
                     surface.offset[2],
                 ),
                 weight,
+                area: share,
                 law: PointLaw {
                     normal_stiffness: contact.normal_stiffness * share,
                     normal_damping: contact.normal_damping * share,
@@ -325,6 +329,8 @@ pub(crate) struct Point {
     pub(crate) surface: usize,
     /// Position in the surface frame, m.
     pub(crate) local: Vector3<f64>,
+    /// The area it stands for, m² ([`PointSpec::area`]).
+    pub(crate) area: f64,
     pub(crate) law: PointLaw,
     /// Where the tangential spring is attached (on the ground), while in contact.
     pub(crate) anchor: Option<Vector3<f64>>,
@@ -355,6 +361,7 @@ impl Point {
         Self {
             surface,
             local: spec.local,
+            area: spec.area,
             law: spec.law,
             anchor: None,
             position: Vector3::zeros(),
@@ -382,6 +389,12 @@ impl Point {
         self.arm = self.position - pose.translation.vector;
         self.velocity = lin(twist) + ang(twist).cross(&self.arm);
         self.penetration = -ground.height_of(&self.position);
+    }
+
+    /// The normal law from the ground's densities where the point is: `k_n = k A`, `b_n = b A` (`A` its area).
+    pub(crate) fn set_normal_densities(&mut self, densities: NormalDensities) {
+        self.law.normal_stiffness = densities.stiffness * self.area;
+        self.law.normal_damping = densities.damping * self.area;
     }
 
     /// After the state was replaced: a penetrating point keeps its anchor (or sticks where it is), the others
@@ -738,6 +751,7 @@ mod tests {
         let ground = GroundPlane::from_config(&GroundConfig {
             height: 0.0,
             inclination: [0.05, -0.1],
+            ..GroundConfig::default()
         });
         let law = PointLaw {
             normal_stiffness: 3e5,
@@ -749,6 +763,7 @@ mod tests {
         let spec = PointSpec {
             local: Vector3::zeros(),
             weight: 1.0,
+            area: 1.0,
             law,
         };
         let mut points = Vec::new();
@@ -790,6 +805,7 @@ mod tests {
         let g = GroundPlane::from_config(&GroundConfig {
             height: 0.0,
             inclination: [0.0, 0.1],
+            ..GroundConfig::default()
         });
         assert!(g.height_of(&Vector3::new(1.0, 0.0, 0.0)) > 0.0);
         assert!((g.normal.norm() - 1.0).abs() < 1e-15);

@@ -32,21 +32,23 @@ mod error;
 mod io;
 mod linalg;
 mod noise;
+mod patches;
 mod push;
 mod robot;
 mod sensors;
 
 pub use config::{
     ActuationConfig, ActuationMode, ContactConfig, ContactSurfaceConfig, EffortLimitPolicy,
-    EncoderConfig, FallConfig, FtSensorConfig, GroundConfig, ImuConfig, IntegratorKind,
-    JointActuatorConfig, JointActuatorOverride, LinkInertiaChange, PlantModelConfig, PushConfig,
-    SafetyConfig, SensorConfig, SimConfig, VelocitySource,
+    EncoderConfig, FallConfig, FtSensorConfig, GroundConfig, GroundPatchConfig, ImuConfig,
+    IntegratorKind, JointActuatorConfig, JointActuatorOverride, LinkInertiaChange,
+    PlantModelConfig, PushConfig, SafetyConfig, SensorConfig, SimConfig, VelocitySource,
 };
 pub use contact::{surface_points, trapezoid_nodes, ContactMode, GroundPlane, PointLaw, PointSpec};
 pub use error::SimError;
 pub use io::{ContactPointState, ImuMeasurement, SimInput, SimOutput, SurfaceMeasurement};
 pub use linalg::{cholesky_in_place, cholesky_solve_in_place, TreeCholesky, TreeMatrix};
 pub use noise::GaussianNoise;
+pub use patches::{GroundCompliance, NormalDensities};
 pub use robot::SimRobot;
 /// The sensor models of [`SimRobot`] for another plant (stride-mujoco): fill a [`SensorTruth`] each step and
 /// [`SensorModels::record`] returns the delayed [`SensorReading`].

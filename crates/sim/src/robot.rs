@@ -21,6 +21,7 @@ use crate::contact::{build_surfaces, GroundPlane, Point, Surface};
 use crate::error::{find_frame, SimError};
 use crate::io::{ContactPointState, SimInput, SimOutput};
 use crate::linalg::{join, lin, TreeCholesky, TreeMatrix};
+use crate::patches::GroundCompliance;
 use crate::push::Push;
 use crate::sensors::{Sensors, Truth};
 
@@ -58,6 +59,8 @@ pub struct SimRobot {
     /// The model's gravity, m/s² (world).
     gravity: Vector3<f64>,
     ground: GroundPlane,
+    /// The ground's normal densities along the path (its patches).
+    compliance: GroundCompliance,
     actuators: Vec<Actuator>,
     surfaces: Vec<Surface>,
     points: Vec<Point>,
@@ -197,6 +200,7 @@ impl SimRobot {
             time_ns: 0,
             gravity: model.gravity(),
             ground: GroundPlane::from_config(&config.ground),
+            compliance: GroundCompliance::from_config(&config.ground, &config.contact),
             actuators,
             anchor_backup: vec![None; points.len()],
             surfaces,

@@ -23,6 +23,7 @@ mod error;
 mod ik;
 mod io;
 pub mod math;
+pub mod soft_contact;
 mod tasks;
 mod tsid;
 
@@ -30,4 +31,8 @@ pub use config::*;
 pub use error::WbcError;
 pub use ik::QpIk;
 pub use io::*;
+pub use soft_contact::{
+    EstimatorSettings, GroundEstimator, GroundParameters, SoleAcceleration, SoleGeometry,
+    SoleState, WrenchRate,
+};
 pub use tsid::Tsid;

@@ -69,3 +69,19 @@ fn clarabel_ticks_are_reported_not_asserted() {
     let mut ik = QpIk::new(Arc::clone(&model), c, std::time::Duration::from_millis(2)).unwrap();
     assert!(ik.step(&input).unwrap().report.status.is_success());
 }
+
+#[test]
+fn soft_contact_model_and_ground_estimator_allocate_nothing() {
+    use common::soft::{rigid_guess_settings, stance_sample, GROUND, SOLE};
+    let state = stance_sample();
+    let mut estimator = stride_wbc::GroundEstimator::new(&rigid_guess_settings()).unwrap();
+    let (_, n) = ALLOC.allocations_during(|| {
+        for _ in 0..20 {
+            let wrench = SOLE.wrench(&state, &GROUND);
+            let _ = SOLE.wrench_rate(&state, &GROUND);
+            estimator.touch_down();
+            assert!(estimator.update(&SOLE.regressor(&state), &wrench));
+        }
+    });
+    assert_eq!(n, 0, "soft-contact model and estimator allocated {n} times");
+}

@@ -31,6 +31,10 @@ pub const OPTIONAL_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "goal.velocity.segments[].lateral", unit: "m/s", meaning: "Lateral speed of the segment." },
     KeyDoc { key: "goal.velocity.segments[].yaw_rate_deg", unit: "deg/s", meaning: "Yaw rate of the segment." },
     KeyDoc { key: "goal.stand", unit: "-", meaning: "`[goal.stand]` (empty table): stand still (push scenarios)." },
+    KeyDoc { key: "sim.ground.patches[].x_min", unit: "m", meaning: "`[[sim.ground.patches]]`: start of a strip of ground along world x (included); a contact point over the strip uses its normal law. Patches must not overlap." },
+    KeyDoc { key: "sim.ground.patches[].x_max", unit: "m", meaning: "End of the strip along world x (excluded), > `x_min`." },
+    KeyDoc { key: "sim.ground.patches[].normal_stiffness", unit: "N/m³", meaning: "Normal stiffness density `k` over the strip (> 0), replacing `sim.contact.normal_stiffness` there." },
+    KeyDoc { key: "sim.ground.patches[].normal_damping", unit: "N·s/m³", meaning: "Normal damping density `b` over the strip (≥ 0), replacing `sim.contact.normal_damping` there." },
 ];
 
 /// Runner-owned keys present in the default configuration.

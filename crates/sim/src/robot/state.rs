@@ -70,7 +70,10 @@ impl SimRobot {
             let stiffness: f64 = self
                 .point_heights()
                 .filter(|(_, h)| *h < lowest + 1e-4)
-                .fold(0.0, |k, (i, _)| k + self.points[i].law.normal_stiffness);
+                .fold(0.0, |k, (i, _)| {
+                    let x = self.point_position(i).x;
+                    k + self.compliance.at(x).stiffness * self.points[i].area
+                });
             let weight =
                 self.model.total_mass() * (-self.gravity.dot(&self.ground.normal)).max(0.0);
             let sink = if stiffness > 0.0 {
@@ -88,14 +91,14 @@ impl SimRobot {
     /// `(index, height above the ground)` of every contact point at the configuration of the dynamics
     /// workspace, m.
     fn point_heights(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
-        self.points.iter().enumerate().map(|(i, p)| {
-            let pose = self.kd.frame_pose(self.surfaces[p.surface].frame);
-            (
-                i,
-                self.ground
-                    .height_of(&(pose * Point3::from(p.local)).coords),
-            )
-        })
+        (0..self.points.len()).map(|i| (i, self.ground.height_of(&self.point_position(i))))
+    }
+
+    /// World position of contact point `i` at the configuration of the dynamics workspace, m.
+    fn point_position(&self, i: usize) -> Vector3<f64> {
+        let p = &self.points[i];
+        let pose = self.kd.frame_pose(self.surfaces[p.surface].frame);
+        (pose * Point3::from(p.local)).coords
     }
 
     /// Validates a state given by the caller (dimensions, finiteness).
@@ -155,6 +158,7 @@ impl SimRobot {
         for p in &mut self.points {
             let s = &self.surfaces[p.surface];
             p.place(&s.pose, &s.twist, &self.ground);
+            p.set_normal_densities(self.compliance.at(p.position.x));
         }
         Ok(())
     }

@@ -1,6 +1,8 @@
 //! Shared helpers of the integration tests.
 #![allow(dead_code)]
 
+pub mod soft;
+
 use std::sync::Arc;
 
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3};

@@ -1,0 +1,83 @@
+//! Soft ground in closed loop on stride-sim (the bundled humanoid, torque control, today's rigid-contact
+//! TSID): on the ground of [Romualdi 2022, Table 8.1] with k = 1e6 N/m³, b = 1e4 N·s/m³
+//! (`configs/walk_soft_ground_torque.toml`) the walk fails within its first second, while the same scenario
+//! on the default floor (30 times stiffer) reaches its goal: the comparison baseline of docs/soft-ground.md,
+//! asserted so that it cannot change silently. Ground patches reach the simulator from a scenario file.
+mod common;
+
+use common::Scratch;
+use stride_runner::config::Scenario;
+use stride_runner::run::{run_scenario, Outcome, RunOptions};
+
+/// A scenario file `name.toml` including `configs/walk_soft_ground_torque.toml`, with `extra` appended.
+fn soft_walk_file(s: &Scratch, name: &str, extra: &str) -> std::path::PathBuf {
+    let base = common::root().join("configs/walk_soft_ground_torque.toml");
+    let text = format!("include = [{:?}]\n{extra}", base.display().to_string());
+    s.write(&format!("{name}.toml"), &text)
+}
+
+/// That scenario, loaded.
+fn soft_walk(s: &Scratch, name: &str, extra: &str) -> Scenario {
+    Scenario::load(&soft_walk_file(s, name, extra)).unwrap()
+}
+
+fn options(s: &Scratch, name: &str) -> RunOptions {
+    RunOptions {
+        output: Some(s.path(&format!("{name}.mcap"))),
+        ..RunOptions::default()
+    }
+}
+
+#[test]
+fn the_rigid_tsid_fails_on_soft_ground_and_walks_on_the_default_floor() {
+    let s = Scratch::new("soft_ground_rigid_tsid");
+    let soft = soft_walk(&s, "soft", "");
+    assert_eq!(soft.config.sim.contact.normal_stiffness, 1e6);
+    assert_eq!(soft.config.sim.contact.normal_damping, 1e4);
+    let summary = run_scenario(&soft, &options(&s, "soft")).unwrap();
+    assert!(
+        matches!(
+            summary.outcome,
+            Outcome::Fell { .. } | Outcome::Error { .. }
+        ),
+        "{}",
+        summary.render()
+    );
+    assert!(summary.simulated_time < 1.0, "{}", summary.render());
+    assert!(summary.distance < 0.1, "{}", summary.render());
+    // The other side: the default floor (3e7 N/m³, 3e5 N·s/m³).
+    let floor = soft_walk(
+        &s,
+        "floor",
+        "[sim.contact]\nnormal_stiffness = 3.0e7\nnormal_damping = 3.0e5\n",
+    );
+    let summary = run_scenario(&floor, &options(&s, "floor")).unwrap();
+    assert_eq!(
+        summary.outcome,
+        Outcome::GoalReached,
+        "{}",
+        summary.render()
+    );
+}
+
+#[test]
+fn ground_patches_reach_the_simulator_and_bad_ones_name_their_key() {
+    let s = Scratch::new("soft_ground_patches");
+    let patches = "[[sim.ground.patches]]\nx_min = 0.3\nx_max = 0.8\nnormal_stiffness = 8e5\nnormal_damping = 1e3\n\
+                   [[sim.ground.patches]]\nx_min = 0.8\nx_max = 1.3\nnormal_stiffness = 2e6\nnormal_damping = 1e4\n";
+    let scenario = soft_walk(&s, "patches", patches);
+    let p = &scenario.config.sim.ground.patches;
+    assert_eq!(p.len(), 2);
+    assert_eq!((p[1].x_min, p[1].normal_stiffness), (0.8, 2e6));
+    let overlapping = patches.replacen("x_min = 0.8", "x_min = 0.7", 1);
+    let error = Scenario::load(&soft_walk_file(&s, "overlap", &overlapping))
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("ground.patches[1]"), "{error}");
+    let unknown =
+        format!("{patches}[[sim.ground.patches]]\nx_min = 2.0\nx_max = 3.0\nstiffness = 1e6\n");
+    let error = Scenario::load(&soft_walk_file(&s, "unknown", &unknown))
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("stiffness"), "{error}");
+}

@@ -1,0 +1,77 @@
+//! The ground's normal compliance along the path: the densities of the [`GroundPatchConfig`] strips over the
+//! default ones of [`ContactConfig`].
+
+use crate::config::{ContactConfig, GroundConfig, GroundPatchConfig};
+
+/// Normal stiffness and damping densities of the ground at a place.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalDensities {
+    /// Stiffness density `k`, N/m³.
+    pub stiffness: f64,
+    /// Damping density `b`, N·s/m³.
+    pub damping: f64,
+}
+
+/// Where on the ground which normal densities hold: the validated patches (non-overlapping strips along
+/// world x) and the default elsewhere.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroundCompliance {
+    default: NormalDensities,
+    patches: Vec<GroundPatchConfig>,
+}
+
+impl GroundCompliance {
+    /// The compliance of a validated configuration ([`crate::SimConfig::validate`]).
+    pub fn from_config(ground: &GroundConfig, contact: &ContactConfig) -> Self {
+        Self {
+            default: NormalDensities {
+                stiffness: contact.normal_stiffness,
+                damping: contact.normal_damping,
+            },
+            patches: ground.patches.clone(),
+        }
+    }
+
+    /// The densities at world abscissa `x` (m): those of the patch with `x_min ≤ x < x_max`, else the default.
+    pub fn at(&self, x: f64) -> NormalDensities {
+        self.patches
+            .iter()
+            .find(|p| p.x_min <= x && x < p.x_max)
+            .map_or(self.default, |p| NormalDensities {
+                stiffness: p.normal_stiffness,
+                damping: p.normal_damping,
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_patch_holds_on_its_half_open_strip_and_the_default_elsewhere() {
+        let ground = GroundConfig {
+            patches: vec![GroundPatchConfig {
+                x_min: 0.5,
+                x_max: 1.0,
+                normal_stiffness: 8e5,
+                normal_damping: 1e3,
+            }],
+            ..GroundConfig::default()
+        };
+        let contact = ContactConfig::default();
+        let c = GroundCompliance::from_config(&ground, &contact);
+        let soft = NormalDensities {
+            stiffness: 8e5,
+            damping: 1e3,
+        };
+        let default = NormalDensities {
+            stiffness: contact.normal_stiffness,
+            damping: contact.normal_damping,
+        };
+        assert_eq!(c.at(0.5), soft);
+        assert_eq!(c.at(0.99), soft);
+        assert_eq!(c.at(1.0), default);
+        assert_eq!(c.at(0.4999), default);
+    }
+}
