@@ -20,6 +20,7 @@ pub type Interval = [f64; 2];
 /// |---|---|---|
 /// | `stage_duration` | 0.1 s | forward-Euler step `dt` of (11.1.15b–d) |
 /// | `stages` | 12 | horizon length `N` |
+/// | `force_hold_stages` | 2 | move blocking: each corner force is one variable over this many consecutive stages |
 /// | `update_period` | 0.05 s | the runner re-solves every this long and interpolates the prediction in between |
 /// | `friction` | 0.33 | static friction `μ` of the linearised cone (11.1.13) |
 /// | `com_weight` | \[1e4, 1e4, 1e5\] | `Λ_CoM` of (11.1.11) \[1/m²\] |
@@ -30,6 +31,7 @@ pub type Interval = [f64; 2];
 /// | `force_regularization` | 1e-7 | Tikhonov term on the cone coordinates \[1/N²\] (keeps the QP strictly convex) |
 /// | `forward` | \[−0.10, 0.10\] | box (11.1.14) along the sole x axis \[m\] |
 /// | `outward` | \[−0.02, 0.10\] | box (11.1.14) across the sole, positive away from the other foot \[m\] |
+/// | `warm_start_active_set` | false | start the active-set solver from the previous active set of the same QP size (the RTI itself always linearises about the previous solution); off because a cold start measured faster (docs/simplified.md) |
 /// | `min_remaining_time` | 0.15 s | a contact that starts sooner than this is no longer moved |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -38,6 +40,8 @@ pub struct CentroidalMpcConfig {
     pub stage_duration: f64,
     /// Number of stages `N`.
     pub stages: usize,
+    /// Stages over which a corner force is held constant (move blocking; 1 = one force per stage).
+    pub force_hold_stages: usize,
     /// Re-solve period used by the runner \[s\].
     pub update_period: f64,
     /// Friction coefficient `μ`.
@@ -60,6 +64,8 @@ pub struct CentroidalMpcConfig {
     pub outward: Interval,
     /// Contacts starting sooner than this are not moved \[s\].
     pub min_remaining_time: f64,
+    /// Warm start of the active-set solver from its previous active set.
+    pub warm_start_active_set: bool,
 }
 
 impl Default for CentroidalMpcConfig {
@@ -67,6 +73,7 @@ impl Default for CentroidalMpcConfig {
         Self {
             stage_duration: 0.1,
             stages: 12,
+            force_hold_stages: 2,
             update_period: 0.05,
             friction: 0.33,
             com_weight: [1e4, 1e4, 1e5],
@@ -78,6 +85,7 @@ impl Default for CentroidalMpcConfig {
             forward: [-0.10, 0.10],
             outward: [-0.02, 0.10],
             min_remaining_time: 0.15,
+            warm_start_active_set: false,
         }
     }
 }
@@ -111,6 +119,13 @@ impl CentroidalMpcConfig {
                 "centroidal_mpc.stages",
                 self.stages as f64,
                 "must be in [2, 30]",
+            ));
+        }
+        if self.force_hold_stages == 0 || self.force_hold_stages > self.stages {
+            return Err(invalid(
+                "centroidal_mpc.force_hold_stages",
+                self.force_hold_stages as f64,
+                "must be in [1, stages]",
             ));
         }
         positive("centroidal_mpc.friction", self.friction)?;

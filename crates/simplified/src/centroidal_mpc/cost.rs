@@ -98,30 +98,31 @@ fn add_force_average(qp: &mut DenseQp, offset: usize, geo: &ContactGeometry, w: 
     }
 }
 
-/// (11.1.8)–(11.1.10): `(f[k] − f[k−1]) / dt` per corner, when the contact is active at both stages
-/// (at `k = 0` against the force applied at the previous tick).
+/// (11.1.8)–(11.1.10): `(f[b] − f[b−1]) / (hold·dt)` per corner between consecutive force blocks of the
+/// same contact (at the first block against the force applied at the previous tick).
 fn add_force_rate(
     qp: &mut DenseQp,
     layout: &Layout,
     geometry: &[ContactGeometry],
     lin: &Linearization,
-    dt: f64,
+    block_duration: f64,
     w: f64,
 ) {
-    for (k, slots) in layout.stages.iter().enumerate() {
+    for (b, slots) in layout.blocks.iter().enumerate() {
         for (q, slot) in slots.iter().enumerate() {
             let Some(slot) = slot else { continue };
-            let g = geometry[slot.contact].generators / dt;
-            if k == 0 {
+            let g = geometry[slot.contact].generators / block_duration;
+            if b == 0 {
                 let Some(applied) = lin.applied[q] else {
                     continue;
                 };
                 for (j, f_prev) in applied.iter().enumerate() {
-                    add_least_squares(qp, &corner_cols(slot.offset, j), &g, &(-f_prev / dt), w);
+                    let c = -f_prev / block_duration;
+                    add_least_squares(qp, &corner_cols(slot.offset, j), &g, &c, w);
                 }
                 continue;
             }
-            let Some(prev) = layout.stages[k - 1]
+            let Some(prev) = layout.blocks[b - 1]
                 .iter()
                 .flatten()
                 .find(|p| p.contact == slot.contact)
@@ -154,7 +155,7 @@ pub(crate) fn assemble(
     config: &CentroidalMpcConfig,
 ) {
     tracking.fill(qp, input, states, layout.stages.len(), config);
-    for slots in &layout.stages {
+    for slots in &layout.blocks {
         for slot in slots.iter().flatten() {
             add_force_average(
                 qp,
@@ -169,7 +170,7 @@ pub(crate) fn assemble(
         layout,
         geometry,
         lin,
-        config.stage_duration,
+        config.stage_duration * config.force_hold_stages as f64,
         config.force_rate_weight,
     );
     let cone = layout.n - 2 * layout.displacement.iter().flatten().count();

@@ -23,10 +23,13 @@ pub(crate) struct Slot {
     pub offset: usize,
 }
 
-/// The variable layout of one tick: cone coordinates stage by stage, then the displacements `d_i`
-/// (sole frame x, y) of the adjustable contacts.
+/// The variable layout of one tick: cone coordinates block by block (a block is `force_hold_stages`
+/// consecutive stages sharing their corner forces), then the displacements `d_i` (sole frame x, y) of
+/// the adjustable contacts. `stages[k]` lists the contacts active at stage `k` with their block's
+/// variables.
 #[derive(Debug, Clone)]
 pub(crate) struct Layout {
+    pub blocks: Vec<[Option<Slot>; MAX_ACTIVE]>,
     pub stages: Vec<[Option<Slot>; MAX_ACTIVE]>,
     pub displacement: [Option<usize>; MAX_MPC_CONTACTS],
     pub n: usize,
@@ -35,6 +38,7 @@ pub(crate) struct Layout {
 impl Layout {
     pub fn with_capacity(stages: usize) -> Self {
         Self {
+            blocks: Vec::with_capacity(stages),
             stages: Vec::with_capacity(stages),
             displacement: [None; MAX_MPC_CONTACTS],
             n: 0,
@@ -42,40 +46,54 @@ impl Layout {
     }
 
     /// Contacts are active at stage `k` when the stage's midpoint `t₀ + (k + ½)·dt` is inside their
-    /// activation interval (the schedule Γ_i of (11.1.4)); a contact is adjustable when it starts after
-    /// `t₀ + min_remaining_time` and is active at some stage.
+    /// activation interval (the schedule Γ_i of (11.1.4)); a block has variables for the contacts active
+    /// at any of its stages; a contact is adjustable when it starts after `t₀ + min_remaining_time` and
+    /// is active at some stage.
     pub fn build(
         &mut self,
         input: &CentroidalMpcInput,
         config: &CentroidalMpcConfig,
     ) -> Result<()> {
         let dt = config.stage_duration;
+        let active = |c: &super::io::MpcContact, k: usize| {
+            let t = input.time + (k as f64 + 0.5) * dt;
+            c.activation <= t && t < c.deactivation
+        };
+        self.blocks.clear();
         self.stages.clear();
         self.displacement = [None; MAX_MPC_CONTACTS];
         let mut used = [false; MAX_MPC_CONTACTS];
         let mut n = 0;
-        for k in 0..config.stages {
-            let t = input.time + (k as f64 + 0.5) * dt;
-            let mut slots = [None; MAX_ACTIVE];
+        for first in (0..config.stages).step_by(config.force_hold_stages) {
+            let last = (first + config.force_hold_stages).min(config.stages);
+            let mut block = [None; MAX_ACTIVE];
             let mut count = 0;
             for (i, c) in input.contacts.iter().enumerate() {
-                if c.activation <= t && t < c.deactivation {
-                    if count == MAX_ACTIVE {
-                        return Err(SimplifiedError::TooManyContacts {
-                            count: count + 1,
-                            reason: "more than two contacts active at one stage",
-                        });
-                    }
-                    slots[count] = Some(Slot {
-                        contact: i,
-                        offset: n,
-                    });
-                    used[i] = true;
-                    count += 1;
-                    n += CONTACT_VARIABLES;
+                if !(first..last).any(|k| active(c, k)) {
+                    continue;
                 }
+                if count == MAX_ACTIVE {
+                    return Err(SimplifiedError::TooManyContacts {
+                        count: count + 1,
+                        reason: "more than two contacts active in one force block",
+                    });
+                }
+                block[count] = Some(Slot {
+                    contact: i,
+                    offset: n,
+                });
+                used[i] = true;
+                count += 1;
+                n += CONTACT_VARIABLES;
             }
-            self.stages.push(slots);
+            self.blocks.push(block);
+            for k in first..last {
+                let mut slots = [None; MAX_ACTIVE];
+                for (s, b) in slots.iter_mut().zip(block.iter()) {
+                    *s = b.filter(|b| active(&input.contacts[b.contact], k));
+                }
+                self.stages.push(slots);
+            }
         }
         for (i, c) in input.contacts.iter().enumerate() {
             if used[i] && c.activation > input.time + config.min_remaining_time {

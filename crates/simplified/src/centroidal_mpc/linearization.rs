@@ -34,7 +34,7 @@ pub(crate) struct Linearization {
     pub com_bar: Vec<Vector3<f64>>,
     pub force_bar: Vec<[[Vector3<f64>; CORNERS]; MAX_ACTIVE]>,
     pub displacement_bar: [Vector2<f64>; MAX_MPC_CONTACTS],
-    /// The force applied at the previous tick per slot of stage 0 (for the rate term at `k = 0`).
+    /// The force applied at the previous tick per slot of block 0 (for the rate term of the first block).
     pub applied: [Option<[Vector3<f64>; CORNERS]>; MAX_ACTIVE],
 }
 
@@ -106,7 +106,7 @@ impl Linearization {
             self.force_bar.push(bar);
         }
         self.applied = [None; MAX_ACTIVE];
-        if let Some(slots) = layout.stages.first() {
+        if let Some(slots) = layout.blocks.first() {
             for (a, slot) in self.applied.iter_mut().zip(slots) {
                 let old = self.valid.then(|| &self.forces[0]);
                 *a = slot.and_then(|s| {

@@ -24,9 +24,12 @@ pub(crate) struct SizedQp {
 }
 
 impl SizedQp {
-    fn new(n: usize) -> Self {
+    fn new(n: usize, warm_start: bool) -> Self {
         let qp = DenseQp::new(n, 0, 0);
-        let mut solver = ActiveSetSolver::new(ActiveSetSettings::default());
+        let mut solver = ActiveSetSolver::new(ActiveSetSettings {
+            warm_start,
+            ..ActiveSetSettings::default()
+        });
         solver.reserve(n, 0, 0);
         let out = SolverOutput::new(&qp);
         Self { qp, solver, out }
@@ -161,7 +164,7 @@ impl CentroidalMpc {
         let i = match self.sized.iter().position(|s| s.qp.n() == n) {
             Some(i) => i,
             None => {
-                self.sized.push(SizedQp::new(n));
+                self.sized.push(SizedQp::new(n, c.warm_start_active_set));
                 self.sized.len() - 1
             }
         };
