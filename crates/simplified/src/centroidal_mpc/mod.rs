@@ -14,6 +14,7 @@
 //! Goldfarb–Idnani active-set solver warm-started from the previous active set of the same size.
 //! The thesis solved the full NLP with IPOPT (§11.1.4).
 
+#[path = "../centroidal_mpc_config.rs"]
 mod config;
 mod cost;
 mod dynamics;

@@ -31,6 +31,8 @@ pub type Interval = [f64; 2];
 /// | `force_regularization` | 1e-7 | Tikhonov term on the cone coordinates \[1/N²\] (keeps the QP strictly convex) |
 /// | `forward` | \[−0.10, 0.10\] | box (11.1.14) along the sole x axis \[m\] |
 /// | `outward` | \[−0.02, 0.10\] | box (11.1.14) across the sole, positive away from the other foot \[m\] |
+/// | `deadband` | 0.01 m | the runner retargets the swing only when the adjusted touch-down differs from the plan's by more |
+/// | `track_prediction` | true | the DCM PI tracks the MPC's predicted CoM (false: the plan's, and the MPC only moves the footsteps) |
 /// | `warm_start_active_set` | false | start the active-set solver from the previous active set of the same QP size (the RTI itself always linearises about the previous solution); off because a cold start measured faster (docs/simplified.md) |
 /// | `min_remaining_time` | 0.15 s | a contact that starts sooner than this is no longer moved |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -64,6 +66,10 @@ pub struct CentroidalMpcConfig {
     pub outward: Interval,
     /// Contacts starting sooner than this are not moved \[s\].
     pub min_remaining_time: f64,
+    /// Dead band of the runner's swing retargeting \[m\].
+    pub deadband: f64,
+    /// Whether the DCM PI tracks the MPC's prediction (else the plan's CoM).
+    pub track_prediction: bool,
     /// Warm start of the active-set solver from its previous active set.
     pub warm_start_active_set: bool,
 }
@@ -85,6 +91,8 @@ impl Default for CentroidalMpcConfig {
             forward: [-0.10, 0.10],
             outward: [-0.02, 0.10],
             min_remaining_time: 0.15,
+            deadband: 0.01,
+            track_prediction: true,
             warm_start_active_set: false,
         }
     }
@@ -151,6 +159,7 @@ impl CentroidalMpcConfig {
         )?;
         interval("centroidal_mpc.forward", self.forward)?;
         interval("centroidal_mpc.outward", self.outward)?;
+        non_negative("centroidal_mpc.deadband", self.deadband)?;
         non_negative("centroidal_mpc.min_remaining_time", self.min_remaining_time)
     }
 }
