@@ -31,7 +31,7 @@ pub type Interval = [f64; 2];
 /// | `force_regularization` | 1e-7 | Tikhonov term on the cone coordinates \[1/N²\] (keeps the QP strictly convex) |
 /// | `forward` | \[−0.10, 0.10\] | box (11.1.14) along the sole x axis \[m\] |
 /// | `outward` | \[0, 0.10\] | box (11.1.14) across the sole, positive away from the other foot \[m\] |
-/// | `deadband` | 0.01 m | the runner retargets the swing only when the adjusted touch-down differs from the plan's by more |
+/// | `deadband` | 0.02 m | the runner retargets the swing only when the adjusted touch-down differs from the plan's by more |
 /// | `track_prediction` | false | the DCM PI tracks the MPC's predicted CoM (false: the plan's, and the MPC only moves the footsteps) |
 /// | `warm_start_active_set` | false | start the active-set solver from the previous active set of the same QP size (the RTI itself always linearises about the previous solution); off because a cold start measured faster (docs/simplified.md) |
 /// | `min_remaining_time` | 0.15 s | a contact that starts sooner than this is no longer moved |
@@ -91,7 +91,7 @@ impl Default for CentroidalMpcConfig {
             forward: [-0.10, 0.10],
             outward: [0.0, 0.10],
             min_remaining_time: 0.15,
-            deadband: 0.01,
+            deadband: 0.02,
             track_prediction: false,
             warm_start_active_set: false,
         }
