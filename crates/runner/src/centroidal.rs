@@ -37,6 +37,22 @@ pub struct CentroidalLayer {
     next_solve: f64,
     nominals: [Option<(Foot, f64, Vector2<f64>)>; REMEMBERED],
     next_nominal: usize,
+    mass: f64,
+    /// Time and measured CoM velocity of the last solve.
+    last_velocity: Option<(f64, nalgebra::Vector3<f64>)>,
+}
+
+/// What the layer reads of the robot at a tick (world frame, SI units).
+#[derive(Debug, Clone, Copy)]
+pub struct CentroidalMeasurement {
+    /// Measured CoM \[m\].
+    pub com: nalgebra::Vector3<f64>,
+    /// Measured CoM velocity \[m/s\].
+    pub com_velocity: nalgebra::Vector3<f64>,
+    /// Sum of the estimated feet contact forces \[N\].
+    pub feet_force: nalgebra::Vector3<f64>,
+    /// Sole half length and half width \[m\].
+    pub foot_half: (f64, f64),
 }
 
 impl CentroidalLayer {
@@ -52,6 +68,8 @@ impl CentroidalLayer {
             next_solve: f64::NEG_INFINITY,
             nominals: [None; REMEMBERED],
             next_nominal: 0,
+            mass,
+            last_velocity: None,
         })
     }
 
@@ -77,17 +95,18 @@ impl CentroidalLayer {
     fn fill(
         &mut self,
         plan: &Plan,
-        com: (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>),
-        foot_half: (f64, f64),
+        m: &CentroidalMeasurement,
         sample: &mut PlanSample,
         t: f64,
     ) -> Result<(), SimplifiedError> {
         let c = *self.mpc.config();
         let end = t + c.stage_duration * c.stages as f64;
+        let external = self.external_force(m, t);
         let i = &mut self.input;
         i.time = t;
-        (i.com_position, i.com_velocity) = com;
-        (i.foot_half_length, i.foot_half_width) = foot_half;
+        (i.com_position, i.com_velocity) = (m.com, m.com_velocity);
+        (i.foot_half_length, i.foot_half_width) = m.foot_half;
+        i.external_force = external;
         i.contacts.clear();
         i.com_reference.clear();
         for foot in [Foot::Left, Foot::Right] {
@@ -117,12 +136,27 @@ impl CentroidalLayer {
         Ok(())
     }
 
+    /// The horizontal external force `m ẍ − Σ f_feet` \[N\] (zero when disabled, at the first solve or
+    /// below the threshold); remembers the velocity for the next solve.
+    fn external_force(&mut self, m: &CentroidalMeasurement, t: f64) -> nalgebra::Vector3<f64> {
+        let c = self.mpc.config();
+        let last = self.last_velocity.replace((t, m.com_velocity));
+        let Some((t0, v0)) = last.filter(|(t0, _)| c.external_force && t > *t0) else {
+            return nalgebra::Vector3::zeros();
+        };
+        let mut f = (m.com_velocity - v0) * (self.mass / (t - t0)) - m.feet_force;
+        f.z = 0.0;
+        if f.norm() < c.external_force_threshold {
+            f.fill(0.0);
+        }
+        f
+    }
+
     /// Re-solves when `update_period` has passed since the last solve; `Ok(true)` when it solved.
     pub fn tick(
         &mut self,
         plan: &Plan,
-        com: (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>),
-        foot_half: (f64, f64),
+        measurement: &CentroidalMeasurement,
         sample: &mut PlanSample,
         t: f64,
     ) -> Result<bool, SimplifiedError> {
@@ -130,7 +164,7 @@ impl CentroidalLayer {
             return Ok(false);
         }
         self.next_solve = t + self.mpc.config().update_period;
-        self.fill(plan, com, foot_half, sample, t)?;
+        self.fill(plan, measurement, sample, t)?;
         self.mpc.step(&self.input)?;
         Ok(true)
     }
@@ -199,5 +233,51 @@ impl CentroidalLayer {
             qp_status: out.diagnostics.status,
             iterations: out.diagnostics.iterations,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    fn measurement(velocity: Vector3<f64>, feet: Vector3<f64>) -> CentroidalMeasurement {
+        CentroidalMeasurement {
+            com: Vector3::zeros(),
+            com_velocity: velocity,
+            feet_force: feet,
+            foot_half: (0.06, 0.03),
+        }
+    }
+
+    #[test]
+    fn the_external_force_is_newtons_law_on_the_measurements() {
+        let config = CentroidalMpcConfig {
+            external_force: true,
+            ..CentroidalMpcConfig::default()
+        };
+        let mut layer = CentroidalLayer::new(&config, 30.0, 9.81).unwrap();
+        let weight = Vector3::new(0.0, 0.0, 30.0 * 9.81);
+        // first solve: no previous velocity
+        let still = measurement(Vector3::zeros(), weight);
+        assert_eq!(layer.external_force(&still, 1.0), Vector3::zeros());
+        // the CoM accelerates by (1, 0) m/s² while the feet push back by 20 N along −y:
+        // f = m a − Σ f = (30, 20) N, vertical dropped
+        let pushed = measurement(
+            Vector3::new(0.05, 0.0, 0.0),
+            weight + Vector3::new(0.0, -20.0, 0.0),
+        );
+        let f = layer.external_force(&pushed, 1.05);
+        assert!((f - Vector3::new(30.0, 20.0, 0.0)).norm() < 1e-9, "{f}");
+        // below the 30 N threshold: ignored
+        let small = measurement(
+            Vector3::new(0.05, 0.0, 0.0),
+            weight + Vector3::new(-10.0, 0.0, 0.0),
+        );
+        assert_eq!(layer.external_force(&small, 1.1), Vector3::zeros());
+        // disabled: always zero
+        let mut off = CentroidalLayer::new(&CentroidalMpcConfig::default(), 30.0, 9.81).unwrap();
+        off.external_force(&still, 1.0);
+        assert_eq!(off.external_force(&pushed, 1.05), Vector3::zeros());
     }
 }

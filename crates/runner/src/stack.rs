@@ -28,7 +28,7 @@ use stride_simplified::{
 };
 use stride_wbc::{QpIk, Tsid, WbcInput};
 
-use crate::centroidal::CentroidalLayer;
+use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
 use crate::config::{ControlMode, EstimationKind, Goal, Scenario};
 use crate::error::RunError;
 use crate::robot::{JointCommand, Measurement};
@@ -605,9 +605,20 @@ impl Stack {
             layer: "simplified",
         })?;
         let t = time_ns as f64 * 1e-9;
-        let com = (self.measured.com, self.measured.com_velocity);
-        let half = (self.foot_half_length, self.foot_half_width);
-        match layer.tick(plan, com, half, &mut self.horizon_sample, t) {
+        let e = &self.estimate;
+        let mut feet_force = Vector3::zeros();
+        for (w, in_contact) in e.foot_wrenches.iter().zip(e.contacts) {
+            if in_contact {
+                feet_force += w.fixed_rows::<3>(0);
+            }
+        }
+        let measurement = CentroidalMeasurement {
+            com: self.measured.com,
+            com_velocity: self.measured.com_velocity,
+            feet_force,
+            foot_half: (self.foot_half_length, self.foot_half_width),
+        };
+        match layer.tick(plan, &measurement, &mut self.horizon_sample, t) {
             Ok(true) => {}
             Ok(false) => return Ok(None),
             Err(e) => {

@@ -31,6 +31,9 @@ pub type Interval = [f64; 2];
 /// | `force_regularization` | 1e-7 | Tikhonov term on the cone coordinates \[1/N²\] (keeps the QP strictly convex) |
 /// | `forward` | \[−0.10, 0.10\] | box (11.1.14) along the sole x axis \[m\] |
 /// | `outward` | \[0, 0.10\] | box (11.1.14) across the sole, positive away from the other foot \[m\] |
+/// | `external_force` | false | the runner estimates the horizontal external force (`m ẍ − Σ f_feet`) and passes it to the MPC [Romualdi 2022, eq. 11.2.1] |
+/// | `external_force_threshold` | 30 N | smaller estimates are ignored (the thesis's code: 30 N) |
+/// | `external_force_stages` | 1 | stages over which the external force acts in the prediction (the thesis: the first only) |
 /// | `deadband` | 0.02 m | the runner retargets the swing only when the adjusted touch-down differs from the plan's by more |
 /// | `track_prediction` | false | the DCM PI tracks the MPC's predicted CoM (false: the plan's, and the MPC only moves the footsteps) |
 /// | `warm_start_active_set` | false | start the active-set solver from the previous active set of the same QP size (the RTI itself always linearises about the previous solution); off because a cold start measured faster (docs/simplified.md) |
@@ -66,6 +69,12 @@ pub struct CentroidalMpcConfig {
     pub outward: Interval,
     /// Contacts starting sooner than this are not moved \[s\].
     pub min_remaining_time: f64,
+    /// Whether the runner estimates the external force and passes it on.
+    pub external_force: bool,
+    /// Estimates below this magnitude are ignored \[N\].
+    pub external_force_threshold: f64,
+    /// Stages over which the external force acts in the prediction.
+    pub external_force_stages: usize,
     /// Dead band of the runner's swing retargeting \[m\].
     pub deadband: f64,
     /// Whether the DCM PI tracks the MPC's prediction (else the plan's CoM).
@@ -91,6 +100,9 @@ impl Default for CentroidalMpcConfig {
             forward: [-0.10, 0.10],
             outward: [0.0, 0.10],
             min_remaining_time: 0.15,
+            external_force: false,
+            external_force_threshold: 30.0,
+            external_force_stages: 1,
             deadband: 0.02,
             track_prediction: false,
             warm_start_active_set: false,
@@ -160,6 +172,17 @@ impl CentroidalMpcConfig {
         interval("centroidal_mpc.forward", self.forward)?;
         interval("centroidal_mpc.outward", self.outward)?;
         non_negative("centroidal_mpc.deadband", self.deadband)?;
+        non_negative(
+            "centroidal_mpc.external_force_threshold",
+            self.external_force_threshold,
+        )?;
+        if self.external_force_stages > self.stages {
+            return Err(invalid(
+                "centroidal_mpc.external_force_stages",
+                self.external_force_stages as f64,
+                "must be <= stages",
+            ));
+        }
         non_negative("centroidal_mpc.min_remaining_time", self.min_remaining_time)
     }
 }

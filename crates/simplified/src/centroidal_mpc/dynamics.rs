@@ -5,7 +5,7 @@
 //! `I₃` block the printed (11.1.4a) drops):
 //!
 //! ```text
-//! h^p[k+1] = h^p[k] + dt (Σ_ij f_ij + m g + f_ext[k])
+//! h^p[k+1] = h^p[k] + dt (Σ_ij f_ij + m g + f_ext[k])   (f_ext over the first `external_force_stages`)
 //! x[k+1]   = x[k]   + dt h^p[k] / m
 //! h^ω[k+1] = h^ω[k] + dt Σ_ij (p_i + R_i c_j − x[k]) × f_ij
 //! ```
@@ -41,6 +41,8 @@ pub(crate) struct Body {
     pub mass: f64,
     pub gravity: f64,
     pub dt: f64,
+    /// Stages over which the input's external force acts.
+    pub external_stages: usize,
 }
 
 fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
@@ -99,7 +101,7 @@ impl Condensed {
             }
             self.add_mapped(r1 + X, r0 + HP, &(Matrix3::identity() * (dt / m)), n);
             self.c[r1 + HP + 2] -= dt * m * body.gravity;
-            if k == 0 {
+            if k < body.external_stages {
                 for a in 0..3 {
                     self.c[r1 + HP + a] += dt * input.external_force[a];
                 }

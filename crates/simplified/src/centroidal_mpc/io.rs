@@ -35,7 +35,8 @@ pub struct CentroidalMpcInput {
     pub com_velocity: Vector3<f64>,
     /// Measured angular momentum about the CoM `h^ω` \[kg m²/s\].
     pub angular_momentum: Vector3<f64>,
-    /// Known external force on the robot during the first stage [Romualdi 2022, eq. 11.2.1] \[N\].
+    /// Known external force on the robot during the first `external_force_stages` stages
+    /// [Romualdi 2022, eq. 11.2.1] \[N\].
     pub external_force: Vector3<f64>,
     /// Half length of the sole rectangle (corners at `±a` along the sole x axis) \[m\].
     pub foot_half_length: f64,

@@ -177,8 +177,12 @@ fn constraints_hold_at_the_solution() {
 
 #[test]
 fn linear_dynamics_match_a_forward_euler_rollout_of_the_forces() {
-    let config = CentroidalMpcConfig::default();
-    let input = walking(&config, Vector3::new(0.3, -0.2, 0.0));
+    let config = CentroidalMpcConfig {
+        external_force_stages: 3,
+        ..CentroidalMpcConfig::default()
+    };
+    let mut input = walking(&config, Vector3::new(0.3, -0.2, 0.0));
+    input.external_force = Vector3::new(25.0, -10.0, 0.0);
     let mpc = solve(&config, &input, 1);
     let out = mpc.output();
     let dt = config.stage_duration;
@@ -190,8 +194,13 @@ fn linear_dynamics_match_a_forward_euler_rollout_of_the_forces() {
             .flatten()
             .flat_map(|(_, f)| f.iter())
             .sum();
+        let external = if k < 3 {
+            input.external_force
+        } else {
+            Vector3::zeros()
+        };
         x += v * dt;
-        v += (total / MASS - Vector3::new(0.0, 0.0, G)) * dt;
+        v += ((total + external) / MASS - Vector3::new(0.0, 0.0, G)) * dt;
         assert!(
             (out.predicted[k + 1].com_position - x).norm() < 1e-9,
             "stage {k}"
