@@ -12,13 +12,7 @@ use stride_simplified::{
 };
 
 fn contact(foot: StanceFoot, x: f64, y: f64, activation: f64, deactivation: f64) -> MpcContact {
-    MpcContact {
-        foot,
-        position: Vector3::new(x, y, 0.0),
-        yaw: 0.0,
-        activation,
-        deactivation,
-    }
+    MpcContact::level(foot, x, y, activation, deactivation)
 }
 
 /// The walk at `t0` with a push-like CoM velocity `push` \[m/s\].

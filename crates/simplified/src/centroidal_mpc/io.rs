@@ -24,6 +24,20 @@ pub struct MpcContact {
     pub deactivation: f64,
 }
 
+impl MpcContact {
+    /// A sole at `(x, y)` on the ground plane `z = 0`, heading along world x (yaw 0), active over
+    /// `[activation, deactivation)` \[m, s\].
+    pub fn level(foot: StanceFoot, x: f64, y: f64, activation: f64, deactivation: f64) -> Self {
+        Self {
+            foot,
+            position: Vector3::new(x, y, 0.0),
+            yaw: 0.0,
+            activation,
+            deactivation,
+        }
+    }
+}
+
 /// Everything one MPC tick needs (plain data; build once with [`CentroidalMpcInput::new`] and refill).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CentroidalMpcInput {

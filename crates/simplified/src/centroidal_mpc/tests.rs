@@ -13,13 +13,7 @@ const G: f64 = 9.81;
 const HEIGHT: f64 = 0.5;
 
 fn contact(foot: StanceFoot, x: f64, y: f64, activation: f64, deactivation: f64) -> MpcContact {
-    MpcContact {
-        foot,
-        position: Vector3::new(x, y, 0.0),
-        yaw: 0.0,
-        activation,
-        deactivation,
-    }
+    MpcContact::level(foot, x, y, activation, deactivation)
 }
 
 fn standing(config: &CentroidalMpcConfig) -> CentroidalMpcInput {
