@@ -1,4 +1,4 @@
-//! The centroidal MPC with footstep adjustment [Romualdi 2022, ch. 11; Romualdi et al., ICRA 2022].
+//! The centroidal MPC with footstep adjustment [Romualdi 2022, ch. 11; Romualdi et al. 2022].
 //!
 //! Prediction model: the centroidal dynamics with the contact wrenches as pure forces at the four sole
 //! corners (11.1.4), forward Euler over `N` stages of `dt` (11.1.15b–c); the contact schedule Γ_i comes
