@@ -16,7 +16,7 @@
 //! The contact-location dynamics (11.1.15d) is folded in: a contact's position is one variable `d_i`,
 //! frozen while it is active.
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, DVectorView, Matrix3, Vector3};
 
 use super::io::CentroidalMpcInput;
 use super::layout::{ContactGeometry, Layout, GENERATORS};
@@ -147,13 +147,13 @@ impl Condensed {
     }
 
     /// State rows of stage `k` at `z`: (CoM, linear momentum, angular momentum).
-    pub fn state(&self, k: usize, z: &DVector<f64>) -> [Vector3<f64>; 3] {
+    pub fn state(&self, k: usize, z: &DVectorView<'_, f64>) -> [Vector3<f64>; 3] {
         let n = z.len();
         let mut out = [Vector3::zeros(); 3];
         for (part, o) in out.iter_mut().enumerate() {
             for a in 0..3 {
                 let r = STATE * k + 3 * part + a;
-                o[a] = self.c[r] + self.s.row(r).columns(0, n).dot(&z.transpose());
+                o[a] = self.c[r] + (0..n).map(|j| self.s[(r, j)] * z[j]).sum::<f64>();
             }
         }
         out

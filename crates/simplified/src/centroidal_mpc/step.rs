@@ -24,7 +24,7 @@ impl CentroidalMpc {
     /// bilinear angular-momentum prediction (11.1.4).
     fn read_solution(&mut self, input: &CentroidalMpcInput) -> f64 {
         let n = self.layout.n;
-        let z = self.z.rows(0, n).into_owned();
+        let z = self.z.rows(0, n);
         let out = &mut self.output;
         out.time = input.time;
         out.stage_duration = self.config.stage_duration;
