@@ -13,6 +13,7 @@ macro_rules! out {
     ($($t:tt)*) => { $crate::cli::write_stdout(format_args!($($t)*)) };
 }
 
+pub mod centroidal;
 pub mod cli;
 pub mod commands;
 pub mod config;

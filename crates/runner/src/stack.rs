@@ -24,11 +24,13 @@ use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_planner::geometry::wrap_angle;
 use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
 use stride_simplified::{
-    feet_support_polygon, measured_zmp, FootRectangle, FootWrench, HorizonSample,
-    SimplifiedController, SimplifiedInput, SimplifiedOutput, StepAdjuster, SupportPolygon,
+    feet_support_polygon, measured_zmp, DcmControllerKind, FootRectangle, FootWrench,
+    HorizonSample, SimplifiedController, SimplifiedInput, SimplifiedOutput, StepAdjuster,
+    SupportPolygon,
 };
 use stride_wbc::{QpIk, Tsid, WbcInput};
 
+use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
 use crate::config::{ControlMode, EstimationKind, Goal, Scenario};
 use crate::error::RunError;
 use crate::robot::{JointCommand, Measurement};
@@ -222,6 +224,11 @@ pub struct Stack {
     /// The footstep adjusted at the last simplified tick, for `/planner/adjusted_footsteps` (taken by the
     /// scheduler).
     pub adjusted_footstep: Option<AdjustedFootstepMsg>,
+    /// The centroidal MPC (`simplified.dcm_controller = "centroidal_mpc"`).
+    pub centroidal: Option<CentroidalLayer>,
+    /// Angular momentum reference of the last simplified tick (the centroidal MPC's; zero otherwise)
+    /// \[kg m²/s\].
+    angular_momentum_reference: Vector3<f64>,
     /// Fallback/hold counters: simplified errors held, wbc QP fallbacks, wbc holds.
     pub counters: Counters,
 }
@@ -322,6 +329,15 @@ impl Stack {
                 None
             },
             adjusted_footstep: None,
+            centroidal: match c.simplified.dcm_controller {
+                DcmControllerKind::CentroidalMpc => Some(CentroidalLayer::new(
+                    &c.simplified.centroidal_mpc,
+                    kd.total_mass(),
+                    -model.gravity().z,
+                )?),
+                _ => None,
+            },
+            angular_momentum_reference: Vector3::zeros(),
             counters: Counters::default(),
             kd,
             model,
@@ -501,6 +517,7 @@ impl Stack {
         self.sample_plan(time_ns)?;
         self.measure_dcm(self.plan_sample.omega);
         self.adjust_step(time_ns);
+        let centroidal_error = self.centroidal_tick(time_ns)?;
         let s = self.plan_sample;
         let contacts = [s.left.in_contact, s.right.in_contact];
         let polygon = Self::polygon_of(
@@ -526,6 +543,10 @@ impl Stack {
         i.measured_dcm = self.measured.dcm;
         i.measured_zmp = self.zmp_filter.0.output().unwrap_or(self.measured.zmp);
         i.support_polygon = polygon;
+        if let Some(layer) = &self.centroidal {
+            let r = layer.write_references(i, time_ns as f64 * 1e-9);
+            self.angular_momentum_reference = r.angular_momentum;
+        }
         i.horizon.clear();
         let n = self.simplified.horizon_samples();
         if n > 0 {
@@ -553,7 +574,7 @@ impl Stack {
             Ok(out) => {
                 self.simplified_output = *out;
                 self.simplified_valid = true;
-                Ok(None)
+                Ok(centroidal_error)
             }
             Err(e) => {
                 self.counters.simplified_holds += 1;
@@ -588,6 +609,56 @@ impl Stack {
             Ok(false) => {}
             Err(_) => self.counters.step_adjustment_failures += 1,
         }
+    }
+
+    /// The centroidal MPC of one simplified tick (when selected, see [`crate::centroidal`]): re-solved
+    /// every `update_period`, its adjusted touch-down applied to the swing in progress. An MPC error keeps
+    /// its last prediction (counted as a simplified hold) and is returned for the event log.
+    fn centroidal_tick(&mut self, time_ns: u64) -> Result<Option<String>, RunError> {
+        let Some(layer) = self.centroidal.as_mut() else {
+            return Ok(None);
+        };
+        let plan = self.planner.plan().ok_or(RunError::NoPlan {
+            layer: "simplified",
+        })?;
+        let t = time_ns as f64 * 1e-9;
+        let e = &self.estimate;
+        let mut feet_force = Vector3::zeros();
+        for (w, in_contact) in e.foot_wrenches.iter().zip(e.contacts) {
+            if in_contact {
+                feet_force += w.fixed_rows::<3>(0);
+            }
+        }
+        let measurement = CentroidalMeasurement {
+            com: self.measured.com,
+            com_velocity: self.measured.com_velocity,
+            feet_force,
+            foot_half: (self.foot_half_length, self.foot_half_width),
+        };
+        match layer.tick(plan, &measurement, &mut self.horizon_sample, t) {
+            Ok(true) => {}
+            Ok(false) => return Ok(None),
+            Err(e) => {
+                self.counters.simplified_holds += 1;
+                return Ok(Some(e.to_string()));
+            }
+        }
+        let Some(request) = layer.request(plan, t) else {
+            return Ok(None);
+        };
+        let foot = plan.current_step(t).map(|s| s.swing.foot);
+        match self.planner.adjust_step(&request, &self.goal) {
+            Ok(true) => {
+                self.counters.step_adjustments += 1;
+                if let Some(foot) = foot {
+                    self.adjusted_footstep =
+                        Some(layer.applied(foot, &request, &self.measured.dcm));
+                }
+            }
+            Ok(false) => {}
+            Err(_) => self.counters.step_adjustment_failures += 1,
+        }
+        Ok(None)
     }
 
     /// One whole-body tick at `time_ns`: references from the plan (feet, CoM height, torso) and the
@@ -629,7 +700,7 @@ impl Stack {
         i.torso.angular_velocity = Vector3::new(0.0, 0.0, 0.5 * (wl + wr));
         i.torso.angular_acceleration = Vector3::zeros();
         i.posture = None;
-        i.angular_momentum = Vector3::zeros();
+        i.angular_momentum = self.angular_momentum_reference;
         let cmd = &mut self.command;
         cmd.contacts = [s.left.in_contact, s.right.in_contact];
         match &mut self.wbc {

@@ -5,41 +5,18 @@
 //! `/planner/adjusted_footsteps`.
 mod common;
 
-use common::Scratch;
+use common::{adjusted_footsteps, log_options as options, Scratch};
 use stride_runner::config::Scenario;
-use stride_runner::log::read_log;
-use stride_runner::run::{run_scenario, Outcome, RunOptions};
+use stride_runner::run::{run_scenario, Outcome};
 
 /// `configs/walk_straight.toml`, with the step-adjustment layer when `adjust`, and `extra` appended.
 fn walk(s: &Scratch, name: &str, adjust: bool, extra: &str) -> Scenario {
-    let configs = common::root().join("configs");
-    let mut include = vec![configs.join("walk_straight.toml")];
-    if adjust {
-        include.push(configs.join("layers/step_adjustment.toml"));
-    }
-    let include: Vec<String> = include
-        .iter()
-        .map(|p| format!("{:?}", p.display().to_string()))
-        .collect();
-    let text = format!("include = [{}]\n{extra}", include.join(", "));
-    Scenario::load(&s.write(&format!("{name}.toml"), &text)).unwrap()
-}
-
-fn options(s: &Scratch, name: &str) -> RunOptions {
-    RunOptions {
-        output: Some(s.path(&format!("{name}.mcap"))),
-        ..RunOptions::default()
-    }
-}
-
-fn adjusted_footsteps(path: &std::path::Path) -> Vec<serde_json::Value> {
-    read_log(path)
-        .unwrap()
-        .messages
-        .into_iter()
-        .filter(|m| m.topic == "/planner/adjusted_footsteps")
-        .map(|m| serde_json::from_slice(&m.data).unwrap())
-        .collect()
+    let layers: &[&str] = if adjust {
+        &["walk_straight.toml", "layers/step_adjustment.toml"]
+    } else {
+        &["walk_straight.toml"]
+    };
+    common::scenario_from_configs(s, name, layers, extra)
 }
 
 #[test]

@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
+use crate::centroidal_mpc::CentroidalMpcConfig;
 use crate::dcm_instantaneous::{DcmInstantaneousConfig, DcmInstantaneousController};
 use crate::dcm_predictive::{
     DcmHorizon, DcmPredictiveConfig, DcmPredictiveController, MpcDiagnostics,
@@ -25,16 +26,21 @@ pub enum DcmControllerKind {
     Instantaneous,
     /// The MPC [Romualdi 2022, eq. 10.2.23].
     Predictive,
+    /// The centroidal MPC with footstep adjustment [Romualdi 2022, ch. 11] ([`crate::CentroidalMpc`],
+    /// run by the caller from the `centroidal_mpc` section) in front of the PI law, which then tracks the
+    /// DCM of the centroidal MPC's predicted CoM instead of the plan's.
+    CentroidalMpc,
 }
 
 /// Configuration of the simplified-model control layer (TOML section, every field optional).
 ///
 /// | field | default | meaning |
 /// |---|---|---|
-/// | `dcm_controller` | `"instantaneous"` | `"instantaneous"` or `"predictive"` |
+/// | `dcm_controller` | `"instantaneous"` | `"instantaneous"`, `"predictive"` or `"centroidal_mpc"` |
 /// | `instantaneous` | see [`DcmInstantaneousConfig`] | `kp` 1.2, `ki` 0, `integral_limit` 0.03 m |
 /// | `predictive` | see [`DcmPredictiveConfig`] | `horizon` 2 s, `dcm_weight` 7500, `zmp_rate_weight` 9e4, … |
 /// | `zmp_com` | see [`ZmpComConfig`] | walking `{k_zmp 1.5, k_com 5}`, standing `{1.0, 4.0}`, `transition_time` 0.05 s |
+/// | `centroidal_mpc` | see [`CentroidalMpcConfig`] | horizon, weights, adjustment box of the centroidal MPC (used by the runner when selected) |
 /// | `step_adjustment` | see [`StepAdjustmentConfig`] | `enabled` false; box, durations and weights of the step-adjustment QP (used by the runner) |
 ///
 /// ```toml
@@ -55,6 +61,8 @@ pub struct SimplifiedConfig {
     pub predictive: DcmPredictiveConfig,
     /// Parameters of the ZMP-CoM controller (always used).
     pub zmp_com: ZmpComConfig,
+    /// The centroidal MPC (the runner runs it when `dcm_controller = "centroidal_mpc"`).
+    pub centroidal_mpc: CentroidalMpcConfig,
     /// Step adjustment (the runner runs it during single support when `enabled`).
     pub step_adjustment: StepAdjustmentConfig,
 }
@@ -65,6 +73,7 @@ impl SimplifiedConfig {
         self.instantaneous.validate()?;
         self.predictive.validate()?;
         self.zmp_com.validate()?;
+        self.centroidal_mpc.validate()?;
         self.step_adjustment.validate()
     }
 }
@@ -212,7 +221,7 @@ impl SimplifiedController {
             DcmControllerKind::Predictive => {
                 Some(DcmPredictiveController::new(config.predictive, period_s)?)
             }
-            DcmControllerKind::Instantaneous => None,
+            DcmControllerKind::Instantaneous | DcmControllerKind::CentroidalMpc => None,
         };
         Ok(Self {
             config: *config,

@@ -57,6 +57,22 @@ pub enum SimplifiedError {
     /// its QP for the horizon and the largest polygon).
     #[error("DCM MPC QP structure: {0}")]
     QpStructure(#[from] stride_qp::BandedQpError),
+    /// The centroidal MPC was given more contacts than its buffers hold, or more than two active at once.
+    #[error("centroidal MPC contacts: {reason} (got {count})")]
+    TooManyContacts {
+        /// Contacts given (or active at one stage).
+        count: usize,
+        /// Which limit was exceeded.
+        reason: &'static str,
+    },
+    /// The centroidal MPC's QP failed (the previous output is kept).
+    #[error("centroidal MPC QP failed: {status:?} after {iterations} iterations")]
+    CentroidalSolverFailed {
+        /// Final status of the active-set solver.
+        status: stride_qp::QpStatus,
+        /// Iterations performed.
+        iterations: usize,
+    },
 }
 
 /// Shorthand for results of this crate.

@@ -54,11 +54,22 @@
 //! [Khadiv 2020] solved by stride-qp's active-set solver without allocation. The runner calls it during
 //! single support and retargets the swing foot.
 //!
+//! # Centroidal MPC
+//!
+//! [`CentroidalMpc`] (config [`CentroidalMpcConfig`]): the reduced-model layer of [Romualdi 2022, ch. 11]
+//! — centroidal dynamics with forces at the sole corners, linearised friction cones, the positions of the
+//! contacts that start inside the horizon as decision variables in a box around the planned ones — as a
+//! real-time iteration (one active-set QP per tick, linearised about the previous solution). A
+//! [`stride_block::Block`] with [`CentroidalMpcInput`] (measured centroidal state, contact schedule,
+//! nominal CoM per stage) and [`CentroidalMpcOutput`] (predicted centroidal states, adjusted contacts,
+//! first-stage forces and ZMP).
+//!
 //! The individual controllers are usable alone: [`DcmInstantaneousController`],
 //! [`DcmPredictiveController`], [`ZmpComController`]; the bare laws [`dcm_instantaneous_law`] and
 //! [`zmp_com_law`] are exposed for analysis.
 
 mod block;
+mod centroidal_mpc;
 mod dcm_instantaneous;
 mod dcm_predictive;
 mod error;
@@ -71,6 +82,11 @@ mod zmp_com;
 pub use block::{
     DcmControllerKind, SimplifiedConfig, SimplifiedController, SimplifiedDiagnostics,
     SimplifiedInput, SimplifiedOutput, PLACEHOLDER_OMEGA,
+};
+pub use centroidal_mpc::{
+    AdjustedContact, CentroidalMpc, CentroidalMpcConfig, CentroidalMpcDiagnostics,
+    CentroidalMpcInput, CentroidalMpcOutput, CentroidalState, ComReference, FootCornerForces,
+    Interval, MpcContact, MAX_CENTROIDAL_STAGES, MAX_MPC_CONTACTS,
 };
 pub use dcm_instantaneous::{
     dcm_instantaneous_law, DcmInstantaneousConfig, DcmInstantaneousController,

@@ -46,3 +46,39 @@ pub fn robot_section() -> String {
         &format!("{:?}", urdf.display().to_string()),
     )
 }
+
+/// The files `configs/<includes>` (in order) with `extra` appended, written to `<scratch>/<name>.toml`
+/// and loaded.
+pub fn scenario_from_configs(
+    s: &Scratch,
+    name: &str,
+    includes: &[&str],
+    extra: &str,
+) -> stride_runner::config::Scenario {
+    let configs = root().join("configs");
+    let include: Vec<String> = includes
+        .iter()
+        .map(|p| format!("{:?}", configs.join(p).display().to_string()))
+        .collect();
+    let text = format!("include = [{}]\n{extra}", include.join(", "));
+    stride_runner::config::Scenario::load(&s.write(&format!("{name}.toml"), &text)).unwrap()
+}
+
+/// Run options that write the log to `<scratch>/<name>.mcap`.
+pub fn log_options(s: &Scratch, name: &str) -> stride_runner::run::RunOptions {
+    stride_runner::run::RunOptions {
+        output: Some(s.path(&format!("{name}.mcap"))),
+        ..stride_runner::run::RunOptions::default()
+    }
+}
+
+/// The `/planner/adjusted_footsteps` records of a log, as JSON.
+pub fn adjusted_footsteps(path: &Path) -> Vec<serde_json::Value> {
+    stride_runner::log::read_log(path)
+        .unwrap()
+        .messages
+        .into_iter()
+        .filter(|m| m.topic == "/planner/adjusted_footsteps")
+        .map(|m| serde_json::from_slice(&m.data).unwrap())
+        .collect()
+}
