@@ -16,8 +16,10 @@ macro_rules! out {
 pub mod cli;
 pub mod commands;
 pub mod config;
+pub mod diagnosis;
 pub mod error;
 pub mod estimation_summary;
+pub mod gait;
 pub mod log;
 pub mod model_cmd;
 #[cfg(feature = "mujoco")]
