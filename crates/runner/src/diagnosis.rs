@@ -202,7 +202,7 @@ impl Diagnosis {
             if f.kind == "dcm_error" {
                 "toppled"
             } else {
-                "the torso, the DCM on its plan"
+                "the torso over balanced legs"
             },
             f.time,
             f.phase,

@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::run::{Outcome, RunSummary};
 
 /// The columns after the axes, in order.
-pub const METRIC_COLUMNS: [&str; 17] = [
+pub const METRIC_COLUMNS: [&str; 18] = [
     "outcome",
     "distance",
     "goal_distance",
@@ -29,6 +29,7 @@ pub const METRIC_COLUMNS: [&str; 17] = [
     "energy_cost",
     "fall_time",
     "fall_direction_deg",
+    "fall_kind",
     "zmp_edge_time",
 ];
 
@@ -150,6 +151,9 @@ pub fn metric_cells(summary: Option<&RunSummary>, wall_s: f64) -> Vec<Cell> {
         Cell::opt(s.gait.energy_cost),
         Cell::opt(s.diagnosis.fall.map(|f| f.time)),
         Cell::opt(s.diagnosis.fall.map(|f| f.direction_deg)),
+        s.diagnosis
+            .fall
+            .map_or(Cell::Empty, |f| Cell::Str(f.kind.into())),
         Cell::Float(s.diagnosis.zmp_edge.at_edge),
     ]
 }
