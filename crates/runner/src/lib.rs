@@ -17,8 +17,10 @@ pub mod centroidal;
 pub mod cli;
 pub mod commands;
 pub mod config;
+pub mod diagnosis;
 pub mod error;
 pub mod estimation_summary;
+pub mod gait;
 pub mod log;
 pub mod model_cmd;
 #[cfg(feature = "mujoco")]

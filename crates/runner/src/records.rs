@@ -462,6 +462,8 @@ pub(crate) struct SimStateMsg<'a> {
 #[derive(Serialize)]
 pub(crate) struct FootMsg {
     pub(crate) in_contact: bool,
+    /// Yaw of the true sole frame about world z \[rad\].
+    pub(crate) yaw: f64,
     pub(crate) force: [f64; 3],
     pub(crate) torque: [f64; 3],
     pub(crate) point: [f64; 3],
@@ -524,12 +526,53 @@ pub(crate) struct TrackingMsg {
     pub(crate) dcm_error: f64,
     pub(crate) com_error: f64,
     pub(crate) zmp_error: Option<f64>,
+    /// Signed distance of the measured ZMP to the boundary of the loaded feet's support polygon \[m\]
+    /// (≤ 0 inside; `crate::diagnosis`).
+    pub(crate) zmp_edge_distance: Option<f64>,
     pub(crate) feet_error: f64,
     pub(crate) measured_com: [f64; 3],
     pub(crate) measured_dcm: [f64; 2],
     pub(crate) measured_zmp: [f64; 2],
     pub(crate) base_height: f64,
     pub(crate) tilt_deg: f64,
+}
+
+/// One joint of `/runner/diagnosis`: time at its effort limit.
+#[derive(Serialize)]
+pub(crate) struct JointSaturationMsg<'a> {
+    pub(crate) joint: &'a str,
+    pub(crate) time: f64,
+}
+
+/// `/runner/diagnosis`: the summary's fall diagnosis and gait figures, once at the end of the run.
+#[derive(Serialize)]
+pub(crate) struct DiagnosisMsg<'a> {
+    pub(crate) time: f64,
+    pub(crate) outcome: &'a crate::summary::Outcome,
+    #[serde(flatten)]
+    pub(crate) diagnosis: &'a crate::diagnosis::Diagnosis,
+    pub(crate) joint_saturation: Vec<JointSaturationMsg<'a>>,
+    #[serde(flatten)]
+    pub(crate) gait: &'a crate::gait::GaitFigures,
+    pub(crate) distance: f64,
+}
+
+impl<'a> DiagnosisMsg<'a> {
+    /// The message of a finished run's summary.
+    pub(crate) fn new(s: &'a crate::summary::RunSummary) -> Self {
+        Self {
+            time: s.simulated_time,
+            outcome: &s.outcome,
+            diagnosis: &s.diagnosis,
+            joint_saturation: s
+                .joint_saturation
+                .iter()
+                .map(|(joint, time)| JointSaturationMsg { joint, time: *time })
+                .collect(),
+            gait: &s.gait,
+            distance: s.distance,
+        }
+    }
 }
 
 /// `/runner/timing`: wall-clock progress (excluded from determinism comparisons).

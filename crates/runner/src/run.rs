@@ -223,6 +223,7 @@ impl<'a> Loop<'a> {
             &stack,
             schedule.total_ticks / schedule.wbc_every + 2,
             schedule.total_ticks / schedule.simplified_every + 2,
+            schedule.total_ticks as f64 * schedule.base_ns as f64 * 1e-9,
         );
         Ok(Self {
             scenario,
@@ -309,7 +310,8 @@ impl<'a> Loop<'a> {
         }
         if run_plant {
             self.robot.advance()?;
-            self.tracker.plant_period(self.robot.measurement());
+            self.tracker
+                .plant_period(self.robot.measurement(), &self.stack);
         }
         Ok(None)
     }
@@ -361,7 +363,7 @@ impl<'a> Loop<'a> {
             let detail = format!("simplified layer held its references: {message}");
             self.event(t, "hold", detail)?;
         }
-        let msg = self.tracker.track(t, &self.stack);
+        let msg = self.tracker.track(t, &self.stack, self.robot.measurement());
         if let Some(log) = self.log.as_mut() {
             log.tracking(t, &msg)?;
         }
@@ -446,7 +448,8 @@ impl<'a> Loop<'a> {
         let end = mid_pose(&self.stack.truth.soles);
         let goal = &self.scenario.config.goal;
         let mut summary = self.tracker.finish(&self.stack, goal, outcome, end, wall);
-        if let Some(log) = self.log.take() {
+        if let Some(mut log) = self.log.take() {
+            log.diagnosis(t_end, &summary)?;
             summary.log = Some(log.finish()?);
         }
         Ok(summary)

@@ -14,13 +14,14 @@ use crate::log::{
     LogOptions, LogStats, LogWriter, TopicId, FRAME_TRANSFORMS_SCHEMA,
 };
 use crate::records::{
-    simplified_output_record, ContactsMsg, EstimationMsg, EventRecord, FeetMsg, FootMsg,
-    FootstepMsg, FootstepsMsg, FtMsg, IkOutputRecord, ImuMsg, PlanSampleRecord, PlannerInputRecord,
-    PoseRecord, RobotDescription, RunnerTimingMsg, SimStateMsg, StateRecord, TimingRecord,
-    TrackingMsg, TsidOutputRecord, WbcInputRecord,
+    simplified_output_record, ContactsMsg, DiagnosisMsg, EstimationMsg, EventRecord, FeetMsg,
+    FootMsg, FootstepMsg, FootstepsMsg, FtMsg, IkOutputRecord, ImuMsg, PlanSampleRecord,
+    PlannerInputRecord, PoseRecord, RobotDescription, RunnerTimingMsg, SimStateMsg, StateRecord,
+    TimingRecord, TrackingMsg, TsidOutputRecord, WbcInputRecord,
 };
 use crate::robot::Measurement;
 use crate::stack::{Stack, Wbc};
+use crate::summary::RunSummary;
 use stride_estimation::EstimatorOutput;
 
 /// Topics whose content depends on wall-clock time (excluded from determinism comparisons).
@@ -46,6 +47,7 @@ struct Topics {
     tf: TopicId,
     tf_static: TopicId,
     tracking: TopicId,
+    diagnosis: TopicId,
     runner_timing: TopicId,
     events: TopicId,
 }
@@ -77,6 +79,7 @@ impl Topics {
             tf: w.topic("/tf", "foxglove.FrameTransforms", tf_schema())?,
             tf_static: w.topic("/tf_static", "foxglove.FrameTransforms", tf_schema())?,
             tracking: w.topic("/runner/tracking", "stride.runner.Tracking", None)?,
+            diagnosis: w.topic("/runner/diagnosis", "stride.runner.Diagnosis", None)?,
             runner_timing: w.topic("/runner/timing", "stride.runner.Timing", None)?,
             events: w.topic("/events", "stride.Event", None)?,
         })
@@ -273,6 +276,7 @@ impl LogSink {
             let w = &truth.foot_wrenches[k];
             FootMsg {
                 in_contact: truth.feet_in_contact[k],
+                yaw: stack.truth.soles[k].rotation.euler_angles().2,
                 force: [w[0], w[1], w[2]],
                 torque: [w[3], w[4], w[5]],
                 point: stack.truth.soles[k].translation.vector.into(),
@@ -395,6 +399,11 @@ impl LogSink {
     /// `/runner/tracking`.
     pub(crate) fn tracking(&mut self, t: u64, msg: &TrackingMsg) -> Result<(), LogError> {
         self.write(|tp| tp.tracking, t, msg)
+    }
+
+    /// `/runner/diagnosis`: the end-of-run diagnosis and gait figures of `summary`, at `t`.
+    pub(crate) fn diagnosis(&mut self, t: u64, summary: &RunSummary) -> Result<(), LogError> {
+        self.write(|tp| tp.diagnosis, t, &DiagnosisMsg::new(summary))
     }
 
     /// `/runner/timing`.

@@ -167,6 +167,9 @@ pub struct Measured {
     /// Torso tilt \[rad\]: angle between the vertical and the torso frame's axis that was vertical in the
     /// initial posture.
     pub tilt: f64,
+    /// The torso's up axis in the world (unit; the world vertical in the initial posture): its horizontal
+    /// part points where the torso leans.
+    pub torso_up: Vector3<f64>,
     /// Base height \[m\].
     pub base_height: f64,
 }
@@ -808,6 +811,7 @@ fn measure_state(
         zmp_from_wrenches: ok,
         soles,
         tilt: up.z.clamp(-1.0, 1.0).acos(),
+        torso_up: up,
         base_height: state.base_pose.translation.z,
     })
 }

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::config::Goal;
+use crate::diagnosis::Diagnosis;
 use crate::estimation_summary::EstimationSummary;
+use crate::gait::GaitFigures;
 use crate::log::LogStats;
 use stride_planner::geometry::wrap_angle;
 
@@ -140,6 +142,10 @@ pub struct RunSummary {
     /// Joints whose motor torque sat at its effort limit, with the simulated time spent there \[s\],
     /// longest first (empty when no joint saturated, or the plant does not report it).
     pub joint_saturation: Vec<(String, f64)>,
+    /// Fall diagnosis: the fall's direction and time, ZMP at the sole edges, the DCM error's peak.
+    pub diagnosis: Diagnosis,
+    /// Steady forward speed and specific energetic cost.
+    pub gait: GaitFigures,
     /// Whole-body ticks solved by the relaxed fallback QP.
     pub wbc_fallbacks: u64,
     /// Whole-body ticks that held the previous command.
@@ -183,6 +189,8 @@ impl RunSummary {
             wbc_solve_time: SolveTimes::default(),
             simplified_solve_time: SolveTimes::default(),
             joint_saturation: Vec::new(),
+            diagnosis: Diagnosis::default(),
+            gait: GaitFigures::default(),
             wbc_fallbacks: 0,
             wbc_holds: 0,
             simplified_holds: 0,
@@ -246,6 +254,7 @@ impl RunSummary {
             "scenario {} on the {} plant: {}",
             self.scenario, self.plant, self.outcome
         );
+        self.diagnosis.render(&mut s, &self.joint_saturation);
         let _ = writeln!(
             s,
             "  simulated {:.2} s in {:.2} s wall clock: {:.1}x real time",
@@ -256,6 +265,7 @@ impl RunSummary {
             "  walked {:.3} m, mean forward speed {:.3} m/s, final pose x {:.3} m y {:.3} m heading {:.1}°",
             self.distance, self.mean_forward_speed, self.final_pose[0], self.final_pose[1], self.final_pose[2]
         );
+        self.gait.render(&mut s);
         if let (Some(d), Some(h)) = (self.goal_distance, self.goal_heading_error_deg) {
             let _ = writeln!(s, "  goal: {:.3} m away, heading error {:.1}°", d, h);
         }
@@ -333,15 +343,23 @@ fn render_saturation(s: &mut String, joints: &[(String, f64)]) {
         let _ = writeln!(s, "  joint torque saturation: none");
         return;
     }
-    let top: Vec<String> = joints
-        .iter()
-        .take(3)
-        .map(|(name, t)| format!("{name} {t:.2} s"))
-        .collect();
     let _ = writeln!(
         s,
         "  joint torque saturation: {} joints at their effort limit (longest: {})",
         joints.len(),
-        top.join(", ")
+        longest_saturations(joints, 3)
     );
+}
+
+/// The first `n` joints of a saturation list (longest first) as `name 0.12 s, ...`; `none` when empty.
+pub(crate) fn longest_saturations(joints: &[(String, f64)], n: usize) -> String {
+    if joints.is_empty() {
+        return "none".into();
+    }
+    let top: Vec<String> = joints
+        .iter()
+        .take(n)
+        .map(|(name, t)| format!("{name} {t:.2} s"))
+        .collect();
+    top.join(", ")
 }

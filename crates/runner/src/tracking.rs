@@ -4,7 +4,9 @@
 use nalgebra::Vector3;
 
 use crate::config::{EstimationKind, Goal, Scenario};
+use crate::diagnosis::{loaded_support, FallDiagnosis};
 use crate::estimation_summary::EstimationSummary;
+use crate::gait::GaitTracker;
 use crate::records::TrackingMsg;
 use crate::robot::{Measurement, Robot};
 use stride_planner::geometry::wrap_angle;
@@ -22,6 +24,10 @@ pub(crate) struct Tracker {
     /// Per joint: simulated time spent at the effort limit \[s\].
     saturated_time: Vec<f64>,
     plant_period: f64,
+    gait: GaitTracker,
+    simplified_period: f64,
+    /// Half length and half width of the sole rectangle \[m\] (`planner.foot_length`, `foot_width`).
+    sole_half_size: [f64; 2],
     initial_base_height: f64,
     start_mid: [f64; 3],
     standstill_since: Option<u64>,
@@ -29,15 +35,19 @@ pub(crate) struct Tracker {
 
 impl Tracker {
     /// Starts tracking at the robot's initial measurement (`stack` already estimated from it), with room
-    /// for `wbc_ticks` and `simplified_ticks` solve times.
+    /// for `wbc_ticks` and `simplified_ticks` solve times and the touch-downs of `duration` \[s\].
     pub(crate) fn new(
         scenario: &Scenario,
         robot: &dyn Robot,
         stack: &Stack,
         wbc_ticks: u64,
         simplified_ticks: u64,
+        duration: f64,
     ) -> Self {
         let m = robot.measurement();
+        let c = &scenario.config;
+        let start_mid = mid_pose(&stack.truth.soles);
+        let mass = robot.model().total_mass();
         let mut summary = RunSummary::new(&scenario.config.scenario.name, robot.name());
         summary.estimation = EstimationSummary::new(match scenario.config.estimation.kind {
             EstimationKind::Ekf => "ekf",
@@ -49,8 +59,11 @@ impl Tracker {
             simplified_times: Vec::with_capacity(simplified_ticks as usize),
             saturated_time: vec![0.0; m.truth.saturated.len()],
             plant_period: robot.period_ns() as f64 * 1e-9,
+            gait: GaitTracker::new(&m.truth, mass, duration),
+            simplified_period: 1.0 / f64::from(c.rates.simplified_hz),
+            sole_half_size: [0.5 * c.planner.foot_length, 0.5 * c.planner.foot_width],
             initial_base_height: m.truth.state.base_pose.translation.z,
-            start_mid: mid_pose(&stack.truth.soles),
+            start_mid,
             standstill_since: None,
         }
     }
@@ -66,8 +79,13 @@ impl Tracker {
         self.summary.estimation.add(&stack.estimate, &m.truth);
     }
 
-    /// After a plant period: joint saturation.
-    pub(crate) fn plant_period(&mut self, m: &Measurement) {
+    /// After a plant period: joint saturation, actuator work, forward progress (along the soles' heading of
+    /// the stack's last measurement) and touch-downs.
+    pub(crate) fn plant_period(&mut self, m: &Measurement, stack: &Stack) {
+        let time = m.time_ns as f64 * 1e-9;
+        let soles = &stack.truth.soles;
+        let heading = crate::stack::soles_heading(&soles[0], &soles[1]);
+        self.gait.add(time, self.plant_period, &m.truth, heading);
         for (time, saturated) in self.saturated_time.iter_mut().zip(&m.truth.saturated) {
             if *saturated {
                 *time += self.plant_period;
@@ -75,8 +93,9 @@ impl Tracker {
         }
     }
 
-    /// Tracking errors at a simplified tick (after the layer ran), accumulated and returned for the log.
-    pub(crate) fn track(&mut self, t: u64, stack: &Stack) -> TrackingMsg {
+    /// Tracking errors and the ZMP's distance to the sole edges at a simplified tick (after the layer ran;
+    /// `plant` the robot's measurement), accumulated and returned for the log.
+    pub(crate) fn track(&mut self, t: u64, stack: &Stack, plant: &Measurement) -> TrackingMsg {
         let s = &stack.plan_sample;
         let m = &stack.truth;
         let dcm_err = (m.dcm - s.dcm_position.xy()).norm();
@@ -88,7 +107,12 @@ impl Tracker {
             (m.soles[k].translation.vector - planned.translation.vector).norm()
         };
         let feet_err = foot_err(0, &s.left.pose).max(foot_err(1, &s.right.pose));
+        let zmp_edge_distance = self.zmp_edge(stack, plant);
         let summary = &mut self.summary;
+        summary
+            .diagnosis
+            .dcm_error_peak
+            .add(dcm_err, t as f64 * 1e-9);
         summary.dcm_error.add(dcm_err);
         summary.com_error.add(com_err);
         if let Some(z) = zmp_err {
@@ -100,6 +124,7 @@ impl Tracker {
             dcm_error: dcm_err,
             com_error: com_err,
             zmp_error: zmp_err,
+            zmp_edge_distance,
             feet_error: feet_err,
             measured_com: m.com.into(),
             measured_dcm: m.dcm.into(),
@@ -107,6 +132,25 @@ impl Tracker {
             base_height: m.base_height,
             tilt_deg: m.tilt.to_degrees(),
         }
+    }
+
+    /// The measured ZMP against the support polygon of the loaded feet (as [`Stack::measure`] loads them),
+    /// accumulated over a simplified period: its signed distance to the boundary \[m\] (`None` without a
+    /// measurable ZMP).
+    fn zmp_edge(&mut self, stack: &Stack, plant: &Measurement) -> Option<f64> {
+        let m = &stack.truth;
+        let truth = &plant.truth;
+        let loaded = [0, 1].map(|k| truth.feet_in_contact[k] && truth.foot_wrenches[k][2] > 0.0);
+        let [hl, hw] = self.sole_half_size;
+        let polygon = loaded_support(&m.soles, loaded, hl, hw).filter(|_| m.zmp_from_wrenches)?;
+        let heading = crate::stack::soles_heading(&m.soles[0], &m.soles[1]);
+        let dt = self.simplified_period;
+        Some(
+            self.summary
+                .diagnosis
+                .zmp_edge
+                .add(m.zmp, &polygon, heading, dt),
+        )
     }
 
     /// The summary at the end of the run, with the stance pose `end` ([`mid_pose`]) and the loop's
@@ -140,6 +184,7 @@ impl Tracker {
         s.replans = counters.replans;
         s.step_adjustments = (counters.step_adjustments, counters.step_adjustment_failures);
         s.finish(self.start_mid, end, goal, wall);
+        s.gait = self.gait.finish(s.distance);
         s.estimation.finish(s.distance);
         self.summary
     }
@@ -152,6 +197,22 @@ pub(crate) fn end_check(
     scenario: &Scenario,
     stack: &Stack,
     t: u64,
+    fallen: bool,
+) -> Option<Outcome> {
+    let outcome = fall_check(tracker, scenario, stack, fallen);
+    if outcome.is_some() {
+        let fall = FallDiagnosis::new(t as f64 * 1e-9, &stack.truth, &stack.plan_sample);
+        tracker.summary.diagnosis.fall = Some(fall);
+        return outcome;
+    }
+    goal_check(tracker, scenario, stack, t)
+}
+
+/// The fall checks: base height, torso tilt, the plant's own detector; `None` while standing.
+fn fall_check(
+    tracker: &mut Tracker,
+    scenario: &Scenario,
+    stack: &Stack,
     fallen: bool,
 ) -> Option<Outcome> {
     let e = &scenario.config.end;
@@ -181,6 +242,18 @@ pub(crate) fn end_check(
         let reason = "the simulator's fall detector fired".into();
         return Some(Outcome::Fell { reason });
     }
+    None
+}
+
+/// Goal reached and standing still for `end.standstill_time`; `None` while the run goes on.
+fn goal_check(
+    tracker: &mut Tracker,
+    scenario: &Scenario,
+    stack: &Stack,
+    t: u64,
+) -> Option<Outcome> {
+    let e = &scenario.config.end;
+    let m = &stack.truth;
     if !(e.stop_at_goal && stack.plan_finished(t)) {
         return None;
     }

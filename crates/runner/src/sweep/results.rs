@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::run::{Outcome, RunSummary};
 
 /// The columns after the axes, in order.
-pub const METRIC_COLUMNS: [&str; 12] = [
+pub const METRIC_COLUMNS: [&str; 18] = [
     "outcome",
     "distance",
     "goal_distance",
@@ -25,6 +25,12 @@ pub const METRIC_COLUMNS: [&str; 12] = [
     "est_tilt_rms_deg",
     "est_tilt_max_deg",
     "step_adjustments",
+    "steady_speed",
+    "energy_cost",
+    "fall_time",
+    "fall_direction_deg",
+    "fall_kind",
+    "zmp_edge_time",
 ];
 
 /// One cell.
@@ -141,6 +147,14 @@ pub fn metric_cells(summary: Option<&RunSummary>, wall_s: f64) -> Vec<Cell> {
         Cell::Float(e.tilt_error.rms.to_degrees()),
         Cell::Float(e.tilt_error.max.to_degrees()),
         Cell::Int(i64::try_from(s.step_adjustments.0).unwrap_or(i64::MAX)),
+        Cell::opt(s.gait.steady_speed),
+        Cell::opt(s.gait.energy_cost),
+        Cell::opt(s.diagnosis.fall.map(|f| f.time)),
+        Cell::opt(s.diagnosis.fall.map(|f| f.direction_deg)),
+        s.diagnosis
+            .fall
+            .map_or(Cell::Empty, |f| Cell::Str(f.kind.into())),
+        Cell::Float(s.diagnosis.zmp_edge.at_edge),
     ]
 }
 
