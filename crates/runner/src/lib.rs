@@ -13,11 +13,13 @@ macro_rules! out {
     ($($t:tt)*) => { $crate::cli::write_stdout(format_args!($($t)*)) };
 }
 
+pub mod check;
 pub mod cli;
 pub mod commands;
 pub mod config;
 pub mod error;
 pub mod estimation_summary;
+pub mod feet;
 pub mod log;
 pub mod model_cmd;
 #[cfg(feature = "mujoco")]

@@ -31,7 +31,29 @@ pub const OPTIONAL_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "goal.velocity.segments[].lateral", unit: "m/s", meaning: "Lateral speed of the segment." },
     KeyDoc { key: "goal.velocity.segments[].yaw_rate_deg", unit: "deg/s", meaning: "Yaw rate of the segment." },
     KeyDoc { key: "goal.stand", unit: "-", meaning: "`[goal.stand]` (empty table): stand still (push scenarios)." },
+    KeyDoc { key: "robot.left_sole.parent", unit: "-", meaning: "`robot.left_sole = { parent = \"<link>\", xyz = [..], rpy = [..] }` instead of a frame name: a sole frame the URDF lacks, added to the model on this frame (usually the foot link); `stride model feet <URDF>` proposes it." },
+    KeyDoc { key: "robot.left_sole.xyz", unit: "m", meaning: "Origin of the added left sole frame in `parent` (default `[0, 0, 0]`)." },
+    KeyDoc { key: "robot.left_sole.rpy", unit: "rad", meaning: "Roll, pitch, yaw of the added left sole frame in `parent`, URDF convention `R = Rz(y) Ry(p) Rx(r)` (default `[0, 0, 0]`); the sole frame has z up (out of the sole) and x forward." },
+    KeyDoc { key: "robot.left_sole.name", unit: "-", meaning: "Name of the added frame in the model (default `left_sole`); must not be a frame the model already has." },
+    KeyDoc { key: "robot.right_sole.parent", unit: "-", meaning: "As `robot.left_sole.parent`, for the right sole." },
+    KeyDoc { key: "robot.right_sole.xyz", unit: "m", meaning: "As `robot.left_sole.xyz`." },
+    KeyDoc { key: "robot.right_sole.rpy", unit: "rad", meaning: "As `robot.left_sole.rpy`." },
+    KeyDoc { key: "robot.right_sole.name", unit: "-", meaning: "Name of the added frame (default `right_sole`)." },
+    KeyDoc { key: "sim.actuation.default.effort_limit", unit: "N·m (N)", meaning: "Motor torque bound of every joint not overridden (absent: each joint's URDF `effort`, unbounded if the URDF has none); at the bound the torque saturates (`effort_limit_policy`). Per joint: `[[sim.actuation.joints]]` `effort_limit`." },
 ];
+
+/// TOML type of an [`OPTIONAL_KEYS`] entry.
+fn optional_key_type(key: &str) -> &'static str {
+    if key == "include" || key.ends_with(".xyz") || key.ends_with(".rpy") {
+        "array"
+    } else if key == "goal.stand" {
+        "table"
+    } else if key.ends_with(".parent") || key.ends_with(".name") {
+        "string"
+    } else {
+        "float"
+    }
+}
 
 /// Runner-owned keys present in the default configuration.
 pub const RUNNER_KEYS: &[KeyDoc] = &[
@@ -43,8 +65,8 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "estimation.kind", unit: "-", meaning: "`ekf` (default): the controllers read only the estimation layer's output (stride-estimation: invariant EKF, contacts and foot wrenches from the force/torque sensors). `ground_truth`: they read the simulator's truth, for debugging only (the summary says GROUND TRUTH; required with `scenario.plant = \"ideal\"`)." },
     KeyDoc { key: "scenario.plant", unit: "-", meaning: "`simulator` (stride-sim), `ideal` (joint commands applied exactly, base from the fixed stance foot) or `mujoco` (MuJoCo 3.17 on the soles of the URDF, configured by the same `[sim]` section; needs a build with `--features mujoco`, see docs/mujoco.md)." },
     KeyDoc { key: "robot.urdf", unit: "-", meaning: "URDF of the robot, relative to the file that sets this key; `${NAME}` is replaced by the environment variable `NAME` (unset: a configuration error), e.g. `\"${STRIDE_ICUB_MODELS_DIR}/iCubGazeboV2_7/model.urdf\"`." },
-    KeyDoc { key: "robot.left_sole", unit: "-", meaning: "Frame at the centre of the left sole (a link or frame of the model)." },
-    KeyDoc { key: "robot.right_sole", unit: "-", meaning: "Frame at the centre of the right sole." },
+    KeyDoc { key: "robot.left_sole", unit: "-", meaning: "Frame at the centre of the left sole, z up and x forward: a link or frame of the model, or a table `{ parent, xyz, rpy }` that adds one (see `robot.left_sole.parent`). `stride check` warns when it is not on the ground or not level in the initial posture." },
+    KeyDoc { key: "robot.right_sole", unit: "-", meaning: "Frame at the centre of the right sole (a frame name or a `{ parent, xyz, rpy }` table)." },
     KeyDoc { key: "robot.torso_frame", unit: "-", meaning: "Frame whose tilt is checked for falls, measured from its orientation in the initial posture (so any frame convention works)." },
     KeyDoc { key: "robot.initial_joint_positions", unit: "rad or m", meaning: "Table joint name → initial position; joints not listed start at 0. Unknown joint names are rejected." },
     KeyDoc { key: "rates.base_hz", unit: "Hz", meaning: "Base clock rate; must divide 1 000 000 000 (integer-nanosecond period). Every other rate divides it." },
@@ -263,13 +285,7 @@ pub fn render(
     for d in OPTIONAL_KEYS {
         all.push((
             d.key.to_string(),
-            if d.key == "include" {
-                "array".into()
-            } else if d.key == "goal.stand" {
-                "table".into()
-            } else {
-                "float".into()
-            },
+            optional_key_type(d.key).into(),
             "–".into(),
             d.unit.into(),
             d.meaning.into(),

@@ -1,0 +1,146 @@
+//! `stride model feet`: sole frames and rectangles from collision geometry, checked against the
+//! dimensions the test URDFs are built from; STL and OBJ meshes against the box they describe.
+mod common;
+
+use common::Scratch;
+use nalgebra::{Point3, Vector3};
+use stride_runner::feet::mesh::{box_triangles, read_mesh};
+use stride_runner::feet::patch::{lowest_patch, Shapes};
+use stride_runner::feet::{propose_feet, FeetError};
+
+const INERTIAL: &str = r#"<inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>"#;
+
+fn leg(side: &str, y: f64, foot: &str) -> String {
+    format!(
+        r#"<joint name="{side}_hip" type="revolute"><parent link="pelvis"/><child link="{side}_foot"/>
+  <origin xyz="0 {y} -0.5"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="100" velocity="10"/></joint>
+<link name="{side}_foot">{INERTIAL}{foot}</link>"#
+    )
+}
+
+fn urdf(left_foot: &str, right_foot: &str) -> String {
+    format!(
+        r#"<robot name="t"><link name="pelvis">{INERTIAL}</link>{}{}</robot>"#,
+        leg("l", 0.1, left_foot),
+        leg("r", -0.1, right_foot)
+    )
+}
+
+/// A binary STL of `triangles`.
+fn binary_stl(triangles: &[[Point3<f64>; 3]]) -> Vec<u8> {
+    let mut out = vec![0u8; 80];
+    out.extend((triangles.len() as u32).to_le_bytes());
+    for t in triangles {
+        out.extend([0f32; 3].iter().flat_map(|v| v.to_le_bytes()));
+        for p in t {
+            for c in [p.x, p.y, p.z] {
+                out.extend((c as f32).to_le_bytes());
+            }
+        }
+        out.extend([0u8; 2]);
+    }
+    out
+}
+
+fn shifted(tris: Vec<[Point3<f64>; 3]>, d: Vector3<f64>) -> Vec<[Point3<f64>; 3]> {
+    tris.into_iter().map(|t| t.map(|p| p + d)).collect()
+}
+
+#[test]
+fn box_foot_and_corner_sphere_foot_give_their_sole_rectangles() {
+    let s = Scratch::new("feet-box");
+    let box_foot = r#"<collision><origin xyz="0.03 0 -0.04"/><geometry><box size="0.2 0.08 0.02"/></geometry></collision>
+<visual><origin xyz="0.03 0 -0.04"/><geometry><box size="0.2 0.08 0.02"/></geometry></visual>"#;
+    let mut spheres = String::new();
+    for (x, y) in [(-0.05, 0.03), (-0.05, -0.03), (0.12, 0.03), (0.12, -0.03)] {
+        spheres.push_str(&format!(
+            r#"<collision><origin xyz="{x} {y} -0.045"/><geometry><sphere radius="0.005"/></geometry></collision>"#
+        ));
+    }
+    // The visual mesh is longer than the sphere rectangle: a disagreement to report.
+    let visual = shifted(
+        box_triangles([0.25, 0.06, 0.02]),
+        Vector3::new(0.035, 0.0, -0.04),
+    );
+    std::fs::create_dir_all(s.path("meshes")).unwrap();
+    std::fs::write(s.path("meshes/foot.stl"), binary_stl(&visual)).unwrap();
+    spheres.push_str(r#"<visual><geometry><mesh filename="meshes/foot.stl"/></geometry></visual>"#);
+    let path = s.write("robot.urdf", &urdf(box_foot, &spheres));
+    let [l, r] = propose_feet(&path).unwrap();
+
+    assert_eq!(l.link, "l_foot");
+    assert!((l.patch.length - 0.2).abs() < 1e-9 && (l.patch.width - 0.08).abs() < 1e-9);
+    let c = l.patch.centre;
+    assert!((c - Point3::new(0.03, 0.1, -0.55)).norm() < 1e-9, "{c}");
+    let t = l.sole_in_link.translation.vector;
+    assert!((t - Vector3::new(0.03, 0.0, -0.05)).norm() < 1e-9, "{t}");
+    assert!(l.sole_in_link.rotation.angle() < 1e-12);
+    assert!(l.warnings.is_empty(), "{:?}", l.warnings);
+
+    assert_eq!(r.link, "r_foot");
+    assert!((r.patch.length - 0.17).abs() < 1e-9 && (r.patch.width - 0.06).abs() < 1e-9);
+    let t = r.sole_in_link.translation.vector;
+    assert!((t - Vector3::new(0.035, 0.0, -0.05)).norm() < 1e-9, "{t}");
+    assert!(
+        r.warnings.iter().any(|w| w.contains("0.250 m × 0.060 m")),
+        "{:?}",
+        r.warnings
+    );
+}
+
+#[test]
+fn a_foot_without_a_flat_bottom_is_not_proposed() {
+    let s = Scratch::new("feet-round");
+    let ball = r#"<collision><origin xyz="0 0 -0.05"/><geometry><sphere radius="0.03"/></geometry></collision>"#;
+    let flat = r#"<collision><origin xyz="0 0 -0.07"/><geometry><box size="0.2 0.08 0.02"/></geometry></collision>"#;
+    let path = s.write("robot.urdf", &urdf(ball, flat));
+    match propose_feet(&path) {
+        Err(FeetError::NoFoot { side, .. }) => assert_eq!(side, "y > 0"),
+        other => panic!("expected no left foot, got {other:?}"),
+    }
+}
+
+#[test]
+fn stl_and_obj_meshes_read_the_box_they_describe() {
+    let s = Scratch::new("feet-mesh");
+    let tris = box_triangles([0.3, 0.1, 0.05]);
+    let stl = s.write("b.stl", "");
+    std::fs::write(&stl, binary_stl(&tris)).unwrap();
+    let mut ascii = String::from("solid b\n");
+    let mut obj = String::new();
+    for (i, t) in tris.iter().enumerate() {
+        ascii.push_str("facet normal 0 0 0\nouter loop\n");
+        for p in t {
+            ascii.push_str(&format!("vertex {} {} {}\n", p.x, p.y, p.z));
+            obj.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+        }
+        ascii.push_str("endloop\nendfacet\n");
+        obj.push_str(&format!(
+            "f {} {}/1 {}/1/1\n",
+            3 * i + 1,
+            3 * i + 2,
+            3 * i + 3
+        ));
+    }
+    let ascii_path = s.write("a.stl", &ascii);
+    let obj_path = s.write("b.obj", &obj);
+    for path in [stl, ascii_path, obj_path] {
+        let read = read_mesh(&path, [2.0, 1.0, 1.0]).unwrap();
+        let patch = lowest_patch(&Shapes {
+            triangles: read,
+            spheres: Vec::new(),
+        })
+        .unwrap();
+        // Scaled by 2 along x.
+        assert!(
+            (patch.length - 0.6).abs() < 1e-6,
+            "{}: {patch:?}",
+            path.display()
+        );
+        assert!((patch.width - 0.1).abs() < 1e-6);
+        assert!((patch.centre.z + 0.025).abs() < 1e-6);
+    }
+    let dae = s.write("m.dae", "<COLLADA/>");
+    let e = read_mesh(&dae, [1.0; 3]).unwrap_err().to_string();
+    assert!(e.contains("unsupported format"), "{e}");
+}
