@@ -144,3 +144,58 @@ fn stl_and_obj_meshes_read_the_box_they_describe() {
     let e = read_mesh(&dae, [1.0; 3]).unwrap_err().to_string();
     assert!(e.contains("unsupported format"), "{e}");
 }
+
+/// `link_H_frame` of a frame rigidly attached to `link` (a body of the model).
+fn placement_in(model: &stride_model::Model, frame: &str, link: &str) -> nalgebra::Isometry3<f64> {
+    let f = &model.frames()[model.frame_id(frame).unwrap().index()];
+    let body = &model.frames()[model.frame_id(link).unwrap().index()];
+    assert_eq!(f.link, body.link, "{frame} and {link} share a body");
+    body.placement.inverse() * f.placement
+}
+
+#[test]
+fn the_bundled_humanoid_feet_are_its_urdf_sole_frames() {
+    let path = common::root().join("models/stride_humanoid.urdf");
+    let model = stride_model::Model::from_urdf_file(&path).unwrap();
+    let feet = propose_feet(&path).unwrap();
+    for (f, (sole, link)) in feet
+        .iter()
+        .zip([("l_sole", "l_foot"), ("r_sole", "r_foot")])
+    {
+        assert_eq!(f.link, link);
+        let d = placement_in(&model, sole, link).inverse() * f.sole_in_link;
+        assert!(d.translation.vector.norm() < 1e-9, "{sole}: {d}");
+        assert!(d.rotation.angle() < 1e-9);
+        // 0.20 m × 0.09 m soles (the URDF's header).
+        assert!((f.patch.length - 0.2).abs() < 1e-9 && (f.patch.width - 0.09).abs() < 1e-9);
+        assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    }
+}
+
+#[test]
+fn icub_feet_are_near_its_urdf_sole_frames() {
+    let Some(path) = stride_testkit::icub_model_urdf(
+        "icub_feet_are_near_its_urdf_sole_frames",
+        "iCubGazeboV2_7",
+    ) else {
+        return;
+    };
+    let model = stride_model::Model::from_urdf_file(&path).unwrap();
+    let feet = propose_feet(&path).unwrap();
+    for (f, (sole, link)) in feet
+        .iter()
+        .zip([("l_sole", "l_foot"), ("r_sole", "r_foot")])
+    {
+        assert_eq!(f.link, link);
+        let d = placement_in(&model, sole, link).inverse() * f.sole_in_link;
+        // Same axes as iCub's sole frame (z up, x forward). The collision box is not centred on it: its
+        // bottom is 11 mm below `l_sole` and its centre 26 mm ahead (measured 2026-12-02: d = [0.026,
+        // ±0.005, −0.011] m), so the proposal is near, not on, the URDF's frame.
+        assert!(d.rotation.angle() < 1e-9, "{sole}: {d}");
+        assert!(
+            d.translation.z < 0.0,
+            "{sole}: the box reaches below the sole frame: {d}"
+        );
+        assert!(d.translation.vector.norm() < 0.03, "{sole}: {d}");
+    }
+}

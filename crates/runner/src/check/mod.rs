@@ -13,7 +13,7 @@ use crate::config::{PlantKind, Scenario};
 use crate::error::RunError;
 use crate::setup::{build_robot, frame_of, initial_joint_positions, load_model};
 use names::{missing_names, NameProblem};
-use posture::{ground_warnings, posture_warnings, Stance};
+use posture::{ground_warnings, posture_warnings, sole_geometry_warnings, Stance};
 
 /// Why a scenario fails its check.
 #[derive(Debug, thiserror::Error)]
@@ -55,7 +55,8 @@ pub fn check_scenario(scenario: &Scenario) -> Result<CheckReport, CheckError> {
     ];
     let stance = Stance::new(&model, &q0, soles).map_err(RunError::from)?;
     build_layers(scenario, &model)?;
-    let mut warnings = posture_warnings(c, &stance);
+    let mut warnings = sole_geometry_warnings(&scenario.urdf_path, &model, soles);
+    warnings.extend(posture_warnings(c, &stance));
     if c.scenario.plant == PlantKind::Simulator {
         warnings.extend(ground_warnings(c, &stance));
     }

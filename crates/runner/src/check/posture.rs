@@ -15,6 +15,8 @@ use crate::robot::{standing_state, RobotError};
 pub const SOLE_HEIGHT_TOLERANCE: f64 = 0.002;
 /// Largest tilt of a sole from level in the standing posture before a warning \[deg\].
 pub const SOLE_TILT_TOLERANCE_DEG: f64 = 1.0;
+/// Largest depth of a foot's collision geometry below its sole frame before a warning \[m\].
+pub const SOLE_GEOMETRY_TOLERANCE: f64 = 0.005;
 /// Largest relative difference between `planner.com_height` and the posture's CoM height [-].
 pub const COM_HEIGHT_TOLERANCE: f64 = 0.05;
 /// Largest relative difference between `planner.nominal_width` and the posture's feet distance [-].
@@ -173,6 +175,31 @@ pub fn ground_warnings(c: &ScenarioConfig, stance: &Stance) -> Vec<String> {
                     c.sim.contact.normal_stiffness * GROUND_STIFFNESS_MARGIN * mgh / k.max(f64::MIN_POSITIVE)
                 ));
             }
+        }
+    }
+    out
+}
+
+/// A warning per sole frame that the foot's collision geometry reaches more than
+/// [`SOLE_GEOMETRY_TOLERANCE`] below (the frame is then above the sole, e.g. an ankle link), or whose
+/// geometry could not be read.
+pub fn sole_geometry_warnings(
+    urdf: &std::path::Path,
+    model: &Arc<Model>,
+    soles: [FrameId; 2],
+) -> Vec<String> {
+    let mut out = Vec::new();
+    for (side, frame) in ["left", "right"].into_iter().zip(soles) {
+        match crate::feet::collision_depth_below(urdf, model, frame) {
+            Ok(Some(depth)) if depth > SOLE_GEOMETRY_TOLERANCE => out.push(format!(
+                "`robot.{side}_sole`: the foot's collision geometry reaches {:.1} mm below the sole frame, \
+                 so the frame is above the sole; `stride model feet` proposes one on the sole",
+                depth * 1e3
+            )),
+            Ok(_) => {}
+            Err(e) => out.push(format!(
+                "`robot.{side}_sole`: the foot's collision geometry was not read: {e}"
+            )),
         }
     }
     out

@@ -315,3 +315,39 @@ fn compare_visual(collision: &Patch, visual: &LinkShapes) -> Vec<String> {
     }
     out
 }
+
+/// How far the collision geometry of the body that carries `frame` reaches below the frame's x-y plane
+/// \[m\] (positive: below; every URDF link merged into that body counts), or `None` when that body has no
+/// readable collision geometry. A sole frame should sit on the lowest flat patch (0 here).
+pub fn collision_depth_below(
+    urdf: &Path,
+    model: &Arc<Model>,
+    frame: stride_model::FrameId,
+) -> Result<Option<f64>, FeetError> {
+    let load = |message: String| FeetError::Load {
+        path: urdf.to_path_buf(),
+        message,
+    };
+    let robot = urdf_rs::read_file(urdf).map_err(|e| load(e.to_string()))?;
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_state(&RobotState::zero(model))
+        .map_err(|e| load(e.to_string()))?;
+    let body = model.frames()[frame.index()].link;
+    let frame_inv = kd.frame_pose(frame).inverse();
+    let dir = urdf.parent().unwrap_or(Path::new("."));
+    let mut shapes = Shapes::default();
+    for link in &robot.links {
+        let Some(id) = model.frame_id(&link.name) else {
+            continue;
+        };
+        if model.frames()[id.index()].link != body {
+            continue;
+        }
+        let in_frame = frame_inv * kd.frame_pose(id);
+        let collision = link.collision.iter().map(|c| (&c.origin, &c.geometry));
+        let s = link_shapes(collision, &in_frame, dir).shapes;
+        shapes.triangles.extend(s.triangles);
+        shapes.spheres.extend(s.spheres);
+    }
+    Ok(shapes.lowest().map(|z| -z))
+}
