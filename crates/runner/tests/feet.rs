@@ -199,3 +199,70 @@ fn icub_feet_are_near_its_urdf_sole_frames() {
         assert!(d.translation.vector.norm() < 0.03, "{sole}: {d}");
     }
 }
+
+/// `$STRIDE_EXAMPLE_ROBOT_DATA_DIR/<rel>`, or `None` (said loudly on stderr) when the variable is unset
+/// (`tools/reference/example-robot-data-dir.sh` installs the package and prints the folder).
+fn example_robot(test: &str, rel: &str) -> Option<std::path::PathBuf> {
+    match std::env::var_os("STRIDE_EXAMPLE_ROBOT_DATA_DIR") {
+        Some(dir) => {
+            let path = std::path::PathBuf::from(dir).join(rel);
+            assert!(path.is_file(), "{} is missing", path.display());
+            eprintln!("STRIDE-ERD-TEST-RAN {test}");
+            Some(path)
+        }
+        None => {
+            eprintln!(
+                "STRIDE-ERD-TEST-SKIPPED {test}: STRIDE_EXAMPLE_ROBOT_DATA_DIR is not set \
+                 (export STRIDE_EXAMPLE_ROBOT_DATA_DIR=$(bash tools/reference/example-robot-data-dir.sh))"
+            );
+            None
+        }
+    }
+}
+
+#[test]
+fn talos_feet_lie_on_its_urdf_sole_links() {
+    let test = "talos_feet_lie_on_its_urdf_sole_links";
+    let Some(path) = example_robot(test, "talos_data/robots/talos_reduced.urdf") else {
+        return;
+    };
+    let model = stride_model::Model::from_urdf_file(&path).unwrap();
+    let feet = propose_feet(&path).unwrap();
+    let pairs = [
+        ("left_sole_link", "leg_left_6_link"),
+        ("right_sole_link", "leg_right_6_link"),
+    ];
+    for (f, (sole, link)) in feet.iter().zip(pairs) {
+        // STL meshes, the right one mirrored (scale 1 −1 1).
+        assert_eq!(f.link, link);
+        let d = placement_in(&model, sole, link).inverse() * f.sole_in_link;
+        // On the plane of TALOS's own sole link (0.107 m below the ankle), same axes; the flat patch of
+        // the collision mesh is centred 5.6 mm behind the ankle axis, where TALOS puts its sole link.
+        assert!(d.translation.z.abs() < 1e-4, "{sole}: {d}");
+        assert!(d.rotation.angle() < 1e-9, "{sole}: {d}");
+        assert!(d.translation.vector.xy().norm() < 0.01, "{sole}: {d}");
+    }
+}
+
+#[test]
+fn g1_feet_are_found_under_its_ankle_roll_links() {
+    let test = "g1_feet_are_found_under_its_ankle_roll_links";
+    let Some(path) = example_robot(test, "g1_description/urdf/g1_29dof_rev_1_0.urdf") else {
+        return;
+    };
+    let [l, r] = propose_feet(&path).unwrap();
+    // Four corner spheres (r = 5 mm) at x −0.05 / 0.12, y ±0.025 / ±0.03, z −0.03 in the ankle roll link:
+    // the sole is 0.17 m × 0.06 m, 35 mm below the link, centred 35 mm ahead of it.
+    for (f, link) in [(&l, "left_ankle_roll_link"), (&r, "right_ankle_roll_link")] {
+        assert_eq!(f.link, link);
+        assert!((f.patch.length - 0.17).abs() < 1e-9 && (f.patch.width - 0.06).abs() < 1e-9);
+        let t = f.sole_in_link.translation.vector;
+        assert!((t - Vector3::new(0.035, 0.0, -0.035)).norm() < 1e-9, "{t}");
+        // The visual mesh is larger than the contact spheres' rectangle.
+        assert!(
+            f.warnings.iter().any(|w| w.contains("visual sole")),
+            "{:?}",
+            f.warnings
+        );
+    }
+}
