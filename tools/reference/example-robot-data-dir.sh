@@ -10,18 +10,8 @@
 set -euo pipefail
 version="6.0.0"
 venv="${STRIDE_EXAMPLE_ROBOT_DATA_VENV:-${HOME:-/tmp}/.cache/stride/example-robot-data-venv}"
-python="${PYTHON:-python3}"
-if ! command -v "$python" >/dev/null 2>&1; then
-  echo "example-robot-data-dir.sh: $python not found" >&2
-  exit 1
-fi
-if [ ! -x "$venv/bin/python" ]; then
-  mkdir -p "$(dirname "$venv")"
-  "$python" -m venv "$venv" >&2
-fi
-if ! "$venv/bin/python" -c "import importlib.metadata as m, sys; sys.exit(m.version('example-robot-data') != '$version')" 2>/dev/null; then
-  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "example-robot-data==$version" >&2
-fi
+. "$(dirname "$0")/pip-venv.sh"
+pip_venv example-robot-data "$version" "$venv"
 dir=$("$venv/bin/python" -c "import sysconfig, os; print(os.path.join(sysconfig.get_paths()['purelib'], 'cmeel.prefix', 'share', 'example-robot-data', 'robots'))")
 if [ ! -f "$dir/g1_description/urdf/g1_29dof_rev_1_0.urdf" ]; then
   echo "example-robot-data-dir.sh: no g1_description/urdf/g1_29dof_rev_1_0.urdf under $dir" >&2

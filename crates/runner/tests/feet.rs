@@ -6,7 +6,7 @@ use common::Scratch;
 use nalgebra::{Point3, Vector3};
 use stride_runner::feet::mesh::{box_triangles, read_mesh};
 use stride_runner::feet::patch::{lowest_patch, Shapes};
-use stride_runner::feet::{propose_feet, FeetError};
+use stride_runner::feet::{propose_feet, FeetError, FootProposal};
 
 const INERTIAL: &str = r#"<inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>"#;
 
@@ -153,17 +153,28 @@ fn placement_in(model: &stride_model::Model, frame: &str, link: &str) -> nalgebr
     body.placement.inverse() * f.placement
 }
 
+/// Each foot proposed for the URDF at `path`, with the URDF's own sole frame it should match and
+/// `d = urdf_sole⁻¹ · proposed_sole`; `pairs` are (sole frame, foot link), left then right.
+fn against_urdf_soles(
+    path: &std::path::Path,
+    pairs: [(&'static str, &str); 2],
+) -> Vec<(FootProposal, &'static str, nalgebra::Isometry3<f64>)> {
+    let model = stride_model::Model::from_urdf_file(path).unwrap();
+    let feet = propose_feet(path).unwrap();
+    feet.into_iter()
+        .zip(pairs)
+        .map(|(f, (sole, link))| {
+            assert_eq!(f.link, link);
+            let d = placement_in(&model, sole, link).inverse() * f.sole_in_link;
+            (f, sole, d)
+        })
+        .collect()
+}
+
 #[test]
 fn the_bundled_humanoid_feet_are_its_urdf_sole_frames() {
     let path = common::root().join("models/stride_humanoid.urdf");
-    let model = stride_model::Model::from_urdf_file(&path).unwrap();
-    let feet = propose_feet(&path).unwrap();
-    for (f, (sole, link)) in feet
-        .iter()
-        .zip([("l_sole", "l_foot"), ("r_sole", "r_foot")])
-    {
-        assert_eq!(f.link, link);
-        let d = placement_in(&model, sole, link).inverse() * f.sole_in_link;
+    for (f, sole, d) in against_urdf_soles(&path, [("l_sole", "l_foot"), ("r_sole", "r_foot")]) {
         assert!(d.translation.vector.norm() < 1e-9, "{sole}: {d}");
         assert!(d.rotation.angle() < 1e-9);
         // 0.20 m × 0.09 m soles (the URDF's header).
@@ -180,14 +191,7 @@ fn icub_feet_are_near_its_urdf_sole_frames() {
     ) else {
         return;
     };
-    let model = stride_model::Model::from_urdf_file(&path).unwrap();
-    let feet = propose_feet(&path).unwrap();
-    for (f, (sole, link)) in feet
-        .iter()
-        .zip([("l_sole", "l_foot"), ("r_sole", "r_foot")])
-    {
-        assert_eq!(f.link, link);
-        let d = placement_in(&model, sole, link).inverse() * f.sole_in_link;
+    for (f, sole, d) in against_urdf_soles(&path, [("l_sole", "l_foot"), ("r_sole", "r_foot")]) {
         // Same axes as iCub's sole frame (z up, x forward). The collision box is not centred on it: its
         // bottom is 11 mm below `l_sole` and its centre 26 mm ahead (measured 2026-12-02: d = [0.026,
         // ±0.005, −0.011] m), so the proposal is near, not on, the URDF's frame.
@@ -226,16 +230,12 @@ fn talos_feet_lie_on_its_urdf_sole_links() {
     let Some(path) = example_robot(test, "talos_data/robots/talos_reduced.urdf") else {
         return;
     };
-    let model = stride_model::Model::from_urdf_file(&path).unwrap();
-    let feet = propose_feet(&path).unwrap();
     let pairs = [
         ("left_sole_link", "leg_left_6_link"),
         ("right_sole_link", "leg_right_6_link"),
     ];
-    for (f, (sole, link)) in feet.iter().zip(pairs) {
-        // STL meshes, the right one mirrored (scale 1 −1 1).
-        assert_eq!(f.link, link);
-        let d = placement_in(&model, sole, link).inverse() * f.sole_in_link;
+    // STL meshes, the right one mirrored (scale 1 −1 1).
+    for (_, sole, d) in against_urdf_soles(&path, pairs) {
         // On the plane of TALOS's own sole link (0.107 m below the ankle), same axes; the flat patch of
         // the collision mesh is centred 5.6 mm behind the ankle axis, where TALOS puts its sole link.
         assert!(d.translation.z.abs() < 1e-4, "{sole}: {d}");

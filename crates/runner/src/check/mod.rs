@@ -19,7 +19,7 @@ use posture::{ground_warnings, posture_warnings, sole_geometry_warnings, Stance}
 #[derive(Debug, thiserror::Error)]
 pub enum CheckError {
     /// Names the model lacks (every one, each with where it was set).
-    #[error("{} name(s) the model lacks:\n{}", problems.len(), problems.iter().map(|p| format!("  {p}")).collect::<Vec<_>>().join("\n"))]
+    #[error("{} name(s) the model lacks:{}", problems.len(), names::render_problems(problems))]
     Names {
         /// The names.
         problems: Vec<NameProblem>,

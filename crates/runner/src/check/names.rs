@@ -47,16 +47,21 @@ pub struct NameProblem {
     pub origin: String,
 }
 
-impl std::fmt::Display for NameProblem {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{}: key `{}`: the model has no {} `{}`",
-            self.origin,
+impl NameProblem {
+    /// What is missing, without the origin.
+    pub fn what(&self) -> String {
+        format!(
+            "key `{}`: the model has no {} `{}`",
             self.name.key,
             self.name.kind.noun(),
             self.name.name
         )
+    }
+}
+
+impl std::fmt::Display for NameProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.origin, self.what())
     }
 }
 
@@ -198,4 +203,24 @@ fn has_name(model: &Model, u: &NameUse) -> bool {
         NameKind::Joint => model.joint_index(&u.name).is_some(),
         NameKind::FtSensor => model.ft_sensor_index(&u.name).is_some(),
     }
+}
+
+/// The problems, one a line; those from one built-in default set under one heading.
+pub fn render_problems(problems: &[NameProblem]) -> String {
+    let mut out = String::new();
+    let mut heading = "";
+    for p in problems {
+        let what = p.what();
+        if p.origin.starts_with("built-in default") {
+            if p.origin != heading {
+                out.push_str(&format!("\n  {}:", p.origin));
+                heading = &p.origin;
+            }
+            out.push_str(&format!("\n    {what}"));
+        } else {
+            heading = "";
+            out.push_str(&format!("\n  {}: {what}", p.origin));
+        }
+    }
+    out
 }
