@@ -191,7 +191,7 @@ fn icub_feet_are_near_its_urdf_sole_frames() {
     ) else {
         return;
     };
-    for (f, sole, d) in against_urdf_soles(&path, [("l_sole", "l_foot"), ("r_sole", "r_foot")]) {
+    for (_, sole, d) in against_urdf_soles(&path, [("l_sole", "l_foot"), ("r_sole", "r_foot")]) {
         // Same axes as iCub's sole frame (z up, x forward). The collision box is not centred on it: its
         // bottom is 11 mm below `l_sole` and its centre 26 mm ahead (measured 2026-12-02: d = [0.026,
         // ±0.005, −0.011] m), so the proposal is near, not on, the URDF's frame.
