@@ -433,8 +433,10 @@ pub fn eval(
 fn print_feet(feet: &[crate::feet::FootProposal; 2]) {
     for f in feet {
         let p = &f.patch;
-        let t = f.sole_in_link.translation.vector;
+        // `+ 0.0` prints −0 as 0.
+        let t = f.sole_in_link.translation.vector.map(|v| v + 0.0);
         let (r, pi, y) = f.sole_in_link.rotation.euler_angles();
+        let (r, pi, y) = (r + 0.0, pi + 0.0, y + 0.0);
         crate::outln!(
             "{} foot: link `{}` ({}): flat patch {:.3} m × {:.3} m (x × y) of {} points, centre [{:.4}, {:.4}, {:.4}] m at the zero posture",
             f.side, f.link, f.source, p.length, p.width, p.points, p.centre.x, p.centre.y, p.centre.z

@@ -252,8 +252,11 @@ pub fn render(
          (numbers, strings, arrays, including arrays of tables such as task lists) is replaced whole by the \
          later file, so a file can change a single key of any section. `[goal]` is the exception: its \
          alternatives (`[goal.pose]`, `[goal.waypoints]`, `[goal.velocity]`, `[goal.stand]`) are exclusive \
-         and not pre-filled (the default is `[goal.pose] x = 2`). Every table rejects unknown keys. Errors name the file, line, column and key and say what \
-         is expected. `stride check <CONFIG>` validates a scenario without running it.\n\n\
+         and not pre-filled (the default is `[goal.pose] x = 2`). Every table rejects unknown keys. Errors name the file, line, column and key (or \
+         say that the value is a built-in default when no file sets the key) and say what is expected. \
+         `stride check <CONFIG>` validates a scenario without running it: it also loads the model, looks up \
+         every frame, joint and sensor name the scenario uses (saying which file or built-in default set each \
+         came from) and warns about the initial posture and the simulated ground (docs/new-robot.md).\n\n\
          Rates are in Hz and must divide `rates.base_hz` exactly; `base_hz` must divide 10⁹ so the base period \
          is a whole number of nanoseconds. The layers get their periods from `[rates]` (`rates.wbc_hz` for the \
          QP-IK and the TSID, `rates.sim_hz` for the simulator); no layer section has a period key.\n\n\
