@@ -128,3 +128,57 @@ fn check_scale(element: &str, field: &'static str, value: f64) -> Result<(), Mod
         })
     }
 }
+
+impl crate::Model {
+    /// Adds the frame `name` rigidly attached to the existing frame `parent`, at `parent_H_frame` =
+    /// `placement` (e.g. a sole frame the URDF lacks, placed on the foot link). The new frame moves with
+    /// `parent`'s body; a force/torque sensor sees it on the side `parent` is on.
+    ///
+    /// # Errors
+    /// [`ModelError::InvalidFrame`] when `name` is empty or already a frame, `parent` is not a frame, or
+    /// `placement` is not finite.
+    pub fn add_frame(
+        &mut self,
+        name: &str,
+        parent: &str,
+        placement: nalgebra::Isometry3<f64>,
+    ) -> Result<crate::FrameId, ModelError> {
+        let invalid = |reason: String| ModelError::InvalidFrame {
+            name: name.to_string(),
+            reason,
+        };
+        if name.is_empty() {
+            return Err(invalid("the name is empty".into()));
+        }
+        if self.frame_index.contains_key(name) {
+            return Err(invalid("the model already has a frame of that name".into()));
+        }
+        let p = *self
+            .frame_index
+            .get(parent)
+            .ok_or_else(|| invalid(format!("the model has no frame `{parent}`")))?;
+        let finite = placement.translation.vector.iter().all(|v| v.is_finite())
+            && placement.rotation.coords.iter().all(|v| v.is_finite());
+        if !finite {
+            return Err(invalid("the placement is not finite".into()));
+        }
+        let parent_frame = self.frames[p].clone();
+        let body_h_frame = parent_frame.placement * placement;
+        let index = self.frames.len();
+        self.frames.push(crate::model::Frame {
+            name: name.to_string(),
+            link: parent_frame.link,
+            placement: body_h_frame,
+            kind: crate::model::FrameKind::Added,
+        });
+        self.frame_index.insert(name.to_string(), index);
+        self.frame_rot
+            .push(body_h_frame.rotation.to_rotation_matrix().into_inner());
+        self.frame_pos.push(body_h_frame.translation.vector);
+        for side in &mut self.ft_sides {
+            let child = side.child_side_frame[p];
+            side.child_side_frame.push(child);
+        }
+        Ok(crate::FrameId(index))
+    }
+}

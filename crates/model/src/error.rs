@@ -136,6 +136,14 @@ pub enum ModelError {
         /// Number of frames of the model.
         count: usize,
     },
+    /// A frame added to a loaded model names a missing parent, an existing name or a non-finite placement.
+    #[error("frame `{name}` cannot be added: {reason}")]
+    InvalidFrame {
+        /// Name of the frame to add.
+        name: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// An [`InertiaEdits`](crate::InertiaEdits) entry that cannot be applied (unknown link, non-positive or
     /// non-finite scale, non-finite CoM offset).
     #[error("{element}: invalid {field}: {reason}")]

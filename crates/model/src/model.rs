@@ -88,6 +88,8 @@ pub enum FrameKind {
     MergedLink,
     /// A sensor frame that is not a URDF link.
     Sensor,
+    /// A frame added after loading ([`Model::add_frame`]), e.g. a sole frame from the configuration.
+    Added,
 }
 
 /// A named frame rigidly attached to a body.

@@ -65,8 +65,8 @@ impl PlanVerification {
 /// | `double_support_fraction` | – | 0.35 | share of each step spent in double support, in (0, 1) |
 /// | `initial_double_support_duration` | s | 1.0 | first double support of a plan started from standing |
 /// | `final_double_support_duration` | s | 1.0 | last double support, ZMP/DCM move to the feet mid-point |
-/// | `step_length_min` | m | 0.0 | min distance between the feet at touch-down [Romualdi 2022, eq. 10.1.12] |
-/// | `step_length_max` | m | 0.22 | max distance between the feet at touch-down [Romualdi 2022, eq. 10.1.12], width included |
+/// | `feet_distance_min` | m | 0.0 | min straight-line distance between the two sole origins at touch-down [Romualdi 2022, eq. 10.1.12] (was `step_length_min`) |
+/// | `feet_distance_max` | m | 0.22 | max straight-line distance between the two sole origins at touch-down [Romualdi 2022, eq. 10.1.12], the lateral width included: a forward step `s` at width `w` needs `√(s² + w²)` (was `step_length_max`) |
 /// | `nominal_width` | m | 0.16 | lateral distance of the feet from each other on the unicycle axle |
 /// | `min_width` | m | 0.14 | min lateral distance of the left foot in the right-foot frame (or of the right foot in the left-foot frame, see `geometry::feet_lateral_separation`) |
 /// | `max_yaw_per_step` | rad | 0.26 | max relative yaw between the feet [Romualdi 2022, eq. 10.1.13], ≈ 15° |
@@ -110,10 +110,12 @@ pub struct PlannerConfig {
     pub initial_double_support_duration: f64,
     /// Duration of the final double support \[s\].
     pub final_double_support_duration: f64,
-    /// Minimum distance between the feet at touch-down \[m\].
-    pub step_length_min: f64,
-    /// Maximum distance between the feet at touch-down \[m\] (the width is included in this distance).
-    pub step_length_max: f64,
+    /// Minimum straight-line distance between the two sole origins at touch-down \[m\] (formerly
+    /// `step_length_min`).
+    pub feet_distance_min: f64,
+    /// Maximum straight-line distance between the two sole origins at touch-down \[m\], the lateral width
+    /// included: a forward step `s` at width `w` needs `√(s² + w²)` (formerly `step_length_max`).
+    pub feet_distance_max: f64,
     /// Nominal lateral distance between the feet \[m\].
     pub nominal_width: f64,
     /// Minimum lateral separation of the feet: the larger of the left sole's lateral position in the right-sole frame and the right sole's (negated) in the left-sole frame \[m\].
@@ -178,8 +180,8 @@ impl Default for PlannerConfig {
             double_support_fraction: 0.35,
             initial_double_support_duration: 1.0,
             final_double_support_duration: 1.0,
-            step_length_min: 0.0,
-            step_length_max: 0.22,
+            feet_distance_min: 0.0,
+            feet_distance_max: 0.22,
             nominal_width: 0.16,
             min_width: 0.14,
             max_yaw_per_step: 0.26,
@@ -339,15 +341,15 @@ impl PlannerConfig {
             "must be >= min_width",
         )?;
         check(
-            "step_length_max",
-            c.step_length_max,
-            c.step_length_max > c.nominal_width,
+            "feet_distance_max",
+            c.feet_distance_max,
+            c.feet_distance_max > c.nominal_width,
             "must exceed nominal_width (the feet distance includes the width)",
         )?;
         check(
-            "step_length_min",
-            c.step_length_min,
-            c.step_length_min >= 0.0 && c.step_length_min <= c.min_width,
+            "feet_distance_min",
+            c.feet_distance_min,
+            c.feet_distance_min >= 0.0 && c.feet_distance_min <= c.min_width,
             "must lie in [0, min_width]",
         )?;
         check(
@@ -476,7 +478,7 @@ impl PlannerConfig {
 
     /// Forward speed limit of the unicycle \[m/s\]: factor · √(l_max² − w²)/t_min.
     pub fn max_forward_speed(&self) -> f64 {
-        let l = self.step_length_max;
+        let l = self.feet_distance_max;
         let w = self.nominal_width;
         self.linear_saturation_factor * (l * l - w * w).sqrt() / self.step_duration_min
     }

@@ -10,7 +10,7 @@ pub enum PlannerError {
     /// A [`crate::PlannerConfig`] field is out of its valid range (or not finite).
     #[error("invalid planner parameter `{name}` = {value}: {reason}")]
     InvalidParameter {
-        /// Config field name, e.g. `step_length_max`.
+        /// Config field name, e.g. `feet_distance_max`.
         name: &'static str,
         /// The offending value.
         value: f64,

@@ -66,13 +66,13 @@ pub fn plan_from_standing(
         });
     }
     if rel.y < config.foot_width
-        || rel.norm() > config.step_length_max.max(config.nominal_width) * 1.5
+        || rel.norm() > config.feet_distance_max.max(config.nominal_width) * 1.5
     {
         return Err(PlannerError::InvalidStart {
             name: "left_sole",
             reason: format!(
                 "left sole at ({:.4}, {:.4}) in the right sole frame: it must be to the left by at least \
-                 foot_width and not farther than 1.5 step_length_max",
+                 foot_width and not farther than 1.5 feet_distance_max",
                 rel.x, rel.y
             ),
         });
@@ -275,7 +275,7 @@ impl Planner {
     /// current plan is unchanged.
     ///
     /// The adjusted plan is verified like every plan, except that the adjusted step itself may be longer
-    /// than `step_length_max` and shorter than `step_duration_min` (the caller's step-adjustment box and
+    /// than `feet_distance_max` and shorter than `step_duration_min` (the caller's step-adjustment box and
     /// duration limits bound it): the verification bounds are widened to exactly that step.
     pub fn adjust_step(
         &mut self,
@@ -297,7 +297,7 @@ impl Planner {
             let length = (request.target - xy(&step.stance_pose)).norm();
             let duration = request.land_time - step.stance_touchdown;
             let mut cfg = self.config.clone();
-            cfg.step_length_max = cfg.step_length_max.max(length + 1e-9);
+            cfg.feet_distance_max = cfg.feet_distance_max.max(length + 1e-9);
             cfg.step_duration_min = cfg.step_duration_min.min(duration - 1e-9);
             adjusted.verify(&cfg, VERIFY_SAMPLING_PERIOD)?;
         }

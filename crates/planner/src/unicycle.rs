@@ -234,7 +234,7 @@ fn twist_feasible(cfg: &PlannerConfig, v: f64, v_lat: f64, omega: f64) -> bool {
     // `nominal_width == min_width` steady walking at the nominal width must stay feasible)
     let width_margin = 0.002f64.min(0.5 * (cfg.nominal_width - cfg.min_width));
     let margin = PlannerConfig {
-        step_length_max: cfg.step_length_max - 0.002,
+        feet_distance_max: cfg.feet_distance_max - 0.002,
         min_width: cfg.min_width + width_margin,
         max_yaw_per_step: cfg.max_yaw_per_step * 0.98,
         ..cfg.clone()
@@ -462,13 +462,13 @@ impl Violation {
         let mut why = Vec::new();
         if self.too_long {
             why.push(format!(
-                "feet distance {:.4} > step_length_max",
+                "feet distance {:.4} > feet_distance_max",
                 self.length
             ));
         }
         if self.too_short {
             why.push(format!(
-                "feet distance {:.4} < step_length_min",
+                "feet distance {:.4} < feet_distance_min",
                 self.length
             ));
         }
@@ -500,8 +500,8 @@ pub(crate) fn feet_feasible(
         length: len,
         lateral,
         yaw: dyaw,
-        too_long: len > cfg.step_length_max + BOUND_TOLERANCE,
-        too_short: len < cfg.step_length_min - BOUND_TOLERANCE,
+        too_long: len > cfg.feet_distance_max + BOUND_TOLERANCE,
+        too_short: len < cfg.feet_distance_min - BOUND_TOLERANCE,
         too_narrow: lateral < cfg.min_width - BOUND_TOLERANCE,
         too_twisted: dyaw.abs() > cfg.max_yaw_per_step + BOUND_TOLERANCE,
     };

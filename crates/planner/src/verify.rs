@@ -11,7 +11,7 @@
 //! | invariant | what is checked | tolerance |
 //! |---|---|---|
 //! | `finite` | every number of the plan (segments, contacts, swings, times) | – |
-//! | `step_length` | at every touch-down: distance between the soles in `[step_length_min, step_length_max]` | 1e-9 m |
+//! | `step_length` | at every touch-down: distance between the soles in `[feet_distance_min, feet_distance_max]` | 1e-9 m |
 //! | `step_width` | at every touch-down: left sole at least `min_width` to the left of the right one (in the right-sole frame or, mirrored, the left-sole frame: `geometry::feet_lateral_separation`) | 1e-9 m |
 //! | `step_yaw` | at every touch-down: relative yaw of the soles within `max_yaw_per_step` | 1e-9 rad |
 //! | `feet_overlap` | at every touch-down: the two sole rectangles do not intersect | – |
@@ -242,15 +242,15 @@ impl Plan {
             let relative = right.inverse_transform_point(left.position());
             let relative_yaw = wrap_angle(left.yaw - right.yaw);
             let length = relative.norm();
-            if length > config.step_length_max + STEP_TOLERANCE
-                || length < config.step_length_min - STEP_TOLERANCE
+            if length > config.feet_distance_max + STEP_TOLERANCE
+                || length < config.feet_distance_min - STEP_TOLERANCE
             {
                 return Err(violation(
                     Invariant::StepLength,
                     t,
                     format!(
                         "soles {length:.6} m apart, outside [{}, {}] m",
-                        config.step_length_min, config.step_length_max
+                        config.feet_distance_min, config.feet_distance_max
                     ),
                 ));
             }

@@ -38,7 +38,10 @@ fn bad_parameters_are_named() {
         ),
         ("step_duration_min", Box::new(|c| c.step_duration_min = 0.0)),
         ("step_duration_max", Box::new(|c| c.step_duration_max = 0.5)),
-        ("step_length_max", Box::new(|c| c.step_length_max = 0.15)),
+        (
+            "feet_distance_max",
+            Box::new(|c| c.feet_distance_max = 0.15),
+        ),
         ("com_height", Box::new(|c| c.com_height = f64::NAN)),
         // ω ≈ 1e-4 rad/s: the closed forms (1/ω³ terms) lose every digit (found by never_panics_or_nans)
         ("com_height", Box::new(|c| c.com_height = 1e9)),
@@ -286,7 +289,7 @@ proptest! {
         let mut cfg = PlannerConfig { horizon: 20.0, ..PlannerConfig::default() };
         let fields: [&mut f64; 12] = [
             &mut cfg.com_height, &mut cfg.step_duration_min, &mut cfg.step_duration_max,
-            &mut cfg.double_support_fraction, &mut cfg.step_length_max, &mut cfg.nominal_width,
+            &mut cfg.double_support_fraction, &mut cfg.feet_distance_max, &mut cfg.nominal_width,
             &mut cfg.min_width, &mut cfg.max_yaw_per_step, &mut cfg.swing_height,
             &mut cfg.unicycle_gain, &mut cfg.time_weight, &mut cfg.final_double_support_duration,
         ];

@@ -17,7 +17,7 @@ fn icub() -> PlannerConfig {
         com_height: 0.524,
         nominal_width: 0.14,
         foot_length: 0.11,
-        step_length_max: 0.20,
+        feet_distance_max: 0.20,
         ..PlannerConfig::default()
     }
 }
@@ -61,8 +61,8 @@ fn small_initial_heading_walks_like_zero_heading() {
     let cfg = icub();
     let base = plan_with_heading(&cfg, 0.0);
     let (_, base_advance) = first_step(&base);
-    // a full first step: the feet at step_length_max apart, √(l_max² − w²) ≈ 0.143 m forward
-    let full = (cfg.step_length_max.powi(2) - cfg.nominal_width.powi(2)).sqrt();
+    // a full first step: the feet at feet_distance_max apart, √(l_max² − w²) ≈ 0.143 m forward
+    let full = (cfg.feet_distance_max.powi(2) - cfg.nominal_width.powi(2)).sqrt();
     assert!(
         base_advance > 0.95 * full,
         "θ = 0: first step {base_advance}"

@@ -37,7 +37,7 @@ fn config_strategy() -> impl Strategy<Value = PlannerConfig> {
                 double_support_fraction: f,
                 nominal_width: w,
                 min_width: (w - 0.02).max(0.125),
-                step_length_max: w + dl,
+                feet_distance_max: w + dl,
                 max_yaw_per_step: yaw,
                 swing_height: sh,
                 swing_apex_fraction: apex,

@@ -78,7 +78,7 @@ fn step_bounds_are_checked_against_the_config() {
         })
         .fold(0.0, f64::max);
     let tighter = PlannerConfig {
-        step_length_max: longest - 0.02,
+        feet_distance_max: longest - 0.02,
         ..cfg.clone()
     };
     assert_eq!(rejected(&p, &tighter), Invariant::StepLength);

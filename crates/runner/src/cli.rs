@@ -80,7 +80,8 @@ pub enum Command {
         #[command(subcommand)]
         command: ModelCommand,
     },
-    /// Validate a scenario file without running it.
+    /// Validate a scenario file and its names against the model (with warnings about the posture and
+    /// the ground) without running it.
     Check {
         /// Scenario TOML file.
         config: PathBuf,
@@ -199,6 +200,12 @@ pub enum ModelCommand {
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
+    },
+    /// Propose each foot's sole frame and rectangle from the lowest flat patch of its collision geometry
+    /// (boxes, cylinders, spheres, STL and OBJ meshes), and compare it with the visual geometry.
+    Feet {
+        /// URDF file.
+        urdf: PathBuf,
     },
     /// Evaluate kinematics and dynamics at a state given as JSON; prints one JSON object.
     Eval {

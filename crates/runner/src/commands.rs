@@ -14,8 +14,12 @@ use crate::config::{Goal, PlannerMode, Scenario};
 use crate::run::{run_scenario, Outcome, RunOptions};
 
 /// `stride check <CONFIG>`.
+///
+/// Loads the scenario and its model, checks every name it uses, builds the run's plant and layers, and
+/// prints what it found, then the warnings (`warning: ...`, exit status still 0).
 pub fn check(path: &Path) -> Result<ExitCode, CliError> {
     let s = Scenario::load(path)?;
+    let report = crate::check::check_scenario(&s).map_err(|e| CliError::msg(one_paragraph(&e)))?;
     let c = &s.config;
     crate::outln!("{}: ok", path.display());
     crate::outln!(
@@ -34,7 +38,24 @@ pub fn check(path: &Path) -> Result<ExitCode, CliError> {
         c.scenario.plant,
         c.scenario.duration
     );
-    crate::outln!("  model: {}", s.urdf_path.display());
+    let m = &report.model;
+    crate::outln!(
+        "  model: {} ({} joints, {:.1} kg)",
+        s.urdf_path.display(),
+        m.dof(),
+        m.total_mass()
+    );
+    crate::outln!(
+        "  names: {} frame, joint and sensor names found in the model",
+        crate::check::names::name_uses(&s).len()
+    );
+    let st = &report.stance;
+    crate::outln!(
+        "  initial posture: CoM {:.3} m above the soles, soles {:.3} m apart, m·g·h = {:.0} N·m/rad",
+        st.com_height(),
+        st.feet_width(),
+        st.toppling_stiffness()
+    );
     let planner = match c.rates.planner_mode {
         PlannerMode::Event => "event-driven".to_string(),
         PlannerMode::Periodic => format!("{} Hz", c.rates.planner_hz),
@@ -52,6 +73,9 @@ pub fn check(path: &Path) -> Result<ExitCode, CliError> {
     crate::outln!("  goal: {goal}");
     if !c.sim.pushes.is_empty() {
         crate::outln!("  pushes: {}", c.sim.pushes.len());
+    }
+    for w in &report.warnings {
+        crate::outln!("warning: {w}");
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -14,12 +14,14 @@ macro_rules! out {
 }
 
 pub mod centroidal;
+pub mod check;
 pub mod cli;
 pub mod commands;
 pub mod config;
 pub mod diagnosis;
 pub mod error;
 pub mod estimation_summary;
+pub mod feet;
 pub mod gait;
 pub mod log;
 pub mod model_cmd;

@@ -31,6 +31,12 @@ pub fn model(command: ModelCommand) -> Result<ExitCode, CliError> {
             }
             Ok(ExitCode::SUCCESS)
         }
+        ModelCommand::Feet { urdf } => {
+            let feet = crate::feet::propose_feet(&urdf)
+                .map_err(|e| CliError::msg(crate::cli::one_paragraph(&e)))?;
+            print_feet(&feet);
+            Ok(ExitCode::SUCCESS)
+        }
         ModelCommand::Eval {
             urdf,
             state,
@@ -421,4 +427,36 @@ pub fn eval(
     });
     debug_assert_eq!(n + 6, nv);
     Ok(out)
+}
+
+/// The proposal as configuration lines, then the warnings.
+fn print_feet(feet: &[crate::feet::FootProposal; 2]) {
+    for f in feet {
+        let p = &f.patch;
+        // `+ 0.0` prints −0 as 0.
+        let t = f.sole_in_link.translation.vector.map(|v| v + 0.0);
+        let (r, pi, y) = f.sole_in_link.rotation.euler_angles();
+        let (r, pi, y) = (r + 0.0, pi + 0.0, y + 0.0);
+        crate::outln!(
+            "{} foot: link `{}` ({}): flat patch {:.3} m × {:.3} m (x × y) of {} points, centre [{:.4}, {:.4}, {:.4}] m at the zero posture",
+            f.side, f.link, f.source, p.length, p.width, p.points, p.centre.x, p.centre.y, p.centre.z
+        );
+        crate::outln!(
+            "  robot.{}_sole = {{ parent = \"{}\", xyz = [{:.4}, {:.4}, {:.4}], rpy = [{:.4}, {:.4}, {:.4}] }}",
+            f.side, f.link, t.x, t.y, t.z, r, pi, y
+        );
+    }
+    let [l, r] = feet;
+    let length = l.patch.length.min(r.patch.length);
+    let width = l.patch.width.min(r.patch.width);
+    crate::outln!(
+        "sole rectangle (the smaller foot): planner.foot_length = {length:.3}, planner.foot_width = {width:.3}; \
+         sim.contact.surfaces[].length = {length:.3}, width = {width:.3}; wbc contact foot_x = [{:.4}, {:.4}], foot_y = [{:.4}, {:.4}]",
+        -0.5 * length, 0.5 * length, -0.5 * width, 0.5 * width
+    );
+    for f in feet {
+        for w in &f.warnings {
+            crate::outln!("warning: {} foot (`{}`): {w}", f.side, f.link);
+        }
+    }
 }

@@ -113,7 +113,7 @@ pub fn run_scenario(scenario: &Scenario, options: &RunOptions) -> Result<RunSumm
 /// encoders' posture, which defines the world frame (left sole level on `z = 0`, the soles' mid-point at
 /// the origin, heading along +x), as a real robot's start does; the ground-truth bypass reads the plant's
 /// truth.
-fn initial_state(
+pub(crate) fn initial_state(
     scenario: &Scenario,
     model: &Arc<stride_model::Model>,
     m: &crate::robot::Measurement,

@@ -55,7 +55,24 @@ pub fn load_model(scenario: &Scenario) -> Result<Arc<Model>, RunError> {
     model
         .set_gravity(Vector3::new(0.0, 0.0, -g))
         .map_err(load_error)?;
+    add_sole_frames(scenario, &mut model)?;
     Ok(Arc::new(model))
+}
+
+/// Adds the sole frames the configuration attaches to links (`robot.left_sole = { parent, xyz, rpy }`).
+fn add_sole_frames(scenario: &Scenario, model: &mut Model) -> Result<(), RunError> {
+    let r = &scenario.config.robot;
+    for (key, sole) in [
+        ("robot.left_sole", &r.left_sole),
+        ("robot.right_sole", &r.right_sole),
+    ] {
+        if let Some(a) = sole.attached() {
+            model
+                .add_frame(&a.name, &a.parent, a.placement())
+                .map_err(|e| scenario.invalid(key, e.to_string()))?;
+        }
+    }
+    Ok(())
 }
 
 /// The simulated plant's own model: the controllers' `model` unless `[sim.model]` sets another URDF or
@@ -88,6 +105,7 @@ pub fn load_plant_model(scenario: &Scenario, model: &Arc<Model>) -> Result<Arc<M
     };
     let mut plant = Model::from_urdf_file_edited(&path, &edits).map_err(load_error)?;
     plant.set_gravity(model.gravity()).map_err(load_error)?;
+    add_sole_frames(scenario, &mut plant)?;
     check_same_joints(scenario, model, &plant)?;
     Ok(Arc::new(plant))
 }

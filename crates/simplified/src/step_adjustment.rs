@@ -67,7 +67,7 @@ const RX: usize = 7;
 const RY: usize = 8;
 
 /// Parameters of the step adjustment, sized for the bundled humanoid (`configs/robots/stride_humanoid.toml`:
-/// CoM height 0.54 m, ω ≈ 4.26 s⁻¹, nominal width 0.15 m, planner `step_length_max` 0.22 m, steps of
+/// CoM height 0.54 m, ω ≈ 4.26 s⁻¹, nominal width 0.15 m, planner `feet_distance_max` 0.22 m, steps of
 /// 0.8–1.2 s).
 ///
 /// | field | unit | default | meaning |

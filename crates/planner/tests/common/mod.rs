@@ -150,12 +150,12 @@ pub fn check_steps(cfg: &PlannerConfig, plan: &Plan, check_durations: bool) {
             .expect("right in contact at touch-down");
         let (rel, dyaw) = left_in_right(&l.pose, &r.pose);
         assert!(
-            rel.norm() <= cfg.step_length_max + tol,
+            rel.norm() <= cfg.feet_distance_max + tol,
             "step length {} at {t}",
             rel.norm()
         );
         assert!(
-            rel.norm() >= cfg.step_length_min - tol,
+            rel.norm() >= cfg.feet_distance_min - tol,
             "step length {} at {t}",
             rel.norm()
         );

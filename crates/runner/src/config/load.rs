@@ -406,8 +406,11 @@ pub fn load_files<T: DeserializeOwned + Serialize + Default>(
             .as_ref()
             .and_then(|s| sources.path_at(s))
             .unwrap_or_default();
-        let message = e.message().to_string();
+        let mut message = e.message().to_string();
         if let Some(field) = unknown_field_name(&message) {
+            if let Some((_, new, meaning)) = RENAMED_KEYS.iter().find(|(old, ..)| *old == field) {
+                message = format!("`{field}` was renamed `{new}` ({meaning}); {message}");
+            }
             if !key.ends_with(&field) {
                 key = if key.is_empty() {
                     field
@@ -428,6 +431,21 @@ pub fn load_files<T: DeserializeOwned + Serialize + Default>(
         merged: plain,
     })
 }
+
+/// Keys renamed since earlier versions: `(old, new, what the new name means)`; an old key is still an
+/// unknown key, and the error names its replacement.
+pub const RENAMED_KEYS: &[(&str, &str, &str)] = &[
+    (
+        "step_length_max",
+        "feet_distance_max",
+        "the straight-line distance between the sole origins at touch-down, the width included",
+    ),
+    (
+        "step_length_min",
+        "feet_distance_min",
+        "the straight-line distance between the sole origins at touch-down, the width included",
+    ),
+];
 
 fn unknown_field_name(msg: &str) -> Option<String> {
     let rest = msg.strip_prefix("unknown field `")?;

@@ -7,6 +7,7 @@
 
 pub mod load;
 pub mod reference;
+pub mod sole;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -14,6 +15,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 pub use load::{Loaded, Location, SourceFile, SourceMap};
+pub use sole::{AttachedFrame, SoleFrame};
 
 /// Why a configuration was rejected.
 #[derive(Debug, thiserror::Error)]
@@ -124,8 +126,8 @@ impl EstimationSection {
         imu_frame: &str,
     ) -> stride_estimation::EstimatorConfig {
         stride_estimation::EstimatorConfig {
-            left_sole: robot.left_sole.clone(),
-            right_sole: robot.right_sole.clone(),
+            left_sole: robot.left_sole.name().to_string(),
+            right_sole: robot.right_sole.name().to_string(),
             imu_frame: imu_frame.into(),
             left_foot_ft_sensor: self.left_foot_ft_sensor.clone(),
             right_foot_ft_sensor: self.right_foot_ft_sensor.clone(),
@@ -187,10 +189,11 @@ pub struct RobotSection {
     /// variable `NAME` (an unset variable is a configuration error), e.g.
     /// `"${STRIDE_ICUB_MODELS_DIR}/iCubGazeboV2_7/model.urdf"` for a model that is not in the repository.
     pub urdf: PathBuf,
-    /// Frame at the centre of the left sole.
-    pub left_sole: String,
-    /// Frame at the centre of the right sole.
-    pub right_sole: String,
+    /// Frame at the centre of the left sole (z up, x forward): a frame of the model, or one attached to a
+    /// link (`{ parent, xyz, rpy }`, added to the model as `left_sole`).
+    pub left_sole: SoleFrame,
+    /// Frame at the centre of the right sole (added as `right_sole` when attached).
+    pub right_sole: SoleFrame,
     /// Frame whose tilt is checked for falls (torso or base link).
     pub torso_frame: String,
     /// Initial joint positions [rad or m] by joint name; joints not listed start at 0.
@@ -201,8 +204,8 @@ impl Default for RobotSection {
     fn default() -> Self {
         Self {
             urdf: PathBuf::from("../models/stride_humanoid.urdf"),
-            left_sole: "l_sole".into(),
-            right_sole: "r_sole".into(),
+            left_sole: SoleFrame::from("l_sole"),
+            right_sole: SoleFrame::from("r_sole"),
             torso_frame: "root_link".into(),
             initial_joint_positions: BTreeMap::new(),
         }
@@ -564,6 +567,17 @@ impl Scenario {
                 );
             }
         }
+        let mut value = value;
+        for (sole, default) in [
+            (&mut value.robot.left_sole, "left_sole"),
+            (&mut value.robot.right_sole, "right_sole"),
+        ] {
+            if let SoleFrame::Attached(a) = sole {
+                if a.name.is_empty() {
+                    a.name = default.to_string();
+                }
+            }
+        }
         let scenario = Self {
             config: value,
             sources,
@@ -575,23 +589,23 @@ impl Scenario {
         Ok(scenario)
     }
 
-    /// An error about `key`, located where it was written.
+    /// An error about `key`, located where it was written; when no file writes it (the value is a
+    /// built-in default), without a location and the message says so.
     pub fn invalid(&self, key: &str, message: impl Into<String>) -> ConfigError {
+        let location = self.sources.value_location(key);
+        let mut message = message.into();
+        if location.is_none() {
+            message.push_str(" (the value is a built-in default: no file sets this key)");
+        }
         ConfigError::Invalid {
-            location: self.sources.value_location(key).or_else(|| {
-                self.sources.files.last().map(|f| Location {
-                    path: f.path.clone(),
-                    line: 1,
-                    column: 1,
-                })
-            }),
+            location,
             key: key.into(),
-            message: message.into(),
+            message,
         }
     }
 
     /// A layer's validation error, located at the key its `InvalidParameter` names: `name` is a path
-    /// inside `section` (`step_length_max`, `dcm_pi.gain`) or the leaf of one; the section when the
+    /// inside `section` (`feet_distance_max`, `dcm_pi.gain`) or the leaf of one; the section when the
     /// error names no parameter or no written key matches.
     fn layer_invalid(&self, section: &str, name: Option<&str>, message: String) -> ConfigError {
         let key = name.map_or_else(|| section.to_string(), |n| self.layer_key(section, n));
@@ -666,8 +680,32 @@ impl Scenario {
                 ));
             }
         }
+        self.validate_soles()?;
         self.validate_plant()?;
         self.validate_layers()
+    }
+
+    /// Attached sole frames: finite placements, distinct names.
+    fn validate_soles(&self) -> Result<(), ConfigError> {
+        let r = &self.config.robot;
+        for (side, sole) in [("left", &r.left_sole), ("right", &r.right_sole)] {
+            if let Some(a) = sole.attached() {
+                let key = format!("robot.{side}_sole");
+                if !a.xyz.iter().chain(&a.rpy).all(|v| v.is_finite()) {
+                    return Err(self.invalid(&key, "expected finite `xyz` [m] and `rpy` [rad]"));
+                }
+            }
+        }
+        if r.left_sole.name() == r.right_sole.name() {
+            return Err(self.invalid(
+                "robot.right_sole",
+                format!(
+                    "the same frame `{}` as robot.left_sole; expected one frame per foot",
+                    r.left_sole.name()
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// `[estimation]` against the plant, and `[sim.model]`'s scales.

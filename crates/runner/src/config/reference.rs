@@ -35,7 +35,29 @@ pub const OPTIONAL_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "sim.ground.patches[].x_max", unit: "m", meaning: "End of the strip along world x (excluded), > `x_min`." },
     KeyDoc { key: "sim.ground.patches[].normal_stiffness", unit: "N/m³", meaning: "Normal stiffness density `k` over the strip (> 0), replacing `sim.contact.normal_stiffness` there." },
     KeyDoc { key: "sim.ground.patches[].normal_damping", unit: "N·s/m³", meaning: "Normal damping density `b` over the strip (≥ 0), replacing `sim.contact.normal_damping` there." },
+    KeyDoc { key: "robot.left_sole.parent", unit: "-", meaning: "`robot.left_sole = { parent = \"<link>\", xyz = [..], rpy = [..] }` instead of a frame name: a sole frame the URDF lacks, added to the model on this frame (usually the foot link); `stride model feet <URDF>` proposes it." },
+    KeyDoc { key: "robot.left_sole.xyz", unit: "m", meaning: "Origin of the added left sole frame in `parent` (default `[0, 0, 0]`)." },
+    KeyDoc { key: "robot.left_sole.rpy", unit: "rad", meaning: "Roll, pitch, yaw of the added left sole frame in `parent`, URDF convention `R = Rz(y) Ry(p) Rx(r)` (default `[0, 0, 0]`); the sole frame has z up (out of the sole) and x forward." },
+    KeyDoc { key: "robot.left_sole.name", unit: "-", meaning: "Name of the added frame in the model (default `left_sole`); must not be a frame the model already has." },
+    KeyDoc { key: "robot.right_sole.parent", unit: "-", meaning: "As `robot.left_sole.parent`, for the right sole." },
+    KeyDoc { key: "robot.right_sole.xyz", unit: "m", meaning: "As `robot.left_sole.xyz`." },
+    KeyDoc { key: "robot.right_sole.rpy", unit: "rad", meaning: "As `robot.left_sole.rpy`." },
+    KeyDoc { key: "robot.right_sole.name", unit: "-", meaning: "Name of the added frame (default `right_sole`)." },
+    KeyDoc { key: "sim.actuation.default.effort_limit", unit: "N·m (N)", meaning: "Motor torque bound of every joint not overridden (absent: each joint's URDF `effort`, unbounded if the URDF has none); at the bound the torque saturates (`effort_limit_policy`). Per joint: `[[sim.actuation.joints]]` `effort_limit`." },
 ];
+
+/// TOML type of an [`OPTIONAL_KEYS`] entry.
+fn optional_key_type(key: &str) -> &'static str {
+    if key == "include" || key.ends_with(".xyz") || key.ends_with(".rpy") {
+        "array"
+    } else if key == "goal.stand" {
+        "table"
+    } else if key.ends_with(".parent") || key.ends_with(".name") {
+        "string"
+    } else {
+        "float"
+    }
+}
 
 /// Runner-owned keys present in the default configuration.
 pub const RUNNER_KEYS: &[KeyDoc] = &[
@@ -48,8 +70,8 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "estimation.measured_zmp_cutoff", unit: "Hz", meaning: "Cut-off of the first-order low-pass filter on the measured ZMP (from the estimated foot wrenches) that the simplified layer's ZMP-CoM controller reads, applied at every simplified and whole-body tick (0: unfiltered; ≥ 0). 5 Hz walks in position control on stride-sim and MuJoCo; unfiltered, the ZMP noise reaches the joint servos through the CoM velocity reference and the position walk falls on MuJoCo (docs/estimation.md, \"The measured ZMP\")." },
     KeyDoc { key: "scenario.plant", unit: "-", meaning: "`simulator` (stride-sim), `ideal` (joint commands applied exactly, base from the fixed stance foot) or `mujoco` (MuJoCo 3.17 on the soles of the URDF, configured by the same `[sim]` section; needs a build with `--features mujoco`, see docs/mujoco.md)." },
     KeyDoc { key: "robot.urdf", unit: "-", meaning: "URDF of the robot, relative to the file that sets this key; `${NAME}` is replaced by the environment variable `NAME` (unset: a configuration error), e.g. `\"${STRIDE_ICUB_MODELS_DIR}/iCubGazeboV2_7/model.urdf\"`." },
-    KeyDoc { key: "robot.left_sole", unit: "-", meaning: "Frame at the centre of the left sole (a link or frame of the model)." },
-    KeyDoc { key: "robot.right_sole", unit: "-", meaning: "Frame at the centre of the right sole." },
+    KeyDoc { key: "robot.left_sole", unit: "-", meaning: "Frame at the centre of the left sole, z up and x forward: a link or frame of the model, or a table `{ parent, xyz, rpy }` that adds one (see `robot.left_sole.parent`). `stride check` warns when it is not on the ground or not level in the initial posture." },
+    KeyDoc { key: "robot.right_sole", unit: "-", meaning: "Frame at the centre of the right sole (a frame name or a `{ parent, xyz, rpy }` table)." },
     KeyDoc { key: "robot.torso_frame", unit: "-", meaning: "Frame whose tilt is checked for falls, measured from its orientation in the initial posture (so any frame convention works)." },
     KeyDoc { key: "robot.initial_joint_positions", unit: "rad or m", meaning: "Table joint name → initial position; joints not listed start at 0. Unknown joint names are rejected." },
     KeyDoc { key: "rates.base_hz", unit: "Hz", meaning: "Base clock rate; must divide 1 000 000 000 (integer-nanosecond period). Every other rate divides it." },
@@ -235,8 +257,11 @@ pub fn render(
          (numbers, strings, arrays, including arrays of tables such as task lists) is replaced whole by the \
          later file, so a file can change a single key of any section. `[goal]` is the exception: its \
          alternatives (`[goal.pose]`, `[goal.waypoints]`, `[goal.velocity]`, `[goal.stand]`) are exclusive \
-         and not pre-filled (the default is `[goal.pose] x = 2`). Every table rejects unknown keys. Errors name the file, line, column and key and say what \
-         is expected. `stride check <CONFIG>` validates a scenario without running it.\n\n\
+         and not pre-filled (the default is `[goal.pose] x = 2`). Every table rejects unknown keys. Errors name the file, line, column and key (or \
+         say that the value is a built-in default when no file sets the key) and say what is expected. \
+         `stride check <CONFIG>` validates a scenario without running it: it also loads the model, looks up \
+         every frame, joint and sensor name the scenario uses (saying which file or built-in default set each \
+         came from) and warns about the initial posture and the simulated ground (docs/new-robot.md).\n\n\
          Rates are in Hz and must divide `rates.base_hz` exactly; `base_hz` must divide 10⁹ so the base period \
          is a whole number of nanoseconds. The layers get their periods from `[rates]` (`rates.wbc_hz` for the \
          QP-IK and the TSID, `rates.sim_hz` for the simulator); no layer section has a period key.\n\n\
@@ -268,13 +293,7 @@ pub fn render(
     for d in OPTIONAL_KEYS {
         all.push((
             d.key.to_string(),
-            if d.key == "include" {
-                "array".into()
-            } else if d.key == "goal.stand" {
-                "table".into()
-            } else {
-                "float".into()
-            },
+            optional_key_type(d.key).into(),
             "–".into(),
             d.unit.into(),
             d.meaning.into(),
