@@ -106,11 +106,12 @@ fn assert_dcm_within_10_mm(name: &str, s: &RunSummary) {
     );
 }
 
-/// The other side of the position-control DCM target: the same walk with the measured ZMP unfiltered
-/// (`estimation.measured_zmp_cutoff = 0`) tracks the DCM worse than 10 mm RMS (measured 11.8 mm, against
-/// 9.0 mm with the default 5 Hz filter; docs/estimation.md, "The measured ZMP").
+/// The other side of the position-control targets: the same walk with the measured ZMP unfiltered
+/// (`estimation.measured_zmp_cutoff = 0`) falls (with the position-control ZMP-CoM gains K_ZMP 2.5 / K_CoM 5 of
+/// `configs/layers/zmp_com_position.toml`; with the crate's 1.5 / 5 it walked at 11.8 mm DCM RMS, against 9.0 mm
+/// filtered; docs/estimation.md, "The measured ZMP").
 #[test]
-fn the_unfiltered_measured_zmp_misses_the_dcm_target() {
+fn the_default_walk_falls_with_the_measured_zmp_unfiltered() {
     let mut scenario = Scenario::load(&config_path("walk_straight.toml")).expect("scenario");
     scenario.config.estimation.measured_zmp_cutoff = 0.0;
     let options = RunOptions {
@@ -118,41 +119,10 @@ fn the_unfiltered_measured_zmp_misses_the_dcm_target() {
         ..RunOptions::default()
     };
     let s = run_scenario(&scenario, &options).expect("run");
-    assert_stayed_up("walk_straight unfiltered", &s);
     assert!(
-        s.dcm_error.rms > 0.010,
-        "DCM error {:.1} mm RMS",
-        1e3 * s.dcm_error.rms
-    );
-}
-
-/// The estimation targets of the sensing issue on a walk (docs/estimation.md): horizontal drift ≤ 1 % of
-/// the distance walked, height error ≤ 5 mm, tilt error RMS ≤ 0.3°, base velocity error RMS ≤ 2 cm/s.
-fn assert_estimation_targets(name: &str, s: &RunSummary) {
-    let e = &s.estimation;
-    assert_eq!(
-        e.kind, "ekf",
-        "{name}: the controllers must run on the estimate"
-    );
-    let [dx, dy] = e.drift_per_metre.expect("the walk covers more than 0.1 m");
-    assert!(
-        dx.abs() <= 0.01 && dy.abs() <= 0.01,
-        "{name}: drift {dx} / {dy} per metre"
-    );
-    assert!(
-        e.height_error.max <= 5e-3,
-        "{name}: height error {} m",
-        e.height_error.max
-    );
-    assert!(
-        e.tilt_error.rms.to_degrees() <= 0.3,
-        "{name}: tilt error RMS {}°",
-        e.tilt_error.rms.to_degrees()
-    );
-    assert!(
-        e.velocity_error.rms <= 0.02,
-        "{name}: velocity error RMS {} m/s",
-        e.velocity_error.rms
+        matches!(s.outcome, Outcome::Fell { .. }),
+        "{}",
+        s.render()
     );
 }
 
