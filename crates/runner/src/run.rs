@@ -443,13 +443,16 @@ impl<'a> Loop<'a> {
     fn finish(mut self, outcome: Outcome) -> Result<RunSummary, RunError> {
         let wall = self.wall_start.elapsed().as_secs_f64();
         let t_end = (self.tracker.summary.simulated_time * 1e9).round() as u64;
-        let _ = self.event(t_end, "end", outcome.to_string());
+        let detail = outcome.to_string();
         let _ = self.stack.measure(self.robot.measurement());
         let end = mid_pose(&self.stack.truth.soles);
         let goal = &self.scenario.config.goal;
         let mut summary = self.tracker.finish(&self.stack, goal, outcome, end, wall);
+        // `/runner/diagnosis` (it needs the summary), then the `end` event: the log's last message.
+        tracing::info!(time = t_end as f64 * 1e-9, kind = "end", "{detail}");
         if let Some(mut log) = self.log.take() {
             log.diagnosis(t_end, &summary)?;
+            let _ = log.event(t_end, "end", detail);
             summary.log = Some(log.finish()?);
         }
         Ok(summary)
