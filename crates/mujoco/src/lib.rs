@@ -27,6 +27,8 @@ mod robot;
 mod scene;
 #[cfg(feature = "mujoco")]
 mod state;
+#[cfg(feature = "mujoco")]
+mod urdf;
 
 #[cfg(feature = "mujoco")]
 pub use actuators::{resolve as resolve_servos, Servo};
@@ -37,6 +39,6 @@ pub use error::MujocoError;
 #[cfg(feature = "mujoco")]
 pub use robot::{MujocoOutput, MujocoRobot, PlantSetup};
 #[cfg(feature = "mujoco")]
-pub use scene::inject_compiler;
-#[cfg(feature = "mujoco")]
 pub use state::{state_from_mujoco, state_to_mujoco};
+#[cfg(feature = "mujoco")]
+pub use urdf::{prepare as prepare_urdf, resolve_package, UrdfEdit, UrdfStats};
