@@ -20,6 +20,8 @@ mod config;
 #[cfg(feature = "mujoco")]
 mod error;
 #[cfg(feature = "mujoco")]
+mod inertia;
+#[cfg(feature = "mujoco")]
 mod measure;
 #[cfg(feature = "mujoco")]
 mod robot;
@@ -36,6 +38,8 @@ pub use actuators::{resolve as resolve_servos, Servo};
 pub use config::{Cone, MujocoConfig};
 #[cfg(feature = "mujoco")]
 pub use error::MujocoError;
+#[cfg(feature = "mujoco")]
+pub use inertia::principal_inertia;
 #[cfg(feature = "mujoco")]
 pub use robot::{MujocoOutput, MujocoRobot, PlantSetup};
 #[cfg(feature = "mujoco")]

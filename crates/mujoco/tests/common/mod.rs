@@ -59,6 +59,7 @@ pub fn plant(model: &Arc<Model>, urdf: &Path, sim: &SimConfig, soles: [&str; 2])
             mujoco: &MujocoConfig::default(),
             soles,
             period: Duration::from_micros(500),
+            inertias_from_model: false,
         },
     )
     .expect("MuJoCo plant")
