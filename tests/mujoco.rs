@@ -98,8 +98,8 @@ fn the_position_walk_reaches_its_goal_on_mujoco_only_with_the_zmp_filter() {
 }
 
 /// The official iCub (iCubGazeboV2_7) on MuJoCo, on its URDF's own sole boxes (0.16 × 0.072 m; stride-sim
-/// simulates a 0.19 m sole): the position walk reaches its goal (measured 2026-12-02: 16 mm from it, DCM
-/// 16.5 mm RMS, tilt 1.1°).
+/// simulates a 0.19 m sole): the position walk reaches its goal (measured 2026-12-02: 13 mm from it, DCM
+/// 15.1 mm RMS, tilt 1.2°; stride-sim 2 mm, 7.9 mm).
 #[cfg(feature = "mujoco")]
 #[test]
 fn icub_walks_to_its_goal_on_mujoco_in_position_control() {
@@ -114,7 +114,7 @@ fn icub_walks_to_its_goal_on_mujoco_in_position_control() {
 }
 
 /// The official iCub on MuJoCo in torque control (TSID): goal reached (measured 2026-12-02: 6 mm from it,
-/// DCM 8.6 mm RMS, tilt 2.6°, no joint at its effort limit).
+/// DCM 8.3 mm RMS, tilt 2.5°, no joint at its effort limit; stride-sim 2 mm, 8.8 mm).
 #[cfg(feature = "mujoco")]
 #[test]
 fn icub_walks_to_its_goal_on_mujoco_in_torque_control() {

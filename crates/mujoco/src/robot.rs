@@ -450,6 +450,17 @@ impl MujocoRobot {
         Ok(())
     }
 
+    /// The deepest penetration of the robot's collision geometry into the floor \[m\] (0 when none), from
+    /// MuJoCo's contacts at the current state (`-dist`). The official iCub standing with its sole frames on
+    /// the floor: 10.5 mm (its sole boxes' bottom faces lie that far below the frames).
+    pub fn ground_penetration(&self) -> f64 {
+        self.data
+            .contact()
+            .iter()
+            .map(|c| -c.dist)
+            .fold(0.0, f64::max)
+    }
+
     /// The latest output.
     pub fn output(&self) -> &MujocoOutput {
         &self.output

@@ -9,34 +9,11 @@ mod common;
 use std::sync::Arc;
 
 use mujoco_rs::prelude::*;
-use nalgebra::DVector;
 use stride_model::{KinDyn, Model};
 use stride_mujoco::{prepare_urdf, resolve_package, UrdfEdit};
 use stride_sim::SimInput;
 
-use common::{ideal_sim, plant, standing};
-
-/// iCub's crouch of `configs/robots/icub_v2_7.toml` (knees bend negative).
-fn icub_crouch(model: &Model) -> DVector<f64> {
-    let mut q = DVector::zeros(model.dof());
-    for (name, v) in [
-        ("l_hip_pitch", 0.35),
-        ("l_knee", -0.7),
-        ("l_ankle_pitch", -0.35),
-        ("r_hip_pitch", 0.35),
-        ("r_knee", -0.7),
-        ("r_ankle_pitch", -0.35),
-        ("l_shoulder_pitch", -0.2),
-        ("l_shoulder_roll", 0.25),
-        ("l_elbow", 0.5),
-        ("r_shoulder_pitch", -0.2),
-        ("r_shoulder_roll", 0.25),
-        ("r_elbow", 0.5),
-    ] {
-        q[model.joint_index(name).expect("joint")] = v;
-    }
-    q
-}
+use common::{icub_crouch, ideal_sim, plant, standing};
 
 /// The URDF edit keeps exactly the two sole boxes (0.16 × 0.072 × 0.001 m on `l_foot` / `r_foot`), removes
 /// every visual and every other collision, and resolves the URDF's `package://iCub/...` mesh paths to the
@@ -137,6 +114,9 @@ fn the_official_icub_compiles_and_stands_on_its_sole_boxes() {
     robot
         .set_initial_state(&standing(&model, &q))
         .expect("state");
+    // iCub's sole boxes reach 10.5 mm below its sole frames: with the frames on the floor they start in it.
+    let depth = robot.ground_penetration();
+    assert!((depth - 0.0105).abs() < 1e-4, "penetration {depth} m");
     let input = SimInput::hold(&q);
     for _ in 0..4000 {
         robot.step(&input).expect("step");

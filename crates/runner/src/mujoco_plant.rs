@@ -34,8 +34,9 @@ pub fn has_inertia_edits(m: &stride_sim::PlantModelConfig) -> bool {
 
 impl MujocoPlant {
     /// Builds the MuJoCo model from `urdf` (the plant's), stepping at `scenario.sim_period()`, with every
-    /// joint in `mode`, the plant model's inertias if `[sim.model]` edits them, and stands the robot at `joint_positions`: left sole level on the ground, the soles'
-    /// mid-point above the world origin, heading along +x (as the other plants start).
+    /// joint in `mode`, the plant model's inertias if `[sim.model]` edits them, and stands the robot at
+    /// `joint_positions`: left sole level on the ground, the soles' mid-point above the world origin,
+    /// heading along +x (as the other plants start), lifted until its collision geometry touches the floor.
     pub fn new(
         scenario: &Scenario,
         model: Arc<Model>,
@@ -66,6 +67,13 @@ impl MujocoPlant {
         let mut state = standing_state(&model, joint_positions, soles[0], soles[1])?;
         state.base_pose.translation.vector += Vector3::new(0.0, 0.0, sim.ground.height);
         robot.set_initial_state(&state)?;
+        // The URDF's collision geometry need not end at the sole frames (iCub's sole boxes reach 10.5 mm
+        // below them): lift the robot until it touches the floor instead of starting inside it.
+        let depth = robot.ground_penetration();
+        if depth > 0.0 {
+            state.base_pose.translation.vector.z += depth;
+            robot.set_initial_state(&state)?;
+        }
         let mut plant = Self {
             robot,
             input: SimInput::hold(joint_positions),

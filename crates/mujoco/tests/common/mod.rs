@@ -37,6 +37,28 @@ pub fn crouch(model: &Model) -> DVector<f64> {
     q
 }
 
+/// iCub's crouch of `configs/robots/icub_v2_7.toml` (knees bend negative).
+pub fn icub_crouch(model: &Model) -> DVector<f64> {
+    let mut q = DVector::zeros(model.dof());
+    for (name, v) in [
+        ("l_hip_pitch", 0.35),
+        ("l_knee", -0.7),
+        ("l_ankle_pitch", -0.35),
+        ("r_hip_pitch", 0.35),
+        ("r_knee", -0.7),
+        ("r_ankle_pitch", -0.35),
+        ("l_shoulder_pitch", -0.2),
+        ("l_shoulder_roll", 0.25),
+        ("l_elbow", 0.5),
+        ("r_shoulder_pitch", -0.2),
+        ("r_shoulder_roll", 0.25),
+        ("r_elbow", 0.5),
+    ] {
+        q[model.joint_index(name).expect("joint")] = v;
+    }
+    q
+}
+
 /// Ideal sensors and actuators with the given servo gains (exact readings, no delays, no friction).
 pub fn ideal_sim(kp: f64, kd: f64) -> SimConfig {
     let mut sim = SimConfig {
