@@ -97,20 +97,34 @@ fn the_position_walk_reaches_its_goal_on_mujoco_only_with_the_zmp_filter() {
     );
 }
 
+/// Runs the iCub scenario `name` on MuJoCo for the test `test` (skipped loudly without the models) and
+/// checks that it reaches its goal upright with the DCM tracked within `dcm_rms_max` \[m\] RMS.
+#[cfg(feature = "mujoco")]
+fn icub_reaches_its_goal_on_mujoco(test: &str, name: &str, dcm_rms_max: f64) {
+    if stride_testkit::icub_model_urdf(test, "iCubGazeboV2_7").is_none() {
+        return;
+    }
+    let s = run_on_mujoco(name);
+    assert_eq!(s.outcome, Outcome::GoalReached, "{}", s.outcome);
+    assert!(s.max_tilt_deg < 10.0 && s.min_base_height_fraction > 0.9);
+    assert!(
+        s.dcm_error.rms < dcm_rms_max,
+        "DCM RMS {} m",
+        s.dcm_error.rms
+    );
+}
+
 /// The official iCub (iCubGazeboV2_7) on MuJoCo, on its URDF's own sole boxes (0.16 × 0.072 m; stride-sim
 /// simulates a 0.19 m sole): the position walk reaches its goal (measured 2026-12-02: 13 mm from it, DCM
 /// 15.1 mm RMS, tilt 1.2°; stride-sim 2 mm, 7.9 mm).
 #[cfg(feature = "mujoco")]
 #[test]
 fn icub_walks_to_its_goal_on_mujoco_in_position_control() {
-    let test = "icub_walks_to_its_goal_on_mujoco_in_position_control";
-    if stride_testkit::icub_model_urdf(test, "iCubGazeboV2_7").is_none() {
-        return;
-    }
-    let s = run_on_mujoco("walk_straight_icub.toml");
-    assert_eq!(s.outcome, Outcome::GoalReached, "{}", s.outcome);
-    assert!(s.max_tilt_deg < 10.0 && s.min_base_height_fraction > 0.9);
-    assert!(s.dcm_error.rms < 0.025, "DCM RMS {} m", s.dcm_error.rms);
+    icub_reaches_its_goal_on_mujoco(
+        "icub_walks_to_its_goal_on_mujoco_in_position_control",
+        "walk_straight_icub.toml",
+        0.025,
+    );
 }
 
 /// The official iCub on MuJoCo in torque control (TSID): goal reached (measured 2026-12-02: 6 mm from it,
@@ -118,14 +132,11 @@ fn icub_walks_to_its_goal_on_mujoco_in_position_control() {
 #[cfg(feature = "mujoco")]
 #[test]
 fn icub_walks_to_its_goal_on_mujoco_in_torque_control() {
-    let test = "icub_walks_to_its_goal_on_mujoco_in_torque_control";
-    if stride_testkit::icub_model_urdf(test, "iCubGazeboV2_7").is_none() {
-        return;
-    }
-    let s = run_on_mujoco("walk_straight_icub_torque.toml");
-    assert_eq!(s.outcome, Outcome::GoalReached, "{}", s.outcome);
-    assert!(s.max_tilt_deg < 10.0 && s.min_base_height_fraction > 0.9);
-    assert!(s.dcm_error.rms < 0.015, "DCM RMS {} m", s.dcm_error.rms);
+    icub_reaches_its_goal_on_mujoco(
+        "icub_walks_to_its_goal_on_mujoco_in_torque_control",
+        "walk_straight_icub_torque.toml",
+        0.015,
+    );
 }
 
 /// `[sim.model]` inertia edits reach MuJoCo: its total mass is the edited plant model's (1e-12 relative),

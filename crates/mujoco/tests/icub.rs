@@ -11,9 +11,8 @@ use std::sync::Arc;
 use mujoco_rs::prelude::*;
 use stride_model::{KinDyn, Model};
 use stride_mujoco::{prepare_urdf, resolve_package, UrdfEdit};
-use stride_sim::SimInput;
 
-use common::{icub_crouch, ideal_sim, plant, standing};
+use common::{icub_crouch, ideal_sim, plant, standing, stands_with_its_weight};
 
 /// The URDF edit keeps exactly the two sole boxes (0.16 × 0.072 × 0.001 m on `l_foot` / `r_foot`), removes
 /// every visual and every other collision, and resolves the URDF's `package://iCub/...` mesh paths to the
@@ -117,18 +116,7 @@ fn the_official_icub_compiles_and_stands_on_its_sole_boxes() {
     // iCub's sole boxes reach 10.5 mm below its sole frames: with the frames on the floor they start in it.
     let depth = robot.ground_penetration();
     assert!((depth - 0.0105).abs() < 1e-4, "penetration {depth} m");
-    let input = SimInput::hold(&q);
-    for _ in 0..4000 {
-        robot.step(&input).expect("step");
-    }
-    let out = robot.output().clone();
-    assert!(!out.fallen && out.sole_contact == [true, true]);
-    let weight = model.total_mass() * 9.81;
-    let fz = out.sole_wrenches[0][2] + out.sole_wrenches[1][2];
-    assert!(
-        (fz - weight).abs() < 1e-3 * weight,
-        "Σ f_z {fz} N vs m g {weight} N"
-    );
+    let out = stands_with_its_weight(&mut robot, &model, &q);
     let mut kd = KinDyn::new(Arc::clone(&model));
     kd.set_state(&out.state).expect("state");
     assert!(kd.com_velocity().norm() < 1e-3, "CoM still moving");

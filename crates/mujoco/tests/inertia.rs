@@ -11,9 +11,8 @@ use std::time::Duration;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use stride_model::{InertiaEdits, KinDyn, LinkInertiaEdit, Model};
 use stride_mujoco::{principal_inertia, MujocoConfig, MujocoRobot, PlantSetup};
-use stride_sim::SimInput;
 
-use common::{crouch, humanoid_urdf, ideal_sim, standing};
+use common::{crouch, humanoid_urdf, ideal_sim, standing, stands_with_its_weight};
 
 fn plant_with_model_inertias(model: &Arc<Model>) -> MujocoRobot {
     MujocoRobot::new(
@@ -111,15 +110,5 @@ fn edited_inertias_give_mujoco_the_edited_mass_and_centre_of_mass() {
         "MuJoCo {com} vs stride {}",
         kd.com_position()
     );
-    let input = SimInput::hold(&q);
-    for _ in 0..4000 {
-        plant.step(&input).expect("step");
-    }
-    let out = plant.output();
-    let fz = out.sole_wrenches[0][2] + out.sole_wrenches[1][2];
-    let weight = model.total_mass() * 9.81;
-    assert!(
-        (fz - weight).abs() < 1e-3 * weight,
-        "Σ f_z {fz} N vs {weight} N"
-    );
+    stands_with_its_weight(&mut plant, &model, &q);
 }
