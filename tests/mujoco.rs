@@ -14,21 +14,26 @@ fn config_path(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// The error of running `scenario` on MuJoCo (panics if it runs).
+fn error_on_mujoco(scenario: &Scenario) -> String {
+    let options = RunOptions {
+        plant: Some(PlantKind::Mujoco),
+        no_log: true,
+        ..RunOptions::default()
+    };
+    match run_scenario(scenario, &options) {
+        Err(e) => e.to_string(),
+        Ok(s) => panic!("expected an error, the run ended with {}", s.outcome),
+    }
+}
+
 /// A build without the `mujoco` feature rejects the MuJoCo plant with a configuration error that names
 /// the command that builds it.
 #[cfg(not(feature = "mujoco"))]
 #[test]
 fn the_mujoco_plant_without_the_feature_names_the_build_command() {
     let scenario = Scenario::load(&config_path("walk_straight.toml")).expect("scenario");
-    let options = RunOptions {
-        plant: Some(PlantKind::Mujoco),
-        no_log: true,
-        ..RunOptions::default()
-    };
-    let message = match run_scenario(&scenario, &options) {
-        Err(e) => e.to_string(),
-        Ok(s) => panic!("expected an error, the run ended with {}", s.outcome),
-    };
+    let message = error_on_mujoco(&scenario);
     assert!(message.contains("scenario.plant"), "{message}");
     assert!(
         message.contains("cargo build --release --features mujoco"),
@@ -184,14 +189,6 @@ fn sim_model_inertia_edits_reach_the_mujoco_plant() {
 fn an_out_of_range_mujoco_parameter_is_an_error_at_its_key() {
     let mut scenario = Scenario::load(&config_path("walk_straight.toml")).expect("scenario");
     scenario.config.mujoco.solref = [0.0001, 1.0];
-    let options = RunOptions {
-        plant: Some(PlantKind::Mujoco),
-        no_log: true,
-        ..RunOptions::default()
-    };
-    let message = match run_scenario(&scenario, &options) {
-        Err(e) => e.to_string(),
-        Ok(s) => panic!("expected an error, the run ended with {}", s.outcome),
-    };
+    let message = error_on_mujoco(&scenario);
     assert!(message.contains("mujoco.solref"), "{message}");
 }
