@@ -11,6 +11,22 @@ pub enum MujocoError {
         /// The OS error.
         source: std::io::Error,
     },
+    /// The URDF is not well-formed XML or has no `<robot>` element.
+    #[error("cannot prepare the URDF {path} for MuJoCo: {message}")]
+    UrdfXml {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A `package://` mesh path of a kept collision element that no ancestor folder of the URDF holds.
+    #[error("{uri} (in {path}): no ancestor folder of the URDF holds this package path")]
+    Package {
+        /// The URDF.
+        path: std::path::PathBuf,
+        /// The `package://` path.
+        uri: String,
+    },
     /// MuJoCo rejected the model (parse or compile error, in MuJoCo's words).
     #[error("MuJoCo could not build the model from {path}: {message}")]
     Compile {

@@ -20,6 +20,8 @@ mod config;
 #[cfg(feature = "mujoco")]
 mod error;
 #[cfg(feature = "mujoco")]
+mod inertia;
+#[cfg(feature = "mujoco")]
 mod measure;
 #[cfg(feature = "mujoco")]
 mod robot;
@@ -27,6 +29,8 @@ mod robot;
 mod scene;
 #[cfg(feature = "mujoco")]
 mod state;
+#[cfg(feature = "mujoco")]
+mod urdf;
 
 #[cfg(feature = "mujoco")]
 pub use actuators::{resolve as resolve_servos, Servo};
@@ -35,8 +39,10 @@ pub use config::{Cone, MujocoConfig};
 #[cfg(feature = "mujoco")]
 pub use error::MujocoError;
 #[cfg(feature = "mujoco")]
+pub use inertia::principal_inertia;
+#[cfg(feature = "mujoco")]
 pub use robot::{MujocoOutput, MujocoRobot, PlantSetup};
 #[cfg(feature = "mujoco")]
-pub use scene::inject_compiler;
-#[cfg(feature = "mujoco")]
 pub use state::{state_from_mujoco, state_to_mujoco};
+#[cfg(feature = "mujoco")]
+pub use urdf::{prepare as prepare_urdf, resolve_package, UrdfEdit, UrdfStats};

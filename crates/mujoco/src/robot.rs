@@ -11,6 +11,7 @@ use stride_sim::{EffortLimitPolicy, ImuMeasurement, SensorModels, SimConfig, Sim
 
 use crate::actuators::{resolve, Servo};
 use crate::config::MujocoConfig;
+use crate::inertia::write_model_inertias;
 use crate::scene::{build, SceneSpec};
 use crate::MujocoError;
 
@@ -39,6 +40,9 @@ pub struct PlantSetup<'a> {
     pub soles: [&'a str; 2],
     /// Plant period, the MuJoCo timestep.
     pub period: Duration,
+    /// Write stride's body inertias (mass, centre of mass, rotational inertia) over MuJoCo's own, compiled
+    /// from the URDF: how the plant model's `[sim.model]` edits reach MuJoCo. `false` keeps MuJoCo's.
+    pub inertias_from_model: bool,
 }
 
 /// What the plant reports after a step (or after its state was set).
@@ -133,7 +137,7 @@ impl MujocoRobot {
         setup.mujoco.validate(dt)?;
         let servos = resolve(&model, &setup.sim.actuation)?;
         let contact_frames = setup.soles.map(String::from);
-        let scene = build(
+        let mut scene = build(
             &model,
             &SceneSpec {
                 urdf: setup.urdf,
@@ -159,7 +163,13 @@ impl MujocoRobot {
         let n = model.dof();
         let n_ft = model.ft_sensors().len();
         let zero = RobotState::zero(&model);
-        let data = MjData::new(Box::new(scene.model));
+        if setup.inertias_from_model {
+            write_model_inertias(&model, &scene.body, &mut scene.model);
+        }
+        let mut data = MjData::new(Box::new(scene.model));
+        if setup.inertias_from_model {
+            data.set_const();
+        }
         let (nq, nv, na) = (data.qpos().len(), data.qvel().len(), data.act().len());
         let ground = stride_sim::GroundPlane::from_config(&setup.sim.ground);
         Ok(Self {
@@ -438,6 +448,17 @@ impl MujocoRobot {
             return Err(MujocoError::NonFiniteState { what: "qvel", time });
         }
         Ok(())
+    }
+
+    /// The deepest penetration of the robot's collision geometry into the floor \[m\] (0 when none), from
+    /// MuJoCo's contacts at the current state (`-dist`). The official iCub standing with its sole frames on
+    /// the floor: 10.5 mm (its sole boxes' bottom faces lie that far below the frames).
+    pub fn ground_penetration(&self) -> f64 {
+        self.data
+            .contact()
+            .iter()
+            .map(|c| -c.dist)
+            .fold(0.0, f64::max)
     }
 
     /// The latest output.

@@ -12,36 +12,11 @@ use stride_sim::{ActuationMode, GroundConfig};
 
 use crate::actuators::Servo;
 use crate::config::{Cone, MujocoConfig};
+use crate::urdf::{prepare, UrdfEdit};
 use crate::MujocoError;
 
 /// Name of the ground plane geom.
 pub const FLOOR: &str = "floor";
-
-/// The compiler options injected into the URDF (`<mujoco><compiler .../></mujoco>`, the URDF extension
-/// element of MuJoCo): visual geoms dropped, links without a joint fused into their parent (MuJoCo's URDF
-/// default, made explicit; stride-model lumps them the same way, so bodies map one to one), meshes looked up
-/// beside the URDF.
-fn compiler_element(mesh_dir: &Path) -> String {
-    format!(
-        "<mujoco><compiler discardvisual=\"true\" fusestatic=\"true\" strippath=\"false\" \
-         meshdir=\"{}\"/></mujoco>",
-        mesh_dir.display()
-    )
-}
-
-/// `urdf` with the compiler element inserted as the first child of `<robot>`.
-pub fn inject_compiler(urdf: &str, mesh_dir: &Path) -> Option<String> {
-    let start = urdf.find("<robot")?;
-    let end = start + urdf[start..].find('>')?;
-    if urdf[..end].ends_with('/') {
-        return None;
-    }
-    let mut text = String::with_capacity(urdf.len() + 200);
-    text.push_str(&urdf[..=end]);
-    text.push_str(&compiler_element(mesh_dir));
-    text.push_str(&urdf[end + 1..]);
-    Some(text)
-}
 
 /// What [`build`] needs besides the stride model.
 pub struct SceneSpec<'a> {
@@ -85,13 +60,15 @@ pub fn build(model: &Model, s: &SceneSpec<'_>) -> Result<Scene, MujocoError> {
         path: s.urdf.to_path_buf(),
         source,
     })?;
-    let dir = s
-        .urdf
-        .parent()
-        .map(|p| p.canonicalize().unwrap_or_else(|_| p.to_path_buf()))
-        .unwrap_or_default();
-    let text = inject_compiler(&text, &dir)
-        .ok_or_else(|| compile_error("no <robot> element to extend".into()))?;
+    let contact_links = contact_links(model, s.contact_frames)?;
+    let (text, _) = prepare(
+        &text,
+        &UrdfEdit {
+            path: s.urdf,
+            // stride's frames are named after their URDF links.
+            contact_links: s.contact_frames,
+        },
+    )?;
     let mut spec = MjSpec::from_xml_string(&text).map_err(|e| compile_error(e.to_string()))?;
     let root = model.root_link();
     spec.body_mut(root)
@@ -104,7 +81,20 @@ pub fn build(model: &Model, s: &SceneSpec<'_>) -> Result<Scene, MujocoError> {
     add_actuators(model, &mut spec, s.servos);
     set_options(model, &mut spec, s);
     let mj = spec.compile().map_err(|e| compile_error(e.to_string()))?;
-    map(model, mj, s.contact_frames)
+    map(model, mj, &contact_links, s.contact_frames)
+}
+
+/// The stride body of each contact frame.
+fn contact_links(model: &Model, contact_frames: &[String]) -> Result<Vec<usize>, MujocoError> {
+    contact_frames
+        .iter()
+        .map(|name| {
+            let f = model.frame_id(name).ok_or_else(|| {
+                MujocoError::Mismatch(format!("stride's model has no frame `{name}`"))
+            })?;
+            Ok(model.frames()[f.index()].link)
+        })
+        .collect()
 }
 
 /// Passive joint dynamics from the servos: damping, armature (at least `min_armature`), Coulomb friction
@@ -211,7 +201,12 @@ fn set_options(model: &Model, spec: &mut MjSpec, s: &SceneSpec<'_>) {
 /// The index maps, and the collision filter: only the floor and the geoms of the contact frames' bodies
 /// collide (stride-sim's contact is the soles on the ground, and fewer geoms make MuJoCo's collision
 /// detection cheaper).
-fn map(model: &Model, mut mj: MjModel, contact_frames: &[String]) -> Result<Scene, MujocoError> {
+fn map(
+    model: &Model,
+    mut mj: MjModel,
+    contact_links: &[usize],
+    contact_frames: &[String],
+) -> Result<Scene, MujocoError> {
     let mut joint_qpos = Vec::with_capacity(model.dof());
     let mut joint_dof = Vec::with_capacity(model.dof());
     for j in model.joints() {
@@ -236,13 +231,7 @@ fn map(model: &Model, mut mj: MjModel, contact_frames: &[String]) -> Result<Scen
             .ok_or_else(|| MujocoError::Mismatch(format!("MuJoCo has no body `{}`", b.name)))?;
         body.push(id);
     }
-    let mut contact_bodies = Vec::with_capacity(contact_frames.len());
-    for name in contact_frames {
-        let f = model.frame_id(name).ok_or_else(|| {
-            MujocoError::Mismatch(format!("stride's model has no frame `{name}`"))
-        })?;
-        contact_bodies.push(body[model.frames()[f.index()].link]);
-    }
+    let contact_bodies: Vec<usize> = contact_links.iter().map(|&l| body[l]).collect();
     let floor = mj.name_to_id(MjtObjBase::mjOBJ_GEOM, FLOOR);
     let ngeom = mj.ngeom() as usize;
     let mut geom_contact = vec![None; ngeom];

@@ -3,13 +3,15 @@
 //! The scenario's `[sim]` section configures it as it configures stride-sim: actuation (`kp`, `kd`, effort
 //! limits, friction, delays, torque lag), sensors (`[sim.sensors]`: the same models), pushes, ground
 //! height, fall detection, the friction coefficient. The contact model is MuJoCo's own, on the URDF's
-//! collision geometry of the soles (`stride_mujoco::MujocoConfig` documents its parameters).
+//! collision geometry of the soles, with the `[mujoco]` section's parameters (`stride_mujoco::MujocoConfig`
+//! documents them). `[sim.model]`'s inertia edits reach MuJoCo as the plant model's body inertias written
+//! over the compiled ones.
 
 use std::sync::Arc;
 
 use nalgebra::{DVector, Vector3};
 use stride_model::{FrameId, Model};
-use stride_mujoco::{MujocoConfig, MujocoRobot, PlantSetup};
+use stride_mujoco::{MujocoRobot, PlantSetup};
 use stride_sim::{ActuationMode, SimInput};
 
 use crate::config::{ControlMode, Scenario};
@@ -25,10 +27,16 @@ pub struct MujocoPlant {
     meas: Measurement,
 }
 
+/// `[sim.model]` changes the inertias (a mass scale or link edits; another URDF alone does not).
+pub fn has_inertia_edits(m: &stride_sim::PlantModelConfig) -> bool {
+    m.mass_scale != 1.0 || !m.links.is_empty()
+}
+
 impl MujocoPlant {
     /// Builds the MuJoCo model from `urdf` (the plant's), stepping at `scenario.sim_period()`, with every
-    /// joint in `mode`, and stands the robot at `joint_positions`: left sole level on the ground, the soles'
-    /// mid-point above the world origin, heading along +x (as the other plants start).
+    /// joint in `mode`, the plant model's inertias if `[sim.model]` edits them, and stands the robot at
+    /// `joint_positions`: left sole level on the ground, the soles' mid-point above the world origin,
+    /// heading along +x (as the other plants start), lifted until its collision geometry touches the floor.
     pub fn new(
         scenario: &Scenario,
         model: Arc<Model>,
@@ -50,14 +58,22 @@ impl MujocoPlant {
             &PlantSetup {
                 urdf,
                 sim: &sim,
-                mujoco: &MujocoConfig::default(),
+                mujoco: &c.mujoco.plant_config(),
                 soles: [&names[0], &names[1]],
                 period: scenario.sim_period(),
+                inertias_from_model: has_inertia_edits(&c.sim.model),
             },
         )?;
         let mut state = standing_state(&model, joint_positions, soles[0], soles[1])?;
         state.base_pose.translation.vector += Vector3::new(0.0, 0.0, sim.ground.height);
         robot.set_initial_state(&state)?;
+        // The URDF's collision geometry need not end at the sole frames (iCub's sole boxes reach 10.5 mm
+        // below them): lift the robot until it touches the floor instead of starting inside it.
+        let depth = robot.ground_penetration();
+        if depth > 0.0 {
+            state.base_pose.translation.vector.z += depth;
+            robot.set_initial_state(&state)?;
+        }
         let mut plant = Self {
             robot,
             input: SimInput::hold(joint_positions),

@@ -180,20 +180,26 @@ pub fn build_robot(
     })
 }
 
-/// The MuJoCo plant on the plant's URDF (`[sim.model] urdf`, else `robot.urdf`). MuJoCo compiles the URDF
-/// itself, so `[sim.model]`'s inertia changes cannot be applied: they are rejected.
+/// The MuJoCo plant on the plant's URDF (`[sim.model] urdf`, else `robot.urdf`) with the `[mujoco]`
+/// section (range-checked here, errors at its keys), the plant model's inertias written over MuJoCo's when
+/// `[sim.model]` edits them.
 #[cfg(feature = "mujoco")]
 fn mujoco_robot(
     scenario: &Scenario,
     model: &Arc<Model>,
     q0: &DVector<f64>,
 ) -> Result<Box<dyn Robot>, RunError> {
-    let m = &scenario.config.sim.model;
-    if m.mass_scale != 1.0 || !m.links.is_empty() {
-        return Err(RunError::Config(scenario.invalid(
-            "sim.model",
-            "inertia changes are not supported on the MuJoCo plant (it compiles the URDF itself); expected              `mass_scale = 1` and no `[sim.model.links]` with `scenario.plant = \"mujoco\"`",
-        )));
+    let period = scenario.sim_period().as_secs_f64();
+    if let Err(stride_mujoco::MujocoError::InvalidConfig {
+        parameter,
+        value,
+        reason,
+    }) = scenario.config.mujoco.plant_config().validate(period)
+    {
+        let key = format!("mujoco.{}", parameter.split('[').next().unwrap_or_default());
+        return Err(RunError::Config(
+            scenario.invalid(&key, format!("{value}: {reason}")),
+        ));
     }
     let plant = load_plant_model(scenario, model)?;
     let urdf = scenario

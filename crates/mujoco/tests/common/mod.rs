@@ -7,8 +7,8 @@ use std::time::Duration;
 
 use nalgebra::{DVector, Isometry3, Translation3, Vector3};
 use stride_model::{KinDyn, Model, RobotState};
-use stride_mujoco::{MujocoConfig, MujocoRobot, PlantSetup};
-use stride_sim::{ActuationConfig, SensorConfig, SimConfig};
+use stride_mujoco::{MujocoConfig, MujocoOutput, MujocoRobot, PlantSetup};
+use stride_sim::{ActuationConfig, SensorConfig, SimConfig, SimInput};
 
 /// The bundled humanoid's URDF.
 pub fn humanoid_urdf() -> PathBuf {
@@ -29,6 +29,28 @@ pub fn crouch(model: &Model) -> DVector<f64> {
         ("l_shoulder_roll", 0.25),
         ("l_elbow", 0.5),
         ("r_shoulder_pitch", 0.2),
+        ("r_shoulder_roll", 0.25),
+        ("r_elbow", 0.5),
+    ] {
+        q[model.joint_index(name).expect("joint")] = v;
+    }
+    q
+}
+
+/// iCub's crouch of `configs/robots/icub_v2_7.toml` (knees bend negative).
+pub fn icub_crouch(model: &Model) -> DVector<f64> {
+    let mut q = DVector::zeros(model.dof());
+    for (name, v) in [
+        ("l_hip_pitch", 0.35),
+        ("l_knee", -0.7),
+        ("l_ankle_pitch", -0.35),
+        ("r_hip_pitch", 0.35),
+        ("r_knee", -0.7),
+        ("r_ankle_pitch", -0.35),
+        ("l_shoulder_pitch", -0.2),
+        ("l_shoulder_roll", 0.25),
+        ("l_elbow", 0.5),
+        ("r_shoulder_pitch", -0.2),
         ("r_shoulder_roll", 0.25),
         ("r_elbow", 0.5),
     ] {
@@ -59,6 +81,7 @@ pub fn plant(model: &Arc<Model>, urdf: &Path, sim: &SimConfig, soles: [&str; 2])
             mujoco: &MujocoConfig::default(),
             soles,
             period: Duration::from_micros(500),
+            inertias_from_model: false,
         },
     )
     .expect("MuJoCo plant")
@@ -110,4 +133,26 @@ pub fn box_urdf(name: &str, mass: f64, size: [f64; 3], inertia: Option<f64>) -> 
         std::env::temp_dir().join(format!("stride_mujoco_{name}_{}.urdf", std::process::id()));
     std::fs::write(&path, text).expect("write URDF");
     path
+}
+
+/// Holds `q` for 2 s (4000 steps at 2 kHz) and checks that the robot stands on both soles with its weight
+/// on them: no fall, Σ f_z = m g within 0.1 % (`model`'s mass). Returns the last output.
+pub fn stands_with_its_weight(
+    robot: &mut MujocoRobot,
+    model: &Model,
+    q: &DVector<f64>,
+) -> MujocoOutput {
+    let input = SimInput::hold(q);
+    for _ in 0..4000 {
+        robot.step(&input).expect("step");
+    }
+    let out = robot.output().clone();
+    assert!(!out.fallen && out.sole_contact == [true, true]);
+    let weight = model.total_mass() * 9.81;
+    let fz = out.sole_wrenches[0][2] + out.sole_wrenches[1][2];
+    assert!(
+        (fz - weight).abs() < 1e-3 * weight,
+        "Σ f_z {fz} N vs m g {weight} N"
+    );
+    out
 }

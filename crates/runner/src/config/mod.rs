@@ -6,6 +6,7 @@
 //! generated from [`mod@reference`] and checked by a test so it cannot drift from the code.
 
 pub mod load;
+pub mod mujoco;
 pub mod reference;
 pub mod sole;
 
@@ -431,6 +432,8 @@ pub struct ScenarioConfig {
     pub sim: stride_sim::SimConfig,
     /// The estimation layer.
     pub estimation: EstimationSection,
+    /// The MuJoCo plant's contact and solver parameters (`scenario.plant = "mujoco"`).
+    pub mujoco: mujoco::MujocoSection,
     /// The log.
     pub log: LogSection,
     /// Run endings.
