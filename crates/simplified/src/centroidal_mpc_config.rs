@@ -36,7 +36,7 @@ pub type Interval = [f64; 2];
 /// | `external_force_stages` | 1 | stages over which the external force acts in the prediction (the thesis: the first only) |
 /// | `deadband` | 0.02 m | the runner retargets the swing only when the adjusted touch-down differs from the plan's by more |
 /// | `track_prediction` | false | the DCM PI tracks the MPC's predicted CoM (false: the plan's, and the MPC only moves the footsteps) |
-/// | `warm_start_active_set` | false | start the active-set solver from the previous active set of the same QP size (the RTI itself always linearises about the previous solution); off because a cold start measured faster (docs/simplified.md) |
+/// | `warm_start_active_set` | false | start the active-set solver from the previous active set of the same QP size (the RTI itself always linearises about the previous solution); off: not faster in two measurements on a loaded machine (docs/simplified.md) |
 /// | `min_remaining_time` | 0.15 s | a contact that starts sooner than this is no longer moved |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
