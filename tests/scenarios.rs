@@ -119,11 +119,7 @@ fn the_default_walk_falls_with_the_measured_zmp_unfiltered() {
         ..RunOptions::default()
     };
     let s = run_scenario(&scenario, &options).expect("run");
-    assert!(
-        matches!(s.outcome, Outcome::Fell { .. }),
-        "{}",
-        s.render()
-    );
+    assert!(matches!(s.outcome, Outcome::Fell { .. }), "{}", s.render());
 }
 
 #[test]
@@ -307,9 +303,5 @@ fn position_control_falls_at_a_quarter_metre_steps() {
         ..RunOptions::default()
     };
     let s = run_scenario(&scenario, &options).expect("run");
-    assert!(
-        matches!(s.outcome, Outcome::Fell { .. }),
-        "{}",
-        s.render()
-    );
+    assert!(matches!(s.outcome, Outcome::Fell { .. }), "{}", s.render());
 }
