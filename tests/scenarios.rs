@@ -305,3 +305,21 @@ fn position_control_falls_at_a_quarter_metre_steps() {
     let s = run_scenario(&scenario, &options).expect("run");
     assert!(matches!(s.outcome, Outcome::Fell { .. }), "{}", s.render());
 }
+
+/// Turning fast in place, both modes (issue 15's turn; docs/gait.md, "Turning"): 180° reached and standing
+/// still within 9.5 s of simulated time, the 1 s initial and final double supports and the 0.5 s standstill
+/// included (measured 8.7 / 8.8 s; 34.7 / 34.5°/s between 10 % and 90 % of the turn).
+#[test]
+fn the_fast_turns_reach_their_heading_within_nine_and_a_half_seconds() {
+    for name in ["turn_fast.toml", "turn_fast_torque.toml"] {
+        let s = run(name);
+        assert_stayed_up(name, &s);
+        assert_eq!(s.outcome, Outcome::GoalReached, "{name}");
+        assert!(s.simulated_time <= 9.5, "{name}: {} s", s.simulated_time);
+        let heading_error = s.goal_heading_error_deg.expect("a pose goal");
+        assert!(
+            heading_error.abs() < 5.0,
+            "{name}: heading error {heading_error}°"
+        );
+    }
+}
