@@ -62,12 +62,12 @@ fn a_side_push_moves_the_swing_foot_outward_and_is_logged() {
 }
 
 #[test]
-/// 20 N forward for 1 s from 5.0 s: reached with both steps of the push adjusted, and 40 N falls with the
+/// 20 N forward for 1 s from 5.0 s: reached with a step of the push adjusted, and 40 N falls with the
 /// adjustment (the two sides of its limit). Without adjustment the walk fell under this push until the
 /// simplified layer read the measured ZMP low-passed (`estimation.measured_zmp_cutoff`, 2026-12-02); it now
 /// reaches the goal too, which is asserted so that the comparison cannot silently change
 /// (docs/push-recovery.md, "The push sweep").
-fn a_forward_push_is_survived_with_both_steps_adjusted() {
+fn a_forward_push_is_survived_with_a_step_adjusted() {
     let s = Scratch::new("step_adjustment_front");
     let configs = common::root().join("configs");
     let load = |name: &str| Scenario::load(&configs.join(name)).unwrap();
@@ -80,16 +80,15 @@ fn a_forward_push_is_survived_with_both_steps_adjusted() {
     assert_eq!(off.outcome, Outcome::GoalReached, "{}", off.render());
     assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
     assert!(on.goal_distance.unwrap() < 0.05, "{}", on.render());
-    // the difference is the adjusted steps: the two steps during the push were moved (measured: by 2–4 cm
-    // backwards and 1 cm sideways, touch-downs within 40 ms of the plan; docs/push-recovery.md)
+    // a step during the push was moved (measured with the position-control ZMP-CoM gains of
+    // configs/layers/zmp_com_position.toml: the left step at 6.29 s, 2.1 cm backwards and 0.4 cm inwards, its
+    // touch-down on time; before those gains both steps of the push moved by 2–4 cm; docs/push-recovery.md)
     let steps = adjusted_footsteps(&s.path("on.mcap"));
     let during: Vec<_> = steps
         .iter()
         .filter(|m| (5.0..6.6).contains(&m["time"].as_f64().unwrap()))
         .collect();
-    let feet: std::collections::BTreeSet<_> =
-        during.iter().map(|m| m["foot"].as_str().unwrap()).collect();
-    assert_eq!(feet.len(), 2, "{during:?}");
+    assert!(!during.is_empty(), "{steps:?}");
     // the summary counts what the log holds
     assert_eq!(on.step_adjustments.0 as usize, steps.len());
     assert_eq!(off.step_adjustments, (0, 0));
