@@ -78,8 +78,8 @@ fn position_control_stands_through_the_push_on_mujoco() {
 }
 
 /// The default walk, position control (QP-IK), on MuJoCo: its goal is reached with the measured ZMP
-/// low-passed at the default 5 Hz, and the same walk falls with the ZMP unfiltered (measured: goal at
-/// 2.03 m, DCM 31 mm RMS; unfiltered, a fall at 6.7 s with the ankles saturated by the servos' damping
+/// low-passed at the default 5 Hz, and the same walk falls with the ZMP unfiltered (measured: goal 24 mm
+/// away, DCM 22.3 mm RMS; unfiltered, a fall at 6.7 s with the ankles saturated by the servos' damping
 /// of the CoM velocity reference's jumps; docs/mujoco.md, "Position control").
 #[cfg(feature = "mujoco")]
 #[test]
