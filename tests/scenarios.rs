@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use stride_runner::config::{PlantKind, Scenario};
+use stride_runner::config::{PlantKind, Scenario, ScenarioConfig};
 use stride_runner::run::{run_scenario, Outcome, RunOptions, RunSummary};
 
 fn config_path(name: &str) -> PathBuf {
@@ -33,6 +33,18 @@ fn run_on(name: &str, plant: Option<PlantKind>) -> RunSummary {
     let summary = run_scenario(&scenario, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
     eprintln!("{}", summary.render());
     summary
+}
+
+/// Runs `name` with `edit` applied to its configuration, without a log.
+fn run_edited(name: &str, edit: impl FnOnce(&mut ScenarioConfig)) -> RunSummary {
+    let mut scenario =
+        Scenario::load(&config_path(name)).unwrap_or_else(|e| panic!("{name} does not load: {e}"));
+    edit(&mut scenario.config);
+    let options = RunOptions {
+        no_log: true,
+        ..RunOptions::default()
+    };
+    run_scenario(&scenario, &options).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// The fall criteria of the issue: base height above 80 % of nominal, torso tilt below 20°, no QP
@@ -142,13 +154,9 @@ fn assert_estimation_targets(name: &str, s: &RunSummary) {
 /// filtered; docs/estimation.md, "The measured ZMP").
 #[test]
 fn the_default_walk_falls_with_the_measured_zmp_unfiltered() {
-    let mut scenario = Scenario::load(&config_path("walk_straight.toml")).expect("scenario");
-    scenario.config.estimation.measured_zmp_cutoff = 0.0;
-    let options = RunOptions {
-        no_log: true,
-        ..RunOptions::default()
-    };
-    let s = run_scenario(&scenario, &options).expect("run");
+    let s = run_edited("walk_straight.toml", |c| {
+        c.estimation.measured_zmp_cutoff = 0.0
+    });
     assert!(matches!(s.outcome, Outcome::Fell { .. }), "{}", s.render());
 }
 
@@ -213,16 +221,10 @@ fn standing_robot_survives_its_push() {
 #[test]
 fn standing_push_limit_is_where_the_docs_say() {
     let push = |newtons: f64| {
-        let mut scenario =
-            Scenario::load(&config_path("stand_push.toml")).expect("stand_push loads");
-        let pushes = &mut scenario.config.sim.pushes;
-        assert_eq!(pushes.len(), 1, "stand_push has one push");
-        pushes[0].wrench[0] = newtons;
-        let options = RunOptions {
-            no_log: true,
-            ..RunOptions::default()
-        };
-        run_scenario(&scenario, &options).expect("stand_push runs")
+        run_edited("stand_push.toml", |c| {
+            assert_eq!(c.sim.pushes.len(), 1, "stand_push has one push");
+            c.sim.pushes[0].wrench[0] = newtons;
+        })
     };
     let survived = push(60.0);
     assert_stayed_up("stand_push 60 N", &survived);
@@ -330,13 +332,7 @@ fn the_fast_walks_reach_their_goals_at_speed() {
 /// (measured: forward, at 6.8 s, after 2.2 m).
 #[test]
 fn position_control_falls_at_a_quarter_metre_steps() {
-    let mut scenario = Scenario::load(&config_path("walk_fast.toml")).expect("scenario");
-    scenario.config.planner.feet_distance_max = 0.2915;
-    let options = RunOptions {
-        no_log: true,
-        ..RunOptions::default()
-    };
-    let s = run_scenario(&scenario, &options).expect("run");
+    let s = run_edited("walk_fast.toml", |c| c.planner.feet_distance_max = 0.2915);
     assert!(matches!(s.outcome, Outcome::Fell { .. }), "{}", s.render());
 }
 
