@@ -23,6 +23,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bundled;
 mod edits;
 mod error;
 mod kindyn;

@@ -1,0 +1,9 @@
+//! # stride-walking
+//!
+//! The walking stack as a library: the functions that connect stride's layers, used by `stride-runner`
+//! and by any controller that embeds the layers without it. Each layer stays usable on its own; this
+//! crate holds only the rules that chain them (plan sample → simplified-layer input, simplified output +
+//! plan → whole-body input).
+
+mod simplified_input;
+mod wbc_input;
