@@ -353,3 +353,20 @@ fn the_fast_turns_reach_their_heading_within_nine_and_a_half_seconds() {
         );
     }
 }
+
+/// Issue 15's curve: a 1 m radius half circle at ≥ 0.25 m/s steady forward speed in position control,
+/// goal pose reached (measured 0.272 m/s, 15.5 s; docs/gait.md, "Curves"). The other side: with the
+/// planner's default yaw per step (0.26 rad) the same curve is walked below 0.25 m/s (measured 0.19): the
+/// yaw-rate limit, not the legs, bounds the speed on a 1 m curve.
+#[test]
+fn the_fast_curve_keeps_a_quarter_metre_per_second_only_with_a_larger_yaw_per_step() {
+    let name = "walk_curve_fast.toml";
+    let s = run(name);
+    assert_stayed_up(name, &s);
+    assert_eq!(s.outcome, Outcome::GoalReached, "{name}");
+    let speed = s.gait.steady_speed.expect("enough touch-downs");
+    assert!(speed >= 0.25, "{name}: steady speed {speed} m/s");
+    let slow = run_edited(name, |c| c.planner.max_yaw_per_step = 0.26);
+    let slow_speed = slow.gait.steady_speed.expect("enough touch-downs");
+    assert!(slow_speed < 0.25, "default yaw per step: {slow_speed} m/s");
+}
