@@ -201,6 +201,9 @@ fn mujoco_robot(
             scenario.invalid(&key, format!("{value}: {reason}")),
         ));
     }
+    if let Some((key, reason)) = soft_ground_unsupported_by_mujoco(scenario) {
+        return Err(RunError::Config(scenario.invalid(key, reason)));
+    }
     let plant = load_plant_model(scenario, model)?;
     let urdf = scenario
         .plant_urdf_path
@@ -214,6 +217,31 @@ fn mujoco_robot(
     Ok(Box::new(crate::mujoco_plant::MujocoPlant::new(
         scenario, plant, &urdf, q0, soles,
     )?))
+}
+
+/// The soft ground of a scenario, which the MuJoCo plant does not model: its contact is MuJoCo's own
+/// (`[mujoco] solref`/`solimp` on the soles' collision boxes), not stride-sim's visco-elastic grid, so a
+/// run on MuJoCo would silently walk on a rigid floor. Ground patches, or a normal stiffness or damping
+/// below stride-sim's default floor, are refused (the key and the reason); a stiffer floor is a rigid floor
+/// on both plants and passes.
+#[cfg_attr(not(feature = "mujoco"), allow(dead_code))]
+pub(crate) fn soft_ground_unsupported_by_mujoco(
+    scenario: &Scenario,
+) -> Option<(&'static str, &'static str)> {
+    let sim = &scenario.config.sim;
+    let floor = stride_sim::ContactConfig::default();
+    const REASON: &str = "a soft ground is modelled by stride-sim only: the MuJoCo plant's contact is \
+         MuJoCo's own ([mujoco] solref, solimp; docs/mujoco.md), so this run would walk on a rigid floor; \
+         run it with `--plant simulator`, or remove the key";
+    if !sim.ground.patches.is_empty() {
+        Some(("sim.ground.patches", REASON))
+    } else if sim.contact.normal_stiffness < floor.normal_stiffness {
+        Some(("sim.contact.normal_stiffness", REASON))
+    } else if sim.contact.normal_damping < floor.normal_damping {
+        Some(("sim.contact.normal_damping", REASON))
+    } else {
+        None
+    }
 }
 
 /// Without the `mujoco` feature the MuJoCo plant is a configuration error that names the build command.
@@ -254,5 +282,45 @@ pub fn default_log_path(scenario: &Scenario) -> PathBuf {
         PathBuf::from(format!("{}.mcap", scenario.config.scenario.name))
     } else {
         p.clone()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scenario(name: &str) -> Scenario {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../configs")
+            .join(name);
+        Scenario::load(&path).expect("shipped scenario loads")
+    }
+
+    #[test]
+    fn mujoco_refuses_the_soft_grounds_it_does_not_model_and_accepts_a_rigid_floor() {
+        let soft = scenario("walk_soft_ground_torque.toml");
+        let (key, _) = soft_ground_unsupported_by_mujoco(&soft).expect("refused");
+        assert_eq!(key, "sim.contact.normal_stiffness");
+        let mut patched = scenario("walk_straight.toml");
+        assert_eq!(soft_ground_unsupported_by_mujoco(&patched), None);
+        patched.config.sim.contact.normal_stiffness *= 10.0;
+        assert_eq!(soft_ground_unsupported_by_mujoco(&patched), None);
+        patched.config.sim.contact.normal_damping *= 0.5;
+        let (key, _) = soft_ground_unsupported_by_mujoco(&patched).expect("refused");
+        assert_eq!(key, "sim.contact.normal_damping");
+        let mut with_patch = scenario("walk_straight.toml");
+        with_patch
+            .config
+            .sim
+            .ground
+            .patches
+            .push(stride_sim::GroundPatchConfig {
+                x_min: 1.0,
+                x_max: 2.0,
+                normal_stiffness: 1e6,
+                normal_damping: 1e4,
+            });
+        let (key, _) = soft_ground_unsupported_by_mujoco(&with_patch).expect("refused");
+        assert_eq!(key, "sim.ground.patches");
     }
 }
