@@ -69,7 +69,7 @@ fn hand_tsid_config() -> TsidConfig {
 fn dynamics_residual(
     model: &Arc<Model>,
     state: &RobotState,
-    frames: &[&str],
+    frames: &[String],
     out: &TsidOutput,
 ) -> f64 {
     let mut kd = kd_at(model, state);
@@ -94,7 +94,7 @@ fn tsid_with_a_hand_contact_and_a_hand_task_holds_the_dynamics_and_the_hand_cone
     let model = bundled_model();
     let state = standing_state(&model, &default_posture(&model));
     let mut tsid = Tsid::new(Arc::clone(&model), hand_tsid_config(), PERIOD).unwrap();
-    let contacts: Vec<&str> = tsid.contact_tasks().collect();
+    let contacts: Vec<String> = tsid.contact_tasks().map(str::to_owned).collect();
     assert_eq!(contacts, ["l_sole", "r_sole", "l_hand_palm"]);
     let kd = kd_at(&model, &state);
     let pose = |f: &str| kd.frame_pose(model.frame_id(f).unwrap());
@@ -189,7 +189,7 @@ fn qp_ik_drives_a_hand_to_the_users_reference_with_the_feet_held() {
     let config = IkConfig::builder()
         .se3_hard(bundled::LEFT_SOLE, 7.0)
         .se3_hard(bundled::RIGHT_SOLE, 7.0)
-        .se3("l_hand_palm", 10.0)
+        .se3_hard("l_hand_palm", 10.0)
         .com(2.0)
         .posture(5.0, &posture())
         .limits()
