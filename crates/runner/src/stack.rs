@@ -52,13 +52,55 @@ impl Wbc {
     pub fn new(scenario: &Scenario, model: &Arc<Model>) -> Result<Self, RunError> {
         let c = &scenario.config;
         let period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.wbc_hz));
-        Ok(match c.scenario.control_mode {
+        let wbc = match c.scenario.control_mode {
             ControlMode::Position => {
                 Wbc::Ik(QpIk::new(Arc::clone(model), c.wbc.ik.clone(), period)?)
             }
             ControlMode::Torque => {
                 Wbc::Tsid(Tsid::new(Arc::clone(model), c.wbc.tsid.clone(), period)?)
             }
+        };
+        wbc.check_walking_names()?;
+        Ok(wbc)
+    }
+
+    /// The runner fills only the walking references and contacts (`stride_walking::walking_layout`):
+    /// any other name would stay at its initial value (identity pose, closed contact) for the whole run.
+    fn check_walking_names(&self) -> Result<(), stride_wbc::WbcError> {
+        let (layout, tasks) = match self {
+            Wbc::Ik(ik) => (ik.input_layout(), &ik.config().tasks),
+            Wbc::Tsid(t) => (t.input_layout(), &t.config().tasks),
+        };
+        let walking = stride_walking::walking_layout();
+        let unknown =
+            |names: &[String], known: &[String]| names.iter().find(|n| !known.contains(n)).cloned();
+        let (key, name) = match (
+            unknown(layout.frames(), walking.frames()),
+            unknown(layout.contacts(), walking.contacts()),
+        ) {
+            (Some(name), _) => ("reference", name),
+            (None, Some(name)) => ("contact", name),
+            (None, None) => return Ok(()),
+        };
+        let task = tasks
+            .iter()
+            .find(|t| match t {
+                stride_wbc::TaskConfig::Se3(c) => c.reference == name,
+                stride_wbc::TaskConfig::So3(c) | stride_wbc::TaskConfig::R3(c) => {
+                    c.reference == name
+                }
+                stride_wbc::TaskConfig::Contact(c) => c.contact_name().is_ok_and(|n| n == name),
+                _ => false,
+            })
+            .map_or("<wbc>", |t| t.name());
+        Err(stride_wbc::WbcError::InvalidConfig {
+            task: task.to_owned(),
+            key,
+            reason: format!(
+                "`{name}`: the runner sets only the walking names ({}, {} and `initial` for references)",
+                walking.frames().join(", "),
+                walking.contacts().join(", ")
+            ),
         })
     }
 

@@ -139,8 +139,10 @@ mod tests {
         let model = Model::from_urdf_str(bundled::URDF).unwrap();
         let mut input = walking_input(&RobotState::zero(&model), &InputLayout::default());
         let handles = WalkingHandles::new(&input).unwrap();
-        let mut plan = PlanSample::default();
-        plan.com_position = Vector3::new(0.1, 0.0, 0.54);
+        let mut plan = PlanSample {
+            com_position: Vector3::new(0.1, 0.0, 0.54),
+            ..Default::default()
+        };
         plan.left.pose.rotation = UnitQuaternion::from_euler_angles(0.0, 0.0, 3.0);
         plan.right.pose.rotation = UnitQuaternion::from_euler_angles(0.0, 0.0, -3.0);
         plan.left.twist[5] = 0.2;
