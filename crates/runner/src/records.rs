@@ -13,7 +13,7 @@ use nalgebra::{
 use serde::{Deserialize, Serialize};
 use stride_model::RobotState;
 use stride_planner::{FootSample, Goal as PlannerGoal, PhaseKind, PlanSample, PlannerInput};
-use stride_wbc::{FootReference, OrientationReference, WbcInput};
+use stride_wbc::{walking, FrameReference, WbcInput};
 
 use crate::config::ControlMode;
 
@@ -266,7 +266,7 @@ pub struct WbcInputRecord<'a> {
     pub angular_momentum: [f64; 3],
 }
 
-fn foot_ref(f: &FootReference) -> FootReferenceRecord {
+fn foot_ref(f: &FrameReference) -> FootReferenceRecord {
     FootReferenceRecord {
         pose: PoseRecord::from_iso(&f.pose),
         velocity: v6(&f.velocity),
@@ -274,61 +274,95 @@ fn foot_ref(f: &FootReference) -> FootReferenceRecord {
     }
 }
 
-fn foot_ref_back(r: &FootReferenceRecord, f: &mut FootReference) {
-    f.pose = r.pose.to_iso();
-    f.velocity = Vector6::from_column_slice(&r.velocity);
-    f.acceleration = Vector6::from_column_slice(&r.acceleration);
+fn foot_ref_back(r: &FootReferenceRecord) -> FrameReference {
+    FrameReference {
+        pose: r.pose.to_iso(),
+        velocity: Vector6::from_column_slice(&r.velocity),
+        acceleration: Vector6::from_column_slice(&r.acceleration),
+    }
+}
+
+/// The walking frame reference `name` of `i` (default when the input lacks it).
+fn walking_frame(i: &WbcInput, name: &str) -> FrameReference {
+    i.frame_reference(name).copied().unwrap_or_default()
+}
+
+/// The walking contact `name` of `i`: (closed, desired wrench); (false, 0) when the input lacks it.
+fn walking_contact(i: &WbcInput, name: &str) -> (bool, Vector6<f64>) {
+    i.contact_named(name)
+        .map(|c| (c.active, c.desired_wrench))
+        .unwrap_or((false, Vector6::zeros()))
 }
 
 impl<'a> WbcInputRecord<'a> {
     /// Borrowing view of a whole-body input.
+    /// The walking names of the input ([`stride_wbc::walking`]) fill the record's fixed fields (the
+    /// runner's inputs always carry them); the desired wrenches are logged when one is not zero.
     pub fn from_input(time_ns: u64, i: &'a WbcInput) -> Self {
-        let q = i.torso.orientation.coords;
+        let torso = walking_frame(i, walking::TORSO);
+        let q = torso.pose.rotation.coords;
+        let (left_in_contact, left_wrench) = walking_contact(i, walking::LEFT_FOOT);
+        let (right_in_contact, right_wrench) = walking_contact(i, walking::RIGHT_FOOT);
+        let desired_wrenches = (left_wrench != Vector6::zeros()
+            || right_wrench != Vector6::zeros())
+        .then(|| [v6(&left_wrench), v6(&right_wrench)]);
         Self {
             time_ns,
             state: StateRecord::from_state(&i.state),
             com_position: v3(&i.com_position),
             com_velocity: v3(&i.com_velocity),
             com_acceleration: v3(&i.com_acceleration),
-            left_foot: foot_ref(&i.left_foot),
-            right_foot: foot_ref(&i.right_foot),
-            left_in_contact: i.left_in_contact,
-            right_in_contact: i.right_in_contact,
+            left_foot: foot_ref(&walking_frame(i, walking::LEFT_FOOT)),
+            right_foot: foot_ref(&walking_frame(i, walking::RIGHT_FOOT)),
+            left_in_contact,
+            right_in_contact,
             desired_zmp: i.desired_zmp.map(|z| [z.x, z.y]),
-            desired_wrenches: i.desired_wrenches.map(|w| [v6(&w[0]), v6(&w[1])]),
+            desired_wrenches,
             torso: OrientationRecord {
                 orientation_xyzw: [q.x, q.y, q.z, q.w],
-                angular_velocity: v3(&i.torso.angular_velocity),
-                angular_acceleration: v3(&i.torso.angular_acceleration),
+                angular_velocity: v3(&torso.velocity.fixed_rows::<3>(3).into_owned()),
+                angular_acceleration: v3(&torso.acceleration.fixed_rows::<3>(3).into_owned()),
             },
             posture: i.posture.as_ref().map(|p| Cow::Borrowed(p.as_slice())),
             angular_momentum: v3(&i.angular_momentum),
         }
     }
 
-    /// Writes the record into a whole-body input sized for the model.
+    /// Writes the record into a whole-body input sized for the model, with the walking names.
     pub fn to_input(&self, i: &mut WbcInput) -> Result<(), String> {
+        let name_error = |e: stride_wbc::WbcError| e.to_string();
         self.state.to_state(&mut i.state)?;
         i.com_position = Vector3::from(self.com_position);
         i.com_velocity = Vector3::from(self.com_velocity);
         i.com_acceleration = Vector3::from(self.com_acceleration);
-        foot_ref_back(&self.left_foot, &mut i.left_foot);
-        foot_ref_back(&self.right_foot, &mut i.right_foot);
-        i.left_in_contact = self.left_in_contact;
-        i.right_in_contact = self.right_in_contact;
+        i.set_frame_reference(walking::LEFT_FOOT, foot_ref_back(&self.left_foot))
+            .map_err(name_error)?;
+        i.set_frame_reference(walking::RIGHT_FOOT, foot_ref_back(&self.right_foot))
+            .map_err(name_error)?;
+        let wrenches = self.desired_wrenches.unwrap_or([[0.0; 6]; 2]);
+        for (name, active, wrench) in [
+            (walking::LEFT_FOOT, self.left_in_contact, &wrenches[0]),
+            (walking::RIGHT_FOOT, self.right_in_contact, &wrenches[1]),
+        ] {
+            let id = i.contact_id(name).map_err(name_error)?;
+            let contact = i.contact_mut(id).map_err(name_error)?;
+            contact.active = active;
+            contact.desired_wrench = Vector6::from_column_slice(wrench);
+        }
         i.desired_zmp = self.desired_zmp.map(|z| Vector2::new(z[0], z[1]));
-        i.desired_wrenches = self.desired_wrenches.map(|w| {
-            [
-                Vector6::from_column_slice(&w[0]),
-                Vector6::from_column_slice(&w[1]),
-            ]
-        });
         let [x, y, z, w] = self.torso.orientation_xyzw;
-        i.torso = OrientationReference {
-            orientation: UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z)),
-            angular_velocity: Vector3::from(self.torso.angular_velocity),
-            angular_acceleration: Vector3::from(self.torso.angular_acceleration),
-        };
+        let mut torso = FrameReference::default();
+        torso.pose.rotation = UnitQuaternion::new_unchecked(Quaternion::new(w, x, y, z));
+        torso
+            .velocity
+            .fixed_rows_mut::<3>(3)
+            .copy_from(&Vector3::from(self.torso.angular_velocity));
+        torso
+            .acceleration
+            .fixed_rows_mut::<3>(3)
+            .copy_from(&Vector3::from(self.torso.angular_acceleration));
+        i.set_frame_reference(walking::TORSO, torso)
+            .map_err(name_error)?;
         i.posture = self.posture.as_ref().map(|p| DVector::from_column_slice(p));
         i.angular_momentum = Vector3::from(self.angular_momentum);
         Ok(())
@@ -378,9 +412,9 @@ pub struct TsidOutputRecord<'a> {
     /// ν̇.
     pub accelerations: &'a DVector<f64>,
     /// Planned contact wrenches.
-    pub contact_wrenches: &'a [Vector6<f64>; 2],
+    pub contact_wrenches: &'a [Vector6<f64>],
     /// Contact load factors.
-    pub contact_load: [f64; 2],
+    pub contact_load: &'a [f64],
     /// Solver report (solve_time and tick_time set to 0).
     pub report: stride_wbc::SolveReport,
     /// Task residuals.
@@ -397,7 +431,7 @@ impl<'a> TsidOutputRecord<'a> {
             joint_torques: &o.joint_torques,
             accelerations: &o.accelerations,
             contact_wrenches: &o.contact_wrenches,
-            contact_load: o.contact_load,
+            contact_load: &o.contact_load,
             report,
             residuals: &o.residuals,
         }

@@ -11,10 +11,9 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use stride_block::Block;
-use stride_model::Model;
+use stride_model::{Model, RobotState};
 use stride_planner::{PlanSample, Planner};
 use stride_simplified::{SimplifiedController, SimplifiedInput};
-use stride_wbc::WbcInput;
 
 use crate::cli::LayerName;
 use crate::config::Scenario;
@@ -311,7 +310,7 @@ fn replay_wbc(
 ) -> Result<(), ReplayError> {
     let mut wbc = Wbc::new(scenario, model)?;
     let outputs: Vec<_> = log.topic("/wbc/output").collect();
-    let mut input = WbcInput::new(model);
+    let mut input = wbc.input(&RobotState::zero(model));
     for (i, m) in log.topic("/wbc/input").enumerate() {
         let rec: WbcInputRecord = parse(&m.data, &m.topic)?;
         rec.to_input(&mut input).map_err(ReplayError::Content)?;

@@ -17,7 +17,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use nalgebra::{UnitQuaternion, Vector2, Vector3, Vector6};
+use nalgebra::{Vector2, Vector3, Vector6};
 use stride_block::{Block, FirstOrderLowPass};
 use stride_estimation::{Estimator, EstimatorOutput};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
@@ -28,6 +28,7 @@ use stride_simplified::{
     HorizonSample, SimplifiedController, SimplifiedInput, SimplifiedOutput, StepAdjuster,
     SupportPolygon,
 };
+use stride_walking::WalkingHandles;
 use stride_wbc::{QpIk, Tsid, WbcInput};
 
 use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
@@ -51,14 +52,66 @@ impl Wbc {
     pub fn new(scenario: &Scenario, model: &Arc<Model>) -> Result<Self, RunError> {
         let c = &scenario.config;
         let period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.wbc_hz));
-        Ok(match c.scenario.control_mode {
+        let wbc = match c.scenario.control_mode {
             ControlMode::Position => {
                 Wbc::Ik(QpIk::new(Arc::clone(model), c.wbc.ik.clone(), period)?)
             }
             ControlMode::Torque => {
                 Wbc::Tsid(Tsid::new(Arc::clone(model), c.wbc.tsid.clone(), period)?)
             }
+        };
+        wbc.check_walking_names()?;
+        Ok(wbc)
+    }
+
+    /// The runner fills only the walking references and contacts (`stride_walking::walking_layout`):
+    /// any other name would stay at its initial value (identity pose, closed contact) for the whole run.
+    fn check_walking_names(&self) -> Result<(), stride_wbc::WbcError> {
+        let (layout, tasks) = match self {
+            Wbc::Ik(ik) => (ik.input_layout(), &ik.config().tasks),
+            Wbc::Tsid(t) => (t.input_layout(), &t.config().tasks),
+        };
+        let walking = stride_walking::walking_layout();
+        let unknown =
+            |names: &[String], known: &[String]| names.iter().find(|n| !known.contains(n)).cloned();
+        let (key, name) = match (
+            unknown(layout.frames(), walking.frames()),
+            unknown(layout.contacts(), walking.contacts()),
+        ) {
+            (Some(name), _) => ("reference", name),
+            (None, Some(name)) => ("contact", name),
+            (None, None) => return Ok(()),
+        };
+        let task = tasks
+            .iter()
+            .find(|t| match t {
+                stride_wbc::TaskConfig::Se3(c) => c.reference == name,
+                stride_wbc::TaskConfig::So3(c) | stride_wbc::TaskConfig::R3(c) => {
+                    c.reference == name
+                }
+                stride_wbc::TaskConfig::Contact(c) => c.contact_name().is_ok_and(|n| n == name),
+                _ => false,
+            })
+            .map_or("<wbc>", |t| t.name());
+        Err(stride_wbc::WbcError::InvalidConfig {
+            task: task.to_owned(),
+            key,
+            reason: format!(
+                "`{name}`: the runner sets only the walking names ({}, {} and `initial` for references)",
+                walking.frames().join(", "),
+                walking.contacts().join(", ")
+            ),
         })
+    }
+
+    /// An input holding the robot at `state` with the controller's names and the walking ones
+    /// ([`stride_walking::walking_input`]).
+    pub fn input(&self, state: &RobotState) -> WbcInput {
+        let layout = match self {
+            Wbc::Ik(ik) => ik.input_layout(),
+            Wbc::Tsid(t) => t.input_layout(),
+        };
+        stride_walking::walking_input(state, layout)
     }
 }
 
@@ -204,6 +257,8 @@ pub struct Stack {
     pub wbc: Wbc,
     /// Its input of the last tick.
     pub wbc_input: WbcInput,
+    /// The walking slots of `wbc_input`.
+    wbc_handles: WalkingHandles,
     /// The command of the last whole-body tick.
     pub command: JointCommand,
     /// The estimation layer (or the ground-truth bypass).
@@ -284,8 +339,8 @@ impl Stack {
             c.planner.foot_width * 0.5,
         )?;
         let simplified_input = SimplifiedInput::new(simplified.horizon_samples(), polygon);
-        let mut wbc_input = WbcInput::new(&model);
-        wbc_input.state.clone_from(initial);
+        let wbc_input = wbc.input(initial);
+        let wbc_handles = WalkingHandles::new(&wbc_input)?;
         let command = JointCommand::hold(c.scenario.control_mode, &initial.joint_positions);
         let estimation = Estimation::new(scenario, &model, initial)?;
         let mut estimate = EstimatorOutput::new(&model);
@@ -316,6 +371,7 @@ impl Stack {
             simplified_valid: false,
             wbc,
             wbc_input,
+            wbc_handles,
             command,
             estimation,
             estimate,
@@ -671,37 +727,8 @@ impl Stack {
         let s = &self.plan_sample;
         let i = &mut self.wbc_input;
         i.state.copy_from(&self.estimate.state);
-        let so = &self.simplified_output;
-        if self.simplified_valid {
-            i.com_position = Vector3::new(so.com_position.x, so.com_position.y, s.com_position.z);
-            i.com_velocity = Vector3::new(so.com_velocity.x, so.com_velocity.y, s.com_velocity.z);
-            i.com_acceleration = Vector3::new(
-                so.com_acceleration.x,
-                so.com_acceleration.y,
-                s.com_acceleration.z,
-            );
-            i.desired_zmp = Some(so.desired_zmp);
-        } else {
-            i.com_position = s.com_position;
-            i.com_velocity = s.com_velocity;
-            i.com_acceleration = s.com_acceleration;
-            i.desired_zmp = Some(s.zmp.xy());
-        }
-        i.left_foot.pose = s.left.pose;
-        i.left_foot.velocity = s.left.twist;
-        i.left_foot.acceleration = s.left.acceleration;
-        i.right_foot.pose = s.right.pose;
-        i.right_foot.velocity = s.right.twist;
-        i.right_foot.acceleration = s.right.acceleration;
-        i.left_in_contact = s.left.in_contact;
-        i.right_in_contact = s.right.in_contact;
-        // Torso: upright, heading the mean of the feet yaws.
-        let yaw = soles_heading(&s.left.pose, &s.right.pose);
-        i.torso.orientation = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
-        let wl = s.left.twist[5];
-        let wr = s.right.twist[5];
-        i.torso.angular_velocity = Vector3::new(0.0, 0.0, 0.5 * (wl + wr));
-        i.torso.angular_acceleration = Vector3::zeros();
+        let simplified = self.simplified_valid.then_some(&self.simplified_output);
+        stride_walking::fill_wbc_input(i, &self.wbc_handles, s, simplified)?;
         i.posture = None;
         i.angular_momentum = self.angular_momentum_reference;
         let cmd = &mut self.command;

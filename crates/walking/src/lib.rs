@@ -6,4 +6,5 @@
 //! plan → whole-body input).
 
 mod simplified_input;
-mod wbc_input;
+pub mod wbc_input;
+pub use wbc_input::{fill_wbc_input, walking_input, walking_layout, WalkingHandles};

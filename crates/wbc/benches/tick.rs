@@ -8,12 +8,11 @@ use std::sync::Arc;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector2};
-use stride_block::Block;
 use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_qp::Backend;
 use stride_wbc::{
-    bundled_posture, FootReference, IkConfig, JointRegularizationTaskConfig, QpIk, TaskConfig,
-    Tsid, TsidConfig, WbcInput,
+    bundled_posture, walking, FrameReference, IkConfig, InputLayout, JointRegularizationTaskConfig,
+    QpIk, TaskConfig, Tsid, TsidConfig, WbcInput,
 };
 
 struct Robot {
@@ -136,19 +135,28 @@ fn input(robot: &Robot) -> WbcInput {
     );
     state.base_pose = flat * l.inverse() * state.base_pose;
     kd.set_state(&state).unwrap();
-    let mut input = WbcInput::new(model);
-    input.state = state;
+    let layout = InputLayout::new(
+        [walking::LEFT_FOOT, walking::RIGHT_FOOT, walking::TORSO],
+        [walking::LEFT_FOOT, walking::RIGHT_FOOT],
+    );
+    let mut input = WbcInput::new(state, Arc::new(layout));
     input.com_position = kd.com_position();
     input.com_position.x += 0.01;
-    input.left_foot = FootReference {
-        pose: kd.frame_pose(model.frame_id(robot.left).unwrap()),
-        ..Default::default()
-    };
-    input.right_foot = FootReference {
-        pose: kd.frame_pose(model.frame_id(robot.right).unwrap()),
-        ..Default::default()
-    };
-    input.torso.orientation = kd.frame_pose(model.frame_id(robot.torso).unwrap()).rotation;
+    let pose = |frame: &str| kd.frame_pose(model.frame_id(frame).unwrap());
+    let torso = FrameReference::still(Isometry3::from_parts(
+        Translation3::identity(),
+        pose(robot.torso).rotation,
+    ));
+    for (name, reference) in [
+        (walking::LEFT_FOOT, FrameReference::still(pose(robot.left))),
+        (
+            walking::RIGHT_FOOT,
+            FrameReference::still(pose(robot.right)),
+        ),
+        (walking::TORSO, torso),
+    ] {
+        input.set_frame_reference(name, reference).unwrap();
+    }
     input.desired_zmp = Some(Vector2::new(input.com_position.x, input.com_position.y));
     input
 }

@@ -128,6 +128,10 @@ pub(crate) struct QpBridge {
     ids: Vec<VarId>,
     /// Whether the last solve wrote its solution to the caller's `x`.
     solved: bool,
+    /// Per task: `None` while enabled; `Some((hard, weights))` while disabled: what to restore.
+    disabled: Vec<Option<(bool, DVector<f64>)>>,
+    /// Per task: a buffer of its row count, so that disabling allocates nothing.
+    spare: Vec<Option<DVector<f64>>>,
 }
 
 impl QpBridge {
@@ -155,7 +159,14 @@ impl QpBridge {
         if eliminate {
             problem.enable_null_space()?;
         }
+        let spare = problem
+            .tasks()
+            .iter()
+            .map(|t| Some(DVector::zeros(t.rows())))
+            .collect();
         Ok(QpBridge {
+            disabled: vec![None; problem.n_tasks()],
+            spare,
             problem,
             ids: layout.ids,
             solved: false,
@@ -188,17 +199,65 @@ impl QpBridge {
         self.problem.task_mut(TaskId(k)).data_mut()
     }
 
-    /// Sets the weights of soft task `k` (one value or one per row).
+    /// Sets the weights of soft task `k` (one value or one per row). Errors: a disabled task.
     pub fn set_weights(&mut self, k: usize, weights: &[f64]) -> Result<(), WbcError> {
+        self.check_enabled(k)?;
         Ok(self.problem.task_mut(TaskId(k)).set_weights(weights)?)
     }
 
-    /// Sets the weight of row `row` of soft task `k`.
+    /// Sets the weight of row `row` of soft task `k`. Errors: a disabled task.
     pub fn set_row_weight(&mut self, k: usize, row: usize, weight: f64) -> Result<(), WbcError> {
+        self.check_enabled(k)?;
         Ok(self
             .problem
             .task_mut(TaskId(k))
             .set_row_weight(row, weight)?)
+    }
+
+    fn check_enabled(&self, k: usize) -> Result<(), WbcError> {
+        match self.disabled[k] {
+            None => Ok(()),
+            Some(_) => Err(WbcError::InvalidInput(format!(
+                "task `{}` is disabled: enable it before changing its weight",
+                self.task(k).name()
+            ))),
+        }
+    }
+
+    /// Whether equality task `k` takes part in the problem.
+    pub fn is_enabled(&self, k: usize) -> bool {
+        self.disabled[k].is_none()
+    }
+
+    /// Takes equality task `k` out of the problem (soft with zero weights: its rows cost nothing) or puts
+    /// it back with the priority and weights it had. Idempotent, allocation-free. Errors: an inequality.
+    pub fn set_enabled(&mut self, k: usize, enabled: bool) -> Result<(), WbcError> {
+        let task = self.problem.task_mut(TaskId(k));
+        if task.kind() != TaskKind::Equality {
+            return Err(WbcError::InvalidInput(format!(
+                "task `{}` is a constraint: it cannot be disabled",
+                task.name()
+            )));
+        }
+        match (enabled, self.disabled[k].is_some()) {
+            (false, false) => {
+                let mut saved = self.spare[k].take().unwrap_or_default();
+                saved.copy_from(task.weights());
+                let hard = task.is_hard();
+                task.set_hard(false)?;
+                task.set_weight(0.0)?;
+                self.disabled[k] = Some((hard, saved));
+            }
+            (true, true) => {
+                if let Some((hard, saved)) = self.disabled[k].take() {
+                    task.set_weights(saved.as_slice())?;
+                    task.set_hard(hard)?;
+                    self.spare[k] = Some(saved);
+                }
+            }
+            _ => {}
+        }
+        Ok(())
     }
 
     pub fn reset(&mut self) {

@@ -6,6 +6,7 @@
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
+use stride_model::bundled;
 pub use stride_qp::{Backend, QpSettings, Weight};
 
 /// Priority of an equality task.
@@ -19,21 +20,19 @@ pub enum Priority {
     Soft,
 }
 
-/// Where a frame task takes its reference from (fields of the controller input).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FrameReferenceSource {
-    /// `input.left_foot` (pose, twist, acceleration).
-    LeftFoot,
-    /// `input.right_foot`.
-    RightFoot,
-    /// `input.torso` (orientation only: valid for `so3` tasks).
-    Torso,
-    /// The frame's pose at the first tick after construction or reset, held still.
-    Initial,
+/// The reference and contact names of the walking stack (stride-walking fills them; the bundled defaults
+/// and the runner's robot files use them).
+pub mod walking {
+    /// Left sole: the frame reference of the left foot's SE(3) task and the left sole's contact flag.
+    pub const LEFT_FOOT: &str = "left_foot";
+    /// Right sole: frame reference and contact flag.
+    pub const RIGHT_FOOT: &str = "right_foot";
+    /// Torso orientation reference (upright; translation unused), read by `so3` tasks.
+    pub const TORSO: &str = "torso";
 }
 
-/// Which foot a contact belongs to (selects `input.left_in_contact` / `input.right_in_contact`).
+/// Which foot a contact belongs to: the TOML key `foot = "left"` of a contact task, kept as a shorthand
+/// for `contact = "left_foot"` (`"right"`: `"right_foot"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Foot {
@@ -41,6 +40,16 @@ pub enum Foot {
     Left,
     /// The right foot.
     Right,
+}
+
+impl Foot {
+    /// The contact name this foot stands for (`"left_foot"`, `"right_foot"`).
+    pub fn contact_name(self) -> &'static str {
+        match self {
+            Foot::Left => walking::LEFT_FOOT,
+            Foot::Right => walking::RIGHT_FOOT,
+        }
+    }
 }
 
 fn default_mask6() -> [bool; 6] {
@@ -60,7 +69,7 @@ fn one() -> f64 {
 /// |---|---|---|---|
 /// | `name` | – | required | task name (unique; used in residual reports) |
 /// | `frame` | – | required | model frame |
-/// | `reference` | – | required | reference source |
+/// | `reference` | – | required | name of the reference in the input ([`crate::WbcInput::set_frame_reference`]), or `"initial"`: the frame's pose at the first tick |
 /// | `kp_linear`, `kp_angular` | 1/s (IK), 1/s² (TSID) | 0 | proportional gains |
 /// | `kd_linear`, `kd_angular` | 1/s | 0 | derivative gains (TSID only) |
 /// | `mask` | – | all true | rows kept: `[x, y, z, rx, ry, rz]` (world axes) |
@@ -73,8 +82,9 @@ pub struct Se3TaskConfig {
     pub name: String,
     /// Frame name in the model.
     pub frame: String,
-    /// Reference source.
-    pub reference: FrameReferenceSource,
+    /// Name of the reference in the input (any name; walking uses `left_foot`, `right_foot`, `torso`), or
+    /// `"initial"`: the frame's pose at the first tick after construction or reset, held still.
+    pub reference: String,
     /// Position gain.
     #[serde(default)]
     pub kp_linear: f64,
@@ -124,8 +134,8 @@ pub struct Frame3TaskConfig {
     pub name: String,
     /// Frame name in the model.
     pub frame: String,
-    /// Reference source.
-    pub reference: FrameReferenceSource,
+    /// Name of the reference in the input, or `"initial"` (see [`Se3TaskConfig::reference`]).
+    pub reference: String,
     /// Orientation offset between the reference and the frame (`so3` tasks; `r3` tasks accept only
     /// `none`).
     #[serde(default)]
@@ -305,7 +315,8 @@ pub struct JointTorqueLimitsTaskConfig {
     pub scale: f64,
 }
 
-/// A rigid planar contact of a foot (TSID). While the foot is loaded it brings: a 6D contact wrench
+/// A rigid planar contact on any frame (feet, hands; TSID), switched by name in the input
+/// ([`crate::WbcInput::set_contact`]). While the contact is loaded it brings: a 6D contact wrench
 /// variable (mixed: force and torque about the frame origin, world orientation), the contact constraint
 /// `J ν̇ + J̇ν = −K_d v − K_p e` (feet do not accelerate; `K_p = K_d = 0` by default) which replaces any
 /// frame task on the same frame, and the feasibility rows (linearized friction cone, unilateral and bounded
@@ -315,8 +326,9 @@ pub struct JointTorqueLimitsTaskConfig {
 /// | key | unit | default | meaning |
 /// |---|---|---|---|
 /// | `name` | – | required | |
-/// | `frame` | – | required | contact frame (sole centre, z normal) |
-/// | `foot` | – | required | `left` / `right` |
+/// | `frame` | – | required | contact frame (centre of the contact surface, z its normal, pointing into the robot) |
+/// | `contact` | – | required (or `foot`) | name of the contact flag in the input, e.g. `left_foot`, `l_hand` |
+/// | `foot` | – | – | shorthand: `left` = `contact = "left_foot"`, `right` = `"right_foot"` (not with `contact`) |
 /// | `friction` | – | 0.33 | static friction coefficient μ |
 /// | `facets` | – | 1 | friction pyramid slices S (4S facets, inscribed) |
 /// | `foot_x` | m | [-0.1, 0.1] | sole rectangle, x in the frame |
@@ -333,8 +345,12 @@ pub struct ContactTaskConfig {
     pub name: String,
     /// Contact frame.
     pub frame: String,
-    /// Which foot's contact flag drives it.
-    pub foot: Foot,
+    /// Name of the input's contact flag that closes and opens it (`""`: from `foot`).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub contact: String,
+    /// Shorthand for `contact = "left_foot"` / `"right_foot"` (TOML files of the feet).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub foot: Option<Foot>,
     /// Friction coefficient.
     #[serde(default = "default_friction")]
     pub friction: f64,
@@ -365,6 +381,47 @@ pub struct ContactTaskConfig {
     /// Velocity stabilization gain.
     #[serde(default)]
     pub kd: f64,
+}
+
+impl ContactTaskConfig {
+    /// A contact task named `frame` on frame `frame`, switched by the contact flag `frame`, with friction
+    /// coefficient `friction` and the defaults of the table above (a 0.2 m × 0.09 m rectangle: set
+    /// `foot_x` / `foot_y` for a hand).
+    pub fn new(frame: &str, friction: f64) -> Self {
+        ContactTaskConfig {
+            name: frame.to_owned(),
+            frame: frame.to_owned(),
+            contact: frame.to_owned(),
+            foot: None,
+            friction,
+            facets: default_facets(),
+            foot_x: default_foot_x(),
+            foot_y: default_foot_y(),
+            torsional_friction: default_torsional(),
+            min_normal_force: 0.0,
+            max_normal_force: default_max_fz(),
+            ramp_time: default_ramp(),
+            kp: 0.0,
+            kd: 0.0,
+        }
+    }
+
+    /// The input contact flag's name: `contact`, or the one of `foot`. Errors: both or neither given.
+    pub fn contact_name(&self) -> Result<&str, crate::error::WbcError> {
+        let bad = |reason: &str| crate::error::WbcError::InvalidConfig {
+            task: self.name.clone(),
+            key: "contact",
+            reason: reason.into(),
+        };
+        match (self.contact.is_empty(), self.foot) {
+            (false, None) => Ok(&self.contact),
+            (true, Some(foot)) => Ok(foot.contact_name()),
+            (true, None) => Err(bad(
+                "missing: name the input's contact flag (e.g. `left_foot`)",
+            )),
+            (false, Some(_)) => Err(bad("give `contact` or its shorthand `foot`, not both")),
+        }
+    }
 }
 
 fn default_friction() -> f64 {
@@ -566,18 +623,13 @@ pub struct TsidConfig {
     pub tasks: Vec<TaskConfig>,
 }
 
-/// Default posture of the bundled model (rad), slightly crouched, arms off the torso.
+/// Default posture of the bundled model (rad), slightly crouched, arms off the torso:
+/// [`stride_model::bundled::POSTURE`].
 pub fn bundled_posture() -> BTreeMap<String, f64> {
-    let mut p = BTreeMap::new();
-    for side in ["l", "r"] {
-        p.insert(format!("{side}_hip_pitch"), 0.35);
-        p.insert(format!("{side}_knee"), 0.7);
-        p.insert(format!("{side}_ankle_pitch"), 0.35);
-        p.insert(format!("{side}_shoulder_pitch"), 0.2);
-        p.insert(format!("{side}_shoulder_roll"), 0.25);
-        p.insert(format!("{side}_elbow"), 0.5);
-    }
-    p
+    stride_model::bundled::POSTURE
+        .iter()
+        .map(|&(joint, q)| (joint.to_owned(), q))
+        .collect()
 }
 
 fn arm_weights(value: f64) -> BTreeMap<String, f64> {
@@ -611,8 +663,8 @@ impl IkConfig {
             tasks: vec![
                 TaskConfig::Se3(Se3TaskConfig {
                     name: "left_foot".into(),
-                    frame: "l_sole".into(),
-                    reference: FrameReferenceSource::LeftFoot,
+                    frame: bundled::LEFT_SOLE.into(),
+                    reference: walking::LEFT_FOOT.into(),
                     kp_linear: 7.0,
                     kp_angular: 5.0,
                     kd_linear: 0.0,
@@ -623,8 +675,8 @@ impl IkConfig {
                 }),
                 TaskConfig::Se3(Se3TaskConfig {
                     name: "right_foot".into(),
-                    frame: "r_sole".into(),
-                    reference: FrameReferenceSource::RightFoot,
+                    frame: bundled::RIGHT_SOLE.into(),
+                    reference: walking::RIGHT_FOOT.into(),
                     kp_linear: 7.0,
                     kp_angular: 5.0,
                     kd_linear: 0.0,
@@ -643,8 +695,8 @@ impl IkConfig {
                 }),
                 TaskConfig::So3(Frame3TaskConfig {
                     name: "torso".into(),
-                    frame: "chest".into(),
-                    reference: FrameReferenceSource::Torso,
+                    frame: bundled::TORSO.into(),
+                    reference: walking::TORSO.into(),
                     reference_offset: ReferenceOffset::None,
                     kp: 5.0,
                     kd: 0.0,
@@ -658,8 +710,8 @@ impl IkConfig {
                 // stride-sim; the robot fell in its first step).
                 TaskConfig::So3(Frame3TaskConfig {
                     name: "pelvis".into(),
-                    frame: "root_link".into(),
-                    reference: FrameReferenceSource::Torso,
+                    frame: bundled::PELVIS.into(),
+                    reference: walking::TORSO.into(),
                     reference_offset: ReferenceOffset::None,
                     kp: 5.0,
                     kd: 0.0,
@@ -737,11 +789,11 @@ impl TsidConfig {
     /// floor) and the CoM gains ([`BUNDLED_TSID_COM_KP`], [`BUNDLED_TSID_COM_KD`], low enough for the
     /// ZMP-CoM feedback of the simplified layer to stay stable).
     pub fn default_for_bundled_model() -> Self {
-        let foot = |name: &str, frame: &str, reference| {
+        let foot = |name: &str, frame: &str, reference: &str| {
             TaskConfig::Se3(Se3TaskConfig {
                 name: name.into(),
                 frame: frame.into(),
-                reference,
+                reference: reference.into(),
                 kp_linear: 400.0,
                 kp_angular: 400.0,
                 kd_linear: 40.0,
@@ -758,7 +810,7 @@ impl TsidConfig {
             TaskConfig::So3(Frame3TaskConfig {
                 name: name.into(),
                 frame: frame.into(),
-                reference: FrameReferenceSource::Torso,
+                reference: walking::TORSO.into(),
                 reference_offset: ReferenceOffset::None,
                 kp: 100.0,
                 kd: 20.0,
@@ -767,21 +819,15 @@ impl TsidConfig {
                 weight: Some(Weight::Scalar(BUNDLED_TSID_UPRIGHT_WEIGHT)),
             })
         };
-        let contact = |name: &str, frame: &str, foot| {
+        // `foot` (not `contact`): the same entries as configs/robots/stride_humanoid.toml
+        let contact = |name: &str, frame: &str, foot: Foot| {
             TaskConfig::Contact(ContactTaskConfig {
                 name: name.into(),
-                frame: frame.into(),
-                foot,
-                friction: default_friction(),
-                facets: default_facets(),
+                contact: String::new(),
+                foot: Some(foot),
                 foot_x: BUNDLED_COP_X,
                 foot_y: BUNDLED_COP_Y,
-                torsional_friction: default_torsional(),
-                min_normal_force: 0.0,
-                max_normal_force: default_max_fz(),
-                ramp_time: default_ramp(),
-                kp: 0.0,
-                kd: 0.0,
+                ..ContactTaskConfig::new(frame, default_friction())
             })
         };
         TsidConfig {
@@ -791,10 +837,10 @@ impl TsidConfig {
                 TaskConfig::FloatingBaseDynamics(FloatingBaseDynamicsTaskConfig {
                     name: "dynamics".into(),
                 }),
-                contact("left_contact", "l_sole", Foot::Left),
-                contact("right_contact", "r_sole", Foot::Right),
-                foot("left_foot", "l_sole", FrameReferenceSource::LeftFoot),
-                foot("right_foot", "r_sole", FrameReferenceSource::RightFoot),
+                contact("left_contact", bundled::LEFT_SOLE, Foot::Left),
+                contact("right_contact", bundled::RIGHT_SOLE, Foot::Right),
+                foot("left_foot", bundled::LEFT_SOLE, walking::LEFT_FOOT),
+                foot("right_foot", bundled::RIGHT_SOLE, walking::RIGHT_FOOT),
                 TaskConfig::Com(ComTaskConfig {
                     name: "com".into(),
                     kp: BUNDLED_TSID_COM_KP,
@@ -803,8 +849,8 @@ impl TsidConfig {
                     priority: Priority::Hard,
                     weight: None,
                 }),
-                upright("torso", "chest"),
-                upright("pelvis", "root_link"),
+                upright("torso", bundled::TORSO),
+                upright("pelvis", bundled::PELVIS),
                 TaskConfig::JointRegularization(JointRegularizationTaskConfig {
                     name: "posture".into(),
                     kp: 100.0,

@@ -42,6 +42,16 @@ pub enum WbcError {
         /// Controller name.
         controller: &'static str,
     },
+    /// A name (frame reference, contact, task) that the input or the controller does not have.
+    #[error("unknown {what} `{name}` (known: {known})")]
+    UnknownName {
+        /// What kind of name.
+        what: String,
+        /// The name.
+        name: String,
+        /// The names there are, comma-separated.
+        known: String,
+    },
     /// The input has the wrong size or non-finite values.
     #[error("invalid input: {0}")]
     InvalidInput(String),

@@ -10,7 +10,8 @@ use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
 use crate::bridge::{QpBridge, VariableLayout};
 use crate::config::{check_unique_names, IkConfig, IkFeedback, Priority, TaskConfig, Weight};
 use crate::error::WbcError;
-use crate::io::{IkOutput, SolveReport, TaskResidual, WbcInput};
+use crate::io::{IkOutput, InputLayout, SolveReport, TaskResidual, WbcInput};
+use crate::names::{input_layout, Resolver};
 use crate::tasks::joint::velocity_bounds;
 use crate::tasks::{
     check_gain, joint_limits, position_limit_bounds, AngularMomentumVelocityTask, ComVelocityTask,
@@ -36,11 +37,50 @@ enum Slot {
 /// solve falls back to the relaxed problem (hard tasks as heavily weighted soft ones, as stride-qp
 /// documents); if that fails too the last valid joint positions are held with zero velocity, the
 /// internal state is not advanced and `report.held` is set.
+///
+/// ```
+/// use std::{sync::Arc, time::Duration};
+/// use stride_wbc::prelude::*;
+/// use stride_model::{bundled, KinDyn, RobotState, VelocityRepresentation};
+///
+/// let model = Arc::new(bundled::model()?);
+/// let config = IkConfig::builder()
+///     .se3_hard(bundled::LEFT_SOLE, 7.0)
+///     .se3_hard(bundled::RIGHT_SOLE, 7.0)
+///     .se3("l_hand_palm", 5.0)
+///     .com(2.0)
+///     .posture(5.0, &bundled::POSTURE)
+///     .build()?;
+/// let mut ik = QpIk::new(model.clone(), config, Duration::from_millis(2))?;
+/// let mut state = RobotState::zero(&model);
+/// for (joint, q) in bundled::POSTURE {
+///     state.joint_positions[model.joint_index(joint).unwrap()] = q;
+/// }
+/// let mut kd = KinDyn::new(model.clone());
+/// kd.set_representation(VelocityRepresentation::Mixed);
+/// kd.set_state(&state)?;
+/// let pose = |name: &str| kd.frame_pose(model.frame_id(name).unwrap());
+/// let mut input = ik.input(&state);
+/// input.com_position = kd.com_position();
+/// for frame in [bundled::LEFT_SOLE, bundled::RIGHT_SOLE] {
+///     input.set_frame_reference(frame, FrameReference::still(pose(frame)))?;
+/// }
+/// // the left palm 5 cm up
+/// let mut hand = pose("l_hand_palm");
+/// hand.translation.vector.z += 0.05;
+/// input.set_frame_reference("l_hand_palm", FrameReference::still(hand))?;
+/// let out = ik.step(&input)?;
+/// assert!(out.report.is_nominal());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub struct QpIk {
     model: Arc<Model>,
     config: IkConfig,
     /// Control period (s).
     period: f64,
+    /// Control period as given to [`QpIk::new`] (for [`QpIk::add_task`]).
+    period_duration: Duration,
+    names: Resolver,
     kd: KinDyn,
     frame_tasks: Vec<FrameTask>,
     com_tasks: Vec<ComVelocityTask>,
@@ -65,6 +105,7 @@ impl QpIk {
     /// Errors: a zero period, unknown frames/joints, invalid gains or weights (a weight on a hard task),
     /// task types the QP-IK does not support (TSID-only tasks), or a QP that stride-qp rejects.
     pub fn new(model: Arc<Model>, config: IkConfig, period: Duration) -> Result<Self, WbcError> {
+        let period_duration = period;
         let period = period.as_secs_f64();
         if period <= 0.0 {
             return Err(WbcError::InvalidConfig {
@@ -86,13 +127,14 @@ impl QpIk {
         let mut velocity_limits = None;
         let (lo, hi, vmax, _) = joint_limits(&model);
         check_unique_names(&config.tasks)?;
+        let names = Resolver::new(input_layout(&config.tasks)?);
         for task in &config.tasks {
             let eq_block = |rows: usize, priority: Priority, weight| {
                 layout.equality(task.name(), rows, priority, weight)
             };
             match task {
                 TaskConfig::Se3(c) => {
-                    let mut t = FrameTask::from_se3(&model, c, Level::Velocity)?;
+                    let mut t = FrameTask::from_se3(&model, &names, c, Level::Velocity)?;
                     t.block = blocks.len();
                     slots.push(Slot::Block(blocks.len()));
                     blocks.push(eq_block(t.row_count(), c.priority, &c.weight)?);
@@ -100,7 +142,8 @@ impl QpIk {
                 }
                 TaskConfig::So3(c) | TaskConfig::R3(c) => {
                     let angular = matches!(task, TaskConfig::So3(_));
-                    let mut t = FrameTask::from_frame3(&model, c, angular, Level::Velocity)?;
+                    let mut t =
+                        FrameTask::from_frame3(&model, &names, c, angular, Level::Velocity)?;
                     t.block = blocks.len();
                     slots.push(Slot::Block(blocks.len()));
                     blocks.push(eq_block(t.row_count(), c.priority, &c.weight)?);
@@ -178,6 +221,8 @@ impl QpIk {
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_representation(VelocityRepresentation::Mixed);
         Ok(QpIk {
+            period_duration,
+            names,
             kd,
             frame_tasks,
             com_tasks,
@@ -209,6 +254,77 @@ impl QpIk {
         &self.model
     }
 
+    /// The names of the frame references this controller reads from its input (no contacts).
+    pub fn input_layout(&self) -> &Arc<InputLayout> {
+        self.names.layout()
+    }
+
+    /// An input holding the robot at `state` with this controller's reference names (see
+    /// [`WbcInput::new`]).
+    pub fn input(&self, state: &RobotState) -> WbcInput {
+        WbcInput::new(state.clone(), Arc::clone(self.names.layout()))
+    }
+
+    /// One tick (the same as [`Block::step`], without importing the trait).
+    pub fn step(&mut self, input: &WbcInput) -> Result<&IkOutput, WbcError> {
+        self.tick(input)
+    }
+
+    /// Takes an equality task (frame, CoM, angular momentum, posture) out of the problem (`false`) or
+    /// puts it back with its priority and weight (`true`), at run time, allocation-free (a hard task
+    /// taken out makes the QP use stride-qp's full solve path until it is back). Errors: unknown name, a
+    /// limit.
+    pub fn set_task_enabled(&mut self, task: &str, enabled: bool) -> Result<(), WbcError> {
+        let k = find_task(&self.config.tasks, task)?;
+        match self.slots[k] {
+            Slot::Block(b) => self.bridge.set_enabled(b, enabled),
+            _ => Err(WbcError::InvalidInput(format!(
+                "task `{task}` is a limit: it cannot be disabled"
+            ))),
+        }
+    }
+
+    /// Whether a task takes part in the problem. Errors: unknown name.
+    pub fn is_task_enabled(&self, task: &str) -> Result<bool, WbcError> {
+        Ok(match self.slots[find_task(&self.config.tasks, task)?] {
+            Slot::Block(b) => self.bridge.is_enabled(b),
+            _ => true,
+        })
+    }
+
+    /// Changes `K_p` (1/s) of a frame, CoM or posture task at run time (every row), allocation-free.
+    /// Errors: unknown name, a task without gain, a negative or non-finite gain.
+    pub fn set_task_gain(&mut self, task: &str, kp: f64) -> Result<(), WbcError> {
+        let k = find_task(&self.config.tasks, task)?;
+        check_gain(task, "kp", kp)?;
+        let Slot::Block(b) = self.slots[k] else {
+            return Err(WbcError::InvalidInput(format!("task `{task}` has no gain")));
+        };
+        if let Some(t) = self.frame_tasks.iter_mut().find(|t| t.block == b) {
+            t.set_gains(kp, 0.0);
+        } else if let Some(t) = self.com_tasks.iter_mut().find(|t| t.block == b) {
+            t.set_gains(kp);
+        } else if let Some(t) = self.joint_tasks.iter_mut().find(|t| t.block == b) {
+            t.set_gains(kp, 0.0);
+        } else {
+            return Err(WbcError::InvalidInput(format!("task `{task}` has no gain")));
+        }
+        Ok(())
+    }
+
+    /// Adds a task: a **reconfiguration**, not a run-time edit. The controller is rebuilt from its
+    /// configuration plus `task` (this allocates) and restarts as after [`Block::reset`] (the next tick
+    /// re-initializes the integrated state from the measured one); run-time edits (weights, gains,
+    /// disabled tasks) are not carried over. Call it before the first tick or where a restart is
+    /// acceptable; a new reference name also needs a new input ([`QpIk::input`]). Errors: those of
+    /// [`QpIk::new`] (on error the controller is unchanged).
+    pub fn add_task(&mut self, task: TaskConfig) -> Result<(), WbcError> {
+        let mut config = self.config.clone();
+        config.tasks.push(task);
+        *self = QpIk::new(Arc::clone(&self.model), config, self.period_duration)?;
+        Ok(())
+    }
+
     /// The internal (integrated) state: the state the task errors were evaluated at in
     /// [`IkFeedback::Integrated`] mode, advanced by the last solution.
     pub fn integrated_state(&self) -> &RobotState {
@@ -229,12 +345,7 @@ impl QpIk {
     /// Errors: unknown task name, a hard task or a limit (no weight), wrong length, negative or
     /// non-finite weight.
     pub fn set_task_weight(&mut self, task: &str, weights: &[f64]) -> Result<(), WbcError> {
-        let k = self
-            .config
-            .tasks
-            .iter()
-            .position(|t| t.name() == task)
-            .ok_or_else(|| WbcError::InvalidInput(format!("no task `{task}`")))?;
+        let k = find_task(&self.config.tasks, task)?;
         let b = match self.slots[k] {
             Slot::Block(b) if !self.bridge.task(b).is_hard() => b,
             _ => {
@@ -266,10 +377,14 @@ impl QpIk {
     /// evaluated at (m and rad mixed: `‖[p_ref − p; Log(R_ref Rᵀ)]‖` on the kept rows), and of the CoM
     /// tasks. Evaluated for `input` at the internal state. For tests and diagnostics (allocates).
     pub fn task_errors(&mut self, input: &WbcInput) -> Result<Vec<(String, f64)>, WbcError> {
+        self.names.resolve(input)?;
         self.kd.set_state(&self.state)?;
         let mut out = Vec::new();
         for t in &mut self.frame_tasks {
-            out.push((t.name.clone(), t.pose_error_norm(&self.kd, input)));
+            out.push((
+                t.name.clone(),
+                t.pose_error_norm(&self.kd, &self.names, input),
+            ));
         }
         for t in &self.com_tasks {
             out.push((t.name.clone(), t.error_norm(&self.kd, input)));
@@ -279,16 +394,26 @@ impl QpIk {
 
     fn fill(&mut self, input: &WbcInput) -> Result<(), WbcError> {
         self.kd.set_state(&self.state)?;
+        let bridge = &mut self.bridge;
         for t in &mut self.frame_tasks {
-            t.update(&self.kd, input, self.bridge.rows_mut(t.block))?;
+            if bridge.is_enabled(t.block) {
+                t.update(&self.kd, &self.names, input, bridge.rows_mut(t.block))?;
+            }
         }
         for t in &mut self.com_tasks {
-            t.update(&mut self.kd, input, self.bridge.rows_mut(t.block))?;
+            if bridge.is_enabled(t.block) {
+                t.update(&mut self.kd, input, bridge.rows_mut(t.block))?;
+            }
         }
         for t in &mut self.momentum_tasks {
-            t.update(&mut self.kd, input, self.bridge.rows_mut(t.block))?;
+            if bridge.is_enabled(t.block) {
+                t.update(&mut self.kd, input, bridge.rows_mut(t.block))?;
+            }
         }
         for t in &self.joint_tasks {
+            if !self.bridge.is_enabled(t.block) {
+                continue;
+            }
             t.update(
                 input,
                 &self.state.joint_positions,
@@ -310,6 +435,7 @@ impl QpIk {
         let n = self.model.dof();
         for (k, slot) in self.slots.iter().enumerate() {
             let r = match slot {
+                Slot::Block(b) if !self.bridge.is_enabled(*b) => 0.0,
                 Slot::Block(b) => self.bridge.residual(*b, &self.x),
                 Slot::PositionLimits | Slot::VelocityLimits => {
                     let mut s = 0.0;
@@ -326,6 +452,22 @@ impl QpIk {
     }
 }
 
+/// Index of task `name` in a task list. Errors: no such task.
+pub(crate) fn find_task(tasks: &[TaskConfig], name: &str) -> Result<usize, WbcError> {
+    tasks
+        .iter()
+        .position(|t| t.name() == name)
+        .ok_or_else(|| WbcError::UnknownName {
+            what: "task".into(),
+            name: name.to_owned(),
+            known: tasks
+                .iter()
+                .map(|t| t.name())
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}
+
 pub(crate) fn check_state(model: &Model, state: &RobotState) -> Result<(), WbcError> {
     Ok(state.validate(model)?)
 }
@@ -338,60 +480,24 @@ pub(crate) fn copy_state(dst: &mut RobotState, src: &RobotState) {
 }
 
 pub(crate) fn check_references(model: &Model, input: &WbcInput) -> Result<(), WbcError> {
-    let vecs = [
-        input.com_position.iter().all(|v| v.is_finite()),
-        input.com_velocity.iter().all(|v| v.is_finite()),
-        input.com_acceleration.iter().all(|v| v.is_finite()),
-        input.left_foot.velocity.iter().all(|v| v.is_finite()),
-        input.left_foot.acceleration.iter().all(|v| v.is_finite()),
-        input.right_foot.velocity.iter().all(|v| v.is_finite()),
-        input.right_foot.acceleration.iter().all(|v| v.is_finite()),
-        input
-            .left_foot
-            .pose
-            .translation
-            .vector
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    let frames_ok = input.frames().iter().all(|r| {
+        finite(r.pose.translation.vector.as_slice())
+            && finite(r.pose.rotation.coords.as_slice())
+            && finite(r.velocity.as_slice())
+            && finite(r.acceleration.as_slice())
+    });
+    let ok = finite(input.com_position.as_slice())
+        && finite(input.com_velocity.as_slice())
+        && finite(input.com_acceleration.as_slice())
+        && finite(input.angular_momentum.as_slice())
+        && input.desired_zmp.is_none_or(|z| finite(z.as_slice()))
+        && frames_ok
+        && input
+            .contacts()
             .iter()
-            .all(|v| v.is_finite()),
-        input
-            .right_foot
-            .pose
-            .translation
-            .vector
-            .iter()
-            .all(|v| v.is_finite()),
-        input
-            .left_foot
-            .pose
-            .rotation
-            .coords
-            .iter()
-            .all(|v| v.is_finite()),
-        input
-            .right_foot
-            .pose
-            .rotation
-            .coords
-            .iter()
-            .all(|v| v.is_finite()),
-        input.torso.orientation.coords.iter().all(|v| v.is_finite()),
-        input.torso.angular_velocity.iter().all(|v| v.is_finite()),
-        input
-            .torso
-            .angular_acceleration
-            .iter()
-            .all(|v| v.is_finite()),
-        input.angular_momentum.iter().all(|v| v.is_finite()),
-        input
-            .desired_zmp
-            .map(|z| z.iter().all(|v| v.is_finite()))
-            .unwrap_or(true),
-        input
-            .desired_wrenches
-            .map(|w| w.iter().all(|x| x.iter().all(|v| v.is_finite())))
-            .unwrap_or(true),
-    ];
-    if !vecs.iter().all(|ok| *ok) {
+            .all(|c| finite(c.desired_wrench.as_slice()));
+    if !ok {
         return Err(WbcError::InvalidInput("non-finite reference".into()));
     }
     if let Some(p) = &input.posture {
@@ -411,9 +517,20 @@ impl Block for QpIk {
     type Error = WbcError;
 
     fn step(&mut self, input: &WbcInput) -> Result<&IkOutput, WbcError> {
+        self.tick(input)
+    }
+
+    fn reset(&mut self) {
+        self.reset_state();
+    }
+}
+
+impl QpIk {
+    fn tick(&mut self, input: &WbcInput) -> Result<&IkOutput, WbcError> {
         let start = Instant::now();
         check_state(&self.model, &input.state)?;
         check_references(&self.model, input)?;
+        self.names.resolve(input)?;
         if !self.initialized || self.config.feedback == IkFeedback::Measured {
             copy_state(&mut self.state, &input.state);
             if !self.initialized {
@@ -455,7 +572,7 @@ impl Block for QpIk {
         Ok(&self.output)
     }
 
-    fn reset(&mut self) {
+    fn reset_state(&mut self) {
         self.initialized = false;
         self.bridge.reset();
         for t in &mut self.frame_tasks {

@@ -18,15 +18,18 @@
 #![warn(missing_docs)]
 
 mod bridge;
+mod builder;
 pub mod config;
 mod error;
 mod ik;
 mod io;
 pub mod math;
+mod names;
 pub mod soft_contact;
 mod tasks;
 mod tsid;
 
+pub use builder::{IkConfigBuilder, TsidConfigBuilder};
 pub use config::*;
 pub use error::WbcError;
 pub use ik::QpIk;
@@ -35,4 +38,24 @@ pub use soft_contact::{
     EstimatorSettings, GroundEstimator, GroundParameters, SoleAcceleration, SoleGeometry,
     SoleState, WrenchRate,
 };
+pub use stride_block::Block;
+pub use stride_qp::QpStatus;
 pub use tsid::Tsid;
+pub use {nalgebra, stride_model};
+
+/// Everything a controller built on stride-wbc usually needs: `use stride_wbc::prelude::*;`.
+pub mod prelude {
+    pub use crate::builder::{IkConfigBuilder, TsidConfigBuilder};
+    pub use crate::config::{
+        walking, ContactTaskConfig, IkConfig, Priority, Se3TaskConfig, TaskConfig, TsidConfig,
+        Weight,
+    };
+    pub use crate::io::{
+        ContactId, ContactInput, FrameRefId, FrameReference, IkOutput, InputLayout, SolveReport,
+        TsidOutput, WbcInput,
+    };
+    pub use crate::{QpIk, Tsid, WbcError};
+    pub use nalgebra;
+    pub use stride_block::Block;
+    pub use stride_qp::QpStatus;
+}

@@ -12,14 +12,16 @@ use std::time::{Duration, Instant};
 
 use nalgebra::{DMatrix, DVector, Vector3, Vector6};
 use stride_block::Block;
-use stride_model::{KinDyn, Model, VelocityRepresentation};
+use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_qp::{TaskKind, TaskSpec};
 
 use crate::bridge::{check_weight, priority_weight, QpBridge, VariableLayout};
-use crate::config::{check_unique_names, Foot, Priority, TaskConfig, TsidConfig, Weight};
+use crate::config::{check_unique_names, Priority, TaskConfig, TsidConfig, Weight};
 use crate::error::WbcError;
-use crate::ik::{check_references, check_state};
-use crate::io::{SolveReport, TaskResidual, TsidOutput, WbcInput};
+use crate::ik::{check_references, check_state, find_task};
+use crate::io::{InputLayout, SolveReport, TaskResidual, TsidOutput, WbcInput};
+use crate::names::input_layout;
+use crate::names::Resolver;
 use crate::tasks::contact::fill_wrench_regularization;
 use crate::tasks::dynamics::{
     fill_base_dynamics, fill_torque_limits, fill_torque_regularization, joint_torques,
@@ -53,6 +55,7 @@ enum TsidTask {
 
 /// The config's tasks, checked and built, before the QPs are: shared by every prebuilt QP.
 struct TaskSet {
+    names: Resolver,
     tasks: Vec<TsidTask>,
     /// Per config task: `Some((hard, weight))` for the equality tasks whose rows keep the config's
     /// priority and weight (the weight is unused when hard), `None` for the others.
@@ -74,6 +77,7 @@ impl TaskSet {
     /// Checks and builds every config task.
     fn parse(model: &Model, config: &TsidConfig, period: f64) -> Result<Self, WbcError> {
         let mut set = TaskSet {
+            names: Resolver::new(input_layout(&config.tasks)?),
             tasks: Vec::new(),
             eq_weights: Vec::new(),
             frame_tasks: Vec::new(),
@@ -126,14 +130,15 @@ impl TaskSet {
                 (TsidTask::Dynamics, Some((true, Weight::default())))
             }
             TaskConfig::Se3(c) => {
-                let t = FrameTask::from_se3(model, c, Level::Acceleration)?;
+                let t = FrameTask::from_se3(model, &self.names, c, Level::Acceleration)?;
                 let w = weights(t.row_count(), c.priority, &c.weight)?;
                 self.frame_tasks.push(t);
                 (TsidTask::Frame(self.frame_tasks.len() - 1), w)
             }
             TaskConfig::So3(c) | TaskConfig::R3(c) => {
                 let angular = matches!(task, TaskConfig::So3(_));
-                let t = FrameTask::from_frame3(model, c, angular, Level::Acceleration)?;
+                let t =
+                    FrameTask::from_frame3(model, &self.names, c, angular, Level::Acceleration)?;
                 let w = weights(t.row_count(), c.priority, &c.weight)?;
                 self.frame_tasks.push(t);
                 (TsidTask::Frame(self.frame_tasks.len() - 1), w)
@@ -181,7 +186,7 @@ impl TaskSet {
                         reason: format!("at most {MAX_CONTACTS} contacts"),
                     });
                 }
-                self.contacts.push(Contact::new(model, c)?);
+                self.contacts.push(Contact::new(model, &self.names, c)?);
                 (
                     TsidTask::Contact(self.contacts.len() - 1),
                     Some((true, Weight::default())),
@@ -355,11 +360,47 @@ struct Variant {
 }
 
 /// The torque TSID block. See the module docs and docs/wbc.md.
+///
+/// ```
+/// use std::{sync::Arc, time::Duration};
+/// use stride_wbc::prelude::*;
+/// use stride_model::{bundled, KinDyn, RobotState, VelocityRepresentation};
+///
+/// let model = Arc::new(bundled::model()?);
+/// let mut tsid = Tsid::new(model.clone(), TsidConfig::default_for_bundled_model(), Duration::from_millis(2))?;
+/// // the robot at its standing posture, soles on z = 0
+/// let mut state = RobotState::zero(&model);
+/// for (joint, q) in bundled::POSTURE {
+///     state.joint_positions[model.joint_index(joint).unwrap()] = q;
+/// }
+/// let mut kd = KinDyn::new(model.clone());
+/// kd.set_representation(VelocityRepresentation::Mixed);
+/// kd.set_state(&state)?;
+/// let left = model.frame_id(bundled::LEFT_SOLE).unwrap();
+/// state.base_pose.translation.vector.z -= kd.frame_pose(left).translation.vector.z;
+/// kd.set_state(&state)?;
+/// let pose = |name: &str| kd.frame_pose(model.frame_id(name).unwrap());
+/// // hold it there: references by name
+/// let mut input = tsid.input(&state);
+/// input.com_position = kd.com_position();
+/// input.set_frame_reference(walking::LEFT_FOOT, FrameReference::still(pose(bundled::LEFT_SOLE)))?;
+/// input.set_frame_reference(walking::RIGHT_FOOT, FrameReference::still(pose(bundled::RIGHT_SOLE)))?;
+/// let torso = input.frame_id(walking::TORSO)?; // a handle: no string lookup in a loop
+/// input.frame_mut(torso)?.pose.rotation = pose(bundled::TORSO).rotation;
+/// let out = tsid.step(&input)?;
+/// assert!(out.report.is_nominal());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub struct Tsid {
     model: Arc<Model>,
     config: TsidConfig,
     /// Control period (s).
     period: f64,
+    /// Control period as given to [`Tsid::new`] (for [`Tsid::add_task`]).
+    period_duration: Duration,
+    names: Resolver,
+    /// Per config task: whether it takes part (see [`Tsid::set_task_enabled`]).
+    enabled: Vec<bool>,
     kd: KinDyn,
     tasks: Vec<TsidTask>,
     frame_tasks: Vec<FrameTask>,
@@ -390,6 +431,7 @@ impl Tsid {
     /// Errors: a zero period, unknown frames/joints, invalid values (a weight on a hard task), no
     /// `floating_base_dynamics` task, more than `MAX_CONTACTS` contacts, or a QP that stride-qp rejects.
     pub fn new(model: Arc<Model>, config: TsidConfig, period: Duration) -> Result<Self, WbcError> {
+        let period_duration = period;
         let period = period.as_secs_f64();
         if period <= 0.0 {
             return Err(WbcError::InvalidConfig {
@@ -427,8 +469,8 @@ impl Tsid {
         let output = TsidOutput {
             joint_torques: DVector::zeros(n),
             accelerations: DVector::zeros(nv),
-            contact_wrenches: [Vector6::zeros(); 2],
-            contact_load: [0.0; 2],
+            contact_wrenches: vec![Vector6::zeros(); set.contacts.len()],
+            contact_load: vec![0.0; set.contacts.len()],
             report: SolveReport::default(),
             residuals,
         };
@@ -442,6 +484,9 @@ impl Tsid {
             com_velocity: Vector3::zeros(),
             momentum: Vector6::zeros(),
             kd,
+            period_duration,
+            enabled: vec![true; set.tasks.len()],
+            names: set.names,
             tasks: set.tasks,
             frame_tasks: set.frame_tasks,
             joint_tasks: set.joint_tasks,
@@ -466,18 +511,106 @@ impl Tsid {
         &self.config
     }
 
+    /// The names of the frame references and contacts this controller reads from its input.
+    pub fn input_layout(&self) -> &Arc<InputLayout> {
+        self.names.layout()
+    }
+
+    /// An input holding the robot at `state` with this controller's reference and contact names (see
+    /// [`WbcInput::new`]).
+    pub fn input(&self, state: &RobotState) -> WbcInput {
+        WbcInput::new(state.clone(), Arc::clone(self.names.layout()))
+    }
+
+    /// The contact tasks' names, in the order of [`TsidOutput::contact_wrenches`].
+    pub fn contact_tasks(&self) -> impl Iterator<Item = &str> {
+        self.contacts.iter().map(|c| c.name.as_str())
+    }
+
+    /// One tick (the same as [`Block::step`], without importing the trait).
+    pub fn step(&mut self, input: &WbcInput) -> Result<&TsidOutput, WbcError> {
+        self.tick(input)
+    }
+
+    /// Takes a task out of the problem (`false`) or puts it back with its priority, weight and gains
+    /// (`true`), at run time, allocation-free (a hard task taken out makes the QP use stride-qp's full
+    /// solve path rather than the null-space one until it is back). Equality tasks only: frame, CoM,
+    /// angular momentum, posture, ZMP and the regularizations; contacts open and close through the input
+    /// ([`WbcInput::set_contact`]). Errors: unknown name, the dynamics, a contact or a limit.
+    pub fn set_task_enabled(&mut self, task: &str, enabled: bool) -> Result<(), WbcError> {
+        let k = find_task(&self.config.tasks, task)?;
+        if matches!(
+            self.tasks[k],
+            TsidTask::Dynamics
+                | TsidTask::Contact(_)
+                | TsidTask::PositionLimits
+                | TsidTask::VelocityLimits
+                | TsidTask::TorqueLimits { .. }
+        ) {
+            return Err(WbcError::InvalidInput(format!(
+                "task `{task}` is a constraint: it cannot be disabled"
+            )));
+        }
+        for variant in &mut self.variants {
+            for &b in &variant.slots[k] {
+                variant.bridge.set_enabled(b, enabled)?;
+            }
+        }
+        self.enabled[k] = enabled;
+        Ok(())
+    }
+
+    /// Whether a task takes part in the problem. Errors: unknown name.
+    pub fn is_task_enabled(&self, task: &str) -> Result<bool, WbcError> {
+        Ok(self.enabled[find_task(&self.config.tasks, task)?])
+    }
+
+    /// Changes the gains of a task at run time, allocation-free: `K_p` (1/s²) and `K_d` (1/s) of every
+    /// row of a frame task, of the CoM and posture tasks; `K_p` of the angular momentum task (`kd`
+    /// unused); the contact constraint's stabilization gains. Errors: unknown name, a task without
+    /// gains, a negative or non-finite gain.
+    pub fn set_task_gains(&mut self, task: &str, kp: f64, kd: f64) -> Result<(), WbcError> {
+        let k = find_task(&self.config.tasks, task)?;
+        check_gain(task, "kp", kp)?;
+        check_gain(task, "kd", kd)?;
+        match &mut self.tasks[k] {
+            TsidTask::Frame(f) => self.frame_tasks[*f].set_gains(kp, kd),
+            TsidTask::Com(t) => t.set_gains(kp, kd),
+            TsidTask::AngularMomentum(t) => t.set_gains(kp),
+            TsidTask::Joint(j) => self.joint_tasks[*j].set_gains(kp, kd),
+            TsidTask::Contact(c) => {
+                self.contacts[*c].kp = kp;
+                self.contacts[*c].kd = kd;
+            }
+            _ => {
+                return Err(WbcError::InvalidInput(format!(
+                    "task `{task}` has no gains"
+                )))
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds a task: a **reconfiguration**, not a run-time edit. The controller is rebuilt from its
+    /// configuration plus `task` (every QP is rebuilt: this allocates) and restarts as after
+    /// [`Block::reset`]; run-time edits (weights, gains, disabled tasks) are not carried over. Call it
+    /// before the first tick, or between phases of a task where a restart is acceptable; a new reference
+    /// or contact name also needs a new input ([`Tsid::input`]). Errors: those of [`Tsid::new`] (on error
+    /// the controller is unchanged).
+    pub fn add_task(&mut self, task: TaskConfig) -> Result<(), WbcError> {
+        let mut config = self.config.clone();
+        config.tasks.push(task);
+        *self = Tsid::new(Arc::clone(&self.model), config, self.period_duration)?;
+        Ok(())
+    }
+
     /// Changes the weight of a soft task at run time (e.g. walking vs standing) in every prebuilt QP:
     /// one value for every row or one per row (per-row lists of `wrench_regularization` have 6 entries,
     /// applied to each contact). Allocation-free.
     ///
     /// Errors: unknown task name, a hard task or a constraint, wrong length, negative or non-finite weight.
     pub fn set_task_weight(&mut self, task: &str, weights: &[f64]) -> Result<(), WbcError> {
-        let k = self
-            .config
-            .tasks
-            .iter()
-            .position(|t| t.name() == task)
-            .ok_or_else(|| WbcError::InvalidInput(format!("no task `{task}`")))?;
+        let k = find_task(&self.config.tasks, task)?;
         if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) {
             return Err(WbcError::InvalidInput(format!(
                 "task `{task}`: weights must be finite and >= 0"
@@ -515,7 +648,7 @@ impl Tsid {
                 found = true;
             }
         }
-        if !found {
+        if !found && self.enabled[k] {
             return Err(WbcError::InvalidInput(format!(
                 "task `{task}` has no weight"
             )));
@@ -578,13 +711,15 @@ impl Tsid {
         };
         for (ti, task) in self.tasks.iter().enumerate() {
             let slots = &variant.slots[ti];
-            if slots.is_empty() {
+            if slots.is_empty() || !self.enabled[ti] {
                 continue;
             }
             let b = &mut variant.bridge.rows_mut(slots[0]);
             match *task {
                 TsidTask::Dynamics => fill_base_dynamics(&ctx, b),
-                TsidTask::Frame(f) => self.frame_tasks[f].update(&self.kd, input, b.reborrow())?,
+                TsidTask::Frame(f) => {
+                    self.frame_tasks[f].update(&self.kd, &self.names, input, b.reborrow())?
+                }
                 TsidTask::Com(t) => t.fill(input, &ctx, b),
                 TsidTask::AngularMomentum(t) => t.fill(input, &ctx, b),
                 TsidTask::Joint(j) => self.joint_tasks[j].update(
@@ -604,7 +739,9 @@ impl Tsid {
                     let off = variant.offsets[c].unwrap_or(0);
                     contact.fill_feasibility(off, &mut variant.bridge.rows_mut(slots[1]));
                 }
-                TsidTask::WrenchRegularization => fill_wrench_regularization(input, &ctx, b),
+                TsidTask::WrenchRegularization => {
+                    fill_wrench_regularization(input, &self.names, &ctx, b)
+                }
                 TsidTask::Zmp => fill_zmp(input, &ctx, b),
             }
         }
@@ -638,7 +775,6 @@ impl Tsid {
             offsets: &variant.offsets,
         };
         joint_torques(&ctx, x, &mut self.output.joint_torques);
-        self.output.contact_wrenches = [Vector6::zeros(); 2];
         for (c, contact) in self.contacts.iter_mut().enumerate() {
             let w = match variant.offsets[c] {
                 Some(off) => Vector6::from_iterator((0..6).map(|k| x[off + k])),
@@ -646,11 +782,7 @@ impl Tsid {
             };
             let rt = contact.pose.rotation.inverse();
             contact.last_fz = (rt * w.fixed_rows::<3>(0).into_owned()).z;
-            let slot = match contact.foot {
-                Foot::Left => 0,
-                Foot::Right => 1,
-            };
-            self.output.contact_wrenches[slot] += w;
+            self.output.contact_wrenches[c] = w;
         }
         for (k, slots) in variant.slots.iter().enumerate() {
             let mut s = 0.0;
@@ -659,6 +791,7 @@ impl Tsid {
                 s += r * r;
             }
             self.output.residuals[k].residual = match self.tasks[k] {
+                _ if !self.enabled[k] => 0.0,
                 TsidTask::PositionLimits | TsidTask::VelocityLimits => {
                     let mut s = 0.0;
                     for i in 0..n {
@@ -675,22 +808,16 @@ impl Tsid {
     }
 }
 
-impl Block for Tsid {
-    type Input = WbcInput;
-    type Output = TsidOutput;
-    type Error = WbcError;
-
-    fn step(&mut self, input: &WbcInput) -> Result<&TsidOutput, WbcError> {
+impl Tsid {
+    fn tick(&mut self, input: &WbcInput) -> Result<&TsidOutput, WbcError> {
         let start = Instant::now();
         check_state(&self.model, &input.state)?;
         check_references(&self.model, input)?;
+        self.names.resolve(input)?;
         self.compute_dynamics(input)?;
         let period = self.period;
         for contact in &mut self.contacts {
-            let flag = match contact.foot {
-                Foot::Left => input.left_in_contact,
-                Foot::Right => input.right_in_contact,
-            };
+            let flag = self.names.contact(input, contact.flag).active;
             if !self.initialized {
                 // start-up: contacts already closed carry load at once
                 contact.reference = contact.pose;
@@ -719,15 +846,20 @@ impl Block for Tsid {
             self.last_valid = true;
         }
         for (c, contact) in self.contacts.iter().enumerate() {
-            let slot = match contact.foot {
-                Foot::Left => 0,
-                Foot::Right => 1,
-            };
-            let _ = c;
-            self.output.contact_load[slot] = contact.load;
+            self.output.contact_load[c] = contact.load;
         }
         self.output.report.tick_time = start.elapsed().as_secs_f64();
         Ok(&self.output)
+    }
+}
+
+impl Block for Tsid {
+    type Input = WbcInput;
+    type Output = TsidOutput;
+    type Error = WbcError;
+
+    fn step(&mut self, input: &WbcInput) -> Result<&TsidOutput, WbcError> {
+        self.tick(input)
     }
 
     fn reset(&mut self) {
@@ -748,7 +880,7 @@ impl Block for Tsid {
         self.initialized = false;
         self.output.joint_torques.fill(0.0);
         self.output.accelerations.fill(0.0);
-        self.output.contact_wrenches = [Vector6::zeros(); 2];
+        self.output.contact_wrenches.fill(Vector6::zeros());
         self.output.report = SolveReport::default();
     }
 }

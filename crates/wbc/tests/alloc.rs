@@ -6,9 +6,8 @@ use std::sync::Arc;
 
 use common::*;
 use nalgebra::Vector2;
-use stride_block::Block;
 use stride_qp::Backend;
-use stride_wbc::{IkConfig, QpIk, Tsid, TsidConfig};
+use stride_wbc::{walking, IkConfig, QpIk, Tsid, TsidConfig};
 
 #[global_allocator]
 static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
@@ -48,7 +47,7 @@ fn ik_and_tsid_ticks_allocate_nothing() {
     });
     assert_eq!(n, 0, "TSID ticks allocated {n} times");
     // a contact change (another prebuilt QP, first solve of that QP included) and a ZMP task
-    input.right_in_contact = false;
+    input.set_contact("right_foot", false).unwrap();
     input.desired_zmp = Some(Vector2::new(input.com_position.x, input.com_position.y));
     let (_, n) = ALLOC.allocations_during(|| {
         for _ in 0..100 {
@@ -56,6 +55,35 @@ fn ik_and_tsid_ticks_allocate_nothing() {
         }
     });
     assert_eq!(n, 0, "TSID ticks across a lift-off allocated {n} times");
+    // run-time edits: contacts and references through handles, weights, gains, tasks taken out and put
+    // back (a hard one too: the full solve path instead of the null-space one)
+    let right = input.contact_id(walking::RIGHT_FOOT).unwrap();
+    let left = input.frame_id(walking::LEFT_FOOT).unwrap();
+    let (_, n) = ALLOC.allocations_during(|| {
+        for k in 0..60 {
+            input.contact_mut(right).unwrap().active = k % 20 < 10;
+            input.frame_mut(left).unwrap().velocity[0] = 1e-4 * k as f64;
+            tsid.set_task_weight("posture", &[1.0 + k as f64]).unwrap();
+            tsid.set_task_gains("com", 25.0 + k as f64, 5.0).unwrap();
+            tsid.set_task_gains("left_foot", 400.0, 40.0 + k as f64)
+                .unwrap();
+            tsid.set_task_enabled("torso", k % 2 == 0).unwrap();
+            tsid.set_task_enabled("right_foot", k % 3 != 0).unwrap();
+            assert!(tsid.step(&input).unwrap().report.status.is_success());
+        }
+    });
+    assert_eq!(n, 0, "TSID ticks with run-time edits allocated {n} times");
+    let (_, n) = ALLOC.allocations_during(|| {
+        for k in 0..60 {
+            input.frame_mut(left).unwrap().velocity[0] = 1e-4 * k as f64;
+            ik.set_task_weight("posture", &[1.0 + k as f64]).unwrap();
+            ik.set_task_gain("com", 2.0 + 0.1 * k as f64).unwrap();
+            ik.set_task_enabled("torso", k % 2 == 0).unwrap();
+            ik.set_task_enabled("com", k % 3 != 0).unwrap();
+            assert!(ik.step(&input).unwrap().report.status.is_success());
+        }
+    });
+    assert_eq!(n, 0, "QP-IK ticks with run-time edits allocated {n} times");
 }
 
 #[test]

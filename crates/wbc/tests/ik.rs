@@ -56,7 +56,7 @@ fn hard_errors(model: &Arc<Model>, state: &stride_model::RobotState, input: &Wbc
     kd.set_representation(VelocityRepresentation::Mixed);
     kd.set_state(state).unwrap();
     let mut worst: f64 = 0.0;
-    for (frame, r) in [("l_sole", &input.left_foot), ("r_sole", &input.right_foot)] {
+    for (frame, r) in [("l_sole", &input.lf()), ("r_sole", &input.rf())] {
         let p = kd.frame_pose(model.frame_id(frame).unwrap());
         worst = worst.max((p.translation.vector - r.pose.translation.vector).norm());
         worst = worst.max((r.pose.rotation * p.rotation.inverse()).angle());
@@ -154,7 +154,7 @@ fn hard_tasks_are_satisfied_exactly_and_velocity_mode_reproduces_reference_rates
     let state = standing_state(&model, &q);
     let mut input = references_at(&model, &state);
     // zero errors, non-zero reference velocities of the feet and the CoM
-    input.left_foot.velocity = nalgebra::Vector6::new(0.1, 0.0, 0.05, 0.0, 0.0, 0.2);
+    input.lf_mut().velocity = nalgebra::Vector6::new(0.1, 0.0, 0.05, 0.0, 0.0, 0.2);
     input.com_velocity = nalgebra::Vector3::new(0.05, 0.01, 0.0);
     let mut config = test_config(10.0);
     config.feedback = stride_wbc::IkFeedback::Measured;
@@ -170,7 +170,7 @@ fn hard_tasks_are_satisfied_exactly_and_velocity_mode_reproduces_reference_rates
     let mut j = nalgebra::DMatrix::zeros(6, model.nv());
     kd.frame_jacobian(model.frame_id("l_sole").unwrap(), &mut j)
         .unwrap();
-    assert!((&j * &nu - input.left_foot.velocity).norm() < 1e-9);
+    assert!((&j * &nu - input.lf().velocity).norm() < 1e-9);
     kd.frame_jacobian(model.frame_id("r_sole").unwrap(), &mut j)
         .unwrap();
     assert!((&j * &nu).norm() < 1e-9);
@@ -223,8 +223,8 @@ fn unreachable_feet_fall_back_to_the_relaxed_problem_without_nan() {
     let state = standing_state(&model, &q);
     let mut input = references_at(&model, &state);
     // feet 3 m apart: the joint-limit bounds make the hard feet + CoM rows infeasible at once
-    input.left_foot.pose.translation.vector.y += 1.5;
-    input.right_foot.pose.translation.vector.y -= 1.5;
+    input.lf_mut().pose.translation.vector.y += 1.5;
+    input.rf_mut().pose.translation.vector.y -= 1.5;
     let mut ik = QpIk::new(Arc::clone(&model), test_config(100.0), PERIOD).unwrap();
     let out = ik.step(&input).unwrap();
     assert_eq!(out.report.status, QpStatus::Infeasible);
@@ -257,8 +257,8 @@ fn a_failed_tick_holds_the_last_valid_command() {
     let mut ik = QpIk::new(Arc::clone(&model), config, PERIOD).unwrap();
     let good = ik.step(&input).unwrap().joint_positions.clone();
     let mut bad = input.clone();
-    bad.left_foot.pose.translation.vector.y += 1.5;
-    bad.right_foot.pose.translation.vector.y -= 1.5;
+    bad.lf_mut().pose.translation.vector.y += 1.5;
+    bad.rf_mut().pose.translation.vector.y -= 1.5;
     let out = ik.step(&bad).unwrap();
     assert!(out.report.held);
     assert_eq!(out.joint_positions, good);
@@ -489,8 +489,8 @@ fn soft_weights_change_at_run_time() {
     let state = standing_state(&model, &q);
     let mut input = references_at(&model, &state);
     // torso reference tilted: torso task and posture task compete
-    input.torso.orientation =
-        nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.2, 0.0) * input.torso.orientation;
+    input.torso_mut().pose.rotation =
+        nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.2, 0.0) * input.torso().pose.rotation;
     let mut config = test_config(10.0);
     config.feedback = stride_wbc::IkFeedback::Measured;
     let mut ik = QpIk::new(Arc::clone(&model), config.clone(), PERIOD).unwrap();
@@ -539,8 +539,8 @@ fn a_step_with_the_default_config_tracks_feet_and_com_references() {
     let dt = PERIOD_500HZ.as_secs_f64();
     let mut ik = QpIk::new(Arc::clone(&model), config, PERIOD_500HZ).unwrap();
     let com0 = start.com_position;
-    let left = start.left_foot.pose.translation.vector;
-    let right0 = start.right_foot.pose.translation.vector;
+    let left = start.lf().pose.translation.vector;
+    let right0 = start.rf().pose.translation.vector;
     let (shift, swing, settle) = (1.0, 0.8, 1.0);
     let steps = ((shift + swing + settle) / dt) as usize;
     let mut worst_foot: f64 = 0.0;
@@ -559,9 +559,9 @@ fn a_step_with_the_default_config_tracks_feet_and_com_references() {
         let (s2, ds2) = min_jerk(t - shift, swing);
         let apex = (std::f64::consts::PI * s2).sin();
         let dapex = std::f64::consts::PI * (std::f64::consts::PI * s2).cos() * ds2;
-        input.right_foot.pose.translation.vector =
+        input.rf_mut().pose.translation.vector =
             right0 + nalgebra::Vector3::new(0.1 * s2, 0.0, 0.03 * apex);
-        input.right_foot.velocity =
+        input.rf_mut().velocity =
             nalgebra::Vector6::new(0.1 * ds2, 0.0, 0.03 * dapex, 0.0, 0.0, 0.0);
         let out = ik.step(&input).unwrap();
         assert_eq!(out.report.status, QpStatus::Solved, "t = {t}");
@@ -571,8 +571,8 @@ fn a_step_with_the_default_config_tracks_feet_and_com_references() {
         kd.set_representation(VelocityRepresentation::Mixed);
         kd.set_state(ik.integrated_state()).unwrap();
         let r = kd.frame_pose(model.frame_id("r_sole").unwrap());
-        worst_foot = worst_foot
-            .max((r.translation.vector - input.right_foot.pose.translation.vector).norm());
+        worst_foot =
+            worst_foot.max((r.translation.vector - input.rf().pose.translation.vector).norm());
         worst_com = worst_com.max((kd.com_position() - input.com_position).norm());
     }
     // one Euler step of lag on a ≤ 0.25 m/s reference is ≤ 0.5 mm
@@ -614,7 +614,7 @@ fn initial_reference_offset_keeps_the_frames_initial_orientation_relative_to_the
     // The torso reference is a heading (yaw) only; the recorded offset is R_refᵀ R_chest.
     let reference0 = UnitQuaternion::from_euler_angles(0.0, 0.0, 0.4);
     let offset = reference0.inverse() * chest;
-    input.torso.orientation = reference0;
+    input.torso_mut().pose.rotation = reference0;
     let mut with_offset = QpIk::new(
         Arc::clone(&model),
         offset_config(ReferenceOffset::Initial),
@@ -631,15 +631,15 @@ fn initial_reference_offset_keeps_the_frames_initial_orientation_relative_to_the
     // which is what the plain controller gets as an absolute reference.
     let first = with_offset.step(&input).unwrap().joint_velocities.clone();
     let mut absolute = input.clone();
-    absolute.torso.orientation = chest;
+    absolute.torso_mut().pose.rotation = chest;
     let expected = plain.step(&absolute).unwrap().joint_velocities.clone();
     assert!((&first - &expected).amax() < 1e-9);
     // A new heading and angular velocity: the reference is R_ref · R_off, the angular velocity unchanged.
     let reference1 = UnitQuaternion::from_euler_angles(0.0, 0.0, 0.55);
-    input.torso.orientation = reference1;
-    input.torso.angular_velocity = Vector3::new(0.0, 0.0, 0.3);
-    absolute.torso.orientation = reference1 * offset;
-    absolute.torso.angular_velocity = input.torso.angular_velocity;
+    input.torso_mut().pose.rotation = reference1;
+    input.set_torso_angular_velocity(Vector3::new(0.0, 0.0, 0.3));
+    absolute.torso_mut().pose.rotation = reference1 * offset;
+    absolute.set_torso_angular_velocity(input.torso_angular_velocity());
     let turned = with_offset.step(&input).unwrap().joint_velocities.clone();
     let expected = plain.step(&absolute).unwrap().joint_velocities.clone();
     assert!(
@@ -656,8 +656,8 @@ fn initial_reference_offset_keeps_the_frames_initial_orientation_relative_to_the
     assert!((&bare - &turned).amax() > 1e-2);
     // `reset` records the offset again, at the next tick.
     with_offset.reset();
-    absolute.torso.orientation = chest;
-    absolute.torso.angular_velocity = input.torso.angular_velocity;
+    absolute.torso_mut().pose.rotation = chest;
+    absolute.set_torso_angular_velocity(input.torso_angular_velocity());
     let again = with_offset.step(&input).unwrap().joint_velocities.clone();
     let expected = plain.step(&absolute).unwrap().joint_velocities.clone();
     assert!((&again - &expected).amax() < 1e-9);

@@ -10,7 +10,6 @@ use std::sync::Arc;
 use common::*;
 use nalgebra::{DMatrix, DVector, Vector2};
 use serde::{Deserialize, Serialize};
-use stride_block::Block;
 use stride_qp::{
     check_kkt, ActiveSetSettings, ActiveSetSolver, ClarabelSettings, ClarabelSolver, DenseQp,
     QpSolver, QpStatus, SolverOutput,
@@ -146,7 +145,7 @@ fn record() {
             &format!("tsid_double_support_zmp_{tag}"),
             tsid.qp_problem().unwrap().dense_qp(),
         ));
-        input.right_in_contact = false;
+        input.set_contact("right_foot", false).unwrap();
         input.desired_zmp = None;
         for k in 0..60 {
             tsid.step(&input).unwrap();

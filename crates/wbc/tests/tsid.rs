@@ -117,16 +117,12 @@ fn solutions_satisfy_the_equations_of_motion_cones_cop_and_torque_limits() {
             0.0,
         );
         input.posture = Some(default_posture(&model));
-        input.left_in_contact = l;
-        input.right_in_contact = r;
+        input.set_contact("left_foot", l).unwrap();
+        input.set_contact("right_foot", r).unwrap();
         if !(l && r) {
             // single support: a LIPM-consistent CoM acceleration, ZMP at the stance sole point nearest
             // to the CoM projection
-            let foot = if l {
-                &input.left_foot
-            } else {
-                &input.right_foot
-            };
+            let foot = if l { &input.lf() } else { &input.rf() };
             let local = foot
                 .pose
                 .inverse_transform_point(&nalgebra::Point3::from(input.com_position));
@@ -279,7 +275,7 @@ fn a_standing_robot_under_tsid_keeps_its_com_still() {
     let state = standing_state(&model, &default_posture(&model));
     let mut input = references_at(&model, &state);
     let com0 = input.com_position;
-    let feet0 = [input.left_foot.pose, input.right_foot.pose];
+    let feet0 = [input.lf().pose, input.rf().pose];
     let mut tsid = Tsid::new(
         Arc::clone(&model),
         TsidConfig::default_for_bundled_model(),
@@ -373,7 +369,7 @@ fn active_set_vs_clarabel(config: &TsidConfig) -> (f64, f64, f64) {
         let mut input = references_at(&model, &state);
         input.com_position.x += 0.01;
         input.desired_zmp = Some(Vector2::new(input.com_position.x, input.com_position.y));
-        input.right_in_contact = trial % 2 == 0;
+        input.set_contact("right_foot", trial % 2 == 0).unwrap();
         let a = config.clone();
         let mut c = a.clone();
         c.qp.backend = Backend::Clarabel;
@@ -499,7 +495,7 @@ fn lift_off_torque_jump(ramp_time: f64) -> (f64, Vec<f64>) {
     }
     let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
     let mut previous = tsid.step(&input).unwrap().joint_torques.clone();
-    input.right_in_contact = false;
+    input.set_contact("right_foot", false).unwrap();
     let mut worst: f64 = 0.0;
     let mut right_fz = Vec::new();
     for _ in 0..80 {
@@ -563,7 +559,7 @@ fn null_space_elimination_gives_the_full_problem_solution() {
         let mut input = references_at(&model, &state);
         input.com_position.y += 0.005;
         input.desired_zmp = Some(Vector2::new(input.com_position.x, input.com_position.y));
-        input.left_in_contact = trial % 3 != 1;
+        input.set_contact("left_foot", trial % 3 != 1).unwrap();
         let mut reduced = Tsid::new(
             Arc::clone(&model),
             TsidConfig::default_for_bundled_model(),
@@ -608,7 +604,9 @@ fn null_space_path_matches_the_full_problem_to_solver_tolerance() {
         let mut full = Tsid::new(Arc::clone(&model), full_config, PERIOD).unwrap();
         for tick in 0..4 {
             // lift the left foot from the second tick of odd trials (load ramp, then single support)
-            input.left_in_contact = trial % 2 == 0 || tick == 0;
+            input
+                .set_contact("left_foot", trial % 2 == 0 || tick == 0)
+                .unwrap();
             let a = reduced.step(&input).unwrap().clone();
             let b = full.step(&input).unwrap().clone();
             assert_eq!(a.report.status, QpStatus::Solved);
@@ -711,8 +709,8 @@ fn a_step_under_tsid_with_forward_dynamics_lands_the_foot_and_tracks_the_com() {
     let state = standing_state(&model, &default_posture(&model));
     let mut input = references_at(&model, &state);
     let com0 = input.com_position;
-    let left = input.left_foot.pose.translation.vector;
-    let right0 = input.right_foot.pose.translation.vector;
+    let left = input.lf().pose.translation.vector;
+    let right0 = input.rf().pose.translation.vector;
     let (shift, swing, settle) = (1.0, 0.8, 1.0);
     let dt = 1e-3;
     let over_left = Vector3::new(left.x, 0.85 * left.y, com0.z) - com0;
@@ -751,14 +749,15 @@ fn a_step_under_tsid_with_forward_dynamics_lands_the_foot_and_tracks_the_com() {
             pi * (pi * s2).cos() * ds2,
             -pi * pi * (pi * s2).sin() * ds2 * ds2 + pi * (pi * s2).cos() * dds2,
         );
-        input.right_foot.pose.translation.vector =
+        input.rf_mut().pose.translation.vector =
             right0 + (landing - right0) * s2 + Vector3::new(0.0, 0.0, 0.03 * a);
         let v = (landing - right0) * ds2 + Vector3::new(0.0, 0.0, 0.03 * da);
         let acc_ref = (landing - right0) * dds2 + Vector3::new(0.0, 0.0, 0.03 * dda);
-        input.right_foot.velocity = Vector6::new(v.x, v.y, v.z, 0.0, 0.0, 0.0);
-        input.right_foot.acceleration =
-            Vector6::new(acc_ref.x, acc_ref.y, acc_ref.z, 0.0, 0.0, 0.0);
-        input.right_in_contact = !(t >= shift && t < shift + swing);
+        input.rf_mut().velocity = Vector6::new(v.x, v.y, v.z, 0.0, 0.0, 0.0);
+        input.rf_mut().acceleration = Vector6::new(acc_ref.x, acc_ref.y, acc_ref.z, 0.0, 0.0, 0.0);
+        input
+            .set_contact("right_foot", !(t >= shift && t < shift + swing))
+            .unwrap();
 
         let out = tsid.step(&input).unwrap().clone();
         assert_eq!(

@@ -23,6 +23,11 @@ pub(crate) struct ComVelocityTask {
 }
 
 impl ComVelocityTask {
+    /// Sets `K_p` (1/s); the velocity-level task has no `K_d`.
+    pub fn set_gains(&mut self, kp: f64) {
+        self.kp = kp;
+    }
+
     pub fn new(model: &Model, c: &ComTaskConfig) -> Result<Self, WbcError> {
         check_gain(&c.name, "kp", c.kp)?;
         let rows: Vec<usize> = (0..3).filter(|&i| c.mask[i]).collect();
@@ -82,6 +87,12 @@ pub(crate) struct ComMomentumTask {
 }
 
 impl ComMomentumTask {
+    /// Sets `K_p` (1/s²) and `K_d` (1/s).
+    pub fn set_gains(&mut self, kp: f64, kd: f64) {
+        self.kp = kp;
+        self.kd = kd;
+    }
+
     pub fn new(c: &ComTaskConfig) -> Result<Self, WbcError> {
         check_gain(&c.name, "kp", c.kp)?;
         check_gain(&c.name, "kd", c.kd)?;

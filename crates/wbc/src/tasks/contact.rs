@@ -1,4 +1,4 @@
-//! Rigid planar contacts of the feet (TSID): the contact constraint, the wrench feasibility (linearized
+//! Rigid planar contacts on any frame (TSID): the contact constraint, the wrench feasibility (linearized
 //! friction cone, CoP inside the sole rectangle, torsional friction, unilateral and bounded normal force,
 //! in the contact frame), the load ramps of contact changes, and the regularization of the contact
 //! wrenches `‖w − w*‖²_W` [Romualdi 2022, eq. 7.2.25]. Wrenches are mixed: force (N) and torque (N m)
@@ -9,10 +9,11 @@ use stride_model::{FrameId, Model};
 use stride_qp::TaskDataMut;
 
 use super::{check_gain, frame_id, TsidContext};
-use crate::config::{ContactTaskConfig, Foot};
+use crate::config::ContactTaskConfig;
 use crate::error::WbcError;
 use crate::io::WbcInput;
 use crate::math::orientation_error;
+use crate::names::Resolver;
 
 /// Rows of the contact wrench feasibility in the contact frame: friction pyramid (4S), CoP (4),
 /// torsional friction (2), all `≤ 0`; the normal force row is separate.
@@ -20,7 +21,8 @@ use crate::math::orientation_error;
 pub(crate) struct Contact {
     pub(crate) name: String,
     pub(crate) frame: FrameId,
-    pub(crate) foot: Foot,
+    /// Index of its contact flag in the controller's names ([`Resolver`]).
+    pub(crate) flag: usize,
     /// Homogeneous rows on the local wrench `[f; τ]`, all `A w ≤ 0`.
     pub(crate) local_rows: DMatrix<f64>,
     pub(crate) min_normal_force: f64,
@@ -41,7 +43,7 @@ pub(crate) struct Contact {
 }
 
 impl Contact {
-    pub fn new(model: &Model, c: &ContactTaskConfig) -> Result<Self, WbcError> {
+    pub fn new(model: &Model, names: &Resolver, c: &ContactTaskConfig) -> Result<Self, WbcError> {
         let bad = |key: &'static str, reason: String| WbcError::InvalidConfig {
             task: c.name.clone(),
             key,
@@ -101,7 +103,13 @@ impl Contact {
         Ok(Contact {
             name: c.name.clone(),
             frame: frame_id(model, &c.name, &c.frame)?,
-            foot: c.foot,
+            flag: names.contact_index(c.contact_name()?).ok_or_else(|| {
+                WbcError::InvalidConfig {
+                    task: c.name.clone(),
+                    key: "contact",
+                    reason: "not in the controller's contact names".into(),
+                }
+            })?,
             local_rows: a,
             min_normal_force: c.min_normal_force,
             max_normal_force: c.max_normal_force,
@@ -214,16 +222,17 @@ impl Contact {
 }
 
 /// Contact wrench regularization: `w_c = w*_c` for every loaded contact (6 rows each, N and N m), with
-/// `w*` from `input.desired_wrenches` (zero when absent).
-pub(crate) fn fill_wrench_regularization(input: &WbcInput, s: &TsidContext, b: &mut TaskDataMut) {
+/// `w*` the contact's `desired_wrench` in the input (zero by default).
+pub(crate) fn fill_wrench_regularization(
+    input: &WbcInput,
+    names: &Resolver,
+    s: &TsidContext,
+    b: &mut TaskDataMut,
+) {
     let mut k = 0;
     for (c, contact) in s.contacts.iter().enumerate() {
         if let Some(off) = s.offsets[c] {
-            let reference = match (&input.desired_wrenches, contact.foot) {
-                (Some(w), Foot::Left) => w[0],
-                (Some(w), Foot::Right) => w[1],
-                (None, _) => Vector6::zeros(),
-            };
+            let reference: Vector6<f64> = names.contact(input, contact.flag).desired_wrench;
             for r in 0..6 {
                 b.a[(k + r, off + r)] = 1.0;
                 b.b[k + r] = reference[r];

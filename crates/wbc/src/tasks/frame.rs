@@ -9,16 +9,19 @@ use stride_model::{FrameId, KinDyn, Model};
 use stride_qp::TaskDataMut;
 
 use super::{check_gain, frame_id, Level};
-use crate::config::{Frame3TaskConfig, FrameReferenceSource, ReferenceOffset, Se3TaskConfig};
+use crate::config::{Frame3TaskConfig, ReferenceOffset, Se3TaskConfig};
 use crate::error::WbcError;
-use crate::io::WbcInput;
+use crate::io::{FrameReference, WbcInput, INITIAL};
 use crate::math::orientation_error;
+use crate::names::Resolver;
 
-/// Reference of a frame task for this tick: pose, twist, acceleration (world, mixed).
-struct FrameRef {
-    pose: Isometry3<f64>,
-    velocity: Vector6<f64>,
-    acceleration: Vector6<f64>,
+/// Where a frame task's reference comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Source {
+    /// The controller's frame reference name `k` (see [`Resolver`]).
+    Named(usize),
+    /// The frame's pose at the first tick, held still.
+    Initial,
 }
 
 /// SE(3) / SO(3) / R³ tracking of a frame (7.1.6–7.1.10, 7.2.9–7.2.13).
@@ -26,7 +29,7 @@ struct FrameRef {
 pub(crate) struct FrameTask {
     pub name: String,
     pub frame: FrameId,
-    source: FrameReferenceSource,
+    source: Source,
     /// Gains per row of the 6D task `[lin; ang]`.
     kp: Vector6<f64>,
     kd: Vector6<f64>,
@@ -43,7 +46,12 @@ pub(crate) struct FrameTask {
 }
 
 impl FrameTask {
-    pub fn from_se3(model: &Model, c: &Se3TaskConfig, level: Level) -> Result<Self, WbcError> {
+    pub fn from_se3(
+        model: &Model,
+        names: &Resolver,
+        c: &Se3TaskConfig,
+        level: Level,
+    ) -> Result<Self, WbcError> {
         for (k, v) in [
             ("kp_linear", c.kp_linear),
             ("kp_angular", c.kp_angular),
@@ -51,13 +59,6 @@ impl FrameTask {
             ("kd_angular", c.kd_angular),
         ] {
             check_gain(&c.name, k, v)?;
-        }
-        if c.reference == FrameReferenceSource::Torso {
-            return Err(WbcError::InvalidConfig {
-                task: c.name.clone(),
-                key: "reference",
-                reason: "`torso` gives an orientation only: use an `so3` task".into(),
-            });
         }
         let rows: Vec<usize> = (0..6).filter(|&i| c.mask[i]).collect();
         let kp = Vector6::new(
@@ -76,24 +77,19 @@ impl FrameTask {
             c.kd_angular,
             c.kd_angular,
         );
-        Self::build(model, &c.name, &c.frame, c.reference, kp, kd, rows, level)
+        let source = source(names, &c.reference);
+        Self::build(model, &c.name, &c.frame, source, kp, kd, rows, level)
     }
 
     pub fn from_frame3(
         model: &Model,
+        names: &Resolver,
         c: &Frame3TaskConfig,
         angular: bool,
         level: Level,
     ) -> Result<Self, WbcError> {
         check_gain(&c.name, "kp", c.kp)?;
         check_gain(&c.name, "kd", c.kd)?;
-        if !angular && c.reference == FrameReferenceSource::Torso {
-            return Err(WbcError::InvalidConfig {
-                task: c.name.clone(),
-                key: "reference",
-                reason: "`torso` gives an orientation only: use an `so3` task".into(),
-            });
-        }
         if !angular && c.reference_offset != ReferenceOffset::None {
             return Err(WbcError::InvalidConfig {
                 task: c.name.clone(),
@@ -105,7 +101,8 @@ impl FrameTask {
         let rows: Vec<usize> = (0..3).filter(|&i| c.mask[i]).map(|i| i + offset).collect();
         let kp = Vector6::from_element(c.kp);
         let kd = Vector6::from_element(c.kd);
-        let mut task = Self::build(model, &c.name, &c.frame, c.reference, kp, kd, rows, level)?;
+        let source = source(names, &c.reference);
+        let mut task = Self::build(model, &c.name, &c.frame, source, kp, kd, rows, level)?;
         task.offset_mode = c.reference_offset;
         Ok(task)
     }
@@ -115,7 +112,7 @@ impl FrameTask {
         model: &Model,
         name: &str,
         frame: &str,
-        source: FrameReferenceSource,
+        source: Source,
         kp: Vector6<f64>,
         kd: Vector6<f64>,
         rows: Vec<usize>,
@@ -153,8 +150,15 @@ impl FrameTask {
         self.offset = None;
     }
 
-    fn reference(&mut self, kd: &KinDyn, input: &WbcInput) -> FrameRef {
-        let mut r = self.source_reference(kd, input);
+    fn reference(&mut self, kd: &KinDyn, names: &Resolver, input: &WbcInput) -> FrameReference {
+        let mut r = match self.source {
+            Source::Named(k) => *names.frame(input, k),
+            Source::Initial => FrameReference::still(
+                *self
+                    .initial
+                    .get_or_insert_with(|| kd.frame_pose(self.frame)),
+            ),
+        };
         if self.offset_mode == ReferenceOffset::Initial {
             let frame = self.frame;
             let reference = r.pose.rotation;
@@ -166,57 +170,21 @@ impl FrameTask {
         r
     }
 
-    fn source_reference(&mut self, kd: &KinDyn, input: &WbcInput) -> FrameRef {
-        match self.source {
-            FrameReferenceSource::LeftFoot => FrameRef {
-                pose: input.left_foot.pose,
-                velocity: input.left_foot.velocity,
-                acceleration: input.left_foot.acceleration,
-            },
-            FrameReferenceSource::RightFoot => FrameRef {
-                pose: input.right_foot.pose,
-                velocity: input.right_foot.velocity,
-                acceleration: input.right_foot.acceleration,
-            },
-            FrameReferenceSource::Torso => {
-                let mut velocity = Vector6::zeros();
-                velocity
-                    .fixed_rows_mut::<3>(3)
-                    .copy_from(&input.torso.angular_velocity);
-                let mut acceleration = Vector6::zeros();
-                acceleration
-                    .fixed_rows_mut::<3>(3)
-                    .copy_from(&input.torso.angular_acceleration);
-                FrameRef {
-                    pose: Isometry3::from_parts(
-                        nalgebra::Translation3::identity(),
-                        input.torso.orientation,
-                    ),
-                    velocity,
-                    acceleration,
-                }
-            }
-            FrameReferenceSource::Initial => {
-                let pose = *self
-                    .initial
-                    .get_or_insert_with(|| kd.frame_pose(self.frame));
-                FrameRef {
-                    pose,
-                    velocity: Vector6::zeros(),
-                    acceleration: Vector6::zeros(),
-                }
-            }
-        }
+    /// Sets the gains of every row: `K_p` (1/s in IK, 1/s² in TSID), `K_d` (1/s, TSID).
+    pub fn set_gains(&mut self, kp: f64, kd: f64) {
+        self.kp.fill(kp);
+        self.kd.fill(kd);
     }
 
     /// Fills the block's columns `0..nv` (the ν / ν̇ part) and its right-hand side.
     pub fn update(
         &mut self,
         kd: &KinDyn,
+        names: &Resolver,
         input: &WbcInput,
         block: TaskDataMut<'_>,
     ) -> Result<(), WbcError> {
-        let r = self.reference(kd, input);
+        let r = self.reference(kd, names, input);
         kd.frame_jacobian(self.frame, &mut self.jacobian)?;
         let pose = kd.frame_pose(self.frame);
         let mut error = Vector6::zeros();
@@ -255,8 +223,8 @@ impl FrameTask {
     }
 
     /// Current task error `[p_ref − p; Log(R_ref Rᵀ)]` on the kept rows, norm (for tests and logs).
-    pub fn pose_error_norm(&mut self, kd: &KinDyn, input: &WbcInput) -> f64 {
-        let r = self.reference(kd, input);
+    pub fn pose_error_norm(&mut self, kd: &KinDyn, names: &Resolver, input: &WbcInput) -> f64 {
+        let r = self.reference(kd, names, input);
         let pose = kd.frame_pose(self.frame);
         let mut e = Vector6::zeros();
         e.fixed_rows_mut::<3>(0)
@@ -264,5 +232,14 @@ impl FrameTask {
         e.fixed_rows_mut::<3>(3)
             .copy_from(&orientation_error(&r.pose.rotation, &pose.rotation));
         self.rows.iter().map(|&i| e[i] * e[i]).sum::<f64>().sqrt()
+    }
+}
+
+/// The source of reference name `name`: `initial`, or its index in the controller's names (which hold
+/// every frame task's reference by construction).
+fn source(names: &Resolver, name: &str) -> Source {
+    match names.frame_index(name) {
+        Some(k) if name != INITIAL => Source::Named(k),
+        _ => Source::Initial,
     }
 }

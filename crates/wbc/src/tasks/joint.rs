@@ -62,6 +62,12 @@ pub(crate) struct JointRegularizationTask {
 }
 
 impl JointRegularizationTask {
+    /// Sets `K_p` (1/s in IK, 1/s² in TSID) and `K_d` (1/s, TSID).
+    pub fn set_gains(&mut self, kp: f64, kd: f64) {
+        self.kp = kp;
+        self.kd = kd;
+    }
+
     pub fn new(
         model: &Model,
         c: &JointRegularizationTaskConfig,

@@ -54,6 +54,11 @@ pub(crate) struct AngularMomentumRateTask {
 }
 
 impl AngularMomentumRateTask {
+    /// Sets `K_p` (1/s).
+    pub fn set_gains(&mut self, kp: f64) {
+        self.kp = kp;
+    }
+
     pub fn new(c: &AngularMomentumTaskConfig) -> Result<Self, WbcError> {
         check_gain(&c.name, "kp", c.kp)?;
         Ok(AngularMomentumRateTask { kp: c.kp })

@@ -9,7 +9,7 @@ use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
-use stride_wbc::{bundled_posture, FootReference, WbcInput};
+use stride_wbc::{bundled_posture, walking, FrameReference, InputLayout, WbcInput};
 
 pub fn model_path() -> String {
     format!(
@@ -65,25 +65,79 @@ pub fn standing_state(model: &Arc<Model>, q: &DVector<f64>) -> RobotState {
     state
 }
 
-/// References that hold the robot exactly where `state` puts it (feet, CoM, chest orientation, posture).
+/// The walking stack's names: frame references `left_foot`, `right_foot`, `torso`; contacts
+/// `left_foot`, `right_foot`.
+pub fn walking_layout() -> Arc<InputLayout> {
+    Arc::new(InputLayout::new(
+        [walking::LEFT_FOOT, walking::RIGHT_FOOT, walking::TORSO],
+        [walking::LEFT_FOOT, walking::RIGHT_FOOT],
+    ))
+}
+
+/// References that hold the robot exactly where `state` puts it (feet, CoM, chest orientation, posture),
+/// in an input with the walking names ([`walking_layout`]).
 pub fn references_at(model: &Arc<Model>, state: &RobotState) -> WbcInput {
     let mut kd = KinDyn::new(Arc::clone(model));
     kd.set_representation(VelocityRepresentation::Mixed);
     kd.set_state(state).unwrap();
-    let mut input = WbcInput::new(model);
-    input.state = state.clone();
+    let mut input = WbcInput::new(state.clone(), walking_layout());
     input.com_position = kd.com_position();
-    input.left_foot = FootReference {
-        pose: kd.frame_pose(model.frame_id("l_sole").unwrap()),
-        ..FootReference::default()
-    };
-    input.right_foot = FootReference {
-        pose: kd.frame_pose(model.frame_id("r_sole").unwrap()),
-        ..FootReference::default()
-    };
-    input.torso.orientation = kd.frame_pose(model.frame_id("chest").unwrap()).rotation;
+    *input.lf_mut() = FrameReference::still(kd.frame_pose(model.frame_id("l_sole").unwrap()));
+    *input.rf_mut() = FrameReference::still(kd.frame_pose(model.frame_id("r_sole").unwrap()));
+    input.torso_mut().pose.rotation = kd.frame_pose(model.frame_id("chest").unwrap()).rotation;
     input.posture = Some(state.joint_positions.clone());
     input
+}
+
+/// Access to the walking references of a [`walking_layout`] input (tests only: names resolved per call).
+pub trait Walking {
+    /// Left sole reference.
+    fn lf(&self) -> FrameReference;
+    /// Right sole reference.
+    fn rf(&self) -> FrameReference;
+    /// Torso reference.
+    fn torso(&self) -> FrameReference;
+    /// Left sole reference, to write.
+    fn lf_mut(&mut self) -> &mut FrameReference;
+    /// Right sole reference, to write.
+    fn rf_mut(&mut self) -> &mut FrameReference;
+    /// Torso reference, to write.
+    fn torso_mut(&mut self) -> &mut FrameReference;
+    /// Torso angular velocity reference (rad/s).
+    fn torso_angular_velocity(&self) -> Vector3<f64> {
+        self.torso().velocity.fixed_rows::<3>(3).into_owned()
+    }
+    /// Sets the torso angular velocity reference (rad/s).
+    fn set_torso_angular_velocity(&mut self, w: Vector3<f64>) {
+        self.torso_mut()
+            .velocity
+            .fixed_rows_mut::<3>(3)
+            .copy_from(&w);
+    }
+}
+
+impl Walking for WbcInput {
+    fn lf(&self) -> FrameReference {
+        *self.frame_reference(walking::LEFT_FOOT).unwrap()
+    }
+    fn rf(&self) -> FrameReference {
+        *self.frame_reference(walking::RIGHT_FOOT).unwrap()
+    }
+    fn torso(&self) -> FrameReference {
+        *self.frame_reference(walking::TORSO).unwrap()
+    }
+    fn lf_mut(&mut self) -> &mut FrameReference {
+        let id = self.frame_id(walking::LEFT_FOOT).unwrap();
+        self.frame_mut(id).unwrap()
+    }
+    fn rf_mut(&mut self) -> &mut FrameReference {
+        let id = self.frame_id(walking::RIGHT_FOOT).unwrap();
+        self.frame_mut(id).unwrap()
+    }
+    fn torso_mut(&mut self) -> &mut FrameReference {
+        let id = self.frame_id(walking::TORSO).unwrap();
+        self.frame_mut(id).unwrap()
+    }
 }
 
 /// A random base pose: translation within ±`t` m, rotation within ±`r` rad about each axis.
