@@ -170,6 +170,17 @@ pub enum ModelError {
         /// `joint `name`` or `the floating base`.
         what: String,
     },
+    /// Two force/torque sensors lie in the same lumped body: the FT-split parameter layout of the
+    /// regressors gives each host body one child-side part.
+    #[error("force/torque sensors `{first}` and `{second}` both lie in body `{body}` (one sensor per lumped body is supported by the FT regressor)")]
+    SharedFtSensorHost {
+        /// The lumped body.
+        body: String,
+        /// First sensor.
+        first: String,
+        /// Second sensor.
+        second: String,
+    },
 }
 
 /// Builds a [`ModelError::DimensionMismatch`] for a vector.

@@ -1,0 +1,110 @@
+//! The inertial-parameter vector ψ of a whole model [Traversaro 2017, Definition 7.1] in the body and the
+//! FT-split layouts (see [`crate::inertial`]).
+
+use nalgebra::DVector;
+
+use super::rigid_body::InertialParameters;
+use crate::error::ModelError;
+use crate::model::Model;
+use crate::spatial::Inertia;
+
+/// `π` of an inertia about a frame origin.
+pub(crate) fn parameters_of(inertia: &Inertia) -> InertialParameters {
+    let i = &inertia.i;
+    InertialParameters::from_column_slice(&[
+        inertia.m,
+        inertia.h.x,
+        inertia.h.y,
+        inertia.h.z,
+        i[(0, 0)],
+        i[(0, 1)],
+        i[(0, 2)],
+        i[(1, 1)],
+        i[(1, 2)],
+        i[(2, 2)],
+    ])
+}
+
+impl Model {
+    /// ψ in the body layout (see [`crate::inertial`]): `π = [m; m c; vech(I_B)]` of every lumped body in
+    /// its own frame, stacked in body order (10·N).
+    pub fn inertial_parameters(&self) -> DVector<f64> {
+        let mut out = DVector::zeros(10 * self.body_count());
+        for (b, inertia) in self.inertia.iter().enumerate() {
+            out.fixed_rows_mut::<10>(10 * b)
+                .copy_from(&parameters_of(inertia));
+        }
+        out
+    }
+
+    /// Checks that no two force/torque sensors lie in the same lumped body (the FT-split layout gives each
+    /// host one child-side part).
+    ///
+    /// # Errors
+    /// [`ModelError::SharedFtSensorHost`].
+    pub(crate) fn check_ft_hosts(&self) -> Result<(), ModelError> {
+        for (k, side) in self.ft_sides.iter().enumerate() {
+            if let Some(j) = self.ft_sides[..k].iter().position(|s| s.host == side.host) {
+                return Err(ModelError::SharedFtSensorHost {
+                    body: self.bodies[side.host].name.clone(),
+                    first: self.ft_sensors[j].name.clone(),
+                    second: self.ft_sensors[k].name.clone(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// `π` of the child-side part of force/torque sensor `k`'s host body, in the host frame.
+    pub(crate) fn ft_child_part(&self, k: usize) -> InertialParameters {
+        let side = &self.ft_sides[k];
+        parameters_of(&Inertia::from_com(
+            side.mass,
+            &side.com,
+            &side.inertia_at_com,
+        ))
+    }
+
+    /// ψ in the FT-split layout (see [`crate::inertial`]), 10·(N + S).
+    ///
+    /// # Errors
+    /// [`ModelError::SharedFtSensorHost`] when two sensors lie in the same lumped body.
+    pub fn ft_split_inertial_parameters(&self) -> Result<DVector<f64>, ModelError> {
+        self.check_ft_hosts()?;
+        let nb = self.body_count();
+        let mut out = DVector::zeros(10 * (nb + self.ft_sensors.len()));
+        out.rows_mut(0, 10 * nb)
+            .copy_from(&self.inertial_parameters());
+        for (k, side) in self.ft_sides.iter().enumerate() {
+            let part = self.ft_child_part(k);
+            out.fixed_rows_mut::<10>(10 * (nb + k)).copy_from(&part);
+            let mut host = out.fixed_rows_mut::<10>(10 * side.host);
+            host -= part;
+        }
+        Ok(out)
+    }
+
+    /// The body-layout ψ of an FT-split ψ: each sensor's child-side block added to its host's block (both
+    /// are in the host frame).
+    ///
+    /// # Errors
+    /// [`ModelError::DimensionMismatch`] when `split` is not 10·(N + S) long.
+    pub fn merge_ft_split_parameters(
+        &self,
+        split: &DVector<f64>,
+    ) -> Result<DVector<f64>, ModelError> {
+        let nb = self.body_count();
+        crate::error::check_len(
+            "FT-split inertial parameters",
+            10 * (nb + self.ft_sensors.len()),
+            split.len(),
+        )?;
+        let mut out = split.rows(0, 10 * nb).into_owned();
+        for (k, side) in self.ft_sides.iter().enumerate() {
+            let part = split.fixed_rows::<10>(10 * (nb + k)).into_owned();
+            let mut host = out.fixed_rows_mut::<10>(10 * side.host);
+            host += part;
+        }
+        Ok(out)
+    }
+}
