@@ -3,27 +3,10 @@
 
 use nalgebra::DVector;
 
-use super::rigid_body::InertialParameters;
+use super::rigid_body::{parameters_of, InertialParameters};
 use crate::error::ModelError;
 use crate::model::Model;
 use crate::spatial::Inertia;
-
-/// `π` of an inertia about a frame origin.
-pub(crate) fn parameters_of(inertia: &Inertia) -> InertialParameters {
-    let i = &inertia.i;
-    InertialParameters::from_column_slice(&[
-        inertia.m,
-        inertia.h.x,
-        inertia.h.y,
-        inertia.h.z,
-        i[(0, 0)],
-        i[(0, 1)],
-        i[(0, 2)],
-        i[(1, 1)],
-        i[(1, 2)],
-        i[(2, 2)],
-    ])
-}
 
 impl Model {
     /// ψ in the body layout (see [`crate::inertial`]): `π = [m; m c; vech(I_B)]` of every lumped body in

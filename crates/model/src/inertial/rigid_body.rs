@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
 
-use crate::spatial::{ang, cross_force, lin, skew};
+use crate::spatial::{ang, cross_force, lin, skew, Inertia};
 
 /// The inertial parameters `π = [m; m c; vech(I_B)]` of a rigid body [Traversaro 2017, eq. 6.3]: mass `m`
 /// (kg), first moment of mass `m c` (kg·m, `c` the CoM in the body frame) and the six independent entries
@@ -36,6 +36,44 @@ pub fn inertial_parameters(
         i_b[(1, 1)],
         i_b[(1, 2)],
         i_b[(2, 2)],
+    ])
+}
+
+/// `π` of the same body in a frame `A` in which the body frame has orientation `rotation` (`^A R_B`) and
+/// origin `translation` (`^A o_B`, m): `m' = m`, `(mc)' = R mc + m o`, `I' = R I Rᵀ − S(R mc) S(o) −
+/// S(o) S(R mc) − m S(o) S(o)` (the inertia about A's origin, [Traversaro 2017, eqs. 2.67, 6.11]). Linear
+/// in `π`; summing bodies transformed into one frame lumps them.
+pub fn transform_parameters(
+    pi: &InertialParameters,
+    rotation: &Matrix3<f64>,
+    translation: &Vector3<f64>,
+) -> InertialParameters {
+    parameters_of(&inertia_of(pi).transformed(rotation, translation))
+}
+
+/// The crate's [`Inertia`] of `π`.
+fn inertia_of(pi: &InertialParameters) -> Inertia {
+    Inertia {
+        m: pi[0],
+        h: Vector3::new(pi[1], pi[2], pi[3]),
+        i: inertia_about_origin(pi),
+    }
+}
+
+/// `π` of an [`Inertia`] (about a frame origin).
+pub(crate) fn parameters_of(inertia: &Inertia) -> InertialParameters {
+    let i = &inertia.i;
+    InertialParameters::from_column_slice(&[
+        inertia.m,
+        inertia.h.x,
+        inertia.h.y,
+        inertia.h.z,
+        i[(0, 0)],
+        i[(0, 1)],
+        i[(0, 2)],
+        i[(1, 1)],
+        i[(1, 2)],
+        i[(2, 2)],
     ])
 }
 
@@ -112,7 +150,6 @@ pub fn sensor_regressor(alpha_g: &Vector6<f64>, omega: &Vector3<f64>) -> RigidBo
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spatial::Inertia;
 
     /// Against the crate's spatial algebra: `φ = I a + v ×̄* (I v)` with [`Inertia::mul_motion`] and
     /// [`cross_force`] (the RNEA's per-body line).
@@ -138,5 +175,10 @@ mod tests {
             let y = rigid_body_regressor(&a, &v);
             assert!((y * pi - phi).amax() <= 1e-12 * phi.amax().max(1.0));
         }
+        // Moving π to another frame is the spatial inertia's change of frame.
+        let r = *nalgebra::Rotation3::from_euler_angles(0.3, -0.4, 1.1).matrix();
+        let p = Vector3::new(0.5, 1.0, -0.7);
+        let moved = spatial_inertia(&transform_parameters(&pi, &r, &p));
+        assert!((moved - inertia.transformed(&r, &p).matrix()).amax() < 1e-14);
     }
 }
