@@ -30,11 +30,10 @@ fn base_parameters(kd: &mut KinDyn, seed: u64) -> BaseParameters {
     BaseParameters::from_stacked(stacked, DEFAULT_RANK_TOLERANCE).unwrap()
 }
 
-#[test]
-fn humanoid_base_parameters_are_stable_and_invariant() {
-    let model = common::humanoid_model().expect("bundled humanoid");
+/// Checks the base parameters of `model`; returns the rank and the gap.
+fn check_base_parameters(model: &Arc<Model>) -> (usize, f64) {
     let p = 10 * model.body_count();
-    let mut kd = KinDyn::new(Arc::clone(&model));
+    let mut kd = KinDyn::new(Arc::clone(model));
     let base = base_parameters(&mut kd, 1);
     let rank = base.rank();
     assert!(rank > 0 && rank < p, "rank {rank} of {p}");
@@ -56,13 +55,38 @@ fn humanoid_base_parameters_are_stable_and_invariant() {
     let random = common::random_vector(p, 77, 1.0);
     let null = &random - base.project(&random).unwrap();
     assert!(null.norm() > 0.1);
-    let fresh = samples(&model, 99, 10);
+    let fresh = samples(model, 99, 10);
     let y = stacked_inverse_dynamics_regressor(&mut kd, &fresh).unwrap();
     let tau = &y * &psi;
     let scale = tau.amax();
     assert!((&y * &projected - &tau).amax() < 1e-9 * scale);
     assert!((&y * (&psi + &null * 10.0) - &tau).amax() < 1e-9 * scale);
     assert_eq!(base.base_parameters(&psi).unwrap().len(), rank);
+    (rank, base.gap())
+}
+
+#[test]
+fn humanoid_base_parameters_are_stable_and_invariant() {
+    let model = common::humanoid_model().expect("bundled humanoid");
+    let (rank, gap) = check_base_parameters(&model);
+    println!(
+        "stride_humanoid: {rank} base parameters of {}, gap {gap:.2e}",
+        10 * model.body_count()
+    );
+}
+
+#[test]
+fn icub_base_parameters_are_stable_and_invariant() {
+    let test = "icub_base_parameters_are_stable_and_invariant";
+    let Some(path) = stride_testkit::icub_model_urdf(test, "iCubGazeboV2_7") else {
+        return;
+    };
+    let model = Arc::new(Model::from_urdf_file(path).unwrap());
+    let (rank, gap) = check_base_parameters(&model);
+    println!(
+        "iCubGazeboV2_7: {rank} base parameters of {}, gap {gap:.2e}",
+        10 * model.body_count()
+    );
 }
 
 #[test]
