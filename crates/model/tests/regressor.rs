@@ -153,6 +153,7 @@ fn whole_body_regressor_is_rnea_on_the_bundled_humanoid() {
     let model = common::humanoid_model().expect("bundled humanoid");
     let worst = check_regressor_is_rnea(&model, 0..20);
     assert!(worst < 1e-10);
+    println!("stride_humanoid: Y ψ vs RNEA, worst relative error {worst:.2e}");
 }
 
 #[test]
@@ -162,7 +163,8 @@ fn whole_body_regressor_is_rnea_on_icub() {
         return;
     };
     let model = Arc::new(Model::from_urdf_file(path).unwrap());
-    check_regressor_is_rnea(&model, 0..10);
+    let worst = check_regressor_is_rnea(&model, 0..10);
+    println!("iCubGazeboV2_7: Y ψ vs RNEA, worst relative error {worst:.2e}");
 }
 
 /// The regressor does not depend on the parameters: the regressor of the bundled humanoid times the
