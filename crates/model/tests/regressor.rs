@@ -288,3 +288,103 @@ fn body_layout_holds_each_body_in_its_frame() {
         assert!((pi - expected).amax() < 1e-12, "{}", body.name);
     }
 }
+
+/// (7.3) holds per sensor whenever its child side carries no external wrench: with a wrench on the right
+/// sole, the left sensors still read `Y_ft ψ_split`, the right ones do not.
+#[test]
+fn ft_regressor_rows_hold_for_contact_free_child_sides() {
+    let model = common::humanoid_model().expect("bundled humanoid");
+    let nv = model.nv();
+    let ns = model.ft_sensors().len();
+    let split = model.ft_split_inertial_parameters().unwrap();
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    let mut y = DMatrix::zeros(6 * ns, 10 * (model.body_count() + ns));
+    let mut readings = vec![Vector6::zeros(); ns];
+    let wrench = [stride_model::ExternalWrench {
+        frame: model.frame_id("r_sole").unwrap(),
+        wrench: Vector6::new(5.0, -3.0, 150.0, 1.0, -2.0, 0.5),
+    }];
+    for seed in 0..5 {
+        kd.set_state(&common::random_state(&model, seed)).unwrap();
+        let nu_dot = random_nu_dot(nv, seed + 3000);
+        kd.ft_sensor_wrenches(&nu_dot, &wrench, &mut readings)
+            .unwrap();
+        kd.ft_sensor_regressor(&nu_dot, &mut y).unwrap();
+        let predicted = &y * &split;
+        for (k, sensor) in model.ft_sensors().iter().enumerate() {
+            let err = (predicted.fixed_rows::<6>(6 * k) - readings[k]).amax();
+            if sensor.name.starts_with("l_") {
+                assert!(
+                    err <= 1e-10 * readings[k].amax().max(1.0),
+                    "{}: {err:.2e}",
+                    sensor.name
+                );
+            } else {
+                assert!(err > 1.0, "{} feels the right sole's wrench", sensor.name);
+            }
+        }
+    }
+}
+
+/// Random parameters (the humanoid's, perturbed by up to 20 % plus a constant, not physically consistent in
+/// general): a model built from them ([`Model::with_ft_split_inertial_parameters`]) holds them, and its inverse
+/// dynamics and FT readings are the regressors times them.
+#[test]
+fn regressors_times_random_parameters_are_the_dynamics_of_the_model_holding_them() {
+    let model = common::humanoid_model().expect("bundled humanoid");
+    let nv = model.nv();
+    let ns = model.ft_sensors().len();
+    let mut r = rng(4);
+    let mut split = model.ft_split_inertial_parameters().unwrap();
+    for (i, v) in split.iter_mut().enumerate() {
+        let size = v.abs() + 0.01;
+        *v += if i % 10 == 0 {
+            r.random_range(0.0..0.2) * size
+        } else {
+            r.random_range(-0.2..0.2) * size
+        };
+    }
+    let edited = Arc::new(model.with_ft_split_inertial_parameters(&split).unwrap());
+    let back = edited.ft_split_inertial_parameters().unwrap();
+    assert!(
+        (&back - &split).amax() < 1e-12,
+        "{:.2e}",
+        (&back - &split).amax()
+    );
+    let psi = edited.inertial_parameters();
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    let mut kd_edited = KinDyn::new(Arc::clone(&edited));
+    let mut y = DMatrix::zeros(nv, 10 * model.body_count());
+    let mut y_ft = DMatrix::zeros(6 * ns, 10 * (model.body_count() + ns));
+    let mut tau = DVector::zeros(nv);
+    let mut readings = vec![Vector6::zeros(); ns];
+    for seed in 0..10 {
+        let state = common::random_state(&model, seed);
+        let nu_dot = random_nu_dot(nv, seed + 4000);
+        kd.set_state(&state).unwrap();
+        kd_edited.set_state(&state).unwrap();
+        kd.inverse_dynamics_regressor(&nu_dot, &mut y).unwrap();
+        kd.ft_sensor_regressor(&nu_dot, &mut y_ft).unwrap();
+        kd_edited.inverse_dynamics(&nu_dot, &[], &mut tau).unwrap();
+        kd_edited
+            .ft_sensor_wrenches(&nu_dot, &[], &mut readings)
+            .unwrap();
+        let expected =
+            DVector::from_iterator(6 * ns, readings.iter().flat_map(|w| w.iter().copied()));
+        assert!(relative(&(&y * &psi), &tau) <= 1e-10, "seed {seed}");
+        assert!(
+            relative(&(&y_ft * &split), &expected) <= 1e-10,
+            "seed {seed}"
+        );
+    }
+    // A model cannot hold a negative mass, nor a first moment without mass.
+    let mut bad = split.clone();
+    bad[0] = -1.0;
+    assert!(model.with_ft_split_inertial_parameters(&bad).is_err());
+    let mut bad = split.clone();
+    bad[0] = 0.0;
+    bad[1] = 0.1;
+    assert!(model.with_ft_split_inertial_parameters(&bad).is_err());
+    bad[0] = f64::NAN;
+    assert!(model.with_ft_split_inertial_parameters(&bad).is_err());
+}

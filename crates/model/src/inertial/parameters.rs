@@ -3,7 +3,7 @@
 
 use nalgebra::DVector;
 
-use super::rigid_body::{parameters_of, InertialParameters};
+use super::rigid_body::{inertia_of, parameters_of, InertialParameters};
 use crate::error::ModelError;
 use crate::model::Model;
 use crate::spatial::Inertia;
@@ -90,4 +90,76 @@ impl Model {
         }
         Ok(out)
     }
+
+    /// A copy of the model with the inertial parameters `split` (FT-split layout, see
+    /// [`crate::inertial`]): every body's and every sensor's child-side part's mass, CoM and inertia, so
+    /// that inverse dynamics and the FT readings of the copy are `Y ψ` with the regressors of
+    /// [`KinDyn`](crate::KinDyn). Without sensors the layout is the body layout. The parameters need not be
+    /// physically consistent (check with [`crate::inertial::check_full_consistency`]), but a model stores
+    /// mass and CoM, so each block needs `m ≥ 0`, and `m c = 0` when `m = 0`.
+    ///
+    /// # Errors
+    /// [`ModelError::DimensionMismatch`], [`ModelError::NonFiniteInput`],
+    /// [`ModelError::InvalidInertialParameters`], [`ModelError::SharedFtSensorHost`].
+    pub fn with_ft_split_inertial_parameters(
+        &self,
+        split: &DVector<f64>,
+    ) -> Result<Model, ModelError> {
+        self.check_ft_hosts()?;
+        let body = self.merge_ft_split_parameters(split)?;
+        if !split.iter().all(|v| v.is_finite()) {
+            return Err(ModelError::NonFiniteInput {
+                what: "inertial parameters",
+            });
+        }
+        let nb = self.body_count();
+        let mut out = self.clone();
+        out.total_mass = 0.0;
+        for b in 0..nb {
+            let what = || format!("body `{}`", self.bodies[b].name);
+            let inertia = checked_inertia(&body.fixed_rows::<10>(10 * b).into_owned(), what)?;
+            out.inertia[b] = inertia;
+            out.body_com[b] = inertia.com();
+            out.body_inertia_com[b] = inertia.inertia_at_com();
+            out.bodies[b].mass = inertia.m;
+            out.bodies[b].com = out.body_com[b];
+            out.bodies[b].inertia_at_com = out.body_inertia_com[b];
+            out.total_mass += inertia.m;
+        }
+        for k in 0..self.ft_sensors.len() {
+            let what = || {
+                format!(
+                    "the child side of force/torque sensor `{}`",
+                    self.ft_sensors[k].name
+                )
+            };
+            let part = checked_inertia(&split.fixed_rows::<10>(10 * (nb + k)).into_owned(), what)?;
+            let side = &mut out.ft_sides[k];
+            side.mass = part.m;
+            side.com = part.com();
+            side.inertia_at_com = part.inertia_at_com();
+        }
+        Ok(out)
+    }
+}
+
+/// The [`Inertia`] of `π` if a model can hold it: `m ≥ 0`, and no first moment without mass.
+fn checked_inertia(
+    pi: &InertialParameters,
+    what: impl Fn() -> String,
+) -> Result<Inertia, ModelError> {
+    let inertia = inertia_of(pi);
+    if inertia.m < 0.0 {
+        return Err(ModelError::InvalidInertialParameters {
+            what: what(),
+            reason: format!("negative mass {} kg", inertia.m),
+        });
+    }
+    if inertia.m == 0.0 && inertia.h.norm() > 0.0 {
+        return Err(ModelError::InvalidInertialParameters {
+            what: what(),
+            reason: format!("first moment {:?} kg·m without mass", inertia.h),
+        });
+    }
+    Ok(inertia)
 }

@@ -52,7 +52,7 @@ pub fn transform_parameters(
 }
 
 /// The crate's [`Inertia`] of `π`.
-fn inertia_of(pi: &InertialParameters) -> Inertia {
+pub(crate) fn inertia_of(pi: &InertialParameters) -> Inertia {
     Inertia {
         m: pi[0],
         h: Vector3::new(pi[1], pi[2], pi[3]),

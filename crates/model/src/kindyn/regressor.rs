@@ -19,10 +19,11 @@ impl KinDyn {
     /// representation's base velocity (mixed by default), the last n (`Y_s`, the joint-torque regressor)
     /// the joint torques (N·m or N); `nu_dot` is in the current representation.
     ///
-    /// Column block `b` is `Σ_k` over the joints `k` on the path from the root to body `b`:
-    /// row `k` = `S_kᵀ X*_b Y(a_b, v_b)`, base rows = `Tᵀ X*_b Y(a_b, v_b)`, with `Y` the rigid-body
-    /// regressor of body `b` in its frame ([`rigid_body_regressor`]), `X*_b` its wrench transform to A'.
-    /// Does not allocate.
+    /// Column block `b` (body `b`): the row of each joint `k` on the path from the root to body `b` is
+    /// `S_kᵀ X*_b Y(a_b, v_b)` (zero for the other joints), the base rows are `Tᵀ X*_b Y(a_b, v_b)`, with
+    /// `Y` the rigid-body regressor of body `b` in its frame ([`rigid_body_regressor`]), `X*_b` its wrench
+    /// transform to the computation frame, `S_k` the joint's motion subspace and `T` the base velocity map
+    /// of the representation (the RNEA's backward pass, [Traversaro 2017, §4.5]). Does not allocate.
     ///
     /// # Errors
     /// [`ModelError::DimensionMismatch`] for a wrong `nu_dot` length or `out` shape,
