@@ -170,6 +170,25 @@ pub enum ModelError {
         /// `joint `name`` or `the floating base`.
         what: String,
     },
+    /// Inertial parameters a model cannot hold (negative mass, or a first moment of mass without mass).
+    #[error("inertial parameters of {what}: {reason}")]
+    InvalidInertialParameters {
+        /// `body `name`` or `the child side of force/torque sensor `name``.
+        what: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Two force/torque sensors lie in the same lumped body: the FT-split parameter layout of the
+    /// regressors gives each host body one child-side part.
+    #[error("force/torque sensors `{first}` and `{second}` both lie in body `{body}` (one sensor per lumped body is supported by the FT regressor)")]
+    SharedFtSensorHost {
+        /// The lumped body.
+        body: String,
+        /// First sensor.
+        first: String,
+        /// Second sensor.
+        second: String,
+    },
 }
 
 /// Builds a [`ModelError::DimensionMismatch`] for a vector.

@@ -21,6 +21,7 @@ use crate::spatial::{
 use crate::state::{convert_velocity, RobotState, VelocityRepresentation};
 
 mod ft_sensors;
+mod regressor;
 
 /// A wrench applied ON the robot at a frame: `[force; torque]`, torque about the frame origin, both in world
 /// orientation (the frame's mixed frame `F[A]`).
@@ -704,23 +705,7 @@ impl KinDyn {
         let nb = self.model.body_count();
         let g6 = self.world_gravity6();
         if velocity {
-            let base_acc = match nu_dot {
-                Some(nd) => {
-                    let vd = Vector6::from_iterator(nd.iter().take(6).copied());
-                    self.base_t_mul(&vd)
-                }
-                None => Vector6::zeros(),
-            };
-            self.acc[0] = base_acc + self.bias[0] - g6;
-            let m = &*self.model;
-            for i in 1..nb {
-                let p = m.parent[i];
-                let mut a = self.acc[p] + self.c[i];
-                if let Some(nd) = nu_dot {
-                    a += self.s[i] * nd[5 + i];
-                }
-                self.acc[i] = a;
-            }
+            self.proper_accelerations(nu_dot);
             for i in 0..nb {
                 let iv = self.inertia[i].mul_motion(&self.vel[i]);
                 self.force[i] = self.inertia[i].mul_motion(&self.acc[i])
@@ -737,6 +722,29 @@ impl KinDyn {
             let p = m.parent[i];
             let f = self.force[i];
             self.force[p] += f;
+        }
+    }
+
+    /// The RNEA's forward pass in frame A': `acc[i]` = proper acceleration of body `i` (gravity
+    /// subtracted, [Traversaro 2017, eq. 2.42b]) for the generalized acceleration `nu_dot` (current
+    /// representation; `None` = zero).
+    fn proper_accelerations(&mut self, nu_dot: Option<&DVector<f64>>) {
+        let base_acc = match nu_dot {
+            Some(nd) => {
+                let vd = Vector6::from_iterator(nd.iter().take(6).copied());
+                self.base_t_mul(&vd)
+            }
+            None => Vector6::zeros(),
+        };
+        self.acc[0] = base_acc + self.bias[0] - self.world_gravity6();
+        let m = &*self.model;
+        for i in 1..m.body_count() {
+            let p = m.parent[i];
+            let mut a = self.acc[p] + self.c[i];
+            if let Some(nd) = nu_dot {
+                a += self.s[i] * nd[5 + i];
+            }
+            self.acc[i] = a;
         }
     }
 

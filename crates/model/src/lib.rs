@@ -26,6 +26,7 @@
 pub mod bundled;
 mod edits;
 mod error;
+pub mod inertial;
 mod kindyn;
 mod model;
 pub mod spatial;

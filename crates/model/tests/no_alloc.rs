@@ -1,4 +1,5 @@
-//! After `KinDyn::new`, neither `set_state` nor any computation allocates (counting global allocator).
+//! After `KinDyn::new`, neither `set_state` nor any computation (the inertial-parameter regressors included)
+//! allocates (counting global allocator).
 
 mod common;
 
@@ -35,6 +36,9 @@ fn exercise(model: Arc<Model>) {
     let mut integrated = states[0].clone();
     let mut ft = vec![Vector6::zeros(); model.ft_sensors().len()];
     let mut ft_map = nalgebra::Matrix6::zeros();
+    let ns = model.ft_sensors().len();
+    let mut y_full = DMatrix::zeros(nv, 10 * model.body_count());
+    let mut y_ft = DMatrix::zeros(6 * ns, 10 * (model.body_count() + ns));
 
     let mut sink = 0.0;
     // only this thread's allocations count (the test harness may allocate on its own threads)
@@ -69,6 +73,9 @@ fn exercise(model: Arc<Model>) {
                 kd.inverse_dynamics(&nu_dot, &wrenches, &mut vec_nv)
                     .unwrap();
                 kd.forward_dynamics(&tau, &wrenches, &mut acc).unwrap();
+                kd.inverse_dynamics_regressor(&nu_dot, &mut y_full).unwrap();
+                kd.ft_sensor_regressor(&nu_dot, &mut y_ft).unwrap();
+                sink += y_full[(6, 10)] + y_ft[(0, 0)];
                 kd.state_into(&mut integrated);
                 integrated.integrate(&model, rep, 1e-3).unwrap();
             }
