@@ -5,5 +5,8 @@
 //! crate holds only the rules that chain them (plan sample → simplified-layer input, simplified output +
 //! plan → whole-body input).
 
+mod heading;
 mod simplified_input;
 mod wbc_input;
+
+pub use heading::soles_heading;
