@@ -441,14 +441,12 @@ pub struct PlannerInput {
     pub right_sole: Isometry3<f64>,
 }
 
-impl stride_block::Block for Planner {
-    type Input = PlannerInput;
-    type Output = PlanSample;
-    type Error = PlannerError;
-
+impl Planner {
     /// First call: starts a plan from the measured soles (standing if no goal). Later calls with a goal:
     /// replan at the next merge point (this allocates; ticks without a goal do not). Then samples.
-    fn step(&mut self, input: &PlannerInput) -> Result<&PlanSample, PlannerError> {
+    ///
+    /// Inherent, so a caller need not import [`stride_block::Block`] (the `Block` impl calls it).
+    pub fn step(&mut self, input: &PlannerInput) -> Result<&PlanSample, PlannerError> {
         let t = input.time.as_secs_f64();
         if self.plan.is_none() {
             let goal = input.goal.clone().unwrap_or(Goal::Stand);
@@ -461,6 +459,16 @@ impl stride_block::Block for Planner {
             p.sample(t, output);
         }
         Ok(&self.output)
+    }
+}
+
+impl stride_block::Block for Planner {
+    type Input = PlannerInput;
+    type Output = PlanSample;
+    type Error = PlannerError;
+
+    fn step(&mut self, input: &PlannerInput) -> Result<&PlanSample, PlannerError> {
+        Planner::step(self, input)
     }
 
     fn reset(&mut self) {

@@ -183,7 +183,7 @@ fn step_adjustment(c: &mut Criterion) {
     let base = StepAdjustmentInput {
         dcm: Vector2::new(0.33, 0.0912),
         omega: OMEGA,
-        stance: StanceFoot::Left,
+        stance: Foot::Left,
         stance_position: Vector2::new(0.3, 0.075),
         stance_yaw: 0.0,
         stance_cop: Vector2::new(0.31, 0.075),

@@ -13,9 +13,9 @@ use crate::dcm_predictive::{
 };
 use crate::error::{check_finite, Result, SimplifiedError};
 use crate::lipm::{check_omega, check_point};
-use crate::polygon::SupportPolygon;
 use crate::step_adjustment::StepAdjustmentConfig;
 use crate::zmp_com::{ZmpComConfig, ZmpComController, ZmpComGains};
+use stride_block::SupportPolygon;
 
 /// Which DCM controller the layer runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -284,14 +284,12 @@ impl SimplifiedController {
     }
 }
 
-impl stride_block::Block for SimplifiedController {
-    type Input = SimplifiedInput;
-    type Output = SimplifiedOutput;
-    type Error = SimplifiedError;
-
+impl SimplifiedController {
     /// One tick. On error (non-finite input, empty MPC horizon, MPC failure) nothing changes and
     /// [`SimplifiedController::output`] still holds the last valid references: callers hold them.
-    fn step(&mut self, input: &SimplifiedInput) -> Result<&SimplifiedOutput> {
+    ///
+    /// Inherent, so a caller need not import [`stride_block::Block`] (the `Block` impl calls it).
+    pub fn step(&mut self, input: &SimplifiedInput) -> Result<&SimplifiedOutput> {
         let start = Instant::now();
         Self::validate_input(input)?;
         let mut diagnostics = SimplifiedDiagnostics {
@@ -355,6 +353,16 @@ impl stride_block::Block for SimplifiedController {
             diagnostics,
         };
         Ok(&self.output)
+    }
+}
+
+impl stride_block::Block for SimplifiedController {
+    type Input = SimplifiedInput;
+    type Output = SimplifiedOutput;
+    type Error = SimplifiedError;
+
+    fn step(&mut self, input: &SimplifiedInput) -> Result<&SimplifiedOutput> {
+        SimplifiedController::step(self, input)
     }
 
     fn reset(&mut self) {

@@ -10,3 +10,6 @@ mod simplified_input;
 mod wbc_input;
 
 pub use heading::soles_heading;
+pub use simplified_input::{
+    is_walking, support_polygon, MeasuredCentroidal, SimplifiedInputBuilder, SimplifiedInputError,
+};
