@@ -102,6 +102,26 @@ pub fn plan_from_standing(
 }
 
 /// The trajectory-layer object: holds the current plan, replans on new goals, samples references.
+///
+/// ```
+/// use std::time::Duration;
+/// use stride_planner::prelude::*;
+/// use nalgebra::Isometry3;
+///
+/// let mut planner = Planner::new(PlannerConfig::default(), 9.81)?;
+/// let input = PlannerInput {
+///     time: Duration::ZERO,
+///     goal: Some(Goal::Pose { x: 0.5, y: 0.0, yaw: 0.0 }),
+///     left_sole: Isometry3::translation(0.0, 0.075, 0.0),
+///     right_sole: Isometry3::translation(0.0, -0.075, 0.0),
+/// };
+/// let sample = planner.step(&input)?; // inherent: no need to import `Block`
+/// assert!(sample.left.in_contact && sample.right.in_contact);
+/// let mut later = PlanSample::default();
+/// planner.sample(2.0, &mut later)?;
+/// assert!(later.com_position.x > 0.0);
+/// # Ok::<(), PlannerError>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Planner {
     config: PlannerConfig,

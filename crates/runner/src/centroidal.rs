@@ -113,7 +113,7 @@ impl CentroidalLayer {
                     position.y = n.y;
                 }
                 self.input.push_contact(MpcContact {
-                    foot: foot,
+                    foot,
                     position,
                     yaw: pc.pose.rotation.euler_angles().2,
                     activation: pc.activation_time,

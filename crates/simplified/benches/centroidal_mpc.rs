@@ -6,7 +6,6 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Vector3;
-use stride_block::Block;
 use stride_simplified::{CentroidalMpc, CentroidalMpcConfig, CentroidalMpcInput, Foot, MpcContact};
 
 fn contact(foot: Foot, x: f64, y: f64, activation: f64, deactivation: f64) -> MpcContact {

@@ -4,7 +4,6 @@ use std::time::Duration;
 
 use criterion::{criterion_group, Criterion};
 use nalgebra::Vector2;
-use stride_block::Block;
 use stride_simplified::*;
 
 const OMEGA: f64 = 4.302_325_511_579_751;

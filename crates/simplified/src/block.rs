@@ -194,6 +194,21 @@ pub struct SimplifiedOutput {
 }
 
 /// The simplified-model control layer. See the crate documentation for the runner-facing contract.
+///
+/// ```
+/// use std::time::Duration;
+/// use stride_simplified::prelude::*;
+/// use nalgebra::Vector2;
+///
+/// let mut layer = SimplifiedController::new(&SimplifiedConfig::default(), Duration::from_millis(10))?;
+/// let foot = SupportPolygon::rectangle(-0.1, 0.1, -0.12, 0.12)?;
+/// let mut input = SimplifiedInput::new(layer.horizon_samples(), foot);
+/// input.omega = (9.81_f64 / 0.54).sqrt();
+/// input.measured_dcm = Vector2::new(0.01, 0.0); // 1 cm ahead of the planned DCM (at the origin)
+/// let out = layer.step(&input)?; // inherent: no need to import `Block`
+/// assert!(out.valid && out.desired_zmp.x > 0.0); // the ZMP moves ahead to push the DCM back
+/// # Ok::<(), SimplifiedError>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct SimplifiedController {
     config: SimplifiedConfig,
