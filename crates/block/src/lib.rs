@@ -1,4 +1,5 @@
-//! `stride-block`: the one interface every stride layer implements.
+//! `stride-block`: the one interface every stride layer implements, and the vocabulary the layers
+//! share: [`Foot`], [`SupportPolygon`] (with [`FootRectangle`] and [`feet_support_polygon`]).
 //!
 //! A layer (planner, simplified-model controller, whole-body controller, simulated robot) is a *block*:
 //! it is built once from a validated configuration (`new`, where all allocation happens), then stepped
@@ -29,8 +30,26 @@
 //! ```
 
 mod filter;
+mod foot;
+mod polygon;
+mod time;
 
 pub use filter::{low_pass_gain, FirstOrderLowPass};
+pub use foot::Foot;
+pub use polygon::{
+    feet_support_polygon, FootRectangle, PolygonError, SupportPolygon, MAX_HULL_POINTS,
+    MAX_POLYGON_VERTICES, MIN_POLYGON_AREA,
+};
+pub use time::seconds;
+
+/// What a user of a layer needs in scope: `use stride_block::prelude::*;`.
+pub mod prelude {
+    pub use crate::{
+        feet_support_polygon, seconds, Block, FirstOrderLowPass, Foot, FootRectangle, PolygonError,
+        SupportPolygon,
+    };
+    pub use nalgebra;
+}
 
 /// A layer of the stack: plain data in, plain data out, no allocation after construction.
 pub trait Block {

@@ -8,7 +8,6 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
-use stride_block::Block;
 use stride_estimation::{Estimator, EstimatorConfig, EstimatorInput, ImuReading};
 use stride_model::{ExternalWrench, KinDyn, Model, RobotState};
 

@@ -543,12 +543,9 @@ fn choose_foot_sensor(
         })
 }
 
-impl Block for Estimator {
-    type Input = EstimatorInput;
-    type Output = EstimatorOutput;
-    type Error = EstimatorError;
-
-    fn step(&mut self, input: &EstimatorInput) -> Result<&EstimatorOutput> {
+impl Estimator {
+    /// One tick (inherent, so a caller need not import [`stride_block::Block`]; the `Block` impl calls it).
+    pub fn step(&mut self, input: &EstimatorInput) -> Result<&EstimatorOutput> {
         let dt = self.check_input(input)?;
         let (kin, imu_r_sole) = self.predict(input, dt)?;
         let h = kin.imu_h_sole.map(|h| h.translation.vector);
@@ -584,6 +581,16 @@ impl Block for Estimator {
         out.foot_wrenches = wrenches;
         self.last_time_ns = Some(input.time_ns);
         Ok(&self.output)
+    }
+}
+
+impl Block for Estimator {
+    type Input = EstimatorInput;
+    type Output = EstimatorOutput;
+    type Error = EstimatorError;
+
+    fn step(&mut self, input: &EstimatorInput) -> Result<&EstimatorOutput> {
+        Estimator::step(self, input)
     }
 
     fn reset(&mut self) {

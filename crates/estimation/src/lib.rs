@@ -21,3 +21,12 @@ pub use error::{EstimatorError, Result};
 pub use estimator::Estimator;
 pub use io::{EstimatorInput, EstimatorOutput, ImuReading};
 pub use schmitt::SchmittTrigger;
+
+/// What a user of the estimation layer needs in scope: `use stride_estimation::prelude::*;`.
+pub mod prelude {
+    pub use crate::{
+        Estimator, EstimatorConfig, EstimatorError, EstimatorInput, EstimatorOutput, ImuReading,
+    };
+    pub use nalgebra;
+    pub use stride_block::Block;
+}

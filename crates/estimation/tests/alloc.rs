@@ -6,7 +6,6 @@ use std::time::Duration;
 
 use common::{bundled_model, standing_input, standing_state};
 use nalgebra::Vector6;
-use stride_block::Block;
 use stride_estimation::{Estimator, EstimatorConfig};
 
 #[global_allocator]

@@ -189,6 +189,18 @@ pub enum ModelError {
         /// Second sensor.
         second: String,
     },
+    /// A joint position outside the joint's URDF limits (user input: an initial posture, a standing state).
+    #[error("joint `{joint}` at {value} is outside its limits [{lower}, {upper}]")]
+    JointOutOfLimits {
+        /// Joint name.
+        joint: String,
+        /// The position (rad or m).
+        value: f64,
+        /// Lower limit (rad or m).
+        lower: f64,
+        /// Upper limit (rad or m).
+        upper: f64,
+    },
 }
 
 /// Builds a [`ModelError::DimensionMismatch`] for a vector.

@@ -30,6 +30,7 @@ pub mod inertial;
 mod kindyn;
 mod model;
 pub mod spatial;
+mod standing;
 mod state;
 mod urdf;
 
@@ -39,7 +40,19 @@ pub use kindyn::{ExternalWrench, KinDyn};
 pub use model::{
     Body, Frame, FrameId, FrameKind, FtSensor, Joint, JointKind, Mimic, Model, STANDARD_GRAVITY,
 };
-pub use state::{convert_velocity, se3_exp, RobotState, VelocityRepresentation};
+pub use state::{
+    check_joint_limits, convert_velocity, se3_exp, RobotState, VelocityRepresentation,
+};
+
+/// What a user of the model needs in scope: `use stride_model::prelude::*;` (the model is not a layer, so
+/// no `Block` here).
+pub mod prelude {
+    pub use crate::{
+        bundled, ExternalWrench, FrameId, KinDyn, Model, ModelError, RobotState,
+        VelocityRepresentation, STANDARD_GRAVITY,
+    };
+    pub use nalgebra;
+}
 
 impl Model {
     /// Loads a model from a URDF file. Fixed joints are merged (inertias lumped, child links kept as frames);

@@ -116,6 +116,19 @@ impl RobotState {
         Ok(())
     }
 
+    /// Checks that every joint position lies within its URDF limits `lower ≤ q ≤ upper` (continuous joints
+    /// and joints without `<limit>` have infinite limits). Call it where joint positions enter from a user
+    /// (an initial posture, a configuration file); the controllers' own states are not checked (a
+    /// simulated joint may overshoot its limit slightly).
+    ///
+    /// # Errors
+    /// [`ModelError::DimensionMismatch`] when the length is not the model's DoF,
+    /// [`ModelError::JointOutOfLimits`] naming the first joint outside its limits, with its value and
+    /// limits.
+    pub fn check_joint_limits(&self, model: &Model) -> Result<(), ModelError> {
+        check_joint_limits(model, &self.joint_positions)
+    }
+
     /// Identity base pose, zero joint positions and velocities.
     pub fn zero(model: &Model) -> Self {
         Self {
@@ -210,4 +223,23 @@ pub fn convert_velocity(
         VelocityRepresentation::Body => join(&(r.transpose() * od), &(r.transpose() * w)),
         VelocityRepresentation::Inertial => join(&(od - w.cross(&o)), &w),
     }
+}
+
+/// [`RobotState::check_joint_limits`] on bare joint positions `q` (model order, rad or m).
+///
+/// # Errors
+/// As [`RobotState::check_joint_limits`]; NaN is outside every limit.
+pub fn check_joint_limits(model: &Model, q: &DVector<f64>) -> Result<(), ModelError> {
+    check_len("joint_positions", model.dof(), q.len())?;
+    for (joint, &value) in model.joints().iter().zip(q.iter()) {
+        if !(joint.lower <= value && value <= joint.upper) {
+            return Err(ModelError::JointOutOfLimits {
+                joint: joint.name.clone(),
+                value,
+                lower: joint.lower,
+                upper: joint.upper,
+            });
+        }
+    }
+    Ok(())
 }

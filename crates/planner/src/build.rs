@@ -10,11 +10,12 @@ use crate::dcm::{
     zmp_constant, zmp_transition, DcmSegment,
 };
 use crate::error::PlannerError;
-use crate::geometry::{wrap_angle, Pose2, SupportPolygon};
+use crate::geometry::{wrap_angle, Pose2};
 use crate::goal::Goal;
 use crate::plan::{Plan, PlanOutcome};
 use crate::swing::{SwingShape, SwingTrajectory};
 use crate::unicycle::{choose_first_swing, search_footsteps, unicycle_path, StepPlan};
+use stride_block::SupportPolygon;
 
 /// Everything a new (partial) plan starts from.
 #[derive(Clone, Debug)]
@@ -163,17 +164,20 @@ struct Footholds {
     step_from: Vec<Isometry3<f64>>,
     /// Mid-point of the final feet \[m\].
     final_mid: Vector2<f64>,
-    /// Hull of the two starting soles.
-    initial_polygon: SupportPolygon,
+    /// Hull of the two starting soles (`None`: degenerate, which validated foot dimensions exclude).
+    initial_polygon: Option<SupportPolygon>,
     /// Hull of the two soles in the double support after each touch-down.
-    ds_polygons: Vec<SupportPolygon>,
+    ds_polygons: Vec<Option<SupportPolygon>>,
 }
 
-/// Hull of the two soles `feet = [left, right]`.
-fn double_support_polygon(cfg: &PlannerConfig, feet: &[Isometry3<f64>; 2]) -> SupportPolygon {
+/// Hull of the two soles `feet = [left, right]` (`None` when degenerate).
+fn double_support_polygon(
+    cfg: &PlannerConfig,
+    feet: &[Isometry3<f64>; 2],
+) -> Option<SupportPolygon> {
     let a = SupportPolygon::foot_corners(&feet[0], cfg.foot_length, cfg.foot_width);
     let b = SupportPolygon::foot_corners(&feet[1], cfg.foot_length, cfg.foot_width);
-    SupportPolygon::hull_of(&[a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]])
+    SupportPolygon::convex_hull(&[a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]).ok()
 }
 
 /// Foot poses along the steps, the stance ZMP of each step and the double-support polygons.
@@ -347,7 +351,7 @@ fn worst_zmp_margin(
         for k in 0..=CHECKS {
             let tau = d * k as f64 / CHECKS as f64;
             let z = seg.evaluate_local(tau, omega).zmp;
-            let dist = polygon.signed_distance(z) - 1e-4;
+            let dist = polygon.map_or(f64::NEG_INFINITY, |p| p.signed_distance(z)) - 1e-4;
             let dist = if dist.is_nan() { -f64::INFINITY } else { dist };
             if dist < worst.0 {
                 worst = (dist, seg.start + tau, i);

@@ -58,7 +58,7 @@ impl PlanVerification {
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
-/// | `com_height` | m | 0.53 | constant CoM height above the ground (LIPM), gives ω = √(g/h); in (0, 10] |
+/// | `com_height` | m | 0.54 (`stride_model::bundled::COM_HEIGHT`) | constant CoM height above the ground (LIPM), gives ω = √(g/h); in (0, 10] |
 /// | `step_duration_min` | s | 0.8 | min time between two touch-downs [Romualdi 2022, eq. 10.1.11] |
 /// | `step_duration_nominal` | s | 1.0 | duration of the closing steps once the unicycle stopped |
 /// | `step_duration_max` | s | 1.2 | max time between two touch-downs [Romualdi 2022, eq. 10.1.11] |
@@ -67,7 +67,7 @@ impl PlanVerification {
 /// | `final_double_support_duration` | s | 1.0 | last double support, ZMP/DCM move to the feet mid-point |
 /// | `feet_distance_min` | m | 0.0 | min straight-line distance between the two sole origins at touch-down [Romualdi 2022, eq. 10.1.12] (was `step_length_min`) |
 /// | `feet_distance_max` | m | 0.22 | max straight-line distance between the two sole origins at touch-down [Romualdi 2022, eq. 10.1.12], the lateral width included: a forward step `s` at width `w` needs `√(s² + w²)` (was `step_length_max`) |
-/// | `nominal_width` | m | 0.16 | lateral distance of the feet from each other on the unicycle axle |
+/// | `nominal_width` | m | 0.15 (`stride_model::bundled::NOMINAL_WIDTH`) | lateral distance of the feet from each other on the unicycle axle |
 /// | `min_width` | m | 0.14 | min lateral distance of the left foot in the right-foot frame (or of the right foot in the left-foot frame, see `geometry::feet_lateral_separation`) |
 /// | `max_yaw_per_step` | rad | 0.26 | max relative yaw between the feet [Romualdi 2022, eq. 10.1.13], ≈ 15° |
 /// | `swing_height` | m | 0.03 | apex height of the swing foot above the higher of its two footholds |
@@ -170,10 +170,12 @@ pub struct PlannerConfig {
     pub last_step_dcm_alpha: f64,
 }
 
+/// The defaults fit the bundled humanoid: `com_height`, `nominal_width`, `foot_length` and `foot_width`
+/// come from [`stride_model::bundled`]; set them for another robot.
 impl Default for PlannerConfig {
     fn default() -> Self {
         Self {
-            com_height: 0.53,
+            com_height: stride_model::bundled::COM_HEIGHT,
             step_duration_min: 0.8,
             step_duration_nominal: 1.0,
             step_duration_max: 1.2,
@@ -182,14 +184,14 @@ impl Default for PlannerConfig {
             final_double_support_duration: 1.0,
             feet_distance_min: 0.0,
             feet_distance_max: 0.22,
-            nominal_width: 0.16,
+            nominal_width: stride_model::bundled::NOMINAL_WIDTH,
             min_width: 0.14,
             max_yaw_per_step: 0.26,
             swing_height: 0.03,
             swing_apex_fraction: 0.5,
             landing_velocity: 0.0,
-            foot_length: 0.20,
-            foot_width: 0.09,
+            foot_length: stride_model::bundled::FOOT_LENGTH,
+            foot_width: stride_model::bundled::FOOT_WIDTH,
             backward_speed_factor: 0.5,
             sideways_speed_factor: 0.3,
             linear_saturation_factor: 0.9,

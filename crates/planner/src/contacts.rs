@@ -3,41 +3,7 @@
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
-/// A foot.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Foot {
-    /// Left foot.
-    Left,
-    /// Right foot.
-    Right,
-}
-
-impl Foot {
-    /// The other foot.
-    pub fn other(self) -> Foot {
-        match self {
-            Foot::Left => Foot::Right,
-            Foot::Right => Foot::Left,
-        }
-    }
-
-    /// `"left"` or `"right"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Foot::Left => "left",
-            Foot::Right => "right",
-        }
-    }
-
-    /// +1 for left, −1 for right (lateral side in the unicycle frame).
-    pub fn side(self) -> f64 {
-        match self {
-            Foot::Left => 1.0,
-            Foot::Right => -1.0,
-        }
-    }
-}
+pub use stride_block::Foot;
 
 /// A planned contact: the foot stands at `pose` (sole frame, world) from `activation_time` to
 /// `deactivation_time` (seconds of plan time; `None` = never lifted again within this plan).

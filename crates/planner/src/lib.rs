@@ -73,9 +73,20 @@ pub use adjust::{CurrentStep, StepAdjustmentRequest};
 pub use config::{DcmInterpolation, FirstSwingFoot, PlanVerification, PlannerConfig};
 pub use contacts::{ContactList, Foot, Phase, PhaseKind, PlannedContact};
 pub use error::PlannerError;
-pub use geometry::{Pose2, SupportPolygon};
+pub use geometry::Pose2;
 pub use goal::{Goal, Waypoint};
 pub use plan::{FootSample, Plan, PlanOutcome, PlanReport, PlanSample};
 pub use planner::{plan_from_standing, Planner, PlannerInput};
+pub use stride_block::{Block, FootRectangle, SupportPolygon};
 pub use swing::{RetargetOutcome, SwingShape, SwingTrajectory};
 pub use verify::{Invariant, InvariantViolation, VerifyReport};
+
+/// What a user of the planner needs in scope: `use stride_planner::prelude::*;`.
+pub mod prelude {
+    pub use crate::{
+        plan_from_standing, Foot, FootSample, Goal, Plan, PlanSample, Planner, PlannerConfig,
+        PlannerError, PlannerInput, SupportPolygon, VerifyReport, Waypoint,
+    };
+    pub use nalgebra;
+    pub use stride_block::Block;
+}

@@ -6,8 +6,8 @@ use serde::{Deserialize, Serialize};
 use crate::contacts::{ContactList, Foot, Phase, PhaseKind};
 use crate::dcm::{DcmSegment, PlanarState};
 use crate::error::PlannerError;
-use crate::geometry::SupportPolygon;
 use crate::swing::SwingTrajectory;
+use stride_block::SupportPolygon;
 
 /// Whether the plan reaches the goal.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -73,8 +73,9 @@ pub struct PlanSample {
     pub right: FootSample,
     /// Gait phase.
     pub phase: PhaseKind,
-    /// Convex hull of the soles in contact (CCW, ground plane).
-    pub support_polygon: SupportPolygon,
+    /// Convex hull of the soles in contact (CCW, ground plane); `None` in a default sample (and never
+    /// `None` in a sample of a plan: some foot is always in contact and the sole dimensions are valid).
+    pub support_polygon: Option<SupportPolygon>,
 }
 
 impl Default for PlanSample {
@@ -91,7 +92,7 @@ impl Default for PlanSample {
             left: FootSample::default(),
             right: FootSample::default(),
             phase: PhaseKind::DoubleSupport,
-            support_polygon: SupportPolygon::default(),
+            support_polygon: None,
         }
     }
 }
@@ -260,7 +261,7 @@ impl Plan {
                 n += 4;
             }
         }
-        out.support_polygon = SupportPolygon::hull_of(&pts[..n]);
+        out.support_polygon = SupportPolygon::convex_hull(&pts[..n]).ok();
     }
 
     /// Samples the whole plan every `dt` seconds from `start_time` to `end_time` (inclusive) into the JSON

@@ -102,6 +102,26 @@ pub fn plan_from_standing(
 }
 
 /// The trajectory-layer object: holds the current plan, replans on new goals, samples references.
+///
+/// ```
+/// use std::time::Duration;
+/// use stride_planner::prelude::*;
+/// use nalgebra::Isometry3;
+///
+/// let mut planner = Planner::new(PlannerConfig::default(), 9.81)?;
+/// let input = PlannerInput {
+///     time: Duration::ZERO,
+///     goal: Some(Goal::Pose { x: 0.5, y: 0.0, yaw: 0.0 }),
+///     left_sole: Isometry3::translation(0.0, 0.075, 0.0),
+///     right_sole: Isometry3::translation(0.0, -0.075, 0.0),
+/// };
+/// let sample = planner.step(&input)?; // inherent: no need to import `Block`
+/// assert!(sample.left.in_contact && sample.right.in_contact);
+/// let mut later = PlanSample::default();
+/// planner.sample(2.0, &mut later)?;
+/// assert!(later.com_position.x > 0.0);
+/// # Ok::<(), PlannerError>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Planner {
     config: PlannerConfig,
@@ -441,14 +461,12 @@ pub struct PlannerInput {
     pub right_sole: Isometry3<f64>,
 }
 
-impl stride_block::Block for Planner {
-    type Input = PlannerInput;
-    type Output = PlanSample;
-    type Error = PlannerError;
-
+impl Planner {
     /// First call: starts a plan from the measured soles (standing if no goal). Later calls with a goal:
     /// replan at the next merge point (this allocates; ticks without a goal do not). Then samples.
-    fn step(&mut self, input: &PlannerInput) -> Result<&PlanSample, PlannerError> {
+    ///
+    /// Inherent, so a caller need not import [`stride_block::Block`] (the `Block` impl calls it).
+    pub fn step(&mut self, input: &PlannerInput) -> Result<&PlanSample, PlannerError> {
         let t = input.time.as_secs_f64();
         if self.plan.is_none() {
             let goal = input.goal.clone().unwrap_or(Goal::Stand);
@@ -461,6 +479,16 @@ impl stride_block::Block for Planner {
             p.sample(t, output);
         }
         Ok(&self.output)
+    }
+}
+
+impl stride_block::Block for Planner {
+    type Input = PlannerInput;
+    type Output = PlanSample;
+    type Error = PlannerError;
+
+    fn step(&mut self, input: &PlannerInput) -> Result<&PlanSample, PlannerError> {
+        Planner::step(self, input)
     }
 
     fn reset(&mut self) {

@@ -27,8 +27,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::PlannerConfig;
 use crate::contacts::Foot;
-use crate::geometry::{feet_lateral_separation, wrap_angle, Pose2, SupportPolygon};
+use crate::geometry::{feet_lateral_separation, wrap_angle, Pose2};
 use crate::plan::{Plan, PlanSample};
+use stride_block::SupportPolygon;
 
 pub use crate::error::{Invariant, InvariantViolation};
 
@@ -390,7 +391,9 @@ impl Plan {
         let t = s.time;
         let w = self.omega;
         let zmp = s.zmp.xy();
-        let margin = s.support_polygon.signed_distance(zmp);
+        let margin = s
+            .support_polygon
+            .map_or(f64::NEG_INFINITY, |p| p.signed_distance(zmp));
         if exceeds(-margin, DYNAMICS_TOLERANCE) {
             return Err(violation(
                 Invariant::ZmpInSupport,

@@ -11,9 +11,10 @@ use stride_planner::{plan_from_standing, Foot, Goal, PhaseKind, PlannerConfig, P
 
 #[test]
 fn omega_and_doubling_time() {
+    // the default com_height is the bundled humanoid's 0.54 m: ω = √(9.81/0.54)
     let cfg = PlannerConfig::default();
-    assert!((cfg.omega(GRAVITY) - 4.3023).abs() < 1e-4);
-    assert!((2f64.ln() / cfg.omega(GRAVITY) - 0.161).abs() < 1e-3);
+    assert!((cfg.omega(GRAVITY) - 4.2622).abs() < 1e-4);
+    assert!((2f64.ln() / cfg.omega(GRAVITY) - 0.1626).abs() < 1e-3);
 }
 
 /// x(t) = p + (x0 − p) cosh ωt + (ẋ0/ω) sinh ωt and ξ(t) = p + e^{ωt}(ξ0 − p); numbers computed by hand.

@@ -5,7 +5,6 @@ mod common;
 use std::time::Duration;
 
 use common::*;
-use stride_block::Block;
 use stride_planner::{Goal, PlanSample, Planner, PlannerConfig, PlannerInput};
 
 #[global_allocator]
@@ -47,7 +46,7 @@ fn sampling_and_stepping_do_not_allocate() {
         while (k as f64) * 0.01 < end + 2.0 {
             let t = k as f64 * 0.01;
             planner.sample(t, &mut out).unwrap();
-            checksum += out.dcm_position.x + out.support_polygon.len as f64;
+            checksum += out.dcm_position.x + out.support_polygon.map_or(0, |p| p.len()) as f64;
             input.time = Duration::from_millis(10 * k);
             let o = planner.step(&input).unwrap();
             checksum += o.com_position.y;

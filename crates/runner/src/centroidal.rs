@@ -10,24 +10,16 @@
 //! [`stride_planner::Planner::adjust_step`] retargets the swing (same touch-down time) and replans the rest.
 
 use nalgebra::Vector2;
-use stride_block::Block;
 use stride_planner::{Foot, Plan, PlanSample, StepAdjustmentRequest};
 use stride_simplified::{
     CentroidalMpc, CentroidalMpcConfig, CentroidalMpcInput, CentroidalMpcOutput, ComReference,
-    MpcContact, SimplifiedError, SimplifiedInput, StanceFoot,
+    MpcContact, SimplifiedError, SimplifiedInput,
 };
 
 use crate::step_adjust::AdjustedFootstepMsg;
 
 /// Contacts whose nominal position this layer remembers (the ones it moved).
 const REMEMBERED: usize = 4;
-
-fn stance_foot(foot: Foot) -> StanceFoot {
-    match foot {
-        Foot::Left => StanceFoot::Left,
-        Foot::Right => StanceFoot::Right,
-    }
-}
 
 /// The centroidal MPC with its input buffer and the nominals of the contacts it moved; no allocation
 /// after the first ticks (one QP per problem size, allocated when that size first occurs).
@@ -121,7 +113,7 @@ impl CentroidalLayer {
                     position.y = n.y;
                 }
                 self.input.push_contact(MpcContact {
-                    foot: stance_foot(foot),
+                    foot,
                     position,
                     yaw: pc.pose.rotation.euler_angles().2,
                     activation: pc.activation_time,
@@ -188,7 +180,7 @@ impl CentroidalLayer {
         let next = out.next_adjusted()?;
         let step = plan.current_step(t)?;
         let swing = step.swing;
-        if stance_foot(swing.foot) != next.planned.foot
+        if swing.foot != next.planned.foot
             || (swing.land_time - next.planned.activation).abs() > 1e-3
         {
             return None;

@@ -104,7 +104,7 @@ pub fn plan(path: &Path, json: bool, dt: Option<f64>) -> Result<ExitCode, CliErr
     };
     let l = frame(&c.robot.left_sole, "robot.left_sole")?;
     let r = frame(&c.robot.right_sole, "robot.right_sole")?;
-    let state = crate::robot::standing_state(&model, &q0, l, r).map_err(err)?;
+    let state = stride_model::RobotState::standing(&model, &q0, l, r).map_err(err)?;
     let mut kd = stride_model::KinDyn::new(Arc::clone(&model));
     kd.set_state(&state).map_err(err)?;
     let (lp, rp) = (kd.frame_pose(l), kd.frame_pose(r));

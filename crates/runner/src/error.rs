@@ -30,6 +30,9 @@ pub enum RunError {
     /// The simplified layer failed to build (a failed tick is held, not an error).
     #[error("simplified layer: {0}")]
     Simplified(#[from] stride_simplified::SimplifiedError),
+    /// The simplified layer's input could not be filled (degenerate support polygon, horizon too small).
+    #[error("simplified layer's input: {0}")]
+    SimplifiedInput(#[from] stride_walking::SimplifiedInputError),
     /// The whole-body layer failed.
     #[error("whole-body layer: {0}")]
     Wbc(#[from] stride_wbc::WbcError),

@@ -10,12 +10,12 @@
 use std::sync::Arc;
 
 use nalgebra::{DVector, Vector3};
-use stride_model::{FrameId, Model};
+use stride_model::{FrameId, Model, RobotState};
 use stride_mujoco::{MujocoRobot, PlantSetup};
 use stride_sim::{ActuationMode, SimInput};
 
 use crate::config::{ControlMode, Scenario};
-use crate::robot::{standing_state, JointCommand, Measurement, Robot, RobotError};
+use crate::robot::{JointCommand, Measurement, Robot, RobotError};
 use crate::sim_plant::{load_command, load_sensors, SensedOutput};
 
 /// MuJoCo behind the [`Robot`] trait: truth from MuJoCo's state and contacts, sensors from stride-sim's
@@ -64,7 +64,7 @@ impl MujocoPlant {
                 inertias_from_model: has_inertia_edits(&c.sim.model),
             },
         )?;
-        let mut state = standing_state(&model, joint_positions, soles[0], soles[1])?;
+        let mut state = RobotState::standing(&model, joint_positions, soles[0], soles[1])?;
         state.base_pose.translation.vector += Vector3::new(0.0, 0.0, sim.ground.height);
         robot.set_initial_state(&state)?;
         // The URDF's collision geometry need not end at the sole frames (iCub's sole boxes reach 10.5 mm

@@ -327,28 +327,3 @@ impl RelativeToBase for KinDyn {
         base.inverse() * world_frame
     }
 }
-
-/// Puts the robot standing: sets the base pose so that the lower sole is flat at z = 0 and the two soles'
-/// mid-point is at the world origin (x, y), heading along x.
-pub fn standing_state(
-    model: &Arc<Model>,
-    joint_positions: &DVector<f64>,
-    left_sole: FrameId,
-    right_sole: FrameId,
-) -> Result<RobotState, RobotError> {
-    let mut state = RobotState::zero(model);
-    state.joint_positions.copy_from(joint_positions);
-    let mut kd = KinDyn::new(Arc::clone(model));
-    kd.set_state(&state)?;
-    let l = kd.frame_pose(left_sole);
-    // Level the left sole: base orientation such that world_R_sole = identity (yaw kept 0).
-    let base_rot = l.rotation.inverse();
-    state.base_pose = Isometry3::from_parts(nalgebra::Translation3::identity(), base_rot);
-    kd.set_state(&state)?;
-    let l = kd.frame_pose(left_sole).translation.vector;
-    let r = kd.frame_pose(right_sole).translation.vector;
-    let mid = (l + r) * 0.5;
-    let lowest = l.z.min(r.z);
-    state.base_pose.translation.vector -= Vector3::new(mid.x, mid.y, lowest);
-    Ok(state)
-}

@@ -126,12 +126,11 @@ pub(crate) fn initial_state(
         frame_of(scenario, model, "robot.left_sole", &c.robot.left_sole)?,
         frame_of(scenario, model, "robot.right_sole", &c.robot.right_sole)?,
     ];
-    Ok(crate::robot::standing_state(
-        model,
-        &m.sensors.joint_positions,
-        soles[0],
-        soles[1],
-    )?)
+    // Measured joints (not checked against the limits: an encoder may read a hair beyond one).
+    let mut state = stride_model::RobotState::zero(model);
+    state.joint_positions.copy_from(&m.sensors.joint_positions);
+    state.place_on_ground(model, soles[0], soles[1])?;
+    Ok(state)
 }
 
 /// Runs a scenario against any [`Robot`] (a real robot interface, another simulator, a test double).

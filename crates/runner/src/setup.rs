@@ -4,11 +4,11 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use nalgebra::{DVector, Vector3};
-use stride_model::{FrameId, InertiaEdits, LinkInertiaEdit, Model};
+use stride_model::{FrameId, InertiaEdits, LinkInertiaEdit, Model, RobotState};
 
 use crate::config::{PlantKind, Scenario};
 use crate::error::RunError;
-use crate::robot::{standing_state, IdealPlant, Robot};
+use crate::robot::{IdealPlant, Robot};
 use crate::sim_plant::SimPlant;
 
 /// Initial joint positions from the scenario (unknown joint names are configuration errors).
@@ -29,6 +29,8 @@ pub fn initial_joint_positions(
         })?;
         q[i] = *v;
     }
+    stride_model::check_joint_limits(model, &q)
+        .map_err(|e| scenario.invalid("robot.initial_joint_positions", e.to_string()))?;
     Ok(q)
 }
 
@@ -167,7 +169,7 @@ pub fn build_robot(
         }
         PlantKind::Mujoco => mujoco_robot(scenario, model, &q0)?,
         PlantKind::Ideal => {
-            let state = standing_state(model, &q0, soles[0], soles[1])?;
+            let state = RobotState::standing(model, &q0, soles[0], soles[1])?;
             let period = 1_000_000_000 / u64::from(c.rates.sim_hz);
             Box::new(IdealPlant::new(
                 Arc::clone(model),

@@ -3,7 +3,6 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use nalgebra::{DVector, Vector6};
-use stride_block::Block;
 use stride_estimation::{EstimatorInput, ImuReading};
 use stride_model::{FrameId, KinDyn, Model};
 use stride_sim::{ActuationMode, ImuMeasurement, SimConfig, SimInput, SimRobot};

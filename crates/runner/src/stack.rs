@@ -21,14 +21,13 @@ use nalgebra::{Vector2, Vector3, Vector6};
 use stride_block::{Block, FirstOrderLowPass};
 use stride_estimation::{Estimator, EstimatorOutput};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
-use stride_planner::geometry::wrap_angle;
 use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
 use stride_simplified::{
-    feet_support_polygon, measured_zmp, DcmControllerKind, FootRectangle, FootWrench,
-    HorizonSample, SimplifiedController, SimplifiedInput, SimplifiedOutput, StepAdjuster,
-    SupportPolygon,
+    measured_zmp, DcmControllerKind, FootWrench, SimplifiedController, SimplifiedInput,
+    SimplifiedOutput, StepAdjuster,
 };
-use stride_walking::WalkingHandles;
+pub use stride_walking::soles_heading;
+use stride_walking::{MeasuredCentroidal, SimplifiedInputBuilder, WalkingHandles};
 use stride_wbc::{QpIk, Tsid, WbcInput};
 
 use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
@@ -249,9 +248,10 @@ pub struct Stack {
     pub simplified: SimplifiedController,
     /// Its input of the last tick.
     pub simplified_input: SimplifiedInput,
+    /// Fills [`Stack::simplified_input`] from the plan and the measurements (the library glue).
+    simplified_glue: SimplifiedInputBuilder,
     /// Its last valid output (held on error).
     pub simplified_output: SimplifiedOutput,
-    simplified_period: f64,
     simplified_valid: bool,
     /// The whole-body layer.
     pub wbc: Wbc,
@@ -332,13 +332,10 @@ impl Stack {
             Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
         let simplified = SimplifiedController::new(&c.simplified, simplified_period)?;
         let wbc = Wbc::new(scenario, &model)?;
-        let polygon = Self::polygon_of(
-            &[kd.frame_pose(soles[0]), kd.frame_pose(soles[1])],
-            [true, true],
-            c.planner.foot_length * 0.5,
-            c.planner.foot_width * 0.5,
-        )?;
-        let simplified_input = SimplifiedInput::new(simplified.horizon_samples(), polygon);
+        let simplified_glue =
+            SimplifiedInputBuilder::new(&simplified, c.planner.foot_length, c.planner.foot_width);
+        let simplified_input =
+            simplified_glue.new_input(&[kd.frame_pose(soles[0]), kd.frame_pose(soles[1])])?;
         let wbc_input = wbc.input(initial);
         let wbc_handles = WalkingHandles::new(&wbc_input)?;
         let command = JointCommand::hold(c.scenario.control_mode, &initial.joint_positions);
@@ -367,7 +364,7 @@ impl Stack {
             simplified_output: *simplified.output(),
             simplified,
             simplified_input,
-            simplified_period: simplified_period.as_secs_f64(),
+            simplified_glue,
             simplified_valid: false,
             wbc,
             wbc_input,
@@ -406,40 +403,6 @@ impl Stack {
     /// The model.
     pub fn model(&self) -> &Arc<Model> {
         &self.model
-    }
-
-    fn polygon_of(
-        soles: &[nalgebra::Isometry3<f64>; 2],
-        contacts: [bool; 2],
-        hl: f64,
-        hw: f64,
-    ) -> Result<SupportPolygon, RunError> {
-        let mut feet = [FootRectangle {
-            position: Vector2::zeros(),
-            yaw: 0.0,
-            x_min: -hl,
-            x_max: hl,
-            y_min: -hw,
-            y_max: hw,
-        }; 2];
-        let mut n = 0;
-        for k in 0..2 {
-            if contacts[k] {
-                let p = &soles[k];
-                feet[n].position = p.translation.vector.xy();
-                feet[n].yaw = p.rotation.euler_angles().2;
-                n += 1;
-            }
-        }
-        if n == 0 {
-            // Flight phase in the plan cannot happen; use both feet.
-            for k in 0..2 {
-                feet[k].position = soles[k].translation.vector.xy();
-                feet[k].yaw = soles[k].rotation.euler_angles().2;
-            }
-            n = 2;
-        }
-        Ok(feet_support_polygon(&feet[..n])?)
     }
 
     /// Steps the estimation layer on a fresh measurement (every plant period): its output
@@ -577,57 +540,28 @@ impl Stack {
         self.measure_dcm(self.plan_sample.omega);
         self.adjust_step(time_ns);
         let centroidal_error = self.centroidal_tick(time_ns)?;
-        let s = self.plan_sample;
-        let contacts = [s.left.in_contact, s.right.in_contact];
-        let polygon = Self::polygon_of(
-            &self.measured.soles,
-            contacts,
-            self.foot_half_length,
-            self.foot_half_width,
-        )?;
+        let plan = self.planner.plan().ok_or(RunError::NoPlan {
+            layer: "simplified",
+        })?;
+        let m = &self.measured;
+        let measured = MeasuredCentroidal {
+            com: m.com,
+            com_velocity: m.com_velocity,
+            dcm: m.dcm,
+            zmp: self.zmp_filter.0.output().unwrap_or(m.zmp),
+            soles: m.soles,
+        };
         let i = &mut self.simplified_input;
-        i.time = Duration::from_nanos(time_ns);
-        i.omega = s.omega;
-        i.walking = self
-            .planner
-            .plan()
-            .is_some_and(|p| p.step_count() > 0 && s.time < p.end_time);
-        i.planned_dcm_position = s.dcm_position.xy();
-        i.planned_dcm_velocity = s.dcm_velocity.xy();
-        i.planned_zmp = s.zmp.xy();
-        i.planned_com_position = s.com_position.xy();
-        i.planned_com_velocity = s.com_velocity.xy();
-        i.measured_com_position = self.measured.com.xy();
-        i.measured_com_velocity = self.measured.com_velocity.xy();
-        i.measured_dcm = self.measured.dcm;
-        i.measured_zmp = self.zmp_filter.0.output().unwrap_or(self.measured.zmp);
-        i.support_polygon = polygon;
+        self.simplified_glue.fill(
+            i,
+            Duration::from_nanos(time_ns),
+            plan,
+            &self.plan_sample,
+            &measured,
+        )?;
         if let Some(layer) = &self.centroidal {
             let r = layer.write_references(i, time_ns as f64 * 1e-9);
             self.angular_momentum_reference = r.angular_momentum;
-        }
-        i.horizon.clear();
-        let n = self.simplified.horizon_samples();
-        if n > 0 {
-            let plan = self.planner.plan().ok_or(RunError::NoPlan {
-                layer: "simplified",
-            })?;
-            for k in 0..n {
-                let t = time_ns as f64 * 1e-9 + k as f64 * self.simplified_period;
-                plan.sample(t, &mut self.horizon_sample);
-                let h = &self.horizon_sample;
-                let support = Self::polygon_of(
-                    &[h.left.pose, h.right.pose],
-                    [h.left.in_contact, h.right.in_contact],
-                    self.foot_half_length,
-                    self.foot_half_width,
-                )?;
-                self.simplified_input.horizon.push(HorizonSample {
-                    dcm_position: h.dcm_position.xy(),
-                    zmp: h.zmp.xy(),
-                    support,
-                })?;
-            }
         }
         match self.simplified.step(&self.simplified_input) {
             Ok(out) => {
@@ -772,13 +706,6 @@ impl Stack {
             t >= p.end_time && self.next_event >= self.events.len()
         })
     }
-}
-
-/// Heading of a stance: the mean of the two soles' yaws (about world z), the shorter way round \[rad\].
-pub fn soles_heading(left: &nalgebra::Isometry3<f64>, right: &nalgebra::Isometry3<f64>) -> f64 {
-    let yl = left.rotation.euler_angles().2;
-    let yr = right.rotation.euler_angles().2;
-    yl + 0.5 * wrap_angle(yr - yl)
 }
 
 /// The frames the measured quantities come from.

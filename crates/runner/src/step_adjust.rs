@@ -12,9 +12,7 @@ use nalgebra::Vector2;
 use serde::Serialize;
 use stride_planner::{Foot, Plan, PlanSample, StepAdjustmentRequest};
 use stride_qp::QpStatus;
-use stride_simplified::{
-    StanceFoot, StepAdjuster, StepAdjustment, StepAdjustmentInput, StepAdjustmentStatus,
-};
+use stride_simplified::{StepAdjuster, StepAdjustment, StepAdjustmentInput, StepAdjustmentStatus};
 
 /// The step in progress: its nominal and what the plan currently has.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,10 +79,7 @@ impl StepTracker {
         let input = StepAdjustmentInput {
             dcm: *dcm,
             omega: sample.omega,
-            stance: match step.stance {
-                Foot::Left => StanceFoot::Left,
-                Foot::Right => StanceFoot::Right,
-            },
+            stance: step.stance,
             stance_position: step.stance_pose.translation.vector.xy(),
             stance_yaw: step.stance_pose.rotation.euler_angles().2,
             stance_cop: sample.zmp.xy(),

@@ -6,7 +6,6 @@ use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::DVector;
-use stride_block::Block;
 use stride_model::Model;
 use stride_sim::{IntegratorKind, SimConfig, SimInput, SimRobot};
 

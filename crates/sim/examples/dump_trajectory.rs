@@ -9,7 +9,6 @@ use std::time::Duration;
 
 use nalgebra::DVector;
 use serde_json::json;
-use stride_block::Block;
 use stride_model::{KinDyn, Model};
 use stride_sim::{SimConfig, SimInput, SimRobot};
 

@@ -8,7 +8,6 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use nalgebra::DVector;
-use stride_block::Block;
 use stride_model::Model;
 use stride_sim::{
     ActuationMode, IntegratorKind, PushConfig, SimConfig, SimInput, SimOutput, SimRobot,

@@ -53,3 +53,12 @@ pub use robot::SimRobot;
 /// The sensor models of [`SimRobot`] for another plant (stride-mujoco): fill a [`SensorTruth`] each step and
 /// [`SensorModels::record`] returns the delayed [`SensorReading`].
 pub use sensors::{Reading as SensorReading, Sensors as SensorModels, Truth as SensorTruth};
+
+/// What a user of the simulator needs in scope: `use stride_sim::prelude::*;`.
+pub mod prelude {
+    pub use crate::{
+        ActuationMode, ImuMeasurement, SimConfig, SimError, SimInput, SimOutput, SimRobot,
+    };
+    pub use nalgebra;
+    pub use stride_block::Block;
+}

@@ -532,16 +532,24 @@ fn copy_input(to: &mut SimInput, from: &SimInput) {
     to.joint_torques.copy_from(&from.joint_torques);
 }
 
+impl SimRobot {
+    /// Advances the simulation by one period. On error the state, time and contact memory are those before
+    /// the step.
+    ///
+    /// Inherent, so a caller need not import [`stride_block::Block`] (the `Block` impl calls it).
+    pub fn step(&mut self, input: &SimInput) -> Result<&SimOutput, SimError> {
+        self.do_step(input)?;
+        Ok(&self.output)
+    }
+}
+
 impl Block for SimRobot {
     type Input = SimInput;
     type Output = SimOutput;
     type Error = SimError;
 
-    /// Advances the simulation by one period. On error the state, time and contact memory are those before
-    /// the step.
     fn step(&mut self, input: &SimInput) -> Result<&SimOutput, SimError> {
-        self.do_step(input)?;
-        Ok(&self.output)
+        SimRobot::step(self, input)
     }
 
     /// Returns to the initial state (the zero state, or the last [`SimRobot::set_initial_state`] /

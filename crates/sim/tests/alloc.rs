@@ -5,7 +5,6 @@ mod common;
 
 use std::sync::Arc;
 
-use stride_block::Block;
 use stride_sim::{
     ActuationMode, IntegratorKind, JointActuatorOverride, PushConfig, SimConfig, SimInput, SimRobot,
 };

@@ -6,7 +6,6 @@ mod common;
 use std::sync::Arc;
 
 use nalgebra::Vector3;
-use stride_block::Block;
 use stride_model::KinDyn;
 use stride_sim::{SimConfig, SimInput, SimRobot};
 

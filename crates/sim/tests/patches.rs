@@ -7,7 +7,6 @@ mod common;
 use std::sync::Arc;
 
 use nalgebra::{Vector3, Vector6};
-use stride_block::Block;
 use stride_model::RobotState;
 use stride_sim::{trapezoid_nodes, GroundPatchConfig, SimConfig, SimError, SimInput, SimRobot};
 

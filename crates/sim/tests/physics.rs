@@ -6,7 +6,6 @@ mod common;
 use std::sync::Arc;
 
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
-use stride_block::Block;
 use stride_model::{KinDyn, RobotState};
 use stride_sim::{ActuationMode, IntegratorKind, PushConfig, SimConfig, SimInput, SimRobot};
 

@@ -7,7 +7,6 @@ mod common;
 use std::sync::Arc;
 
 use nalgebra::{DVector, UnitQuaternion, Vector3, Vector6};
-use stride_block::Block;
 use stride_model::{ExternalWrench, KinDyn, Model, VelocityRepresentation};
 use stride_sim::{
     ActuationMode, FtSensorConfig, ImuConfig, JointActuatorConfig, SimConfig, SimInput, SimOutput,

@@ -6,12 +6,9 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Vector3;
-use stride_block::Block;
-use stride_simplified::{
-    CentroidalMpc, CentroidalMpcConfig, CentroidalMpcInput, MpcContact, StanceFoot,
-};
+use stride_simplified::{CentroidalMpc, CentroidalMpcConfig, CentroidalMpcInput, Foot, MpcContact};
 
-fn contact(foot: StanceFoot, x: f64, y: f64, activation: f64, deactivation: f64) -> MpcContact {
+fn contact(foot: Foot, x: f64, y: f64, activation: f64, deactivation: f64) -> MpcContact {
     MpcContact::level(foot, x, y, activation, deactivation)
 }
 
@@ -22,10 +19,10 @@ fn input(config: &CentroidalMpcConfig, t0: f64, push: Vector3<f64>) -> Centroida
     i.foot_half_length = 0.06;
     i.foot_half_width = 0.03;
     let contacts = [
-        contact(StanceFoot::Right, 0.0, -0.08, -1.0, 0.0),
-        contact(StanceFoot::Left, 0.0, 0.08, -1.0, 0.9),
-        contact(StanceFoot::Right, 0.15, -0.08, 0.6, 1.9),
-        contact(StanceFoot::Left, 0.3, 0.08, 1.6, f64::INFINITY),
+        contact(Foot::Right, 0.0, -0.08, -1.0, 0.0),
+        contact(Foot::Left, 0.0, 0.08, -1.0, 0.9),
+        contact(Foot::Right, 0.15, -0.08, 0.6, 1.9),
+        contact(Foot::Left, 0.3, 0.08, 1.6, f64::INFINITY),
     ];
     for c in contacts.iter().filter(|c| c.deactivation > t0) {
         i.push_contact(*c).unwrap();

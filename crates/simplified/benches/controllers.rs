@@ -4,7 +4,6 @@ use std::time::Duration;
 
 use criterion::{criterion_group, Criterion};
 use nalgebra::Vector2;
-use stride_block::Block;
 use stride_simplified::*;
 
 const OMEGA: f64 = 4.302_325_511_579_751;
@@ -183,7 +182,7 @@ fn step_adjustment(c: &mut Criterion) {
     let base = StepAdjustmentInput {
         dcm: Vector2::new(0.33, 0.0912),
         omega: OMEGA,
-        stance: StanceFoot::Left,
+        stance: Foot::Left,
         stance_position: Vector2::new(0.3, 0.075),
         stance_yaw: 0.0,
         stance_cop: Vector2::new(0.31, 0.075),

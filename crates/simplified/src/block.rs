@@ -13,9 +13,9 @@ use crate::dcm_predictive::{
 };
 use crate::error::{check_finite, Result, SimplifiedError};
 use crate::lipm::{check_omega, check_point};
-use crate::polygon::SupportPolygon;
 use crate::step_adjustment::StepAdjustmentConfig;
 use crate::zmp_com::{ZmpComConfig, ZmpComController, ZmpComGains};
+use stride_block::SupportPolygon;
 
 /// Which DCM controller the layer runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -194,6 +194,21 @@ pub struct SimplifiedOutput {
 }
 
 /// The simplified-model control layer. See the crate documentation for the runner-facing contract.
+///
+/// ```
+/// use std::time::Duration;
+/// use stride_simplified::prelude::*;
+/// use nalgebra::Vector2;
+///
+/// let mut layer = SimplifiedController::new(&SimplifiedConfig::default(), Duration::from_millis(10))?;
+/// let foot = SupportPolygon::rectangle(-0.1, 0.1, -0.12, 0.12)?;
+/// let mut input = SimplifiedInput::new(layer.horizon_samples(), foot);
+/// input.omega = (9.81_f64 / 0.54).sqrt();
+/// input.measured_dcm = Vector2::new(0.01, 0.0); // 1 cm ahead of the planned DCM (at the origin)
+/// let out = layer.step(&input)?; // inherent: no need to import `Block`
+/// assert!(out.valid && out.desired_zmp.x > 0.0); // the ZMP moves ahead to push the DCM back
+/// # Ok::<(), SimplifiedError>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct SimplifiedController {
     config: SimplifiedConfig,
@@ -284,14 +299,12 @@ impl SimplifiedController {
     }
 }
 
-impl stride_block::Block for SimplifiedController {
-    type Input = SimplifiedInput;
-    type Output = SimplifiedOutput;
-    type Error = SimplifiedError;
-
+impl SimplifiedController {
     /// One tick. On error (non-finite input, empty MPC horizon, MPC failure) nothing changes and
     /// [`SimplifiedController::output`] still holds the last valid references: callers hold them.
-    fn step(&mut self, input: &SimplifiedInput) -> Result<&SimplifiedOutput> {
+    ///
+    /// Inherent, so a caller need not import [`stride_block::Block`] (the `Block` impl calls it).
+    pub fn step(&mut self, input: &SimplifiedInput) -> Result<&SimplifiedOutput> {
         let start = Instant::now();
         Self::validate_input(input)?;
         let mut diagnostics = SimplifiedDiagnostics {
@@ -355,6 +368,16 @@ impl stride_block::Block for SimplifiedController {
             diagnostics,
         };
         Ok(&self.output)
+    }
+}
+
+impl stride_block::Block for SimplifiedController {
+    type Input = SimplifiedInput;
+    type Output = SimplifiedOutput;
+    type Error = SimplifiedError;
+
+    fn step(&mut self, input: &SimplifiedInput) -> Result<&SimplifiedOutput> {
+        SimplifiedController::step(self, input)
     }
 
     fn reset(&mut self) {

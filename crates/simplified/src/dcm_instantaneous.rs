@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{check_non_negative, Result, SimplifiedError};
 use crate::lipm::{check_omega, check_point};
-use crate::polygon::SupportPolygon;
+use stride_block::SupportPolygon;
 
 /// Parameters of the DCM instantaneous (PI) controller. Gains are isotropic (the same on x and y), so
 /// the law does not depend on the robot's heading.

@@ -46,7 +46,7 @@ use stride_qp::{BandedOutcome, BandedQp, BandedSettings, ClarabelSettings, Clara
 
 use crate::error::{check_positive, Result, SimplifiedError};
 use crate::lipm::{check_omega, check_point, LipmDiscretization};
-use crate::polygon::{SupportPolygon, MAX_POLYGON_VERTICES};
+use stride_block::{SupportPolygon, MAX_POLYGON_VERTICES};
 
 /// How the ZMP-rate cost is referenced.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]

@@ -121,3 +121,12 @@ pub(crate) fn check_non_negative(name: &'static str, value: f64) -> Result<()> {
         })
     }
 }
+
+impl From<stride_block::PolygonError> for SimplifiedError {
+    fn from(e: stride_block::PolygonError) -> Self {
+        SimplifiedError::InvalidPolygon {
+            name: e.name,
+            reason: e.reason,
+        }
+    }
+}

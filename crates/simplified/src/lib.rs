@@ -74,7 +74,6 @@ mod dcm_instantaneous;
 mod dcm_predictive;
 mod error;
 mod lipm;
-mod polygon;
 mod step_adjustment;
 mod wrench;
 mod zmp_com;
@@ -98,15 +97,27 @@ pub use dcm_predictive::{
 };
 pub use error::{Result, SimplifiedError};
 pub use lipm::{dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization};
-pub use polygon::{
-    feet_support_polygon, FootRectangle, SupportPolygon, MAX_HULL_POINTS, MAX_POLYGON_VERTICES,
-    MIN_POLYGON_AREA,
-};
 pub use step_adjustment::{
-    StanceFoot, StepAdjuster, StepAdjustment, StepAdjustmentConfig, StepAdjustmentDiagnostics,
+    StepAdjuster, StepAdjustment, StepAdjustmentConfig, StepAdjustmentDiagnostics,
     StepAdjustmentInput, StepAdjustmentStatus, STEP_ADJUSTMENT_VARIABLES,
+};
+pub use stride_block::{
+    feet_support_polygon, Block, Foot, FootRectangle, PolygonError, SupportPolygon,
+    MAX_HULL_POINTS, MAX_POLYGON_VERTICES, MIN_POLYGON_AREA,
 };
 pub use wrench::{measured_zmp, FootWrench};
 pub use zmp_com::{
     minimum_jerk_blend, zmp_com_law, ZmpComConfig, ZmpComController, ZmpComGains, ZmpComOutput,
 };
+
+/// What a user of the simplified layer needs in scope: `use stride_simplified::prelude::*;`.
+pub mod prelude {
+    pub use crate::{
+        feet_support_polygon, Block, CentroidalMpc, CentroidalMpcInput, CentroidalMpcOutput,
+        DcmControllerKind, Foot, FootRectangle, HorizonSample, MpcStatus, SimplifiedConfig,
+        SimplifiedController, SimplifiedDiagnostics, SimplifiedError, SimplifiedInput,
+        SimplifiedOutput, StepAdjuster, StepAdjustmentInput, StepAdjustmentStatus, SupportPolygon,
+    };
+    pub use nalgebra;
+    pub use stride_qp::QpStatus;
+}

@@ -48,6 +48,7 @@
 
 use nalgebra::{Rotation2, Vector2};
 use serde::{Deserialize, Serialize};
+use stride_block::Foot;
 use stride_qp::{ActiveSetSettings, ActiveSetSolver, DenseQp, QpSolver, QpStatus, SolverOutput};
 
 use crate::error::{
@@ -218,26 +219,6 @@ impl StepAdjustmentConfig {
     }
 }
 
-/// Which foot is on the ground while the other one swings.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum StanceFoot {
-    /// Left foot on the ground, right foot swinging (it steps to the stance frame's −y).
-    Left,
-    /// Right foot on the ground, left foot swinging (it steps to the stance frame's +y).
-    Right,
-}
-
-impl StanceFoot {
-    /// `+1` when the swing foot steps towards the stance frame's +y (right stance), `−1` otherwise.
-    pub fn outward(self) -> f64 {
-        match self {
-            StanceFoot::Left => -1.0,
-            StanceFoot::Right => 1.0,
-        }
-    }
-}
-
 /// One step-adjustment problem (plain data; 2D vectors are world x, y in metres).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct StepAdjustmentInput {
@@ -246,7 +227,7 @@ pub struct StepAdjustmentInput {
     /// LIPM natural frequency ω \[s⁻¹\].
     pub omega: f64,
     /// Which foot stands.
-    pub stance: StanceFoot,
+    pub stance: Foot,
     /// Stance foot (sole) position `p_s` \[m\].
     pub stance_position: Vector2<f64>,
     /// Stance foot yaw `ψ_s` \[rad\].
@@ -493,7 +474,7 @@ impl StepAdjuster {
     fn fill_bounds(&mut self, input: &StepAdjustmentInput, nominal: &Nominal) {
         let c = &self.config;
         let w = input.omega;
-        let side = input.stance.outward();
+        let side = input.stance.other().side();
         let (y_lo, y_hi) = if side > 0.0 {
             (c.lateral_min, c.lateral_max)
         } else {

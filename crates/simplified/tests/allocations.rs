@@ -3,7 +3,6 @@
 use std::time::Duration;
 
 use nalgebra::Vector2;
-use stride_block::Block;
 use stride_simplified::*;
 
 /// Only allocations of the thread under test are counted (the test harness's own threads may
@@ -125,7 +124,7 @@ fn step_adjustment_does_not_allocate() {
     let mut input = StepAdjustmentInput {
         dcm: Vector2::new(0.35, -0.05),
         omega: OMEGA,
-        stance: StanceFoot::Left,
+        stance: Foot::Left,
         stance_position: Vector2::new(0.3, 0.075),
         stance_yaw: 0.1,
         stance_cop: Vector2::new(0.31, 0.075),

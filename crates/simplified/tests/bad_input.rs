@@ -2,7 +2,6 @@
 use std::time::Duration;
 
 use nalgebra::{Vector2, Vector3, Vector6};
-use stride_block::Block;
 use stride_simplified::*;
 
 const OMEGA: f64 = 4.302_325_511_579_751;

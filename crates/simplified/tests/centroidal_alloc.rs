@@ -2,10 +2,7 @@
 //! over one step of a walk (the input time advancing by 0.05 s, as the runner ticks it) makes no
 //! allocation.
 use nalgebra::Vector3;
-use stride_block::Block;
-use stride_simplified::{
-    CentroidalMpc, CentroidalMpcConfig, CentroidalMpcInput, MpcContact, StanceFoot,
-};
+use stride_simplified::{CentroidalMpc, CentroidalMpcConfig, CentroidalMpcInput, Foot, MpcContact};
 
 #[global_allocator]
 static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
@@ -15,10 +12,10 @@ fn fill(input: &mut CentroidalMpcInput, config: &CentroidalMpcConfig, t0: f64) {
     input.contacts.clear();
     input.com_reference.clear();
     let contacts = [
-        MpcContact::level(StanceFoot::Right, 0.0, -0.08, -1.0, 0.0),
-        MpcContact::level(StanceFoot::Left, 0.0, 0.08, -1.0, 0.9),
-        MpcContact::level(StanceFoot::Right, 0.15, -0.08, 0.6, 1.9),
-        MpcContact::level(StanceFoot::Left, 0.3, 0.08, 1.6, f64::INFINITY),
+        MpcContact::level(Foot::Right, 0.0, -0.08, -1.0, 0.0),
+        MpcContact::level(Foot::Left, 0.0, 0.08, -1.0, 0.9),
+        MpcContact::level(Foot::Right, 0.15, -0.08, 0.6, 1.9),
+        MpcContact::level(Foot::Left, 0.3, 0.08, 1.6, f64::INFINITY),
     ];
     for c in contacts.iter().filter(|c| c.deactivation > t0) {
         input.push_contact(*c).unwrap();

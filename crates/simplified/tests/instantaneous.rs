@@ -7,7 +7,6 @@ use std::time::Duration;
 use common::{Plan, OMEGA};
 use nalgebra::{Matrix2, Vector2};
 use proptest::prelude::*;
-use stride_block::Block;
 use stride_simplified::*;
 
 fn input_from_plan(plan: &Plan, k: usize, horizon_capacity: usize) -> SimplifiedInput {

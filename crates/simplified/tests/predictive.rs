@@ -7,7 +7,6 @@ use std::time::Duration;
 
 use common::{Plan, OMEGA};
 use nalgebra::{DMatrix, DVector, Vector2};
-use stride_block::Block;
 use stride_qp::{ClarabelSettings, ClarabelSolver, DenseQp, QpSolver, SolverOutput};
 use stride_simplified::*;
 

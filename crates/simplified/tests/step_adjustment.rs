@@ -18,9 +18,9 @@ struct Case {
     planned_dcm: Vector2<f64>,
 }
 
-fn case(stance: StanceFoot, yaw: f64) -> Case {
+fn case(stance: Foot, yaw: f64) -> Case {
     let rot = Rotation2::new(yaw);
-    let side = stance.outward();
+    let side = stance.other().side();
     let p_s = Vector2::new(0.3, -0.075 * side);
     let cop = p_s + rot * Vector2::new(0.01, 0.0);
     let u_n = p_s + rot * Vector2::new(0.1, 0.2 * side);
@@ -94,7 +94,7 @@ fn planned_of(i: &StepAdjustmentInput) -> Vector2<f64> {
 #[test]
 fn nominal_dcm_gives_the_nominal_step_and_timing() {
     let config = StepAdjustmentConfig::default();
-    for stance in [StanceFoot::Left, StanceFoot::Right] {
+    for stance in [Foot::Left, Foot::Right] {
         for yaw in [0.0, 0.4, -2.5] {
             let c = case(stance, yaw);
             assert!((planned_of(&c.input) - c.planned_dcm).norm() < 1e-12);
@@ -113,12 +113,12 @@ fn nominal_dcm_gives_the_nominal_step_and_timing() {
 #[test]
 fn dcm_offset_moves_the_step_as_the_closed_form_says() {
     let config = no_ankle();
-    for stance in [StanceFoot::Left, StanceFoot::Right] {
+    for stance in [Foot::Left, Foot::Right] {
         for yaw in [0.0, 0.4] {
             // x and y of the world (y outward: inward, the no-crossing bound would be active), and the
             // outward direction of the stance frame
-            let outward = Rotation2::new(yaw) * Vector2::new(0.0, stance.outward());
-            let world_y = Vector2::new(0.0, 0.01 * stance.outward());
+            let outward = Rotation2::new(yaw) * Vector2::new(0.0, stance.other().side());
+            let world_y = Vector2::new(0.0, 0.01 * stance.other().side());
             for delta in [Vector2::new(0.01, 0.0), world_y, outward * 0.01] {
                 let mut c = case(stance, yaw);
                 c.input.dcm += delta;
@@ -148,10 +148,10 @@ fn with_fixed_timing_the_step_takes_the_weighted_share_of_the_amplified_offset()
         step_duration_max: T_NOM,
         ..no_ankle()
     };
-    for stance in [StanceFoot::Left, StanceFoot::Right] {
+    for stance in [Foot::Left, Foot::Right] {
         for delta in [
             Vector2::new(0.01, 0.0),
-            Vector2::new(0.0, 0.01 * stance.outward()),
+            Vector2::new(0.0, 0.01 * stance.other().side()),
         ] {
             let mut c = case(stance, 0.0);
             c.input.dcm += delta;
@@ -173,9 +173,9 @@ fn the_ankle_takes_small_errors_first_as_the_closed_form_says() {
     // With the CoP box free (|δr| below its bounds), the CoP lever α ≈ 7.4 takes α²/(α² + w_r/w_u) ≈ 98 %
     // of the error: the step moves by about 2 % of the capture-point shift.
     let config = StepAdjustmentConfig::default();
-    for stance in [StanceFoot::Left, StanceFoot::Right] {
+    for stance in [Foot::Left, Foot::Right] {
         for yaw in [0.0, 0.4] {
-            let outward = Rotation2::new(yaw) * Vector2::new(0.0, stance.outward());
+            let outward = Rotation2::new(yaw) * Vector2::new(0.0, stance.other().side());
             for delta in [Vector2::new(0.004, 0.0), outward * 0.0015] {
                 let mut c = case(stance, yaw);
                 c.input.dcm += delta;
@@ -195,7 +195,7 @@ fn the_ankle_takes_small_errors_first_as_the_closed_form_says() {
 fn large_pushes_respect_the_box_and_the_timing_bounds() {
     let config = StepAdjustmentConfig::default();
     let tol = 1e-9;
-    for stance in [StanceFoot::Left, StanceFoot::Right] {
+    for stance in [Foot::Left, Foot::Right] {
         for yaw in [0.0, 0.7] {
             let rot = Rotation2::new(yaw);
             for dir in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (0.7, 0.7)] {
@@ -207,7 +207,7 @@ fn large_pushes_respect_the_box_and_the_timing_bounds() {
                     let r = *adj.solve(&c.input).unwrap();
                     assert_eq!(r.diagnostics.status, StepAdjustmentStatus::Solved);
                     let u = rot.inverse() * (r.touchdown - c.input.stance_position);
-                    let out = u.y * stance.outward();
+                    let out = u.y * stance.other().side();
                     assert!(u.x <= config.forward_max + tol && u.x >= -config.backward_max - tol);
                     assert!(out >= config.lateral_min - tol && out <= config.lateral_max + tol);
                     let t_lo = config.step_duration_min.max(t + config.min_remaining_time);
@@ -226,11 +226,11 @@ fn large_pushes_respect_the_box_and_the_timing_bounds() {
 #[test]
 fn an_inward_push_stops_at_the_no_crossing_distance() {
     let config = StepAdjustmentConfig::default();
-    for stance in [StanceFoot::Left, StanceFoot::Right] {
+    for stance in [Foot::Left, Foot::Right] {
         let mut c = case(stance, 0.0);
-        c.input.dcm.y -= 0.08 * stance.outward();
+        c.input.dcm.y -= 0.08 * stance.other().side();
         let r = *StepAdjuster::new(&config).unwrap().solve(&c.input).unwrap();
-        let out = (r.touchdown.y - c.input.stance_position.y) * stance.outward();
+        let out = (r.touchdown.y - c.input.stance_position.y) * stance.other().side();
         assert!((out - config.lateral_min).abs() < 1e-9, "{r:?}");
         // the offset box then gives: the slack takes what the step cannot
         assert!(r.diagnostics.offset_slack.y > 0.0);
@@ -241,7 +241,7 @@ fn an_inward_push_stops_at_the_no_crossing_distance() {
 fn kkt_holds_and_clarabel_agrees() {
     let config = StepAdjustmentConfig::default();
     let mut clarabel = ClarabelSolver::new(Default::default());
-    for stance in [StanceFoot::Left, StanceFoot::Right] {
+    for stance in [Foot::Left, Foot::Right] {
         for (dx, dy, t) in [
             (0.0, 0.0, 0.5),
             (0.01, -0.02, 0.4),
@@ -288,7 +288,7 @@ fn kkt_holds_and_clarabel_agrees() {
 #[test]
 fn bad_inputs_and_configs_are_named() {
     let mut adj = StepAdjuster::new(&StepAdjustmentConfig::default()).unwrap();
-    let good = case(StanceFoot::Left, 0.0).input;
+    let good = case(Foot::Left, 0.0).input;
     let mut i = good;
     i.dcm.x = f64::NAN;
     assert_eq!(
@@ -364,7 +364,7 @@ proptest! {
         t_nom in 0.3..2.0f64, left in any::<bool>(),
     ) {
         let config = StepAdjustmentConfig::default();
-        let stance = if left { StanceFoot::Left } else { StanceFoot::Right };
+        let stance = if left { Foot::Left } else { Foot::Right };
         let mut c = case(stance, yaw);
         c.input.dcm += Vector2::new(dx, dy);
         c.input.time_since_touchdown = t;

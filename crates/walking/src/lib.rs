@@ -5,6 +5,12 @@
 //! crate holds only the rules that chain them (plan sample → simplified-layer input, simplified output +
 //! plan → whole-body input).
 
+mod heading;
 mod simplified_input;
 pub mod wbc_input;
+
+pub use heading::soles_heading;
+pub use simplified_input::{
+    is_walking, support_polygon, MeasuredCentroidal, SimplifiedInputBuilder, SimplifiedInputError,
+};
 pub use wbc_input::{fill_wbc_input, walking_input, walking_layout, WalkingHandles};

@@ -4,7 +4,6 @@
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-use stride_planner::geometry::wrap_angle;
 use stride_planner::{FootSample, PlanSample};
 use stride_simplified::SimplifiedOutput;
 use stride_wbc::{walking, ContactId, FrameRefId, FrameReference, InputLayout, WbcError, WbcInput};
@@ -95,7 +94,7 @@ pub fn fill_wbc_input(
     }
     set_foot(input, handles.left, handles.left_contact, &plan.left)?;
     set_foot(input, handles.right, handles.right_contact, &plan.right)?;
-    let yaw = mean_yaw(&plan.left.pose, &plan.right.pose);
+    let yaw = crate::soles_heading(&plan.left.pose, &plan.right.pose);
     let torso = input.frame_mut(handles.torso)?;
     torso.pose = Isometry3::from_parts(
         Translation3::identity(),
@@ -120,13 +119,6 @@ fn set_foot(
     };
     input.contact_mut(contact)?.active = foot.in_contact;
     Ok(())
-}
-
-/// The mean of two soles' yaws about world z, the shorter way round \[rad\].
-fn mean_yaw(left: &Isometry3<f64>, right: &Isometry3<f64>) -> f64 {
-    let yl = left.rotation.euler_angles().2;
-    let yr = right.rotation.euler_angles().2;
-    yl + 0.5 * wrap_angle(yr - yl)
 }
 
 #[cfg(test)]

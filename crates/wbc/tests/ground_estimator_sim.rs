@@ -13,7 +13,6 @@ use common::soft::{
     at_rest, box_model, box_sim_config, rigid_guess_settings, sole_state, SOLE, SOLE_DROP,
 };
 use nalgebra::Vector3;
-use stride_block::Block;
 use stride_model::{Model, RobotState};
 use stride_sim::{GaussianNoise, GroundPatchConfig, SimInput, SimRobot};
 use stride_wbc::{EstimatorSettings, GroundEstimator, GroundParameters};

@@ -5,11 +5,11 @@
 use std::sync::Arc;
 
 use nalgebra::{DVector, Isometry3, Vector3};
-use stride_model::{FrameId, KinDyn, Model};
+use stride_model::{FrameId, KinDyn, Model, RobotState};
 use stride_sim::{surface_points, ContactConfig, ContactSurfaceConfig};
 
 use crate::config::ScenarioConfig;
-use crate::robot::{standing_state, RobotError};
+use crate::robot::RobotError;
 
 /// Largest height of the higher sole above the ground in the standing posture before a warning \[m\].
 pub const SOLE_HEIGHT_TOLERANCE: f64 = 0.002;
@@ -44,7 +44,7 @@ impl Stance {
         q: &DVector<f64>,
         soles: [FrameId; 2],
     ) -> Result<Self, RobotError> {
-        let state = standing_state(model, q, soles[0], soles[1])?;
+        let state = RobotState::standing(model, q, soles[0], soles[1])?;
         let mut kd = KinDyn::new(Arc::clone(model));
         kd.set_state(&state)?;
         Ok(Self {

@@ -182,8 +182,8 @@ pub(crate) fn assemble(
     for (i, od) in layout.displacement.iter().enumerate() {
         let Some(od) = *od else { continue };
         let side = match input.contacts[i].foot {
-            crate::StanceFoot::Left => 1.0,
-            crate::StanceFoot::Right => -1.0,
+            crate::Foot::Left => 1.0,
+            crate::Foot::Right => -1.0,
         };
         let [out_lo, out_hi] = config.outward;
         let (y_lo, y_hi) = if side > 0.0 {

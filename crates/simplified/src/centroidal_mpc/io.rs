@@ -4,7 +4,7 @@ use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_finite, Result, SimplifiedError};
-use crate::step_adjustment::StanceFoot;
+use stride_block::Foot;
 
 /// Most contacts one input can list (both feet's current and next contacts over a horizon).
 pub const MAX_MPC_CONTACTS: usize = 8;
@@ -13,7 +13,7 @@ pub const MAX_MPC_CONTACTS: usize = 8;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MpcContact {
     /// Which foot makes the contact.
-    pub foot: StanceFoot,
+    pub foot: Foot,
     /// Planned sole position `p_iⁿ` (centre of the adjustment box) \[m\].
     pub position: Vector3<f64>,
     /// Sole yaw about world z \[rad\] (the feet are flat on the ground).
@@ -27,7 +27,7 @@ pub struct MpcContact {
 impl MpcContact {
     /// A sole at `(x, y)` on the ground plane `z = 0`, heading along world x (yaw 0), active over
     /// `[activation, deactivation)` \[m, s\].
-    pub fn level(foot: StanceFoot, x: f64, y: f64, activation: f64, deactivation: f64) -> Self {
+    pub fn level(foot: Foot, x: f64, y: f64, activation: f64, deactivation: f64) -> Self {
         Self {
             foot,
             position: Vector3::new(x, y, 0.0),

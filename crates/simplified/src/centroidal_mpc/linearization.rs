@@ -5,18 +5,18 @@ use nalgebra::{Vector2, Vector3};
 
 use super::io::{CentroidalMpcInput, MpcContact, MAX_MPC_CONTACTS};
 use super::layout::{Layout, CORNERS, MAX_ACTIVE};
-use crate::step_adjustment::StanceFoot;
+use stride_block::Foot;
 
 /// Corner forces of one contact at one stage, tagged with the contact's identity.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct TaggedForces {
-    pub foot: StanceFoot,
+    pub foot: Foot,
     pub activation: f64,
     pub forces: [Vector3<f64>; CORNERS],
 }
 
 /// A contact is the same across ticks when the foot and the activation time (1 ms) agree.
-fn same(foot: StanceFoot, activation: f64, c: &MpcContact) -> bool {
+fn same(foot: Foot, activation: f64, c: &MpcContact) -> bool {
     foot == c.foot && (activation - c.activation).abs() < 1e-3
 }
 
@@ -28,7 +28,7 @@ pub(crate) struct Linearization {
     stage_duration: f64,
     com: Vec<Vector3<f64>>,
     forces: Vec<[Option<TaggedForces>; MAX_ACTIVE]>,
-    displacements: [Option<(StanceFoot, f64, Vector2<f64>)>; MAX_MPC_CONTACTS],
+    displacements: [Option<(Foot, f64, Vector2<f64>)>; MAX_MPC_CONTACTS],
     /// Linearisation point of the current tick: CoM per stage, corner forces per stage and slot,
     /// displacement per contact.
     pub com_bar: Vec<Vector3<f64>>,

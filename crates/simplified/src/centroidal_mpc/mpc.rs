@@ -10,7 +10,7 @@ use super::io::{CentroidalMpcInput, CentroidalMpcOutput, MAX_MPC_CONTACTS};
 use super::layout::{ContactGeometry, Layout, CONTACT_VARIABLES, CORNERS, GENERATORS, MAX_ACTIVE};
 use super::linearization::Linearization;
 use crate::error::{check_positive, Result, SimplifiedError};
-use crate::step_adjustment::StanceFoot;
+use stride_block::Foot;
 
 /// A foot's adjusted sole position and its four corner forces at one stage (None: not in contact).
 pub type FootCornerForces = Option<(Vector3<f64>, [Vector3<f64>; CORNERS])>;
@@ -187,9 +187,9 @@ impl CentroidalMpc {
 }
 
 /// 0 for the left foot, 1 for the right.
-pub(crate) fn foot_index(foot: StanceFoot) -> usize {
+pub(crate) fn foot_index(foot: Foot) -> usize {
     match foot {
-        StanceFoot::Left => 0,
-        StanceFoot::Right => 1,
+        Foot::Left => 0,
+        Foot::Right => 1,
     }
 }

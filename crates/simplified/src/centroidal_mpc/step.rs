@@ -128,14 +128,12 @@ impl CentroidalMpc {
     }
 }
 
-impl stride_block::Block for CentroidalMpc {
-    type Input = CentroidalMpcInput;
-    type Output = CentroidalMpcOutput;
-    type Error = SimplifiedError;
-
+impl CentroidalMpc {
     /// One real-time iteration. On error (invalid input, too many contacts, QP failure) the previous
     /// output is kept ([`CentroidalMpc::output`]).
-    fn step(&mut self, input: &CentroidalMpcInput) -> Result<&CentroidalMpcOutput> {
+    ///
+    /// Inherent, so a caller need not import [`stride_block::Block`] (the `Block` impl calls it).
+    pub fn step(&mut self, input: &CentroidalMpcInput) -> Result<&CentroidalMpcOutput> {
         let start = Instant::now();
         input.validate()?;
         let (status, iterations, warm_started) = self.solve(input)?;
@@ -151,6 +149,16 @@ impl stride_block::Block for CentroidalMpc {
             linearization_gap: gap,
         };
         Ok(&self.output)
+    }
+}
+
+impl stride_block::Block for CentroidalMpc {
+    type Input = CentroidalMpcInput;
+    type Output = CentroidalMpcOutput;
+    type Error = SimplifiedError;
+
+    fn step(&mut self, input: &CentroidalMpcInput) -> Result<&CentroidalMpcOutput> {
+        CentroidalMpc::step(self, input)
     }
 
     fn reset(&mut self) {

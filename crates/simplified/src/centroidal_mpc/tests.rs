@@ -2,17 +2,16 @@
 //! the bilinear model, the KKT conditions and a second solver (clarabel).
 
 use nalgebra::{Rotation3, Vector3};
-use stride_block::Block;
 use stride_qp::{check_kkt, ClarabelSettings, ClarabelSolver, QpSolver, SolverOutput};
 
 use super::*;
-use crate::StanceFoot;
+use crate::Foot;
 
 const MASS: f64 = 33.0;
 const G: f64 = 9.81;
 const HEIGHT: f64 = 0.5;
 
-fn contact(foot: StanceFoot, x: f64, y: f64, activation: f64, deactivation: f64) -> MpcContact {
+fn contact(foot: Foot, x: f64, y: f64, activation: f64, deactivation: f64) -> MpcContact {
     MpcContact::level(foot, x, y, activation, deactivation)
 }
 
@@ -22,10 +21,10 @@ fn standing(config: &CentroidalMpcConfig) -> CentroidalMpcInput {
     input.foot_half_length = 0.06;
     input.foot_half_width = 0.03;
     input
-        .push_contact(contact(StanceFoot::Left, 0.0, 0.08, -1.0, f64::INFINITY))
+        .push_contact(contact(Foot::Left, 0.0, 0.08, -1.0, f64::INFINITY))
         .unwrap();
     input
-        .push_contact(contact(StanceFoot::Right, 0.0, -0.08, -1.0, f64::INFINITY))
+        .push_contact(contact(Foot::Right, 0.0, -0.08, -1.0, f64::INFINITY))
         .unwrap();
     for _ in 0..=config.stages {
         input.com_reference.push(input.com_position);
@@ -42,10 +41,10 @@ fn walking(config: &CentroidalMpcConfig, com_velocity: Vector3<f64>) -> Centroid
     input.foot_half_length = 0.06;
     input.foot_half_width = 0.03;
     input
-        .push_contact(contact(StanceFoot::Left, 0.0, 0.08, -1.0, 0.9))
+        .push_contact(contact(Foot::Left, 0.0, 0.08, -1.0, 0.9))
         .unwrap();
     input
-        .push_contact(contact(StanceFoot::Right, 0.15, -0.08, 0.6, f64::INFINITY))
+        .push_contact(contact(Foot::Right, 0.15, -0.08, 0.6, f64::INFINITY))
         .unwrap();
     for k in 0..=config.stages {
         let t = k as f64 * config.stage_duration;
@@ -157,8 +156,8 @@ fn constraints_hold_at_the_solution() {
                 continue;
             }
             let (lo, hi) = match c.planned.foot {
-                StanceFoot::Left => (config.outward[0], config.outward[1]),
-                StanceFoot::Right => (-config.outward[1], -config.outward[0]),
+                Foot::Left => (config.outward[0], config.outward[1]),
+                Foot::Right => (-config.outward[1], -config.outward[0]),
             };
             assert!(
                 d.x >= config.forward[0] - 1e-9 && d.x <= config.forward[1] + 1e-9,
@@ -254,7 +253,7 @@ fn bad_input_is_an_error_and_keeps_the_output() {
     assert!(mpc.step(&bad).is_err());
     let mut crowded = input.clone();
     crowded
-        .push_contact(contact(StanceFoot::Left, 0.1, 0.08, -1.0, f64::INFINITY))
+        .push_contact(contact(Foot::Left, 0.1, 0.08, -1.0, f64::INFINITY))
         .unwrap();
     assert!(matches!(
         mpc.step(&crowded),

@@ -1,12 +1,23 @@
 //! Support polygons: fixed-capacity convex polygons, convex hulls of feet rectangles, point-in-polygon tests,
 //! projection onto the polygon and the half-plane (H-) representation used by the MPC [Romualdi 2022, eq. 10.2.22].
 //!
-//! Nothing here allocates: hulls are built in stack arrays.
+//! Nothing here allocates: hulls are built in stack arrays. This is the one support-polygon type of
+//! stride: the planner's plan samples and the simplified layer's inputs both carry it.
 
-use nalgebra::Vector2;
+use nalgebra::{Isometry3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, SimplifiedError};
+/// Why a [`SupportPolygon`] cannot be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("invalid support polygon `{name}`: {reason}")]
+pub struct PolygonError {
+    /// Which polygon (input field name or helper name).
+    pub name: &'static str,
+    /// What is wrong with it.
+    pub reason: &'static str,
+}
+
+type Result<T> = std::result::Result<T, PolygonError>;
 
 /// Largest number of vertices a [`SupportPolygon`] stores (the hull of two rectangles has at most 8).
 pub const MAX_POLYGON_VERTICES: usize = 8;
@@ -30,10 +41,10 @@ pub struct SupportPolygon {
 }
 
 impl TryFrom<Vec<[f64; 2]>> for SupportPolygon {
-    type Error = SimplifiedError;
+    type Error = PolygonError;
     fn try_from(points: Vec<[f64; 2]>) -> Result<Self> {
         if points.len() > MAX_HULL_POINTS {
-            return Err(SimplifiedError::InvalidPolygon {
+            return Err(PolygonError {
                 name: "vertices",
                 reason: "more than MAX_HULL_POINTS points",
             });
@@ -76,19 +87,19 @@ impl SupportPolygon {
     pub fn convex_hull(points: &[Vector2<f64>]) -> Result<Self> {
         const NAME: &str = "convex_hull";
         if points.len() > MAX_HULL_POINTS {
-            return Err(SimplifiedError::InvalidPolygon {
+            return Err(PolygonError {
                 name: NAME,
                 reason: "more than MAX_HULL_POINTS points",
             });
         }
         if points.iter().any(|p| !(p.x.is_finite() && p.y.is_finite())) {
-            return Err(SimplifiedError::InvalidPolygon {
+            return Err(PolygonError {
                 name: NAME,
                 reason: "a point is not finite",
             });
         }
         if points.len() < 3 {
-            return Err(SimplifiedError::InvalidPolygon {
+            return Err(PolygonError {
                 name: NAME,
                 reason: "fewer than 3 points",
             });
@@ -120,13 +131,13 @@ impl SupportPolygon {
         // The last point equals the first one.
         let count = k.saturating_sub(1);
         if count < 3 {
-            return Err(SimplifiedError::InvalidPolygon {
+            return Err(PolygonError {
                 name: NAME,
                 reason: "degenerate: the points are collinear or coincident",
             });
         }
         if count > MAX_POLYGON_VERTICES {
-            return Err(SimplifiedError::InvalidPolygon {
+            return Err(PolygonError {
                 name: NAME,
                 reason: "the hull has more than MAX_POLYGON_VERTICES vertices",
             });
@@ -138,7 +149,7 @@ impl SupportPolygon {
             len: count,
         };
         if polygon.area() < MIN_POLYGON_AREA {
-            return Err(SimplifiedError::InvalidPolygon {
+            return Err(PolygonError {
                 name: NAME,
                 reason: "degenerate: area below MIN_POLYGON_AREA",
             });
@@ -154,6 +165,25 @@ impl SupportPolygon {
             Vector2::new(x_max, y_max),
             Vector2::new(x_min, y_max),
         ])
+    }
+
+    /// Corners of a sole (rectangle `length` × `width` \[m\] centred on the sole frame `pose`), projected
+    /// on the ground plane, counter-clockwise for a flat sole. Unlike [`FootRectangle`] this keeps the
+    /// sole's full 3D orientation (a tilted sole's outline projects shorter).
+    pub fn foot_corners(pose: &Isometry3<f64>, length: f64, width: f64) -> [Vector2<f64>; 4] {
+        let (hl, hw) = (0.5 * length, 0.5 * width);
+        let local = [
+            Vector3::new(hl, hw, 0.0),
+            Vector3::new(-hl, hw, 0.0),
+            Vector3::new(-hl, -hw, 0.0),
+            Vector3::new(hl, -hw, 0.0),
+        ];
+        let mut out = [Vector2::zeros(); 4];
+        for (o, l) in out.iter_mut().zip(local.iter()) {
+            let w = pose.transform_point(&(*l).into());
+            *o = Vector2::new(w.x, w.y);
+        }
+        out
     }
 
     /// The vertices, counter-clockwise.
@@ -213,6 +243,25 @@ impl SupportPolygon {
         self.max_violation(p) <= tolerance
     }
 
+    /// Signed distance \[m\] of `p` from the boundary lines: positive inside (the distance to the nearest
+    /// edge line), negative outside (minus the most violated edge distance, a lower bound of the true
+    /// distance). The planner's form of [`SupportPolygon::max_violation`], computed with the inward normal
+    /// `(−e_y, e_x)/|e|` of each edge `e`.
+    pub fn signed_distance(&self, p: Vector2<f64>) -> f64 {
+        let mut d = f64::INFINITY;
+        for i in 0..self.len {
+            let a = self.vertices[i];
+            let b = self.vertices[(i + 1) % self.len];
+            let e = b - a;
+            let n = e.norm();
+            if n == 0.0 {
+                continue;
+            }
+            d = d.min(((p.x - a.x) * (-e.y) + (p.y - a.y) * e.x) / n);
+        }
+        d
+    }
+
     /// The point of the polygon closest to `p` (Euclidean projection), and whether `p` was outside.
     /// Points inside (or on the boundary) are returned unchanged.
     pub fn project(&self, p: Vector2<f64>) -> (Vector2<f64>, bool) {
@@ -264,6 +313,20 @@ pub struct FootRectangle {
 }
 
 impl FootRectangle {
+    /// The rectangle `length` × `width` \[m\] centred on the sole frame `pose` (its planar position and
+    /// yaw about world z).
+    pub fn centred(pose: &Isometry3<f64>, length: f64, width: f64) -> Self {
+        let (hl, hw) = (0.5 * length, 0.5 * width);
+        Self {
+            position: pose.translation.vector.xy(),
+            yaw: pose.rotation.euler_angles().2,
+            x_min: -hl,
+            x_max: hl,
+            y_min: -hw,
+            y_max: hw,
+        }
+    }
+
     /// The four corners in the world, counter-clockwise.
     pub fn corners(&self) -> [Vector2<f64>; 4] {
         let (s, c) = self.yaw.sin_cos();
@@ -282,13 +345,13 @@ impl FootRectangle {
 /// result is degenerate (see [`SupportPolygon::convex_hull`]).
 pub fn feet_support_polygon(feet: &[FootRectangle]) -> Result<SupportPolygon> {
     if feet.is_empty() {
-        return Err(SimplifiedError::InvalidPolygon {
+        return Err(PolygonError {
             name: "feet_support_polygon",
             reason: "no foot in contact",
         });
     }
     if 4 * feet.len() > MAX_HULL_POINTS {
-        return Err(SimplifiedError::InvalidPolygon {
+        return Err(PolygonError {
             name: "feet_support_polygon",
             reason: "more than 8 feet",
         });
