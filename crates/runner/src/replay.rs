@@ -307,7 +307,7 @@ fn replay_planner(
                 }
             }
             "/planner/references" => {
-                planner.sample(m.time_ns as f64 * 1e-9, &mut sample)?;
+                planner.sample(Duration::from_nanos(m.time_ns), &mut sample)?;
                 let replayed = PlanSampleRecord::from_sample(&sample);
                 cmp.add("/planner/references", m.time_ns, &replayed, &m.data)?;
             }
