@@ -221,7 +221,10 @@ fn replanning_with_the_same_goal_keeps_the_footsteps() {
         yaw: 0.0,
     };
     let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
-    let old = planner.start(Duration::ZERO, &l, &r, &goal).unwrap().clone();
+    let old = planner
+        .start(Duration::ZERO, &l, &r, &goal)
+        .unwrap()
+        .clone();
     let m = planner.replan(Duration::from_secs(4), &goal).unwrap();
     let new = planner.plan().unwrap();
     assert_eq!(new.merge_times, vec![m]);

@@ -34,7 +34,10 @@ fn assert_numbers(v: &serde_json::Value, len: usize, what: &str) {
         .as_array()
         .unwrap_or_else(|| panic!("{what} is not an array: {v}"));
     assert_eq!(a.len(), len, "{what}: {v}");
-    assert!(a.iter().all(|x| x.is_f64() || x.is_i64() || x.is_u64()), "{what}: {v}");
+    assert!(
+        a.iter().all(|x| x.is_f64() || x.is_i64() || x.is_u64()),
+        "{what}: {v}"
+    );
 }
 
 /// Where `v` holds serde's form of a dynamic nalgebra vector, `[[numbers], n, null]`.
@@ -100,7 +103,10 @@ fn logged_vectors_are_plain_arrays_in_both_control_modes() {
         }
         for m in &log.messages {
             if let Some(at) = find_nalgebra_shape(&json(&m.data), "") {
-                panic!("{mode}: {} at {} ns holds {at} as [data, n, null]", m.topic, m.time_ns);
+                panic!(
+                    "{mode}: {} at {} ns holds {at} as [data, n, null]",
+                    m.topic, m.time_ns
+                );
             }
         }
     }
