@@ -8,9 +8,10 @@ use common::*;
 use std::time::Duration;
 
 use nalgebra::Vector2;
+use stride_block::seconds;
 use stride_planner::{
-    Foot, Goal, PhaseKind, PlanSample, PlanVerification, Planner, PlannerConfig, PlannerError,
-    StepAdjustmentRequest,
+    Foot, Goal, PhaseKind, Plan, PlanSample, PlanVerification, Planner, PlannerConfig,
+    PlannerError, StepAdjustmentRequest,
 };
 
 const GOAL: Goal = Goal::Pose {
@@ -135,9 +136,9 @@ fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
     }
 }
 
-#[test]
-fn frozen_and_unchanged_requests_leave_the_plan() {
-    let mut p = planner();
+/// A fresh planner, its plan, and the request that keeps the third step as planned (mid-swing).
+fn unchanged_request() -> (Planner, Plan, StepAdjustmentRequest) {
+    let p = planner();
     let (time, t) = mid_single_support(&p, 2);
     let old = p.plan().unwrap().clone();
     let step = old.current_step(t).unwrap();
@@ -147,6 +148,13 @@ fn frozen_and_unchanged_requests_leave_the_plan() {
         land_time: step.swing.land_time,
         min_remaining: 0.1,
     };
+    (p, old, same)
+}
+
+#[test]
+fn frozen_and_unchanged_requests_leave_the_plan() {
+    let (mut p, old, same) = unchanged_request();
+    let step = old.current_step(seconds(same.time)).unwrap();
     assert!(!p.adjust_step(&same, &GOAL).unwrap());
     let late = StepAdjustmentRequest {
         time: instant(step.swing.land_time - 0.05).0,
@@ -166,15 +174,10 @@ fn frozen_and_unchanged_requests_leave_the_plan() {
 
 #[test]
 fn non_finite_request_seconds_are_refused() {
-    let mut p = planner();
-    let (time, t) = mid_single_support(&p, 2);
-    let old = p.plan().unwrap().clone();
-    let step = old.current_step(t).unwrap();
+    let (mut p, old, same) = unchanged_request();
     let valid = StepAdjustmentRequest {
-        time,
-        target: step.swing.end.translation.vector.xy() + Vector2::new(0.03, 0.0),
-        land_time: step.swing.land_time,
-        min_remaining: 0.1,
+        target: same.target + Vector2::new(0.03, 0.0),
+        ..same
     };
     for bad in [f64::NAN, f64::INFINITY] {
         for (name, request) in [
