@@ -193,6 +193,11 @@ fn lock_lists_that_cannot_be_applied_are_errors_naming_the_entry() {
             other => panic!("{locks:?}: expected InvalidLock, got {other:?}"),
         }
     }
+    // A mimic joint whose target is locked names a joint the reduced model lacks.
+    assert!(matches!(
+        reduce(&[JointLock::new("finger_a_joint", 0.0)]),
+        Err(ModelError::MimicTarget { .. })
+    ));
     // The same position twice is one lock, not a conflict; an empty list is the full model.
     let twice = reduce(&[JointLock::new("l_*", 0.1), JointLock::new("l_knee", 0.1)]).unwrap();
     assert!(twice.joint_index("l_knee").is_none() && twice.joint_index("l_hip").is_none());
