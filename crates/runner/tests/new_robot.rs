@@ -72,3 +72,34 @@ fn the_g1_walks_two_metres_in_torque_control() {
         summary.outcome
     );
 }
+
+/// Position control walks the 2 m with the bundled position scenarios' stiff servos (the layer file the
+/// page's scenario includes), and falls with stride-sim's default servos (kp 1000 N·m/rad, kd 60).
+#[test]
+fn the_g1_walks_two_metres_in_position_control_with_the_stiff_servos_only() {
+    let test = "the_g1_walks_two_metres_in_position_control_with_the_stiff_servos_only";
+    let Some(s) = docs_scenario(test, "walk_g1") else {
+        return;
+    };
+    let options = RunOptions {
+        no_log: true,
+        ..RunOptions::default()
+    };
+    let summary = run_scenario(&s, &options).unwrap();
+    assert!(
+        matches!(summary.outcome, Outcome::GoalReached),
+        "{:?}",
+        summary.outcome
+    );
+    let mut soft = s.clone();
+    let defaults = stride_sim::SimConfig::default().actuation.default;
+    soft.config.sim.actuation.default.kp = defaults.kp;
+    soft.config.sim.actuation.default.kd = defaults.kd;
+    assert!((defaults.kp, defaults.kd) == (1000.0, 60.0));
+    let summary = run_scenario(&soft, &options).unwrap();
+    assert!(
+        matches!(summary.outcome, Outcome::Fell { .. }),
+        "{:?}",
+        summary.outcome
+    );
+}
