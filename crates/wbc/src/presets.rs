@@ -25,6 +25,7 @@ use std::collections::BTreeMap;
 
 use stride_model::bundled;
 
+use crate::builder::{com, limits};
 use crate::config::*;
 
 /// The frames a walking preset uses.
@@ -184,18 +185,6 @@ fn foot_task(name: &str, frame: &str, reference: &str, kp: [f64; 2], kd: f64) ->
     })
 }
 
-/// A hard CoM task.
-fn com_task(kp: f64, kd: f64) -> TaskConfig {
-    TaskConfig::Com(ComTaskConfig {
-        name: "com".into(),
-        kp,
-        kd,
-        mask: [true; 3],
-        priority: Priority::Hard,
-        weight: None,
-    })
-}
-
 /// QP-IK foot position gain K_p \[1/s\] (the iCub walking controller's).
 pub const IK_FOOT_KP_LINEAR: f64 = 7.0;
 /// QP-IK foot orientation gain K_p \[1/s\].
@@ -218,7 +207,7 @@ pub fn walking_ik(p: &WalkingPreset) -> IkConfig {
     let f = &p.frames;
     let foot_kp = [IK_FOOT_KP_LINEAR, IK_FOOT_KP_ANGULAR];
     let upright_gains = [IK_UPRIGHT_KP, 0.0];
-    IkConfig {
+    let mut config = IkConfig {
         feedback: IkFeedback::Integrated,
         qp: QpSettings::default(),
         eliminate_equalities: true,
@@ -231,29 +220,14 @@ pub fn walking_ik(p: &WalkingPreset) -> IkConfig {
                 foot_kp,
                 0.0,
             ),
-            com_task(IK_COM_KP, 0.0),
+            com(IK_COM_KP, 0.0),
             upright_task(p, "torso", &f.torso, upright_gains, IK_TORSO_WEIGHT),
             upright_task(p, "pelvis", &f.base, upright_gains, IK_PELVIS_WEIGHT),
             posture_task(p, IK_UPRIGHT_KP, 0.0),
-            position_limits(None),
-            velocity_limits(),
         ],
-    }
-}
-
-fn position_limits(look_ahead: Option<f64>) -> TaskConfig {
-    TaskConfig::JointPositionLimits(JointPositionLimitsTaskConfig {
-        name: "joint_position_limits".into(),
-        margin: 0.0,
-        look_ahead,
-    })
-}
-
-fn velocity_limits() -> TaskConfig {
-    TaskConfig::JointVelocityLimits(JointVelocityLimitsTaskConfig {
-        name: "joint_velocity_limits".into(),
-        scale: 1.0,
-    })
+    };
+    config.tasks.extend(limits(None));
+    config
 }
 
 /// TSID foot SE(3) gain K_p \[1/s²\], linear and angular.
@@ -284,7 +258,7 @@ pub fn walking_tsid(p: &WalkingPreset) -> TsidConfig {
     };
     let w = BUNDLED_TSID_UPRIGHT_WEIGHT;
     let foot_kp = [TSID_FOOT_KP, TSID_FOOT_KP];
-    TsidConfig {
+    let mut config = TsidConfig {
         qp: QpSettings::default(),
         eliminate_equalities: true,
         tasks: vec![
@@ -307,7 +281,7 @@ pub fn walking_tsid(p: &WalkingPreset) -> TsidConfig {
                 foot_kp,
                 TSID_FOOT_KD,
             ),
-            com_task(BUNDLED_TSID_COM_KP, BUNDLED_TSID_COM_KD),
+            com(BUNDLED_TSID_COM_KP, BUNDLED_TSID_COM_KD),
             upright_task(p, "torso", &f.torso, TSID_UPRIGHT_GAINS, w),
             upright_task(p, "pelvis", &f.base, TSID_UPRIGHT_GAINS, w),
             posture_task(p, TSID_UPRIGHT_GAINS[0], TSID_UPRIGHT_GAINS[1]),
@@ -328,10 +302,10 @@ pub fn walking_tsid(p: &WalkingPreset) -> TsidConfig {
                 name: "joint_torque_limits".into(),
                 scale: 1.0,
             }),
-            position_limits(Some(TSID_LIMIT_LOOK_AHEAD)),
-            velocity_limits(),
         ],
-    }
+    };
+    config.tasks.extend(limits(Some(TSID_LIMIT_LOOK_AHEAD)));
+    config
 }
 
 /// Overrides a preset task by task: each entry of `overrides` replaces the task of `tasks` with the same
