@@ -10,7 +10,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
-use stride_block::Block;
 use stride_model::{Model, RobotState};
 use stride_planner::{PlanSample, Planner};
 use stride_simplified::{SimplifiedController, SimplifiedInput};

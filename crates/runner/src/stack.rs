@@ -18,7 +18,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use nalgebra::{Vector2, Vector3, Vector6};
-use stride_block::{Block, FirstOrderLowPass};
+use stride_block::FirstOrderLowPass;
 use stride_estimation::{Estimator, EstimatorOutput};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
