@@ -155,6 +155,14 @@ pub enum ModelError {
         /// What is wrong.
         reason: String,
     },
+    /// A locked-joint entry that cannot be applied ([`crate::JointLock`]).
+    #[error("locked joints: `{pattern}`: {reason}")]
+    InvalidLock {
+        /// The entry's joint name or glob.
+        pattern: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A force/torque sensor index that does not belong to this model.
     #[error("force/torque sensor index {index} is out of range (the model has {count} sensors)")]
     FtSensorOutOfRange {

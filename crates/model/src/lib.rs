@@ -28,6 +28,7 @@ mod edits;
 mod error;
 pub mod inertial;
 mod kindyn;
+mod locks;
 mod model;
 pub mod spatial;
 mod standing;
@@ -37,6 +38,7 @@ mod urdf;
 pub use edits::{InertiaEdits, LinkInertiaEdit};
 pub use error::ModelError;
 pub use kindyn::{ExternalWrench, KinDyn};
+pub use locks::{glob_matches, JointLock};
 pub use model::{
     Body, Frame, FrameId, FrameKind, FtSensor, Joint, JointKind, Mimic, Model, STANDARD_GRAVITY,
 };
@@ -88,5 +90,33 @@ impl Model {
     /// non-positive or non-finite scale or a non-finite offset.
     pub fn from_urdf_str_edited(urdf: &str, edits: &InertiaEdits) -> Result<Model, ModelError> {
         urdf::load_str_edited(urdf, edits)
+    }
+
+    /// Loads a reduced model from URDF text: the inertial parameters edited as in
+    /// [`Model::from_urdf_str_edited`], and every movable joint matched by `locks` turned into a fixed
+    /// joint at its locked position (Pinocchio's `buildReducedModel`): its child link is placed at the
+    /// joint's origin moved by the locked position, merged into the parent body (inertia lumped, the link
+    /// and its frames kept as frames). The reduced model's mass matrix, bias forces, CoM and frame poses
+    /// equal the full model's with the locked joints held still at their positions (rows and columns of
+    /// the remaining degrees of freedom).
+    ///
+    /// # Errors
+    /// Those of [`Model::from_urdf_str_edited`], and [`ModelError::InvalidLock`] for a non-finite position,
+    /// a name or glob that matches no movable joint, or a joint locked at two positions.
+    pub fn from_urdf_str_reduced(
+        urdf: &str,
+        edits: &InertiaEdits,
+        locks: &[JointLock],
+    ) -> Result<Model, ModelError> {
+        urdf::load_str_reduced(urdf, edits, locks)
+    }
+
+    /// [`Model::from_urdf_str_reduced`] on a file.
+    pub fn from_urdf_file_reduced(
+        path: impl AsRef<std::path::Path>,
+        edits: &InertiaEdits,
+        locks: &[JointLock],
+    ) -> Result<Model, ModelError> {
+        urdf::load_file_reduced(path.as_ref(), edits, locks)
     }
 }

@@ -178,17 +178,23 @@ pub fn logged_scenario(log: &LogContents, log_path: &Path) -> Result<Scenario, R
     )])?)
 }
 
-/// The model stored in a log.
-pub fn logged_model(log: &LogContents, log_path: &Path) -> Result<Arc<Model>, ReplayError> {
+/// The model stored in a log, reduced by the scenario's `robot.locked_joints`.
+pub fn logged_model(
+    log: &LogContents,
+    log_path: &Path,
+    scenario: &Scenario,
+) -> Result<Arc<Model>, ReplayError> {
     let urdf = log.attachments.get("model.urdf").ok_or_else(|| {
         ReplayError::Content(format!(
             "{} holds no model.urdf attachment",
             log_path.display()
         ))
     })?;
-    Ok(Arc::new(Model::from_urdf_str(&String::from_utf8_lossy(
-        urdf,
-    ))?))
+    Ok(Arc::new(Model::from_urdf_str_reduced(
+        &String::from_utf8_lossy(urdf),
+        &stride_model::InertiaEdits::default(),
+        &crate::setup::joint_locks(scenario),
+    )?))
 }
 
 /// Compares replayed outputs with logged ones and writes them to the output log, if any.
@@ -239,7 +245,7 @@ pub fn replay(
         Some(p) => Scenario::load(p)?,
         None => logged_scenario(&log, log_path)?,
     };
-    let model = logged_model(&log, log_path)?;
+    let model = logged_model(&log, log_path, &scenario)?;
     let writer = match output {
         Some(p) => Some(output_log(p, &scenario, &log)?),
         None => None,

@@ -4,7 +4,9 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use nalgebra::{DVector, Vector3};
-use stride_model::{FrameId, InertiaEdits, LinkInertiaEdit, Model, RobotState};
+use stride_model::{
+    FrameId, InertiaEdits, JointLock, LinkInertiaEdit, Model, ModelError, RobotState,
+};
 
 use crate::config::{PlantKind, Scenario};
 use crate::error::RunError;
@@ -52,13 +54,39 @@ pub fn load_model(scenario: &Scenario) -> Result<Arc<Model>, RunError> {
         path: scenario.urdf_path.clone(),
         source,
     };
-    let mut model = Model::from_urdf_file(&scenario.urdf_path).map_err(load_error)?;
+    let mut model = Model::from_urdf_file_reduced(
+        &scenario.urdf_path,
+        &InertiaEdits::default(),
+        &joint_locks(scenario),
+    )
+    .map_err(|e| load_failure(scenario, &scenario.urdf_path, e))?;
     let g = scenario.config.scenario.gravity;
     model
         .set_gravity(Vector3::new(0.0, 0.0, -g))
         .map_err(load_error)?;
     add_sole_frames(scenario, &mut model)?;
     Ok(Arc::new(model))
+}
+
+/// `robot.locked_joints` as the model's lock list.
+pub fn joint_locks(scenario: &Scenario) -> Vec<JointLock> {
+    let locks = &scenario.config.robot.locked_joints;
+    locks.iter().map(|(p, q)| JointLock::new(p, *q)).collect()
+}
+
+/// A model that failed to load from `path`: a lock the model rejected is a configuration error at its
+/// `robot.locked_joints` entry.
+fn load_failure(scenario: &Scenario, path: &std::path::Path, e: ModelError) -> RunError {
+    match e {
+        ModelError::InvalidLock { pattern, reason } => RunError::Config(scenario.invalid(
+            &format!("robot.locked_joints.{pattern}"),
+            format!("`{pattern}` {reason}"),
+        )),
+        source => RunError::ModelLoad {
+            path: path.to_path_buf(),
+            source,
+        },
+    }
 }
 
 /// Adds the sole frames the configuration attaches to links (`robot.left_sole = { parent, xyz, rpy }`).
@@ -105,7 +133,8 @@ pub fn load_plant_model(scenario: &Scenario, model: &Arc<Model>) -> Result<Arc<M
         path: path.clone(),
         source,
     };
-    let mut plant = Model::from_urdf_file_edited(&path, &edits).map_err(load_error)?;
+    let mut plant = Model::from_urdf_file_reduced(&path, &edits, &joint_locks(scenario))
+        .map_err(|e| load_failure(scenario, &scenario.urdf_path, e))?;
     plant.set_gravity(model.gravity()).map_err(load_error)?;
     add_sole_frames(scenario, &mut plant)?;
     check_same_joints(scenario, model, &plant)?;

@@ -52,12 +52,16 @@ impl Wbc {
         let c = &scenario.config;
         let period = Duration::from_nanos(1_000_000_000 / u64::from(c.rates.wbc_hz));
         let wbc = match c.scenario.control_mode {
-            ControlMode::Position => {
-                Wbc::Ik(QpIk::new(Arc::clone(model), c.wbc.ik.clone(), period)?)
-            }
-            ControlMode::Torque => {
-                Wbc::Tsid(Tsid::new(Arc::clone(model), c.wbc.tsid.clone(), period)?)
-            }
+            ControlMode::Position => Wbc::Ik(QpIk::new(
+                Arc::clone(model),
+                scenario.ik_config(model)?,
+                period,
+            )?),
+            ControlMode::Torque => Wbc::Tsid(Tsid::new(
+                Arc::clone(model),
+                scenario.tsid_config(model)?,
+                period,
+            )?),
         };
         wbc.check_walking_names()?;
         Ok(wbc)

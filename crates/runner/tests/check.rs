@@ -51,14 +51,17 @@ fn the_bundled_scenarios_pass_without_warnings_and_start_running() {
 
 #[test]
 fn names_from_the_built_in_defaults_are_checked_and_say_so() {
-    // The bundled URDF with `chest` renamed: the built-in whole-body task lists still name `chest`.
+    // The bundled URDF with `chest` and the joint `l_knee` renamed. The walking preset's tasks follow
+    // `robot.torso_frame`, so `chest` is no problem; the built-in default posture (not written here) still
+    // names `l_knee`.
     let s = Scratch::new("check-default-names");
     let urdf = std::fs::read_to_string(root().join("models/stride_humanoid.urdf"))
         .unwrap()
-        .replace("\"chest\"", "\"upper_body\"");
+        .replace("\"chest\"", "\"upper_body\"")
+        .replace("<joint name=\"l_knee\"", "<joint name=\"l_knee_joint\"");
     let urdf_path = s.write("robot.urdf", &urdf);
     let text = format!(
-        "{TOP}[robot]\nurdf = {:?}\ntorso_frame = \"upper_body\"\n\n[robot.initial_joint_positions]\nl_knee = 0.7\nl_kne = 0.7\n",
+        "{TOP}[robot]\nurdf = {:?}\ntorso_frame = \"upper_body\"\n",
         urdf_path.display().to_string()
     );
     let path = s.write("scenario.toml", &text);
@@ -66,15 +69,34 @@ fn names_from_the_built_in_defaults_are_checked_and_say_so() {
     let Err(CheckError::Names { problems }) = check_scenario(&scenario) else {
         panic!("expected missing names");
     };
-    let chest: Vec<_> = problems.iter().filter(|p| p.name.name == "chest").collect();
-    // One `so3` torso task in each controller's default list.
-    assert_eq!(chest.len(), 2, "{problems:?}");
-    for p in &chest {
-        assert_eq!(p.name.kind, NameKind::Frame);
-        assert!(p.name.key.starts_with("wbc.") && p.name.key.ends_with(".frame"));
-        assert!(p.origin.contains("built-in default `wbc."), "{}", p.origin);
-        assert!(p.origin.contains("restate the whole"), "{}", p.origin);
-    }
+    assert!(
+        problems.iter().all(|p| p.name.name != "chest"),
+        "{problems:?}"
+    );
+    assert_eq!(problems.len(), 1, "{problems:?}");
+    let knee = &problems[0];
+    assert_eq!(knee.name.name, "l_knee");
+    assert_eq!(knee.name.kind, NameKind::Joint);
+    assert_eq!(knee.name.key, "robot.initial_joint_positions.l_knee");
+    assert!(
+        knee.origin
+            .contains("built-in default `robot.initial_joint_positions`")
+            && knee.origin.contains("replaces it whole"),
+        "{}",
+        knee.origin
+    );
+
+    // A written posture replaces the default whole; a misspelt joint in it is located in the file, and a
+    // preset task overridden in the file is checked at its key.
+    let text = format!(
+        "{text}\n[robot.initial_joint_positions]\nl_knee_joint = 0.7\nl_kne = 0.7\n\n[[wbc.ik.tasks]]\ntype = \"so3\"\nname = \"torso\"\nframe = \"chest\"\nreference = \"torso\"\n"
+    );
+    let path = s.write("scenario.toml", &text);
+    let scenario = Scenario::load(&path).unwrap();
+    let Err(CheckError::Names { problems }) = check_scenario(&scenario) else {
+        panic!("expected missing names");
+    };
+    assert_eq!(problems.len(), 2, "{problems:?}");
     let typo = problems
         .iter()
         .find(|p| p.name.name == "l_kne")
@@ -85,9 +107,18 @@ fn names_from_the_built_in_defaults_are_checked_and_say_so() {
         "{}",
         typo.origin
     );
-    assert_eq!(problems.len(), 3, "{problems:?}");
+    let chest = problems
+        .iter()
+        .find(|p| p.name.name == "chest")
+        .expect("the override's frame");
+    assert_eq!(chest.name.key, "wbc.ik.tasks[0].frame");
+    assert!(
+        chest.origin.contains("scenario.toml:15:"),
+        "{}",
+        chest.origin
+    );
     let text = CheckError::Names { problems }.to_string();
-    assert!(text.contains("3 name(s) the model lacks"), "{text}");
+    assert!(text.contains("2 name(s) the model lacks"), "{text}");
 }
 
 #[test]

@@ -160,7 +160,8 @@ fn include_overlay_deep_merges_and_later_wins() {
 
 #[test]
 fn one_key_of_a_layer_section_can_be_overridden() {
-    // IkConfig's task list has no serde default: the built-in defaults fill it, the file changes one key.
+    // The built-in defaults fill `wbc.ik` (no overrides: the walking preset of the default robot, the
+    // bundled humanoid), the file changes one key.
     let s = Scratch::new("partial");
     let top = s.write(
         "s.toml",
@@ -168,32 +169,127 @@ fn one_key_of_a_layer_section_can_be_overridden() {
     );
     let sc = Scenario::load(&top).unwrap();
     assert_eq!(sc.config.wbc.ik.feedback, stride_wbc::IkFeedback::Measured);
+    assert!(sc.config.wbc.ik.tasks.is_empty());
+    let model = stride_model::bundled::model().unwrap();
+    let ik = sc.ik_config(&model).unwrap();
+    assert_eq!(ik.feedback, stride_wbc::IkFeedback::Measured);
     assert_eq!(
-        sc.config.wbc.ik.tasks,
+        ik.tasks,
         stride_wbc::IkConfig::default_for_bundled_model().tasks
     );
     assert!(matches!(sc.config.goal, Goal::Stand {}));
 }
 
-/// The bundled robot's whole-body tasks are written in its robot file like iCub's; the Rust defaults a user
-/// embedding stride-wbc gets are the same lists.
+/// The whole-body task lists configs/robots/stride_humanoid.toml stated before the walking preset.
+fn explicit_bundled_lists() -> (stride_wbc::IkConfig, stride_wbc::TsidConfig) {
+    #[derive(serde::Deserialize)]
+    struct Wbc {
+        ik: stride_wbc::IkConfig,
+        tsid: stride_wbc::TsidConfig,
+    }
+    #[derive(serde::Deserialize)]
+    struct Fixture {
+        wbc: Wbc,
+    }
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let path = root.join("crates/wbc/tests/fixtures/stride_humanoid_tasks.toml");
+    let f: Fixture = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    (f.wbc.ik, f.wbc.tsid)
+}
+
+/// The bundled robot's file states only its frames and posture; the walking preset built from them is
+/// exactly the task lists the file stated before presets, and the Rust defaults a user embedding stride-wbc
+/// gets.
 #[test]
-fn bundled_robot_file_states_the_library_defaults() {
+fn bundled_robot_file_builds_the_explicit_task_lists() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let sc = Scenario::load(&root.join("configs/robots/stride_humanoid.toml")).unwrap();
-    assert!(
-        sc.sources
-            .key_location("wbc.ik.tasks")
-            .is_some_and(|l| l.path.ends_with("stride_humanoid.toml")),
-        "the task list must come from the robot file, not the built-in defaults"
-    );
-    let ik = stride_wbc::IkConfig::default_for_bundled_model();
-    assert_eq!(sc.config.wbc.ik.tasks, ik.tasks);
-    assert_eq!(sc.config.wbc.ik.feedback, ik.feedback);
-    let tsid = stride_wbc::TsidConfig::default_for_bundled_model();
-    assert_eq!(sc.config.wbc.tsid.tasks, tsid.tasks);
+    assert!(sc.config.wbc.ik.tasks.is_empty() && sc.config.wbc.tsid.tasks.is_empty());
+    let model = stride_model::bundled::model().unwrap();
+    let (ik, tsid) = explicit_bundled_lists();
+    let built_ik = sc.ik_config(&model).unwrap();
+    assert_eq!(built_ik.tasks, ik.tasks);
+    assert_eq!(built_ik.feedback, ik.feedback);
+    assert_eq!(sc.tsid_config(&model).unwrap().tasks, tsid.tasks);
+    assert_eq!(ik, stride_wbc::IkConfig::default_for_bundled_model());
+    assert_eq!(tsid, stride_wbc::TsidConfig::default_for_bundled_model());
     let posture = stride_wbc::bundled_posture();
     assert_eq!(sc.config.robot.initial_joint_positions, posture);
+}
+
+/// `wbc.ik.tasks` entries replace the preset's task of the same name in place or are added;
+/// `wbc.walking.ik_without` drops preset tasks; `wbc.preset = "none"` takes the written list whole; the
+/// posture weights' globs are matched against the model's joints.
+#[test]
+fn preset_tasks_are_overridden_by_name_removed_or_replaced_whole() {
+    let s = Scratch::new("preset_overrides");
+    let model = stride_model::bundled::model().unwrap();
+    let com = "[[wbc.ik.tasks]]\ntype = \"com\"\nname = \"com\"\nkp = 1.0\npriority = \"hard\"\n";
+    let head = "[[wbc.ik.tasks]]\ntype = \"so3\"\nname = \"head\"\nframe = \"head\"\nreference = \"torso\"\n";
+    let top = s.write(
+        "s.toml",
+        &format!(
+            "[goal.stand]\n[wbc.walking]\nik_without = [\"pelvis\"]\nposture_joint_weights = {{ \"l_hip_*\" = 3.0 }}\n{com}{head}"
+        ),
+    );
+    let sc = Scenario::load(&top).unwrap();
+    let ik = sc.ik_config(&model).unwrap();
+    let names: Vec<&str> = ik.tasks.iter().map(|t| t.name()).collect();
+    assert_eq!(
+        names,
+        [
+            "left_foot",
+            "right_foot",
+            "com",
+            "torso",
+            "posture",
+            "joint_position_limits",
+            "joint_velocity_limits",
+            "head"
+        ]
+    );
+    match &ik.tasks[2] {
+        stride_wbc::TaskConfig::Com(c) => assert_eq!(c.kp, 1.0),
+        other => panic!("{other:?}"),
+    }
+    match &ik.tasks[4] {
+        stride_wbc::TaskConfig::JointRegularization(p) => {
+            assert_eq!(p.joint_weights.get("l_hip_pitch"), Some(&3.0));
+            assert_eq!(p.joint_weights.get("l_elbow"), Some(&2.0));
+            assert_eq!(p.joint_weights.get("l_knee"), None);
+        }
+        other => panic!("{other:?}"),
+    }
+    // The TSID keeps its preset's tasks (the overrides and removals were the QP-IK's).
+    let tsid = sc.tsid_config(&model).unwrap().tasks;
+    let preset = stride_wbc::TsidConfig::default_for_bundled_model().tasks;
+    let names =
+        |t: &[stride_wbc::TaskConfig]| t.iter().map(|t| t.name().to_owned()).collect::<Vec<_>>();
+    assert_eq!(names(&tsid), names(&preset));
+    assert_eq!(tsid[5], preset[5]);
+
+    let none = s.write(
+        "none.toml",
+        &format!("[goal.stand]\n[wbc]\npreset = \"none\"\n{com}"),
+    );
+    let sc = Scenario::load(&none).unwrap();
+    assert_eq!(sc.ik_config(&model).unwrap().tasks.len(), 1);
+
+    let bad = s.write(
+        "bad.toml",
+        "[goal.stand]\n[wbc.walking]\ntsid_without = [\"pelvic\"]\n",
+    );
+    let err = Scenario::load(&bad)
+        .unwrap()
+        .tsid_config(&model)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("bad.toml:3")
+            && err.contains("wbc.walking.tsid_without")
+            && err.contains("pelvic"),
+        "{err}"
+    );
 }
 
 #[test]

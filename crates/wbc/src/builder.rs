@@ -57,7 +57,8 @@ fn so3(frame: &str, reference: &str, kp: f64, kd: f64, weight: f64) -> TaskConfi
     })
 }
 
-fn com(kp: f64, kd: f64) -> TaskConfig {
+/// A hard CoM task named `com`.
+pub(crate) fn com(kp: f64, kd: f64) -> TaskConfig {
     TaskConfig::Com(ComTaskConfig {
         name: "com".into(),
         kp,
@@ -80,7 +81,8 @@ fn posture_task(kp: f64, kd: f64, posture: &[(&str, f64)]) -> TaskConfig {
     })
 }
 
-fn limits(look_ahead: Option<f64>) -> [TaskConfig; 2] {
+/// The joint position limits (`look_ahead`: `None` = the controller period) and velocity limits.
+pub(crate) fn limits(look_ahead: Option<f64>) -> [TaskConfig; 2] {
     [
         TaskConfig::JointPositionLimits(JointPositionLimitsTaskConfig {
             name: "joint_position_limits".into(),

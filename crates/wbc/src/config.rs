@@ -6,7 +6,6 @@
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
-use stride_model::bundled;
 pub use stride_qp::{Backend, QpSettings, Weight};
 
 /// Priority of an equality task.
@@ -424,7 +423,7 @@ impl ContactTaskConfig {
     }
 }
 
-fn default_friction() -> f64 {
+pub(crate) fn default_friction() -> f64 {
     0.33
 }
 fn default_facets() -> usize {
@@ -632,113 +631,12 @@ pub fn bundled_posture() -> BTreeMap<String, f64> {
         .collect()
 }
 
-fn arm_weights(value: f64) -> BTreeMap<String, f64> {
-    let mut w = BTreeMap::new();
-    for side in ["l", "r"] {
-        for j in [
-            "shoulder_pitch",
-            "shoulder_roll",
-            "shoulder_yaw",
-            "elbow",
-            "wrist_prosup",
-            "wrist_pitch",
-            "wrist_yaw",
-        ] {
-            w.insert(format!("{side}_{j}"), value);
-        }
-    }
-    w
-}
-
 impl IkConfig {
-    /// The QP-IK of [Romualdi 2022, eq. 7.1.16] for `models/stride_humanoid.urdf`, with the gains of the iCub
-    /// walking controller: feet SE(3) hard (K_p 7 / 5), CoM hard (K 1… here 2 for a 500 Hz
-    /// loop), chest SO(3) soft (K 5, weight 5), pelvis (`root_link`) SO(3) soft (K 5, weight 50), posture soft (K 5, weights 1 torso/legs, 2 arms), joint
-    /// position and velocity limits.
+    /// The QP-IK of [Romualdi 2022, eq. 7.1.16] for `models/stride_humanoid.urdf`: the walking preset
+    /// ([`crate::presets::walking_ik`]) with the bundled robot's frames, posture and arm weights
+    /// ([`crate::presets::WalkingPreset::bundled`]).
     pub fn default_for_bundled_model() -> Self {
-        IkConfig {
-            feedback: IkFeedback::Integrated,
-            qp: QpSettings::default(),
-            eliminate_equalities: true,
-            tasks: vec![
-                TaskConfig::Se3(Se3TaskConfig {
-                    name: "left_foot".into(),
-                    frame: bundled::LEFT_SOLE.into(),
-                    reference: walking::LEFT_FOOT.into(),
-                    kp_linear: 7.0,
-                    kp_angular: 5.0,
-                    kd_linear: 0.0,
-                    kd_angular: 0.0,
-                    mask: [true; 6],
-                    priority: Priority::Hard,
-                    weight: None,
-                }),
-                TaskConfig::Se3(Se3TaskConfig {
-                    name: "right_foot".into(),
-                    frame: bundled::RIGHT_SOLE.into(),
-                    reference: walking::RIGHT_FOOT.into(),
-                    kp_linear: 7.0,
-                    kp_angular: 5.0,
-                    kd_linear: 0.0,
-                    kd_angular: 0.0,
-                    mask: [true; 6],
-                    priority: Priority::Hard,
-                    weight: None,
-                }),
-                TaskConfig::Com(ComTaskConfig {
-                    name: "com".into(),
-                    kp: 2.0,
-                    kd: 0.0,
-                    mask: [true; 3],
-                    priority: Priority::Hard,
-                    weight: None,
-                }),
-                TaskConfig::So3(Frame3TaskConfig {
-                    name: "torso".into(),
-                    frame: bundled::TORSO.into(),
-                    reference: walking::TORSO.into(),
-                    reference_offset: ReferenceOffset::None,
-                    kp: 5.0,
-                    kd: 0.0,
-                    mask: [true; 3],
-                    priority: Priority::Soft,
-                    weight: Some(Weight::Scalar(5.0)),
-                }),
-                // Keeping the pelvis upright matters on a real (dynamic) plant: without it the QP lets the
-                // root link roll and pitch by up to 8-9° in single support, the torso joints compensate,
-                // and the angular momentum this creates drives the ZMP to the foot edge (measured in
-                // stride-sim; the robot fell in its first step).
-                TaskConfig::So3(Frame3TaskConfig {
-                    name: "pelvis".into(),
-                    frame: bundled::PELVIS.into(),
-                    reference: walking::TORSO.into(),
-                    reference_offset: ReferenceOffset::None,
-                    kp: 5.0,
-                    kd: 0.0,
-                    mask: [true; 3],
-                    priority: Priority::Soft,
-                    weight: Some(Weight::Scalar(50.0)),
-                }),
-                TaskConfig::JointRegularization(JointRegularizationTaskConfig {
-                    name: "posture".into(),
-                    kp: 5.0,
-                    kd: 0.0,
-                    posture: bundled_posture(),
-                    weight: None,
-                    joint_weights: arm_weights(2.0),
-                    priority: Priority::Soft,
-                }),
-                TaskConfig::JointPositionLimits(JointPositionLimitsTaskConfig {
-                    name: "joint_position_limits".into(),
-                    margin: 0.0,
-                    look_ahead: None,
-                }),
-                TaskConfig::JointVelocityLimits(JointVelocityLimitsTaskConfig {
-                    name: "joint_velocity_limits".into(),
-                    scale: 1.0,
-                }),
-            ],
-        }
+        crate::presets::walking_ik(&crate::presets::WalkingPreset::bundled())
     }
 }
 
@@ -779,115 +677,15 @@ pub const BUNDLED_TSID_COM_KD: f64 = 5.0;
 pub const BUNDLED_TSID_UPRIGHT_WEIGHT: f64 = 50.0;
 
 impl TsidConfig {
-    /// The TSID of [Romualdi 2022, eq. 7.2.31] for `models/stride_humanoid.urdf`: floating-base dynamics, feet
-    /// SE(3) hard (swing tracking; contact constraint when loaded), linear momentum (CoM) hard, chest and
-    /// pelvis SO(3) ([`BUNDLED_TSID_UPRIGHT_WEIGHT`]), posture, wrench and torque regularization soft, ZMP soft, torque/position/velocity limits and
-    /// contact wrench feasibility hard.
+    /// The TSID of [Romualdi 2022, eq. 7.2.31] for `models/stride_humanoid.urdf`: the walking preset
+    /// ([`crate::presets::walking_tsid`]) with the bundled robot's frames, posture and arm weights.
     ///
     /// Two values are tuned for the torque-controlled robot in stride-sim (see their docs): the CoP region
     /// of the contacts ([`BUNDLED_COP_X`], [`BUNDLED_COP_Y`], a margin inside the sole for a compliant
     /// floor) and the CoM gains ([`BUNDLED_TSID_COM_KP`], [`BUNDLED_TSID_COM_KD`], low enough for the
     /// ZMP-CoM feedback of the simplified layer to stay stable).
     pub fn default_for_bundled_model() -> Self {
-        let foot = |name: &str, frame: &str, reference: &str| {
-            TaskConfig::Se3(Se3TaskConfig {
-                name: name.into(),
-                frame: frame.into(),
-                reference: reference.into(),
-                kp_linear: 400.0,
-                kp_angular: 400.0,
-                kd_linear: 40.0,
-                kd_angular: 40.0,
-                mask: [true; 6],
-                priority: Priority::Hard,
-                weight: None,
-            })
-        };
-        // Chest and pelvis both held upright, at the same weight: with the chest alone the pelvis swung
-        // ±26° between the legs and the torso at 0.3 m/s and the robot fell (docs/wbc.md, "Upright chest
-        // and pelvis").
-        let upright = |name: &str, frame: &str| {
-            TaskConfig::So3(Frame3TaskConfig {
-                name: name.into(),
-                frame: frame.into(),
-                reference: walking::TORSO.into(),
-                reference_offset: ReferenceOffset::None,
-                kp: 100.0,
-                kd: 20.0,
-                mask: [true; 3],
-                priority: Priority::Soft,
-                weight: Some(Weight::Scalar(BUNDLED_TSID_UPRIGHT_WEIGHT)),
-            })
-        };
-        // `foot` (not `contact`): the same entries as configs/robots/stride_humanoid.toml
-        let contact = |name: &str, frame: &str, foot: Foot| {
-            TaskConfig::Contact(ContactTaskConfig {
-                name: name.into(),
-                contact: String::new(),
-                foot: Some(foot),
-                foot_x: BUNDLED_COP_X,
-                foot_y: BUNDLED_COP_Y,
-                ..ContactTaskConfig::new(frame, default_friction())
-            })
-        };
-        TsidConfig {
-            qp: QpSettings::default(),
-            eliminate_equalities: true,
-            tasks: vec![
-                TaskConfig::FloatingBaseDynamics(FloatingBaseDynamicsTaskConfig {
-                    name: "dynamics".into(),
-                }),
-                contact("left_contact", bundled::LEFT_SOLE, Foot::Left),
-                contact("right_contact", bundled::RIGHT_SOLE, Foot::Right),
-                foot("left_foot", bundled::LEFT_SOLE, walking::LEFT_FOOT),
-                foot("right_foot", bundled::RIGHT_SOLE, walking::RIGHT_FOOT),
-                TaskConfig::Com(ComTaskConfig {
-                    name: "com".into(),
-                    kp: BUNDLED_TSID_COM_KP,
-                    kd: BUNDLED_TSID_COM_KD,
-                    mask: [true; 3],
-                    priority: Priority::Hard,
-                    weight: None,
-                }),
-                upright("torso", bundled::TORSO),
-                upright("pelvis", bundled::PELVIS),
-                TaskConfig::JointRegularization(JointRegularizationTaskConfig {
-                    name: "posture".into(),
-                    kp: 100.0,
-                    kd: 20.0,
-                    posture: bundled_posture(),
-                    weight: None,
-                    joint_weights: arm_weights(2.0),
-                    priority: Priority::Soft,
-                }),
-                TaskConfig::WrenchRegularization(WrenchRegularizationTaskConfig {
-                    name: "wrench_regularization".into(),
-                    weight: Weight::Scalar(1e-4),
-                }),
-                TaskConfig::TorqueRegularization(TorqueRegularizationTaskConfig {
-                    name: "torque_regularization".into(),
-                    weight: Weight::Scalar(1e-4),
-                }),
-                TaskConfig::Zmp(ZmpTaskConfig {
-                    name: "zmp".into(),
-                    priority: Priority::Soft,
-                    weight: Some(Weight::Scalar(1e-3)),
-                }),
-                TaskConfig::JointTorqueLimits(JointTorqueLimitsTaskConfig {
-                    name: "joint_torque_limits".into(),
-                    scale: 1.0,
-                }),
-                TaskConfig::JointPositionLimits(JointPositionLimitsTaskConfig {
-                    name: "joint_position_limits".into(),
-                    margin: 0.0,
-                    look_ahead: Some(0.05),
-                }),
-                TaskConfig::JointVelocityLimits(JointVelocityLimitsTaskConfig {
-                    name: "joint_velocity_limits".into(),
-                    scale: 1.0,
-                }),
-            ],
-        }
+        crate::presets::walking_tsid(&crate::presets::WalkingPreset::bundled())
     }
 }
 

@@ -25,6 +25,7 @@ mod ik;
 mod io;
 pub mod math;
 mod names;
+pub mod presets;
 pub mod soft_contact;
 mod tasks;
 mod tsid;

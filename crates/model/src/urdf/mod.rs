@@ -28,6 +28,7 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 
 use crate::edits::InertiaEdits;
 use crate::error::ModelError;
+use crate::locks::JointLock;
 use crate::model::Model;
 
 /// Loads a model from a URDF file.
@@ -41,11 +42,20 @@ pub(crate) fn load_file(path: &Path) -> Result<Model, ModelError> {
 
 /// Loads a model from a URDF file with edited inertias.
 pub(crate) fn load_file_edited(path: &Path, edits: &InertiaEdits) -> Result<Model, ModelError> {
+    load_file_reduced(path, edits, &[])
+}
+
+/// Loads a model from a URDF file with edited inertias and locked joints.
+pub(crate) fn load_file_reduced(
+    path: &Path,
+    edits: &InertiaEdits,
+    locks: &[JointLock],
+) -> Result<Model, ModelError> {
     let text = std::fs::read_to_string(path).map_err(|e| ModelError::Io {
         path: path.display().to_string(),
         message: e.to_string(),
     })?;
-    load_str_edited(&text, edits)
+    load_str_reduced(&text, edits, locks)
 }
 
 /// Loads a model from URDF text.
@@ -55,6 +65,16 @@ pub(crate) fn load_str(text: &str) -> Result<Model, ModelError> {
 
 /// Loads a model from URDF text, the link inertias edited by `edits` before lumping.
 pub(crate) fn load_str_edited(text: &str, edits: &InertiaEdits) -> Result<Model, ModelError> {
+    load_str_reduced(text, edits, &[])
+}
+
+/// Loads a model from URDF text, the link inertias edited by `edits` before lumping and the joints
+/// matched by `locks` fixed at their positions ([`crate::locks`]).
+pub(crate) fn load_str_reduced(
+    text: &str,
+    edits: &InertiaEdits,
+    locks: &[JointLock],
+) -> Result<Model, ModelError> {
     let text = texture::strip_textures_without_filename(text);
     let robot = urdf_rs::read_from_string(&text).map_err(|e| ModelError::Urdf(e.to_string()))?;
     let raw = raw::read_raw(&text)?;
@@ -65,7 +85,12 @@ pub(crate) fn load_str_edited(text: &str, edits: &InertiaEdits) -> Result<Model,
     }
     let links = links::read_links(&robot, edits, &mut warnings)?;
     let graph = graph::read_joints(&robot, &links.index)?;
-    let mut tree = tree::build(&robot, &raw, &links, &graph, version_ge_1_2, &mut warnings)?;
+    let locked = crate::locks::resolve(&robot, locks)?;
+    let options = tree::Options {
+        version_ge_1_2,
+        locked: &locked,
+    };
+    let mut tree = tree::build(&robot, &raw, &links, &graph, options, &mut warnings)?;
     let joint_index = frames::check_mimic_targets(&tree.joints)?;
     let merged = std::mem::take(&mut tree.merged_frames);
     let mut frames = frames::body_and_merged_frames(&tree.bodies, merged, &links);

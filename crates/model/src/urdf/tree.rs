@@ -1,6 +1,8 @@
 //! The depth-first traversal from the root: one body per movable joint, fixed joints merged into the body
 //! above them (inertias lumped, merged links kept as frames).
 
+use std::collections::BTreeMap;
+
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
 use super::graph::Graph;
@@ -42,6 +44,14 @@ struct Pending {
     joint: Option<usize>,
 }
 
+/// How [`build`] treats the joints.
+pub(super) struct Options<'a> {
+    /// `<robot version>` ≥ 1.2: revolute and prismatic joints without `<limit>` are unbounded silently.
+    pub(super) version_ge_1_2: bool,
+    /// Locked joints (URDF index → position): merged like fixed joints at `origin · motion(q)`.
+    pub(super) locked: &'a BTreeMap<usize, f64>,
+}
+
 /// Walks the tree depth-first from the root, children in file order.
 ///
 /// # Errors
@@ -52,9 +62,10 @@ pub(super) fn build(
     raw: &RawInfo,
     links: &Links,
     graph: &Graph,
-    version_ge_1_2: bool,
+    options: Options<'_>,
     warnings: &mut Vec<String>,
 ) -> Result<Tree, ModelError> {
+    let version_ge_1_2 = options.version_ge_1_2;
     let root = graph.root;
     let mut tree = Tree::with_root(robot.links[root].name.clone(), robot.links.len());
     let mut stack = vec![Pending {
@@ -91,8 +102,12 @@ pub(super) fn build(
         for &jk in graph.children[p.link].iter().rev() {
             let joint = &robot.joints[jk];
             let child = links.index[&joint.child.link];
-            let origin = placement * pose(joint.origin.xyz.0, joint.origin.rpy.0);
-            let movable = joint.joint_type != urdf_rs::JointType::Fixed;
+            let mut origin = placement * pose(joint.origin.xyz.0, joint.origin.rpy.0);
+            if let Some(&q) = options.locked.get(&jk) {
+                origin *= crate::locks::joint_motion(joint, q)?;
+            }
+            let movable =
+                joint.joint_type != urdf_rs::JointType::Fixed && !options.locked.contains_key(&jk);
             stack.push(Pending {
                 link: child,
                 parent_body: body,

@@ -93,6 +93,9 @@ pub fn name_uses(scenario: &Scenario) -> Vec<NameUse> {
         &c.robot.torso_frame,
         NameKind::Frame,
     );
+    if let Some(base) = &c.robot.base_frame {
+        push("robot.base_frame".into(), base, NameKind::Frame);
+    }
     for j in c.robot.initial_joint_positions.keys() {
         push(
             format!("robot.initial_joint_positions.{j}"),
@@ -170,10 +173,16 @@ fn task_names(key: &str, task: &TaskConfig, push: &mut impl FnMut(String, &str, 
 
 /// Where `key` was set: its file location, or the built-in default set it belongs to.
 pub fn origin(scenario: &Scenario, key: &str) -> String {
+    let posture = "robot.initial_joint_positions";
+    if key.starts_with(posture) && scenario.sources.key_location(posture).is_none() {
+        return "built-in default `robot.initial_joint_positions` (the bundled humanoid's posture, also the \
+                walking preset's; a written table replaces it whole, so write this robot's posture)"
+            .to_string();
+    }
     if let Some(loc) = scenario.sources.value_location(key) {
         return loc.to_string();
     }
-    let list = ["wbc.ik.tasks", "wbc.tsid.tasks", "sim.contact.surfaces"]
+    let list = ["sim.contact.surfaces"]
         .into_iter()
         .find(|l| key.starts_with(l));
     match list {

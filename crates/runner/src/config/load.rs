@@ -318,9 +318,10 @@ pub struct Loaded<T> {
 /// The serialized `T::default()` is merged first, as a virtual file: every section is complete before
 /// the user's files are overlaid, so a file can change one key of a layer's configuration (say
 /// `wbc.ik.feedback`) without restating the fields that have no serde default (the task list).
-/// Top-level keys in `exclusive` (tables that select one alternative, such as an externally tagged enum)
-/// are not pre-filled from the defaults: a file that writes another alternative must not be merged with
-/// the default one.
+/// Keys in `exclusive` (dotted; tables that select one alternative, such as an externally tagged enum, or
+/// tables whose default names parts of one robot) are not pre-filled from the defaults: a file that
+/// writes another alternative must not be merged with the default one (serde fills them from the type's
+/// default when no file writes them).
 pub fn load<T: DeserializeOwned + Serialize + Default>(
     path: &Path,
     exclusive: &[&str],
@@ -344,7 +345,7 @@ pub fn load_files<T: DeserializeOwned + Serialize + Default>(
     };
     let mut table = toml::Table::try_from(T::default()).map_err(|e| bad(e.to_string()))?;
     for k in exclusive {
-        table.remove(*k);
+        remove_dotted(&mut table, k);
     }
     let defaults = toml::to_string(&table).map_err(|e| bad(e.to_string()))?;
     files.insert(
@@ -446,6 +447,20 @@ pub const RENAMED_KEYS: &[(&str, &str, &str)] = &[
         "the straight-line distance between the sole origins at touch-down, the width included",
     ),
 ];
+
+/// Removes the dotted key `key` (`a.b.c`) from `table`, if present.
+fn remove_dotted(table: &mut toml::Table, key: &str) {
+    match key.split_once('.') {
+        None => {
+            table.remove(key);
+        }
+        Some((head, rest)) => {
+            if let Some(toml::Value::Table(t)) = table.get_mut(head) {
+                remove_dotted(t, rest);
+            }
+        }
+    }
+}
 
 fn unknown_field_name(msg: &str) -> Option<String> {
     let rest = msg.strip_prefix("unknown field `")?;

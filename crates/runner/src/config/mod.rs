@@ -9,6 +9,7 @@ pub mod load;
 pub mod mujoco;
 pub mod reference;
 pub mod sole;
+pub mod wbc;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -17,6 +18,7 @@ use serde::{Deserialize, Serialize};
 
 pub use load::{Loaded, Location, SourceFile, SourceMap};
 pub use sole::{AttachedFrame, SoleFrame};
+pub use wbc::{WalkingSection, WbcPreset, WbcSection};
 
 /// Why a configuration was rejected.
 #[derive(Debug, thiserror::Error)]
@@ -195,20 +197,32 @@ pub struct RobotSection {
     pub left_sole: SoleFrame,
     /// Frame at the centre of the right sole (added as `right_sole` when attached).
     pub right_sole: SoleFrame,
-    /// Frame whose tilt is checked for falls (torso or base link).
+    /// Frame whose tilt is checked for falls (torso or base link), held upright by the walking preset's
+    /// `torso` tasks.
     pub torso_frame: String,
-    /// Initial joint positions [rad or m] by joint name; joints not listed start at 0.
+    /// Floating-base frame held upright by the walking preset's `pelvis` tasks (none: the model's root
+    /// link).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base_frame: Option<String>,
+    /// Initial joint positions [rad or m] by joint name; joints not listed start at 0. Also the posture of
+    /// the walking preset. Replaced whole by a file that writes it (not merged with the default).
     pub initial_joint_positions: BTreeMap<String, f64>,
+    /// Locked joints: joint name or glob (`*`, `?`) → position [rad or m]. The model every layer and the
+    /// simulator use is reduced: each locked joint becomes a fixed joint at its position
+    /// (`stride_model::Model::from_urdf_file_reduced`).
+    pub locked_joints: BTreeMap<String, f64>,
 }
 
 impl Default for RobotSection {
     fn default() -> Self {
         Self {
             urdf: PathBuf::from("../models/stride_humanoid.urdf"),
-            left_sole: SoleFrame::from("l_sole"),
-            right_sole: SoleFrame::from("r_sole"),
-            torso_frame: "root_link".into(),
-            initial_joint_positions: BTreeMap::new(),
+            left_sole: SoleFrame::from(stride_model::bundled::LEFT_SOLE),
+            right_sole: SoleFrame::from(stride_model::bundled::RIGHT_SOLE),
+            torso_frame: stride_model::bundled::TORSO.into(),
+            base_frame: None,
+            initial_joint_positions: stride_wbc::bundled_posture(),
+            locked_joints: BTreeMap::new(),
         }
     }
 }
@@ -390,26 +404,6 @@ impl Default for EndSection {
     }
 }
 
-/// `[wbc]`: the whole-body controllers; `ik` is used in position mode, `tsid` in torque mode. Their
-/// period is `1 / rates.wbc_hz`, given to their constructors by the runner.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct WbcSection {
-    /// Kinematic QP-IK (`stride_wbc::IkConfig`).
-    pub ik: stride_wbc::IkConfig,
-    /// TSID (`stride_wbc::TsidConfig`).
-    pub tsid: stride_wbc::TsidConfig,
-}
-
-impl Default for WbcSection {
-    fn default() -> Self {
-        Self {
-            ik: stride_wbc::IkConfig::default_for_bundled_model(),
-            tsid: stride_wbc::TsidConfig::default_for_bundled_model(),
-        }
-    }
-}
-
 /// A whole scenario. The file may also hold `include = [...]` (see [`load`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
@@ -442,7 +436,9 @@ pub struct ScenarioConfig {
 
 /// Sections that choose one alternative (`[goal.pose]`, `[goal.stand]`, ...): not pre-filled from the
 /// defaults, so writing another alternative replaces the default one instead of merging with it.
-const EXCLUSIVE_SECTIONS: &[&str] = &["goal"];
+/// `robot.initial_joint_positions` is the bundled humanoid's posture by default and names its joints: a
+/// file that writes the table replaces it whole.
+const EXCLUSIVE_SECTIONS: &[&str] = &["goal", "robot.initial_joint_positions"];
 
 /// Replaces every `${NAME}` in `text` by the value `lookup(NAME)` (the process environment for
 /// `robot.urdf`). `$` not followed by `{` is kept as written. Errors (as a message for
@@ -714,6 +710,13 @@ impl Scenario {
     /// `[estimation]` against the plant, and `[sim.model]`'s scales.
     fn validate_plant(&self) -> Result<(), ConfigError> {
         let c = &self.config;
+        if c.scenario.plant == PlantKind::Mujoco && !c.robot.locked_joints.is_empty() {
+            return Err(self.invalid(
+                "robot.locked_joints",
+                "the MuJoCo plant compiles the URDF itself and does not lock joints; expected no \
+                 locked joints with `scenario.plant = \"mujoco\"` (or the simulator plant)",
+            ));
+        }
         if c.scenario.plant == PlantKind::Ideal && c.estimation.kind != EstimationKind::GroundTruth
         {
             return Err(self.invalid(

@@ -43,6 +43,7 @@ pub const OPTIONAL_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "robot.right_sole.xyz", unit: "m", meaning: "As `robot.left_sole.xyz`." },
     KeyDoc { key: "robot.right_sole.rpy", unit: "rad", meaning: "As `robot.left_sole.rpy`." },
     KeyDoc { key: "robot.right_sole.name", unit: "-", meaning: "Name of the added frame (default `right_sole`)." },
+    KeyDoc { key: "robot.base_frame", unit: "-", meaning: "Floating-base frame the walking preset's `pelvis` tasks hold upright (absent: the model's root link)." },
     KeyDoc { key: "sim.actuation.default.effort_limit", unit: "N·m (N)", meaning: "Motor torque bound of every joint not overridden (absent: each joint's URDF `effort`, unbounded if the URDF has none); at the bound the torque saturates (`effort_limit_policy`). Per joint: `[[sim.actuation.joints]]` `effort_limit`." },
 ];
 
@@ -52,7 +53,7 @@ fn optional_key_type(key: &str) -> &'static str {
         "array"
     } else if key == "goal.stand" {
         "table"
-    } else if key.ends_with(".parent") || key.ends_with(".name") {
+    } else if key.ends_with(".parent") || key.ends_with(".name") || key == "robot.base_frame" {
         "string"
     } else {
         "float"
@@ -73,7 +74,15 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "robot.left_sole", unit: "-", meaning: "Frame at the centre of the left sole, z up and x forward: a link or frame of the model, or a table `{ parent, xyz, rpy }` that adds one (see `robot.left_sole.parent`). `stride check` warns when it is not on the ground or not level in the initial posture." },
     KeyDoc { key: "robot.right_sole", unit: "-", meaning: "Frame at the centre of the right sole (a frame name or a `{ parent, xyz, rpy }` table)." },
     KeyDoc { key: "robot.torso_frame", unit: "-", meaning: "Frame whose tilt is checked for falls, measured from its orientation in the initial posture (so any frame convention works)." },
-    KeyDoc { key: "robot.initial_joint_positions", unit: "rad or m", meaning: "Table joint name → initial position; joints not listed start at 0. Unknown joint names are rejected." },
+    KeyDoc { key: "robot.initial_joint_positions", unit: "rad or m", meaning: "Table joint name → initial position; joints not listed start at 0. Unknown joint names are rejected. Also the posture of the walking preset's posture tasks (`wbc.preset`). The default is the bundled humanoid's crouch; a file that writes the table replaces it whole (no merge with the default)." },
+    KeyDoc { key: "robot.locked_joints", unit: "rad or m", meaning: "Table joint name or glob (`*` any run of characters, `?` one) → position: every movable joint matched is locked there, and the model every layer and the simulator use is reduced (the joint becomes fixed, its child link merged into the parent body: `stride_model::Model::from_urdf_file_reduced`, docs/model.md). An entry that matches no movable joint, a non-finite position or a joint locked at two positions is an error; locked joints cannot be named elsewhere (posture, tasks, actuators). Not with the MuJoCo plant." },
+    KeyDoc { key: "wbc.preset", unit: "-", meaning: "`walking` (default): the QP-IK and TSID task lists are stride-wbc's walking presets (`stride_wbc::presets::walking_ik`, `walking_tsid`) built from `robot.left_sole`, `robot.right_sole`, `robot.torso_frame`, `robot.base_frame`, `robot.initial_joint_positions` and `[wbc.walking]`; each `[[wbc.ik.tasks]]` / `[[wbc.tsid.tasks]]` entry replaces the preset's task of the same name in place, or is added at the end (docs/wbc.md, \"Task presets\"). `none`: the written lists are the whole lists." },
+    KeyDoc { key: "wbc.walking.posture_joint_weights", unit: "-", meaning: "Walking preset: weights of the posture tasks' joints, by joint name or glob (`*`, `?`), matched against the model's joints (joints matched by none: 1; a glob matching no joint is ignored). Table entries merge with the default's globs (set one to 1.0 to neutralise it)." },
+    KeyDoc { key: "wbc.walking.upright_offset", unit: "-", meaning: "Walking preset: `reference_offset` of the torso and pelvis orientation tasks, `none` (the frames are x forward, z up when upright) or `initial` (they keep their initial orientation relative to the upright reference; e.g. iCub)." },
+    KeyDoc { key: "wbc.walking.cop_x", unit: "m", meaning: "Walking preset: `[min, max]` of the TSID contacts' CoP region along the sole frame's x (the part of the sole that stays loaded; default `stride_wbc::BUNDLED_COP_X`)." },
+    KeyDoc { key: "wbc.walking.cop_y", unit: "m", meaning: "Walking preset: `[min, max]` of the CoP region along the sole frame's y (default `stride_wbc::BUNDLED_COP_Y`)." },
+    KeyDoc { key: "wbc.walking.ik_without", unit: "-", meaning: "Walking preset: names of the QP-IK preset's tasks to leave out (`left_foot`, `right_foot`, `com`, `torso`, `pelvis`, `posture`, `joint_position_limits`, `joint_velocity_limits`); a name the preset lacks is an error." },
+    KeyDoc { key: "wbc.walking.tsid_without", unit: "-", meaning: "Walking preset: names of the TSID preset's tasks to leave out (`dynamics`, `left_contact`, `right_contact`, `left_foot`, `right_foot`, `com`, `torso`, `pelvis`, `posture`, `wrench_regularization`, `torque_regularization`, `zmp`, `joint_torque_limits`, `joint_position_limits`, `joint_velocity_limits`)." },
     KeyDoc { key: "rates.base_hz", unit: "Hz", meaning: "Base clock rate; must divide 1 000 000 000 (integer-nanosecond period). Every other rate divides it." },
     KeyDoc { key: "rates.planner_mode", unit: "-", meaning: "`event` (plan at start and on each new goal segment) or `periodic` (also at `planner_hz`)." },
     KeyDoc { key: "rates.planner_hz", unit: "Hz", meaning: "Planner rate in `periodic` mode; divides `base_hz`." },
@@ -161,7 +170,11 @@ pub fn rows(root: &toml::Table) -> Vec<Row> {
 }
 
 /// Keys whose table holds data (names → values), not fields.
-const DATA_TABLES: &[&str] = &["robot.initial_joint_positions"];
+const DATA_TABLES: &[&str] = &[
+    "robot.initial_joint_positions",
+    "robot.locked_joints",
+    "wbc.walking.posture_joint_weights",
+];
 
 fn is_data_table(key: &str) -> bool {
     DATA_TABLES.contains(&key) || key.ends_with(".posture") || key.ends_with(".joint_weights")
