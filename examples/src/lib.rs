@@ -24,7 +24,7 @@ impl Checks {
         self.that(
             what,
             value >= limit,
-            &format!("{value:.4} {unit} (at least {limit})"),
+            &format!("{value:.4} {unit} (at least {limit:.4})"),
         );
     }
 
