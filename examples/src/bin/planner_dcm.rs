@@ -41,7 +41,9 @@ fn main() -> ExitCode {
             y: 0.0,
             yaw: 0.0,
         };
-        let plan = planner.start(0.0, &soles[0], &soles[1], &goal)?.clone();
+        let plan = planner
+            .start(Duration::ZERO, &soles[0], &soles[1], &goal)?
+            .clone();
         println!(
             "plan: {} steps, {:.2} s",
             plan.step_count(),
@@ -57,7 +59,7 @@ fn main() -> ExitCode {
 
         // The pendulum, started at the plan's CoM moved by OFFSET along x, at rest.
         let mut sample = PlanSample::default();
-        planner.sample(0.0, &mut sample)?;
+        planner.sample(Duration::ZERO, &mut sample)?;
         let omega = sample.omega;
         let lipm = LipmDiscretization::new(omega, PERIOD.as_secs_f64())?;
         let mut com = sample.com_position.xy() + Vector2::new(OFFSET, 0.0);
@@ -69,8 +71,7 @@ fn main() -> ExitCode {
         let (mut dcm_error, mut error_at_check) = (0.0, 0.0);
         for k in 0..=ticks {
             let time = PERIOD * k;
-            let t = time.as_secs_f64();
-            planner.sample(t, &mut sample)?;
+            planner.sample(time, &mut sample)?;
             // What a robot would measure; here the pendulum's own state (and the feet where planned).
             let measured = MeasuredCentroidal {
                 com: com.push(sample.com_position.z),

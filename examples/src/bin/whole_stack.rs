@@ -74,7 +74,7 @@ fn main() -> ExitCode {
             y: 0.0,
             yaw: 0.0,
         };
-        planner.start(0.0, &start[0], &start[1], &goal)?;
+        planner.start(Duration::ZERO, &start[0], &start[1], &goal)?;
         let mut plan_sample = PlanSample::default();
 
         // The simplified layer and the glue that fills its input.
@@ -103,7 +103,6 @@ fn main() -> ExitCode {
         let steps = (DURATION / bundled::SIM_PERIOD).round() as u64;
         for k in 0..steps {
             let time = sim_period * k as u32;
-            let t = time.as_secs_f64();
 
             // 1. Sense: the simulator's sensors → the estimator (encoders, IMU, force/torque sensors).
             let out = sim.output();
@@ -120,7 +119,7 @@ fn main() -> ExitCode {
 
             if k % WBC_EVERY == 0 {
                 // 2. Measure CoM, DCM (with the plan's ω), ZMP (low-passed) and soles from the estimate.
-                planner.sample(t, &mut plan_sample)?;
+                planner.sample(time, &mut plan_sample)?;
                 let measured = meter.measure(
                     &estimate.state,
                     &estimate.foot_wrenches,
@@ -187,9 +186,9 @@ fn main() -> ExitCode {
         // Forward progress, against the plan's (the plan starts from the estimator's world frame, the
         // simulator's differs by a constant offset: compare displacements).
         let walked = sim.kin_dyn().com_position().x - start_com.x;
-        planner.sample(DURATION, &mut plan_sample)?;
+        planner.sample(Duration::from_secs_f64(DURATION), &mut plan_sample)?;
         let mut plan_start = PlanSample::default();
-        planner.sample(0.0, &mut plan_start)?;
+        planner.sample(Duration::ZERO, &mut plan_start)?;
         let planned = plan_sample.com_position.x - plan_start.com_position.x;
         println!("CoM moved forward {walked:.3} m in {DURATION} s (plan: {planned:.3} m)");
         checks.at_most("CoM advance - plan's", (walked - planned).abs(), 0.02, "m");
