@@ -133,7 +133,9 @@ fn main() -> ExitCode {
                 };
                 let zmp = zmp_filter.update(measured.zmp, dt);
 
-                // 3. Simplified layer: the DCM controller's desired ZMP and the CoM references.
+                // 3. Simplified layer: the DCM controller's desired ZMP and the CoM references. (On an
+                //    error this example stops; a controller would hold `simplified.output()`, the last
+                //    valid references, as stride-runner does.)
                 if k % SIMPLIFIED_EVERY == 0 {
                     let plan = planner.plan().ok_or("no plan")?;
                     let measured = MeasuredCentroidal { zmp, ..measured };
