@@ -8,7 +8,11 @@
 //! # Ok::<(), stride_model::ModelError>(())
 //! ```
 
-use crate::{Model, ModelError};
+use std::sync::Arc;
+
+use nalgebra::DVector;
+
+use crate::{FrameId, Model, ModelError, RobotState};
 
 /// The URDF text of the bundled humanoid (compiled into the library: no file needed at run time).
 pub const URDF: &str = include_str!("../../../models/stride_humanoid.urdf");
@@ -64,6 +68,59 @@ pub fn model() -> Result<Model, ModelError> {
     Model::from_urdf_str(URDF)
 }
 
+/// The joint positions of [`POSTURE`] in `model`'s joint order \[rad\] (joints not listed at zero).
+///
+/// # Errors
+/// [`ModelError::InvalidFrame`] naming a [`POSTURE`] joint `model` does not have (a model that is not the
+/// bundled humanoid).
+pub fn posture(model: &Model) -> Result<DVector<f64>, ModelError> {
+    let mut q = DVector::zeros(model.dof());
+    for (joint, angle) in POSTURE {
+        let i = model
+            .joint_index(joint)
+            .ok_or_else(|| not_bundled(joint, "no such joint"))?;
+        q[i] = angle;
+    }
+    Ok(q)
+}
+
+/// The sole frames `[left, right]` ([`LEFT_SOLE`], [`RIGHT_SOLE`]) of `model`.
+///
+/// # Errors
+/// [`ModelError::InvalidFrame`] when `model` lacks one.
+pub fn soles(model: &Model) -> Result<[FrameId; 2], ModelError> {
+    let find = |name| {
+        model
+            .frame_id(name)
+            .ok_or_else(|| not_bundled(name, "no such frame"))
+    };
+    Ok([find(LEFT_SOLE)?, find(RIGHT_SOLE)?])
+}
+
+/// The bundled humanoid standing at [`POSTURE`] with its soles flat on the ground `z = 0`, their mid-point
+/// at the world origin, at rest ([`RobotState::standing`]).
+///
+/// ```
+/// let model = std::sync::Arc::new(stride_model::bundled::model()?);
+/// let state = stride_model::bundled::standing_state(&model)?;
+/// assert_eq!(state.joint_positions, stride_model::bundled::posture(&model)?);
+/// # Ok::<(), stride_model::ModelError>(())
+/// ```
+///
+/// # Errors
+/// As [`posture`] and [`soles`].
+pub fn standing_state(model: &Arc<Model>) -> Result<RobotState, ModelError> {
+    let [left, right] = soles(model)?;
+    RobotState::standing(model, &posture(model)?, left, right)
+}
+
+fn not_bundled(name: &str, reason: &str) -> ModelError {
+    ModelError::InvalidFrame {
+        name: name.to_string(),
+        reason: format!("{reason} (not the bundled humanoid's model?)"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -79,5 +136,32 @@ mod tests {
             assert!(joint.is_some(), "joint {j}");
             assert!(q.is_finite());
         }
+    }
+
+    #[test]
+    fn standing_state_puts_the_soles_on_the_ground_and_other_models_are_refused() {
+        let model = Arc::new(model().expect("bundled URDF loads"));
+        let state = standing_state(&model).expect("the bundled humanoid stands");
+        let mut kd = crate::KinDyn::new(Arc::clone(&model));
+        kd.set_state(&state).expect("finite state");
+        let [l, r] = soles(&model).expect("soles");
+        let (pl, pr) = (kd.frame_pose(l), kd.frame_pose(r));
+        assert!(pl.translation.z.abs() < 1e-12 && pr.translation.z.abs() < 1e-12);
+        assert!((pl.translation.vector + pr.translation.vector).xy().norm() < 1e-12);
+        let knee = model.joint_index("l_knee").expect("knee");
+        assert_eq!(state.joint_positions[knee], 0.7);
+
+        let other = Model::from_urdf_str(
+            r#"<robot name="one"><link name="a"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>"#,
+        )
+        .expect("one-link URDF");
+        assert!(matches!(
+            posture(&other),
+            Err(ModelError::InvalidFrame { .. })
+        ));
+        assert!(matches!(
+            soles(&other),
+            Err(ModelError::InvalidFrame { .. })
+        ));
     }
 }

@@ -9,8 +9,8 @@
 //!
 //! Measured quantities: the CoM position and velocity from the estimated base state and joints through
 //! the model; the DCM `ξ = x + ẋ/ω` with the plan's ω (computed once per simplified tick); the ZMP from the
-//! feet wrenches ([`stride_simplified::measured_zmp`]), falling back to the CoM's ground projection when
-//! no foot carries more than 5 % of the weight. The simplified layer reads that ZMP through a first-order
+//! feet wrenches by the walking stack's rule ([`stride_walking::feet_zmp`]), falling back to the CoM's ground
+//! projection when the feet in contact carry less than 5 % of the weight. The simplified layer reads that ZMP through a first-order
 //! low-pass filter ([`Stack::filter_measured_zmp`], `estimation.measured_zmp_cutoff`), updated at every
 //! simplified and whole-body tick.
 
@@ -23,8 +23,7 @@ use stride_estimation::{Estimator, EstimatorOutput};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
 use stride_simplified::{
-    measured_zmp, DcmControllerKind, FootWrench, SimplifiedController, SimplifiedInput,
-    SimplifiedOutput, StepAdjuster,
+    DcmControllerKind, SimplifiedController, SimplifiedInput, SimplifiedOutput, StepAdjuster,
 };
 pub use stride_walking::soles_heading;
 use stride_walking::{MeasuredCentroidal, SimplifiedInputBuilder, WalkingHandles};
@@ -724,7 +723,7 @@ struct MeasureFrames {
     torso_up: Vector3<f64>,
 }
 
-/// CoM, ZMP (from the wrenches of the feet in contact carrying more than 5 % of the `weight` \[N\]),
+/// CoM, ZMP (the walking stack's rule, [`stride_walking::feet_zmp`], the CoM's ground projection when it has none),
 /// soles and tilt of `state`; the DCM is left at zero (it needs the plan's ω).
 fn measure_state(
     kd: &mut KinDyn,
@@ -736,28 +735,13 @@ fn measure_state(
 ) -> Result<Measured, RunError> {
     kd.set_state(state)?;
     let com = kd.com_position();
-    let mut loaded = [FootWrench {
-        wrench: Vector6::zeros(),
-        point: Vector3::zeros(),
-    }; 2];
     let soles = [
         kd.frame_pose(frames.soles[0]),
         kd.frame_pose(frames.soles[1]),
     ];
-    let mut n = 0;
-    for ((sole, wrench), in_contact) in soles.iter().zip(foot_wrenches).zip(contacts) {
-        if in_contact && wrench[2] > 0.0 {
-            let point = sole.translation.vector;
-            loaded[n] = FootWrench {
-                wrench: *wrench,
-                point,
-            };
-            n += 1;
-        }
-    }
-    let (zmp, ok) = match measured_zmp(&loaded[..n], 0.0, 0.05 * weight) {
-        Ok(z) => (z, true),
-        Err(_) => (com.xy(), false),
+    let (zmp, ok) = match stride_walking::feet_zmp(&soles, foot_wrenches, contacts, weight) {
+        Some(z) => (z, true),
+        None => (com.xy(), false),
     };
     let torso = kd.frame_pose(frames.torso);
     let up = torso.rotation * frames.torso_up;

@@ -11,7 +11,7 @@ mod simplified_input;
 pub mod wbc_input;
 
 pub use heading::soles_heading;
-pub use measure::{CentroidalMeter, MEASURED_ZMP_CUTOFF, MIN_ZMP_LOAD};
+pub use measure::{feet_zmp, CentroidalMeter, MEASURED_ZMP_CUTOFF, MIN_ZMP_LOAD};
 pub use simplified_input::{
     is_walking, support_polygon, MeasuredCentroidal, SimplifiedInputBuilder, SimplifiedInputError,
 };

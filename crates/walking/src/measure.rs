@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use nalgebra::{Vector2, Vector3, Vector6};
+use nalgebra::{Isometry3, Vector2, Vector3, Vector6};
 use stride_model::{FrameId, KinDyn, Model, ModelError, RobotState, VelocityRepresentation};
 use stride_simplified::{measured_zmp, FootWrench};
 
@@ -108,48 +108,55 @@ impl CentroidalMeter {
 
     fn zmp(
         &mut self,
-        soles: &[nalgebra::Isometry3<f64>; 2],
+        soles: &[Isometry3<f64>; 2],
         foot_wrenches: &[Vector6<f64>; 2],
         contacts: [bool; 2],
         com: &Vector3<f64>,
     ) -> Vector2<f64> {
-        let mut loaded = [FootWrench {
-            wrench: Vector6::zeros(),
-            point: Vector3::zeros(),
-        }; 2];
-        let mut n = 0;
-        for k in 0..2 {
-            if contacts[k] && foot_wrenches[k][2] > 0.0 {
-                loaded[n] = FootWrench {
-                    wrench: foot_wrenches[k],
-                    point: soles[k].translation.vector,
-                };
-                n += 1;
-            }
-        }
-        let zmp = measured_zmp(&loaded[..n], 0.0, MIN_ZMP_LOAD * self.weight);
-        self.zmp_from_wrenches = zmp.is_ok();
-        zmp.unwrap_or_else(|_| com.xy())
+        let zmp = feet_zmp(soles, foot_wrenches, contacts, self.weight);
+        self.zmp_from_wrenches = zmp.is_some();
+        zmp.unwrap_or_else(|| com.xy())
     }
+}
+
+/// The walking stack's measured ZMP \[m\] (world xy, ground at `z = 0`): from the wrenches of the feet
+/// flagged in `contacts` that push on the ground (`f_z > 0`), about their sole origins `soles` ([`measured_zmp`],
+/// [Romualdi 2022, eq. 2.4.10]), when together they carry at least [`MIN_ZMP_LOAD`] of `weight` \[N\];
+/// `None` otherwise (the caller's fallback, [`CentroidalMeter`]'s the CoM's ground projection). Wrenches
+/// `[f; τ]` \[N, N·m\] the ground applies on each foot, world orientation, torque about the sole origin.
+/// Allocation-free.
+pub fn feet_zmp(
+    soles: &[Isometry3<f64>; 2],
+    foot_wrenches: &[Vector6<f64>; 2],
+    contacts: [bool; 2],
+    weight: f64,
+) -> Option<Vector2<f64>> {
+    let mut loaded = [FootWrench {
+        wrench: Vector6::zeros(),
+        point: Vector3::zeros(),
+    }; 2];
+    let mut n = 0;
+    for k in 0..2 {
+        if contacts[k] && foot_wrenches[k][2] > 0.0 {
+            loaded[n] = FootWrench {
+                wrench: foot_wrenches[k],
+                point: soles[k].translation.vector,
+            };
+            n += 1;
+        }
+    }
+    measured_zmp(&loaded[..n], 0.0, MIN_ZMP_LOAD * weight).ok()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::DVector;
     use stride_model::bundled;
 
     fn standing() -> (Arc<Model>, [FrameId; 2], RobotState) {
         let model = Arc::new(bundled::model().unwrap());
-        let soles = [
-            model.frame_id(bundled::LEFT_SOLE).unwrap(),
-            model.frame_id(bundled::RIGHT_SOLE).unwrap(),
-        ];
-        let mut q = DVector::zeros(model.dof());
-        for (name, value) in bundled::POSTURE {
-            q[model.joint_index(name).unwrap()] = value;
-        }
-        let state = RobotState::standing(&model, &q, soles[0], soles[1]).unwrap();
+        let soles = bundled::soles(&model).unwrap();
+        let state = bundled::standing_state(&model).unwrap();
         (model, soles, state)
     }
 

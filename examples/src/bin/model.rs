@@ -24,12 +24,9 @@ fn main() -> ExitCode {
         );
 
         // Standing: the bundled posture, the soles flat on the ground plane z = 0.
-        let left = model.frame_id(bundled::LEFT_SOLE).ok_or("no left sole")?;
-        let right = model.frame_id(bundled::RIGHT_SOLE).ok_or("no right sole")?;
-        let mut q = DVector::zeros(model.dof());
-        for (joint, angle) in bundled::POSTURE {
-            q[model.joint_index(joint).ok_or(joint)?] = angle;
-        }
+        // (`bundled::standing_state(&model)` does the same in one call.)
+        let [left, right] = bundled::soles(&model)?;
+        let q = bundled::posture(&model)?;
         let state = RobotState::standing(&model, &q, left, right)?;
 
         // One kinematics/dynamics workspace per thread; it allocates here and never again.

@@ -19,15 +19,9 @@ use stride_wbc::prelude::*;
 fn main() -> ExitCode {
     stride_examples::run(|checks| {
         let model = Arc::new(bundled::model()?);
-        let soles = [
-            model.frame_id(bundled::LEFT_SOLE).ok_or("no left sole")?,
-            model.frame_id(bundled::RIGHT_SOLE).ok_or("no right sole")?,
-        ];
-        let mut q = DVector::zeros(model.dof());
-        for (joint, angle) in bundled::POSTURE {
-            q[model.joint_index(joint).ok_or(joint)?] = angle;
-        }
-        let state = RobotState::standing(&model, &q, soles[0], soles[1])?;
+        // The bundled posture with the soles flat on the ground (`RobotState::standing` for any robot).
+        let soles = bundled::soles(&model)?;
+        let state = bundled::standing_state(&model)?;
         let mut kd = KinDyn::new(Arc::clone(&model));
         kd.set_state(&state)?;
 

@@ -23,7 +23,7 @@ use stride_planner::prelude::*;
 use stride_sim::prelude::*;
 use stride_simplified::prelude::*;
 use stride_walking::prelude::*;
-use stride_wbc::prelude::nalgebra::{DVector, Vector3};
+use stride_wbc::prelude::nalgebra::Vector3;
 use stride_wbc::prelude::*;
 
 /// Simulated time \[s\].
@@ -35,15 +35,9 @@ const SIMPLIFIED_EVERY: u64 = 20;
 fn main() -> ExitCode {
     stride_examples::run(|checks| {
         let model = Arc::new(bundled::model()?);
-        let soles = [
-            model.frame_id(bundled::LEFT_SOLE).ok_or("no left sole")?,
-            model.frame_id(bundled::RIGHT_SOLE).ok_or("no right sole")?,
-        ];
+        let soles = bundled::soles(&model)?;
         let chest = model.frame_id(bundled::TORSO).ok_or("no chest")?;
-        let mut posture = DVector::zeros(model.dof());
-        for (joint, angle) in bundled::POSTURE {
-            posture[model.joint_index(joint).ok_or(joint)?] = angle;
-        }
+        let posture = bundled::posture(&model)?;
         let sim_period = Duration::from_secs_f64(bundled::SIM_PERIOD);
         let wbc_period = sim_period * WBC_EVERY as u32;
         let simplified_period = sim_period * SIMPLIFIED_EVERY as u32;

@@ -15,13 +15,9 @@ pub fn humanoid_urdf() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/stride_humanoid.urdf")
 }
 
-/// The bundled humanoid's crouched posture (`stride_model::bundled::POSTURE`).
+/// The bundled humanoid's crouched posture (`stride_model::bundled::posture`).
 pub fn crouch(model: &Model) -> DVector<f64> {
-    let mut q = DVector::zeros(model.dof());
-    for (name, v) in stride_model::bundled::POSTURE {
-        q[model.joint_index(name).expect("joint")] = v;
-    }
-    q
+    stride_model::bundled::posture(model).expect("the bundled humanoid")
 }
 
 /// iCub's crouch of `configs/robots/icub_v2_7.toml` (knees bend negative).

@@ -105,7 +105,7 @@ pub struct EstimationSection {
 
 /// Default of `estimation.measured_zmp_cutoff` \[Hz\]: the middle of the band that walks on both plants
 /// (docs/estimation.md, "The measured ZMP").
-pub const DEFAULT_MEASURED_ZMP_CUTOFF: f64 = 5.0;
+pub const DEFAULT_MEASURED_ZMP_CUTOFF: f64 = stride_walking::MEASURED_ZMP_CUTOFF;
 
 impl Default for EstimationSection {
     fn default() -> Self {
