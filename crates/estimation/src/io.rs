@@ -1,7 +1,11 @@
 //! The estimation layer's data-only input and output.
 
+use std::time::Duration;
+
 use nalgebra::{DVector, UnitQuaternion, Vector3, Vector6};
 use stride_model::{Model, RobotState};
+
+use crate::EstimatorError;
 
 /// One IMU sample, in the IMU frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,6 +55,52 @@ impl EstimatorInput {
             ft_wrenches: vec![Vector6::zeros(); model.ft_sensors().len()],
         }
     }
+
+    /// Copies one sample of the robot's sensors into this input, allocation-free: its `time` (whole
+    /// nanoseconds), encoder positions and velocities (rad, rad/s, model joint order), IMU sample and FT
+    /// readings (N, N·m, [`Model::ft_sensors`] order). What a plant adapter (a simulator, a robot's driver)
+    /// calls once per sample before [`Estimator::step`](crate::Estimator).
+    ///
+    /// # Errors
+    /// [`EstimatorError::InputSize`] when a slice's length differs from this input's (built for the model);
+    /// nothing is copied then.
+    pub fn set_readings(
+        &mut self,
+        time: Duration,
+        joint_positions: &[f64],
+        joint_velocities: &[f64],
+        imu: ImuReading,
+        ft_wrenches: &[Vector6<f64>],
+    ) -> Result<(), EstimatorError> {
+        let size = |name, expected: usize, actual: usize| {
+            if expected == actual {
+                Ok(())
+            } else {
+                Err(EstimatorError::InputSize {
+                    name,
+                    expected,
+                    actual,
+                })
+            }
+        };
+        size(
+            "joint_positions",
+            self.joint_positions.len(),
+            joint_positions.len(),
+        )?;
+        size(
+            "joint_velocities",
+            self.joint_velocities.len(),
+            joint_velocities.len(),
+        )?;
+        size("ft_wrenches", self.ft_wrenches.len(), ft_wrenches.len())?;
+        self.time_ns = u64::try_from(time.as_nanos()).unwrap_or(u64::MAX);
+        self.joint_positions.copy_from_slice(joint_positions);
+        self.joint_velocities.copy_from_slice(joint_velocities);
+        self.imu = imu;
+        self.ft_wrenches.copy_from_slice(ft_wrenches);
+        Ok(())
+    }
 }
 
 /// What the estimation layer gives the controllers.
@@ -79,5 +129,43 @@ impl EstimatorOutput {
             joint_torques: DVector::zeros(model.dof()),
             ft_offsets: vec![Vector6::zeros(); model.ft_sensors().len()],
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn set_readings_copies_a_sample_and_refuses_wrong_sizes_untouched() {
+        let model = stride_model::bundled::model().expect("bundled model");
+        let mut input = EstimatorInput::new(&model);
+        let (n, f) = (model.dof(), model.ft_sensors().len());
+        let q: Vec<f64> = (0..n).map(|i| 0.01 * i as f64).collect();
+        let qd: Vec<f64> = (0..n).map(|i| -0.02 * i as f64).collect();
+        let ft = vec![Vector6::new(1.0, 2.0, 3.0, 4.0, 5.0, 6.0); f];
+        let imu = ImuReading {
+            angular_velocity: Vector3::new(0.1, 0.2, 0.3),
+            ..ImuReading::default()
+        };
+        input
+            .set_readings(Duration::from_micros(1500), &q, &qd, imu, &ft)
+            .expect("sizes of the model");
+        assert_eq!(input.time_ns, 1_500_000);
+        assert_eq!(input.joint_positions.as_slice(), q.as_slice());
+        assert_eq!(input.joint_velocities.as_slice(), qd.as_slice());
+        assert_eq!(input.imu, imu);
+        assert_eq!(input.ft_wrenches, ft);
+
+        let before = input.clone();
+        let short = &q[..n - 1];
+        let err = input
+            .set_readings(Duration::from_secs(1), &q, short, imu, &ft)
+            .expect_err("one joint velocity short");
+        assert!(matches!(
+            err,
+            EstimatorError::InputSize { name: "joint_velocities", expected, actual } if expected == n && actual == n - 1
+        ));
+        assert_eq!(input, before);
     }
 }

@@ -100,15 +100,18 @@ fn main() -> ExitCode {
 
             // 1. Sense: the simulator's sensors → the estimator (encoders, IMU, force/torque sensors).
             let out = sim.output();
-            sensors.time_ns = out.time.as_nanos() as u64;
-            sensors.joint_positions.copy_from(&out.joint_positions);
-            sensors.joint_velocities.copy_from(&out.joint_velocities);
-            sensors.imu = ImuReading {
+            let imu = ImuReading {
                 orientation: out.imu.orientation,
                 angular_velocity: out.imu.angular_velocity,
                 proper_acceleration: out.imu.proper_acceleration,
             };
-            sensors.ft_wrenches.copy_from_slice(&out.ft_wrenches);
+            sensors.set_readings(
+                out.time,
+                out.joint_positions.as_slice(),
+                out.joint_velocities.as_slice(),
+                imu,
+                &out.ft_wrenches,
+            )?;
             let estimate = estimator.step(&sensors)?;
 
             if k % WBC_EVERY == 0 {
