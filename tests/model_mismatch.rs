@@ -65,8 +65,8 @@ fn ten_percent_heavier_plant_walks_in_both_modes() {
 
 #[test]
 fn position_control_mass_limit() {
-    assert_walks("walk_straight.toml", Mismatch::MassScale(1.8));
-    assert_falls("walk_straight.toml", Mismatch::MassScale(1.9));
+    assert_walks("walk_straight.toml", Mismatch::MassScale(2.0));
+    assert_falls("walk_straight.toml", Mismatch::MassScale(2.1));
 }
 
 #[test]

@@ -106,6 +106,13 @@ fn default_scenario_walks_two_metres_to_its_goal() {
     assert!((s.real_time_factor - rtf).abs() <= 1e-9 * rtf);
     assert_estimation_targets("walk_straight", &s);
     assert_dcm_within_10_mm("walk_straight", &s);
+    // Issue 15's ZMP target in position control at the default speed (measured 18.8 mm RMS; docs/gait.md,
+    // "Tracking at the default speed").
+    assert!(
+        s.zmp_error.rms <= 0.020,
+        "walk_straight: ZMP error {:.1} mm RMS",
+        1e3 * s.zmp_error.rms
+    );
 }
 
 /// The tracking target of the speed issue at the default speed: DCM error ≤ 10 mm RMS (true DCM against
@@ -148,16 +155,21 @@ fn assert_estimation_targets(name: &str, s: &RunSummary) {
     );
 }
 
-/// The other side of the position-control targets: the same walk with the measured ZMP unfiltered
-/// (`estimation.measured_zmp_cutoff = 0`) falls (with the position-control ZMP-CoM gains K_ZMP 2.5 / K_CoM 5 of
-/// `configs/layers/zmp_com_position.toml`; with the crate's 1.5 / 5 it walked at 11.8 mm DCM RMS, against 9.0 mm
-/// filtered; docs/estimation.md, "The measured ZMP").
+/// The other side of the position-control tracking targets: the same walk with the measured ZMP unfiltered
+/// (`estimation.measured_zmp_cutoff = 0`) misses them. With the gains of `configs/layers/zmp_com_position.toml`
+/// (K_ZMP 2.5 / K_CoM 3, DCM PI k_p 1.5) it reaches the goal but tracks the DCM at 19.0 mm and the ZMP at 63.0
+/// mm RMS, against 9.0 and 18.8 filtered (with the former K_CoM 5 / k_p 1.2 it fell; docs/estimation.md, "The
+/// measured ZMP"; on MuJoCo tests/mujoco.rs checks the filter's other side).
 #[test]
-fn the_default_walk_falls_with_the_measured_zmp_unfiltered() {
+fn the_default_walk_misses_the_tracking_targets_with_the_measured_zmp_unfiltered() {
     let s = run_edited("walk_straight.toml", |c| {
         c.estimation.measured_zmp_cutoff = 0.0
     });
-    assert!(matches!(s.outcome, Outcome::Fell { .. }), "{}", s.render());
+    assert!(
+        s.dcm_error.rms > 0.010 && s.zmp_error.rms > 0.020,
+        "{}",
+        s.render()
+    );
 }
 
 #[test]
@@ -326,6 +338,42 @@ fn the_fast_walks_reach_their_goals_at_speed() {
         let speed = s.gait.steady_speed.expect("enough touch-downs");
         assert!(speed >= min_speed, "{name}: steady speed {speed} m/s");
     }
+}
+
+/// Issue 15's energy targets at the thesis's 0.212 m/s (Romualdi 2022, Table 7.2: 4.82 J/kg/m in position,
+/// 2.55 in torque control): c_et ≤ 4.0 J/kg/m in position and ≤ 2.0 in torque control (measured 2.48 / 1.90;
+/// docs/gait.md, "Energy at the thesis's speed"). The other side: the same speed walked with 0.131 m steps every
+/// 0.5 s costs more than 2.0 J/kg/m in torque control (measured 2.11): the step timing, not the speed alone,
+/// sets the cost.
+#[test]
+fn energy_at_the_thesis_speed_meets_the_targets_with_0_6_s_steps() {
+    for (name, max_cost) in [
+        ("walk_thesis_speed.toml", 4.0),
+        ("walk_thesis_speed_torque.toml", 2.0),
+    ] {
+        let s = run(name);
+        assert_reached_goal(name, &s, 4.0, 0.10);
+        let speed = s.gait.steady_speed.expect("enough touch-downs");
+        assert!(
+            (0.20..=0.22).contains(&speed),
+            "{name}: steady speed {speed} m/s"
+        );
+        let cost = s.gait.energy_cost.expect("a walked distance");
+        assert!(cost <= max_cost, "{name}: c_et {cost} J/kg/m");
+    }
+    let quick = run_edited("walk_thesis_speed_torque.toml", |c| {
+        c.planner.feet_distance_max = 0.1992;
+        c.planner.step_duration_min = 0.5;
+        c.planner.step_duration_nominal = 0.6;
+        c.planner.step_duration_max = 0.8;
+    });
+    let speed = quick.gait.steady_speed.expect("enough touch-downs");
+    assert!(
+        (0.20..=0.22).contains(&speed),
+        "0.5 s steps: steady speed {speed} m/s"
+    );
+    let cost = quick.gait.energy_cost.expect("a walked distance");
+    assert!(cost > 2.0, "0.5 s steps: c_et {cost} J/kg/m");
 }
 
 /// The other side of the position-control speed limit: 0.25 m steps (commanded 0.405 m/s) fall

@@ -167,6 +167,32 @@ pub(crate) struct FtSensorSide {
 
 /// The immutable floating-base model. Build it with [`Model::from_urdf_file`] or [`Model::from_urdf_str`]
 /// and share it with [`std::sync::Arc`].
+///
+/// # Examples
+///
+/// A 2 kg base with a 1 kg arm on a hinge: one joint, `nv = 6 + 1`, 3 kg.
+///
+/// ```
+/// use stride_model::{JointKind, Model};
+///
+/// let model = Model::from_urdf_str(
+///     r#"<robot name="pendulum">
+///       <link name="base"><inertial><mass value="2"/>
+///         <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+///       <link name="arm"><inertial><origin xyz="0 0 -0.5"/><mass value="1"/>
+///         <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+///       <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
+///         <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
+///     </robot>"#,
+/// )?;
+/// assert_eq!((model.dof(), model.nv()), (1, 7));
+/// assert_eq!(model.root_link(), "base");
+/// assert_eq!(model.joint_index("hinge"), Some(0));
+/// assert_eq!(model.joints()[0].kind, JointKind::Revolute);
+/// assert_eq!(model.total_mass(), 3.0);
+/// assert!(model.frame_id("arm").is_some() && model.frame_id("hand").is_none());
+/// # Ok::<(), stride_model::ModelError>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Model {
     pub(crate) name: String,

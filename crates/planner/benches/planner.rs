@@ -3,6 +3,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::hint::black_box;
+use std::time::Duration;
 use stride_planner::{plan_from_standing, Goal, PlanSample, Planner, PlannerConfig};
 
 /// Gravity magnitude \[m/s²\].
@@ -51,7 +52,7 @@ fn benches(c: &mut Criterion) {
     let mut planner = Planner::new(cfg.clone(), GRAVITY).unwrap();
     planner
         .start(
-            0.0,
+            Duration::ZERO,
             &l,
             &r,
             &Goal::Pose {
@@ -70,7 +71,7 @@ fn benches(c: &mut Criterion) {
     c.bench_function("replan_mid_walk", |b| {
         b.iter_batched(
             || base.clone(),
-            |mut p| p.replan(black_box(6.0), &turn).unwrap(),
+            |mut p| p.replan(black_box(Duration::from_secs(6)), &turn).unwrap(),
             criterion::BatchSize::SmallInput,
         )
     });

@@ -13,8 +13,11 @@
 //!   first, towards the same goal; it starts with a double support whose extra ZMP term makes the DCM
 //!   start exactly at the old plan's state (see [`crate::dcm`]).
 
+use std::time::Duration;
+
 use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
+use stride_block::seconds;
 
 use crate::build::{build_plan, StartState};
 use crate::config::PlannerConfig;
@@ -63,13 +66,17 @@ impl Plan {
 }
 
 /// A request to move the touch-down of the swinging foot.
+///
+/// `time` is the instant of the request (plan time `stride_block::seconds(time)`); `land_time` is a plan
+/// time, like the plan's own touch-down times it is compared with exactly (a request that keeps the
+/// planned touch-down passes the plan's `f64` unchanged, which a nanosecond `Duration` could not).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StepAdjustmentRequest {
-    /// When \[s\] (inside the single support).
-    pub time: f64,
+    /// When (inside the single support).
+    pub time: Duration,
     /// New touch-down position of the sole (world x, y; the height and the orientation stay) \[m\].
     pub target: Vector2<f64>,
-    /// New touch-down time \[s\].
+    /// New touch-down time, plan time \[s\].
     pub land_time: f64,
     /// No retarget with less than this left before the current or the new touch-down \[s\] (freeze).
     pub min_remaining: f64,
@@ -84,7 +91,7 @@ pub(crate) fn adjusted_plan(
     request: &StepAdjustmentRequest,
     goal: &Goal,
 ) -> Result<Option<Plan>, PlannerError> {
-    let t = request.time;
+    let t = seconds(request.time);
     let step = plan
         .current_step(t)
         .ok_or(PlannerError::NoMergePoint { time: t })?;

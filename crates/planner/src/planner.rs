@@ -3,6 +3,7 @@
 use std::time::Duration;
 
 use nalgebra::{Isometry3, Vector2};
+use stride_block::seconds;
 
 use crate::adjust::{adjusted_plan, StepAdjustmentRequest};
 use crate::build::{build_plan, xy, StartState};
@@ -118,7 +119,7 @@ pub fn plan_from_standing(
 /// let sample = planner.step(&input)?; // inherent: no need to import `Block`
 /// assert!(sample.left.in_contact && sample.right.in_contact);
 /// let mut later = PlanSample::default();
-/// planner.sample(2.0, &mut later)?;
+/// planner.sample(Duration::from_secs(2), &mut later)?;
 /// assert!(later.com_position.x > 0.0);
 /// # Ok::<(), PlannerError>(())
 /// ```
@@ -161,42 +162,43 @@ impl Planner {
         self.plan.as_ref()
     }
 
-    /// Starts a new plan from standing (see [`plan_from_standing`]); replaces any previous plan.
+    /// Starts a new plan from standing at `t0` (plan time `seconds(t0)`, see [`plan_from_standing`]);
+    /// replaces any previous plan.
     pub fn start(
         &mut self,
-        t0: f64,
+        t0: Duration,
         left: &Isometry3<f64>,
         right: &Isometry3<f64>,
         goal: &Goal,
     ) -> Result<&Plan, PlannerError> {
+        let t0 = seconds(t0);
         let plan = plan_from_standing(&self.config, self.gravity, t0, left, right, goal)?;
         self.verify(&plan)?;
         Ok(self.plan.insert(plan))
     }
 
-    /// Writes the references at `t` into `out` (no allocation).
-    pub fn sample(&self, t: f64, out: &mut PlanSample) -> Result<(), PlannerError> {
+    /// Writes the references at `t` (plan time `seconds(t)`, [`Plan::sample`]) into `out` (no allocation).
+    pub fn sample(&self, t: Duration, out: &mut PlanSample) -> Result<(), PlannerError> {
         let plan = self.plan.as_ref().ok_or(PlannerError::NoPlan)?;
-        plan.sample(t, out);
+        plan.sample(seconds(t), out);
         Ok(())
     }
 
     /// The merge point a replan requested at `t` would use: the first double support whose merge point
     /// (`merge_point_fraction` into it) is at or after `t` and leaves some double support after it; in the
-    /// final double support (or standing) any time works.
-    pub fn merge_time(&self, t: f64) -> Result<f64, PlannerError> {
+    /// final double support (or standing) any time works. Returns the merge point in plan time \[s\].
+    pub fn merge_time(&self, t: Duration) -> Result<f64, PlannerError> {
         let plan = self.plan.as_ref().ok_or(PlannerError::NoPlan)?;
-        check_time("t", t)?;
-        merge_point(&self.config, plan, t)
+        merge_point(&self.config, plan, seconds(t))
     }
 
     /// Merges a plan towards `goal` into the current one at the first merge point after `t`. Feet planned
     /// before the merge point do not move; DCM position/velocity, CoM and feet are continuous across it.
-    /// Returns the merge time. On error the current plan is unchanged.
-    pub fn replan(&mut self, t: f64, goal: &Goal) -> Result<f64, PlannerError> {
+    /// Returns the merge time in plan time \[s\]. On error the current plan is unchanged.
+    pub fn replan(&mut self, t: Duration, goal: &Goal) -> Result<f64, PlannerError> {
         goal.validate()?;
         let plan = self.plan.as_ref().ok_or(PlannerError::NoPlan)?;
-        check_time("t", t)?;
+        let t = seconds(t);
         let cfg = &self.config;
         let m = merge_point(cfg, plan, t)?;
         let mut s = PlanSample::default();
@@ -304,16 +306,17 @@ impl Planner {
     ) -> Result<bool, PlannerError> {
         goal.validate()?;
         let plan = self.plan.as_ref().ok_or(PlannerError::NoPlan)?;
-        check_time("request.time", request.time)?;
         check_time("request.land_time", request.land_time)?;
+        check_time("request.min_remaining", request.min_remaining)?;
+        let t = seconds(request.time);
         let omega = self.config.omega(self.gravity);
         let Some(adjusted) = adjusted_plan(&self.config, omega, plan, request, goal)? else {
             return Ok(false);
         };
         if self.config.verify_plans.enabled() {
             let step = plan
-                .current_step(request.time)
-                .ok_or(PlannerError::NoMergePoint { time: request.time })?;
+                .current_step(t)
+                .ok_or(PlannerError::NoMergePoint { time: t })?;
             let length = (request.target - xy(&step.stance_pose)).norm();
             let duration = request.land_time - step.stance_touchdown;
             let mut cfg = self.config.clone();
@@ -467,7 +470,7 @@ impl Planner {
     ///
     /// Inherent, so a caller need not import [`stride_block::Block`] (the `Block` impl calls it).
     pub fn step(&mut self, input: &PlannerInput) -> Result<&PlanSample, PlannerError> {
-        let t = input.time.as_secs_f64();
+        let t = input.time;
         if self.plan.is_none() {
             let goal = input.goal.clone().unwrap_or(Goal::Stand);
             self.start(t, &input.left_sole, &input.right_sole, &goal)?;
@@ -476,7 +479,7 @@ impl Planner {
         }
         let Self { plan, output, .. } = self;
         if let Some(p) = plan.as_ref() {
-            p.sample(t, output);
+            p.sample(seconds(t), output);
         }
         Ok(&self.output)
     }

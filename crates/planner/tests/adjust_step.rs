@@ -5,10 +5,13 @@
 mod common;
 
 use common::*;
+use std::time::Duration;
+
 use nalgebra::Vector2;
+use stride_block::seconds;
 use stride_planner::{
-    Foot, Goal, PhaseKind, PlanSample, PlanVerification, Planner, PlannerConfig,
-    StepAdjustmentRequest,
+    Foot, Goal, PhaseKind, Plan, PlanSample, PlanVerification, Planner, PlannerConfig,
+    PlannerError, StepAdjustmentRequest,
 };
 
 const GOAL: Goal = Goal::Pose {
@@ -26,12 +29,12 @@ fn planner() -> Planner {
     };
     let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
     let mut p = Planner::new(cfg, GRAVITY).unwrap();
-    p.start(0.0, &l, &r, &GOAL).unwrap();
+    p.start(Duration::ZERO, &l, &r, &GOAL).unwrap();
     p
 }
 
-/// The middle of the `n`-th single support.
-fn mid_single_support(p: &Planner, n: usize) -> f64 {
+/// The middle of the `n`-th single support (whole nanoseconds), as an instant and in plan time \[s\].
+fn mid_single_support(p: &Planner, n: usize) -> (Duration, f64) {
     let phase = p
         .plan()
         .unwrap()
@@ -41,12 +44,12 @@ fn mid_single_support(p: &Planner, n: usize) -> f64 {
         .nth(n)
         .copied()
         .unwrap();
-    0.5 * (phase.start + phase.end)
+    instant(0.5 * (phase.start + phase.end))
 }
 
 fn sample(p: &Planner, t: f64) -> PlanSample {
     let mut s = PlanSample::default();
-    p.sample(t, &mut s).unwrap();
+    p.plan().unwrap().sample(t, &mut s);
     s
 }
 
@@ -58,7 +61,7 @@ fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
         (4, Vector2::new(0.04, 0.03), 0.05),
     ] {
         let mut p = planner();
-        let t = mid_single_support(&p, n);
+        let (time, t) = mid_single_support(&p, n);
         let old = p.plan().unwrap().clone();
         let step = old.current_step(t).unwrap();
         let swing_foot = step.stance.other();
@@ -67,7 +70,7 @@ fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
         let target = nominal + Vector2::new(shift.x, shift.y * swing_foot.side());
         let land = step.swing.land_time + dt_land;
         let request = StepAdjustmentRequest {
-            time: t,
+            time,
             target,
             land_time: land,
             min_remaining: 0.1,
@@ -133,21 +136,28 @@ fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
     }
 }
 
-#[test]
-fn frozen_and_unchanged_requests_leave_the_plan() {
-    let mut p = planner();
-    let t = mid_single_support(&p, 2);
+/// A fresh planner, its plan, and the request that keeps the third step as planned (mid-swing).
+fn unchanged_request() -> (Planner, Plan, StepAdjustmentRequest) {
+    let p = planner();
+    let (time, t) = mid_single_support(&p, 2);
     let old = p.plan().unwrap().clone();
     let step = old.current_step(t).unwrap();
     let same = StepAdjustmentRequest {
-        time: t,
+        time,
         target: step.swing.end.translation.vector.xy(),
         land_time: step.swing.land_time,
         min_remaining: 0.1,
     };
+    (p, old, same)
+}
+
+#[test]
+fn frozen_and_unchanged_requests_leave_the_plan() {
+    let (mut p, old, same) = unchanged_request();
+    let step = old.current_step(seconds(same.time)).unwrap();
     assert!(!p.adjust_step(&same, &GOAL).unwrap());
     let late = StepAdjustmentRequest {
-        time: step.swing.land_time - 0.05,
+        time: instant(step.swing.land_time - 0.05).0,
         target: same.target + Vector2::new(0.05, 0.0),
         ..same
     };
@@ -155,9 +165,45 @@ fn frozen_and_unchanged_requests_leave_the_plan() {
     assert_eq!(p.plan().unwrap(), &old);
     // outside single support: an error, the plan unchanged
     let ds = StepAdjustmentRequest {
-        time: step.swing.land_time + 0.01,
+        time: instant(step.swing.land_time + 0.01).0,
         ..late
     };
     assert!(p.adjust_step(&ds, &GOAL).is_err());
     assert_eq!(p.plan().unwrap(), &old);
+}
+
+#[test]
+fn non_finite_request_seconds_are_refused() {
+    let (mut p, old, same) = unchanged_request();
+    let valid = StepAdjustmentRequest {
+        target: same.target + Vector2::new(0.03, 0.0),
+        ..same
+    };
+    for bad in [f64::NAN, f64::INFINITY] {
+        for (name, request) in [
+            (
+                "request.land_time",
+                StepAdjustmentRequest {
+                    land_time: bad,
+                    ..valid
+                },
+            ),
+            (
+                "request.min_remaining",
+                StepAdjustmentRequest {
+                    min_remaining: bad,
+                    ..valid
+                },
+            ),
+        ] {
+            let e = p.adjust_step(&request, &GOAL).unwrap_err();
+            assert!(
+                matches!(e, PlannerError::InvalidTime { name: n, .. } if n == name),
+                "{name} = {bad}: {e}"
+            );
+            assert_eq!(p.plan().unwrap(), &old);
+        }
+    }
+    // the same request with finite seconds is applied
+    assert!(p.adjust_step(&valid, &GOAL).unwrap());
 }

@@ -203,7 +203,12 @@ fn bad_start_is_named() {
     assert_eq!(param_of(e), "t0");
     // replanning without a plan
     let mut p = Planner::new(cfg, GRAVITY).unwrap();
-    assert_eq!(p.replan(1.0, &goal).unwrap_err(), PlannerError::NoPlan);
+    let one_second = std::time::Duration::from_secs(1);
+    assert_eq!(
+        p.replan(one_second, &goal).unwrap_err(),
+        PlannerError::NoPlan
+    );
+    assert_eq!(p.merge_time(one_second).unwrap_err(), PlannerError::NoPlan);
 }
 
 #[test]

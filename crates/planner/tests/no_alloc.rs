@@ -44,8 +44,9 @@ fn sampling_and_stepping_do_not_allocate() {
     // only this thread's allocations count (the test harness may allocate on its own threads)
     let (_, allocations) = ALLOC.allocations_during(|| {
         while (k as f64) * 0.01 < end + 2.0 {
-            let t = k as f64 * 0.01;
-            planner.sample(t, &mut out).unwrap();
+            planner
+                .sample(Duration::from_millis(10 * k), &mut out)
+                .unwrap();
             checksum += out.dcm_position.x + out.support_polygon.map_or(0, |p| p.len()) as f64;
             input.time = Duration::from_millis(10 * k);
             let o = planner.step(&input).unwrap();

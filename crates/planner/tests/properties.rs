@@ -2,6 +2,8 @@
 
 mod common;
 
+use std::time::Duration;
+
 use common::*;
 use proptest::prelude::*;
 use stride_planner::{plan_from_standing, Goal, Planner, PlannerConfig, PlannerError, Waypoint};
@@ -115,9 +117,9 @@ proptest! {
                                                     goal2 in goal_strategy(), frac in 0.0f64..1.0) {
         let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
         let mut planner = Planner::new(cfg.clone(), GRAVITY).unwrap();
-        let old = planner.start(0.0, &l, &r, &goal1).unwrap().clone();
-        let t = old.start_time + frac * (old.end_time - old.start_time + 1.0);
-        let m = match planner.replan(t, &goal2) {
+        let old = planner.start(Duration::ZERO, &l, &r, &goal1).unwrap().clone();
+        let (time, t) = instant(old.start_time + frac * (old.end_time - old.start_time + 1.0));
+        let m = match planner.replan(time, &goal2) {
             Ok(m) => m,
             Err(PlannerError::NoMergePoint { .. }) => return Ok(()),
             Err(e) => panic!("replanning failed: {e}"),
@@ -177,11 +179,12 @@ proptest! {
         let cfg = PlannerConfig { horizon: 30.0, ..PlannerConfig::default() };
         let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
         let mut planner = Planner::new(cfg.clone(), GRAVITY).unwrap();
-        planner.start(0.0, &l, &r, &goals[0]).unwrap();
+        planner.start(Duration::ZERO, &l, &r, &goals[0]).unwrap();
         let mut t = 0.0;
         for (g, gap) in goals.iter().skip(1).zip(gaps.iter()) {
             t += gap;
-            match planner.replan(t, g) {
+            let (time, t) = instant(t);
+            match planner.replan(time, g) {
                 Ok(m) => prop_assert!(m >= t),
                 Err(PlannerError::NoMergePoint { .. }) => {}
                 Err(e) => panic!("replanning failed: {e}"),

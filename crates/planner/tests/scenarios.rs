@@ -2,6 +2,8 @@
 
 mod common;
 
+use std::time::Duration;
+
 use common::*;
 use stride_planner::{plan_from_standing, Goal, PlanOutcome, PlannerConfig, Waypoint};
 
@@ -219,8 +221,11 @@ fn replanning_with_the_same_goal_keeps_the_footsteps() {
         yaw: 0.0,
     };
     let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
-    let old = planner.start(0.0, &l, &r, &goal).unwrap().clone();
-    let m = planner.replan(4.0, &goal).unwrap();
+    let old = planner
+        .start(Duration::ZERO, &l, &r, &goal)
+        .unwrap()
+        .clone();
+    let m = planner.replan(Duration::from_secs(4), &goal).unwrap();
     let new = planner.plan().unwrap();
     assert_eq!(new.merge_times, vec![m]);
     check_steps(&cfg, new, false);
@@ -242,7 +247,7 @@ fn replanning_to_a_new_goal() {
     let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
     planner
         .start(
-            0.0,
+            Duration::ZERO,
             &l,
             &r,
             &Goal::Pose {
@@ -254,7 +259,7 @@ fn replanning_to_a_new_goal() {
         .unwrap();
     planner
         .replan(
-            5.0,
+            Duration::from_secs(5),
             &Goal::Pose {
                 x: 1.5,
                 y: 1.0,
@@ -264,7 +269,7 @@ fn replanning_to_a_new_goal() {
         .unwrap();
     planner
         .replan(
-            9.0,
+            Duration::from_secs(9),
             &Goal::Velocity {
                 forward: 0.1,
                 lateral: 0.0,
@@ -368,7 +373,7 @@ fn stopping_mid_walk() {
             let mut planner = stride_planner::Planner::new(cfg.clone(), GRAVITY).unwrap();
             planner
                 .start(
-                    0.0,
+                    Duration::ZERO,
                     &l,
                     &r,
                     &Goal::Pose {
@@ -378,7 +383,8 @@ fn stopping_mid_walk() {
                     },
                 )
                 .unwrap();
-            let m = planner.replan(t, &stop).unwrap();
+            let (time, t) = instant(t);
+            let m = planner.replan(time, &stop).unwrap();
             let plan = planner.plan().unwrap();
             assert!(m >= t);
             check_dynamics(&cfg, plan, 0.01);

@@ -4,6 +4,8 @@
 
 mod common;
 
+use std::time::Duration;
+
 use common::*;
 use nalgebra::{UnitQuaternion, Vector2, Vector3};
 use stride_planner::{
@@ -198,7 +200,7 @@ fn the_planner_verifies_its_plans_when_asked() {
     let mut planner = Planner::new(cfg.clone(), GRAVITY).expect("config");
     planner
         .start(
-            0.0,
+            Duration::ZERO,
             &l,
             &r,
             &Goal::Pose {
@@ -210,7 +212,7 @@ fn the_planner_verifies_its_plans_when_asked() {
         .expect("start");
     for (t, goal) in [
         (
-            2.0,
+            Duration::from_secs(2),
             Goal::Pose {
                 x: 1.0,
                 y: 0.5,
@@ -218,7 +220,7 @@ fn the_planner_verifies_its_plans_when_asked() {
             },
         ),
         (
-            4.5,
+            Duration::from_millis(4500),
             Goal::Velocity {
                 forward: 0.1,
                 lateral: 0.0,

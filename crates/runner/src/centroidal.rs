@@ -9,7 +9,10 @@
 //! touch-down of the swing in progress and the MPC moved it by more than `deadband` from what the plan has,
 //! [`stride_planner::Planner::adjust_step`] retargets the swing (same touch-down time) and replans the rest.
 
+use std::time::Duration;
+
 use nalgebra::Vector2;
+use stride_block::seconds;
 use stride_planner::{Foot, Plan, PlanSample, StepAdjustmentRequest};
 use stride_simplified::{
     CentroidalMpc, CentroidalMpcConfig, CentroidalMpcInput, CentroidalMpcOutput, ComReference,
@@ -83,19 +86,20 @@ impl CentroidalLayer {
             .map(|n| n.2)
     }
 
-    /// Fills the MPC input at `t` \[s\] from `plan` (`sample` is a scratch buffer).
+    /// Fills the MPC input at `time` from `plan` (`sample` is a scratch buffer).
     fn fill(
         &mut self,
         plan: &Plan,
         m: &CentroidalMeasurement,
         sample: &mut PlanSample,
-        t: f64,
+        time: Duration,
     ) -> Result<(), SimplifiedError> {
+        let t = seconds(time);
         let c = *self.mpc.config();
         let end = t + c.stage_duration * c.stages as f64;
         let external = self.external_force(m, t);
         let i = &mut self.input;
-        i.time = t;
+        i.time = time;
         (i.com_position, i.com_velocity) = (m.com, m.com_velocity);
         (i.foot_half_length, i.foot_half_width) = m.foot_half;
         i.external_force = external;
@@ -150,13 +154,14 @@ impl CentroidalLayer {
         plan: &Plan,
         measurement: &CentroidalMeasurement,
         sample: &mut PlanSample,
-        t: f64,
+        time: Duration,
     ) -> Result<bool, SimplifiedError> {
+        let t = seconds(time);
         if t + 1e-9 < self.next_solve {
             return Ok(false);
         }
         self.next_solve = t + self.mpc.config().update_period;
-        self.fill(plan, measurement, sample, t)?;
+        self.fill(plan, measurement, sample, time)?;
         self.mpc.step(&self.input)?;
         Ok(true)
     }
@@ -174,11 +179,11 @@ impl CentroidalLayer {
         r
     }
 
-    /// The swing retargeting the last solution asks for at `t`, if any (see the module documentation).
-    pub fn request(&self, plan: &Plan, t: f64) -> Option<StepAdjustmentRequest> {
+    /// The swing retargeting the last solution asks for at `time`, if any (see the module documentation).
+    pub fn request(&self, plan: &Plan, time: Duration) -> Option<StepAdjustmentRequest> {
         let out = self.output();
         let next = out.next_adjusted()?;
-        let step = plan.current_step(t)?;
+        let step = plan.current_step(seconds(time))?;
         let swing = step.swing;
         if swing.foot != next.planned.foot
             || (swing.land_time - next.planned.activation).abs() > 1e-3
@@ -189,7 +194,7 @@ impl CentroidalLayer {
         let target = next.position.xy();
         ((target - swing.end.translation.vector.xy()).norm() > c.deadband).then_some(
             StepAdjustmentRequest {
-                time: t,
+                time,
                 target,
                 land_time: swing.land_time,
                 min_remaining: c.min_remaining_time,
@@ -212,7 +217,7 @@ impl CentroidalLayer {
             self.next_nominal = (self.next_nominal + 1) % REMEMBERED;
         }
         AdjustedFootstepMsg {
-            time: request.time,
+            time: seconds(request.time),
             foot: plan_foot.name(),
             nominal_position: nominal.into(),
             position: request.target.into(),

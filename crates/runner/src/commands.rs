@@ -114,10 +114,12 @@ pub fn plan(path: &Path, json: bool, dt: Option<f64>) -> Result<ExitCode, CliErr
     let first = events
         .first()
         .map_or(stride_planner::Goal::Stand, |e| e.goal.clone());
-    planner.start(0.0, &lp, &rp, &first).map_err(err)?;
+    planner
+        .start(std::time::Duration::ZERO, &lp, &rp, &first)
+        .map_err(err)?;
     for e in events.iter().skip(1) {
         planner
-            .replan(e.time_ns as f64 * 1e-9, &e.goal)
+            .replan(std::time::Duration::from_nanos(e.time_ns), &e.goal)
             .map_err(err)?;
     }
     let plan = planner

@@ -1,9 +1,11 @@
 //! Serializable records of what flows between the layers, written to the log and read back by replay.
 //!
-//! Layer types that already derive serde (`SimplifiedInput`, `SimplifiedOutput`, `IkOutput`,
-//! `TsidOutput`) are logged as they are (wall-clock fields zeroed: those go to the `*/timing` topics).
-//! The others get a mirror here with an exact, lossless conversion both ways (f64 values round-trip
-//! bit-exactly through JSON). Vectors are borrowed (`Cow`) when writing so logging does not allocate.
+//! Layer types whose serde form is plain JSON (`SimplifiedInput`, `SimplifiedOutput`: fixed-size nalgebra
+//! vectors serialize as arrays) are logged as they are (wall-clock fields zeroed: those go to the
+//! `*/timing` topics). The others get a mirror here with an exact, lossless conversion (f64 values
+//! round-trip bit-exactly through JSON), so that every logged vector is a plain array of numbers (never
+//! serde's `[data, nrows, ncols]` form of a dynamic nalgebra vector) and every pose a [`PoseRecord`]
+//! ([`LOG_FORMAT`] 2). Vectors are borrowed (`Cow`, slices) when writing so logging does not allocate.
 
 use std::borrow::Cow;
 
@@ -16,6 +18,11 @@ use stride_planner::{FootSample, Goal as PlannerGoal, PhaseKind, PlanSample, Pla
 use stride_wbc::{walking, FrameReference, WbcInput};
 
 use crate::config::ControlMode;
+
+/// Version of the logs' message shapes, written as `log_format` in the `stride` metadata record and
+/// checked by `stride replay`. 1: the first logs (dynamic vectors in serde's `[data, nrows, ncols]` form,
+/// no `log_format` entry); 2: every vector a plain array, poses as [`PoseRecord`].
+pub const LOG_FORMAT: u32 = 2;
 
 /// A pose: position \[m\] and orientation quaternion `[x, y, z, w]`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
@@ -369,18 +376,18 @@ impl<'a> WbcInputRecord<'a> {
     }
 }
 
-/// `/wbc/output` in position mode: `stride_wbc::IkOutput` with the wall-clock fields of its report zeroed
-/// (same JSON shape, so it deserializes as `IkOutput`).
+/// `/wbc/output` in position mode: `stride_wbc::IkOutput` with the wall-clock fields of its report zeroed,
+/// every vector a plain JSON array and the base pose a [`PoseRecord`].
 #[derive(Debug, Serialize)]
 pub struct IkOutputRecord<'a> {
-    /// Joint position commands \[rad\].
-    pub joint_positions: &'a DVector<f64>,
-    /// Joint velocities [rad/s].
-    pub joint_velocities: &'a DVector<f64>,
-    /// Base twist (mixed).
-    pub base_velocity: &'a Vector6<f64>,
+    /// Joint position commands \[rad\], model order.
+    pub joint_positions: &'a [f64],
+    /// Joint velocities [rad/s], model order.
+    pub joint_velocities: &'a [f64],
+    /// Base twist `[v; ω]` (mixed) [m/s; rad/s].
+    pub base_velocity: [f64; 6],
     /// Integrated base pose.
-    pub base_pose: &'a Isometry3<f64>,
+    pub base_pose: PoseRecord,
     /// Solver report (solve_time and tick_time set to 0).
     pub report: stride_wbc::SolveReport,
     /// Task residuals.
@@ -390,28 +397,26 @@ pub struct IkOutputRecord<'a> {
 impl<'a> IkOutputRecord<'a> {
     /// View of an output without its wall-clock fields.
     pub fn new(o: &'a stride_wbc::IkOutput) -> Self {
-        let mut report = o.report;
-        report.solve_time = 0.0;
-        report.tick_time = 0.0;
         Self {
-            joint_positions: &o.joint_positions,
-            joint_velocities: &o.joint_velocities,
-            base_velocity: &o.base_velocity,
-            base_pose: &o.base_pose,
-            report,
+            joint_positions: o.joint_positions.as_slice(),
+            joint_velocities: o.joint_velocities.as_slice(),
+            base_velocity: v6(&o.base_velocity),
+            base_pose: PoseRecord::from_iso(&o.base_pose),
+            report: without_wall_clock(o.report),
             residuals: &o.residuals,
         }
     }
 }
 
-/// `/wbc/output` in torque mode: `stride_wbc::TsidOutput` with wall-clock fields zeroed.
+/// `/wbc/output` in torque mode: `stride_wbc::TsidOutput` with wall-clock fields zeroed and every vector a
+/// plain JSON array.
 #[derive(Debug, Serialize)]
 pub struct TsidOutputRecord<'a> {
-    /// Joint torques [N m].
-    pub joint_torques: &'a DVector<f64>,
-    /// ν̇.
-    pub accelerations: &'a DVector<f64>,
-    /// Planned contact wrenches.
+    /// Joint torques [N m], model order.
+    pub joint_torques: &'a [f64],
+    /// ν̇ `[base (mixed) [m/s²; rad/s²]; joints [rad/s²]]`.
+    pub accelerations: &'a [f64],
+    /// Planned contact wrenches, each `[f; τ]` [N; N m].
     pub contact_wrenches: &'a [Vector6<f64>],
     /// Contact load factors.
     pub contact_load: &'a [f64],
@@ -424,18 +429,22 @@ pub struct TsidOutputRecord<'a> {
 impl<'a> TsidOutputRecord<'a> {
     /// View of an output without its wall-clock fields.
     pub fn new(o: &'a stride_wbc::TsidOutput) -> Self {
-        let mut report = o.report;
-        report.solve_time = 0.0;
-        report.tick_time = 0.0;
         Self {
-            joint_torques: &o.joint_torques,
-            accelerations: &o.accelerations,
+            joint_torques: o.joint_torques.as_slice(),
+            accelerations: o.accelerations.as_slice(),
             contact_wrenches: &o.contact_wrenches,
             contact_load: &o.contact_load,
-            report,
+            report: without_wall_clock(o.report),
             residuals: &o.residuals,
         }
     }
+}
+
+/// `report` with its wall-clock fields (`solve_time`, `tick_time`) zeroed.
+fn without_wall_clock(mut report: stride_wbc::SolveReport) -> stride_wbc::SolveReport {
+    report.solve_time = 0.0;
+    report.tick_time = 0.0;
+    report
 }
 
 /// `/simplified/output`: the layer's output with the solve times zeroed.

@@ -10,7 +10,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
-use stride_block::Block;
 use stride_model::{Model, RobotState};
 use stride_planner::{PlanSample, Planner};
 use stride_simplified::{SimplifiedController, SimplifiedInput};
@@ -20,7 +19,7 @@ use crate::config::Scenario;
 use crate::log::{read_log, LogContents, LogOptions, LogWriter};
 use crate::records::{
     simplified_output_record, IkOutputRecord, PlanSampleRecord, PlannerInputRecord,
-    TsidOutputRecord, WbcInputRecord,
+    TsidOutputRecord, WbcInputRecord, LOG_FORMAT,
 };
 use crate::stack::Wbc;
 
@@ -45,6 +44,20 @@ pub enum ReplayError {
     /// The URDF stored in the log does not load.
     #[error("the URDF stored in the log does not load: {0}")]
     Model(#[from] stride_model::ModelError),
+    /// The log was written in another message format than this version reads.
+    #[error(
+        "{}: log format {found}, this stride replays log format {expected} only (run the scenario again to \
+         record a log in the current format)",
+        path.display()
+    )]
+    Format {
+        /// The log file.
+        path: PathBuf,
+        /// The `log_format` of its `stride` metadata (`1` when it has none: logs older than the entry).
+        found: String,
+        /// [`LOG_FORMAT`].
+        expected: u32,
+    },
     /// The log lacks something or holds something unexpected.
     #[error("{0}")]
     Content(String),
@@ -128,6 +141,28 @@ fn parse<T: serde::de::DeserializeOwned>(data: &[u8], topic: &str) -> Result<T, 
         .map_err(|e| ReplayError::Content(format!("a message on {topic} does not parse: {e}")))
 }
 
+/// The `log_format` entry of a log's `stride` metadata record; `"1"` when it has none (the logs written
+/// before the entry existed).
+pub fn logged_format(log: &LogContents) -> &str {
+    log.metadata
+        .get("stride")
+        .and_then(|m| m.get("log_format"))
+        .map_or("1", String::as_str)
+}
+
+/// `Ok` when the log at `log_path` is in the message format this version replays ([`LOG_FORMAT`]).
+pub fn check_format(log: &LogContents, log_path: &Path) -> Result<(), ReplayError> {
+    let found = logged_format(log);
+    if found == LOG_FORMAT.to_string() {
+        return Ok(());
+    }
+    Err(ReplayError::Format {
+        path: log_path.to_path_buf(),
+        found: found.to_string(),
+        expected: LOG_FORMAT,
+    })
+}
+
 /// The scenario stored in a log.
 pub fn logged_scenario(log: &LogContents, log_path: &Path) -> Result<Scenario, ReplayError> {
     let text = log.attachments.get("scenario.toml").ok_or_else(|| {
@@ -199,6 +234,7 @@ pub fn replay(
     output: Option<&PathBuf>,
 ) -> Result<ReplayReport, ReplayError> {
     let log = read_log(log_path)?;
+    check_format(&log, log_path)?;
     let scenario = match config {
         Some(p) => Scenario::load(p)?,
         None => logged_scenario(&log, log_path)?,
@@ -230,7 +266,8 @@ pub fn replay(
     Ok(cmp.report)
 }
 
-/// The log replayed outputs go to: the scenario used and the logged URDF attached.
+/// The log replayed outputs go to: the scenario used and the logged URDF attached, the logged `stride`
+/// metadata (with its `log_format`) copied.
 fn output_log(
     path: &Path,
     scenario: &Scenario,
@@ -245,6 +282,9 @@ fn output_log(
     if let Some(u) = log.attachments.get("model.urdf") {
         w.attach("model.urdf", "application/xml", u.clone())?;
     }
+    let mut metadata = log.metadata.get("stride").cloned().unwrap_or_default();
+    metadata.insert("log_format".into(), LOG_FORMAT.to_string());
+    w.metadata("stride", metadata)?;
     Ok(w)
 }
 
@@ -266,7 +306,7 @@ fn replay_planner(
                 }
             }
             "/planner/references" => {
-                planner.sample(m.time_ns as f64 * 1e-9, &mut sample)?;
+                planner.sample(Duration::from_nanos(m.time_ns), &mut sample)?;
                 let replayed = PlanSampleRecord::from_sample(&sample);
                 cmp.add("/planner/references", m.time_ns, &replayed, &m.data)?;
             }

@@ -437,6 +437,7 @@ fn provenance(scenario: &Scenario, plant: &str) -> BTreeMap<String, String> {
         ("config_files".into(), files.join(", ")),
         ("plant".into(), plant.into()),
         ("base_hz".into(), c.rates.base_hz.to_string()),
+        ("log_format".into(), crate::records::LOG_FORMAT.to_string()),
     ])
 }
 

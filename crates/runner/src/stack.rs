@@ -18,7 +18,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use nalgebra::{Vector2, Vector3, Vector6};
-use stride_block::{Block, FirstOrderLowPass};
+use stride_block::{seconds, FirstOrderLowPass};
 use stride_estimation::{Estimator, EstimatorOutput};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
@@ -529,7 +529,7 @@ impl Stack {
     /// Samples the plan at `time_ns` into [`Stack::plan_sample`].
     pub fn sample_plan(&mut self, time_ns: u64) -> Result<(), RunError> {
         self.planner
-            .sample(time_ns as f64 * 1e-9, &mut self.plan_sample)?;
+            .sample(Duration::from_nanos(time_ns), &mut self.plan_sample)?;
         Ok(())
     }
 
@@ -587,9 +587,9 @@ impl Stack {
         let Some(plan) = self.planner.plan() else {
             return;
         };
-        let t = time_ns as f64 * 1e-9;
+        let time = Duration::from_nanos(time_ns);
         let Some(request) =
-            tracker.request(plan, adjuster, &self.measured.dcm, &self.plan_sample, t)
+            tracker.request(plan, adjuster, &self.measured.dcm, &self.plan_sample, time)
         else {
             return;
         };
@@ -614,7 +614,7 @@ impl Stack {
         let plan = self.planner.plan().ok_or(RunError::NoPlan {
             layer: "simplified",
         })?;
-        let t = time_ns as f64 * 1e-9;
+        let time = Duration::from_nanos(time_ns);
         let e = &self.estimate;
         let mut feet_force = Vector3::zeros();
         for (w, in_contact) in e.foot_wrenches.iter().zip(e.contacts) {
@@ -628,7 +628,7 @@ impl Stack {
             feet_force,
             foot_half: (self.foot_half_length, self.foot_half_width),
         };
-        match layer.tick(plan, &measurement, &mut self.horizon_sample, t) {
+        match layer.tick(plan, &measurement, &mut self.horizon_sample, time) {
             Ok(true) => {}
             Ok(false) => return Ok(None),
             Err(e) => {
@@ -636,10 +636,10 @@ impl Stack {
                 return Ok(Some(e.to_string()));
             }
         }
-        let Some(request) = layer.request(plan, t) else {
+        let Some(request) = layer.request(plan, time) else {
             return Ok(None);
         };
-        let foot = plan.current_step(t).map(|s| s.swing.foot);
+        let foot = plan.current_step(seconds(time)).map(|s| s.swing.foot);
         match self.planner.adjust_step(&request, &self.goal) {
             Ok(true) => {
                 self.counters.step_adjustments += 1;

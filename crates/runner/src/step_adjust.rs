@@ -8,8 +8,11 @@
 //! down and the nominal step duration. Its touch-down and time go to [`stride_planner::Planner::adjust_step`]
 //! when they differ from the planned ones by more than `deadband` / `time_deadband`.
 
+use std::time::Duration;
+
 use nalgebra::Vector2;
 use serde::Serialize;
+use stride_block::seconds;
 use stride_planner::{Foot, Plan, PlanSample, StepAdjustmentRequest};
 use stride_qp::QpStatus;
 use stride_simplified::{StepAdjuster, StepAdjustment, StepAdjustmentInput, StepAdjustmentStatus};
@@ -36,7 +39,7 @@ pub struct StepTracker {
 }
 
 impl StepTracker {
-    /// The adjustment to apply at `t` \[s\], if any: `None` outside single support, with less than
+    /// The adjustment to apply at `time`, if any: `None` outside single support, with less than
     /// `min_remaining_time` before the planned touch-down (frozen), when the QP falls back or when its
     /// answer is within the dead bands of what the plan has.
     pub fn request(
@@ -45,8 +48,9 @@ impl StepTracker {
         adjuster: &mut StepAdjuster,
         dcm: &Vector2<f64>,
         sample: &PlanSample,
-        t: f64,
+        time: Duration,
     ) -> Option<StepAdjustmentRequest> {
+        let t = seconds(time);
         let Some(step) = plan.current_step(t) else {
             self.step = None;
             return None;
@@ -97,7 +101,7 @@ impl StepTracker {
         let moved = (r.touchdown - tracked.target).norm() > c.deadband;
         let retimed = (land - tracked.land).abs() > c.time_deadband;
         (moved || retimed).then_some(StepAdjustmentRequest {
-            time: t,
+            time,
             target: r.touchdown,
             land_time: land,
             min_remaining: c.min_remaining_time,
@@ -117,7 +121,7 @@ impl StepTracker {
         s.target = request.target;
         s.land = request.land_time;
         AdjustedFootstepMsg {
-            time: request.time,
+            time: seconds(request.time),
             foot: match s.swing_foot {
                 Foot::Left => "left",
                 Foot::Right => "right",

@@ -3,6 +3,7 @@
 //! schedule shifts and the linearisation point (the previous solution) has to follow it, as in closed
 //! loop; `*_warm_active_set` also starts the active-set solver from its previous active set.
 use std::hint::black_box;
+use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Vector3;
@@ -13,9 +14,10 @@ fn contact(foot: Foot, x: f64, y: f64, activation: f64, deactivation: f64) -> Mp
 }
 
 /// The walk at `t0` with a push-like CoM velocity `push` \[m/s\].
-fn input(config: &CentroidalMpcConfig, t0: f64, push: Vector3<f64>) -> CentroidalMpcInput {
+fn input(config: &CentroidalMpcConfig, time: Duration, push: Vector3<f64>) -> CentroidalMpcInput {
+    let t0 = stride_block::seconds(time);
     let mut i = CentroidalMpcInput::new(config.stages);
-    i.time = t0;
+    i.time = time;
     i.foot_half_length = 0.06;
     i.foot_half_width = 0.03;
     let contacts = [
@@ -62,7 +64,7 @@ fn benches(c: &mut Criterion) {
         ),
     ] {
         let inputs: Vec<_> = (0..20)
-            .map(|k| input(&config, 0.05 * k as f64, push))
+            .map(|k| input(&config, Duration::from_millis(50 * k), push))
             .collect();
         let mut mpc = CentroidalMpc::new(&config, 33.0, 9.81).unwrap();
         for i in &inputs {

@@ -1,14 +1,17 @@
 //! A centroidal-MPC tick allocates nothing once every QP size of the schedule has occurred: a second pass
 //! over one step of a walk (the input time advancing by 0.05 s, as the runner ticks it) makes no
 //! allocation.
+use std::time::Duration;
+
 use nalgebra::Vector3;
 use stride_simplified::{CentroidalMpc, CentroidalMpcConfig, CentroidalMpcInput, Foot, MpcContact};
 
 #[global_allocator]
 static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
 
-fn fill(input: &mut CentroidalMpcInput, config: &CentroidalMpcConfig, t0: f64) {
-    input.time = t0;
+fn fill(input: &mut CentroidalMpcInput, config: &CentroidalMpcConfig, time: Duration) {
+    input.time = time;
+    let t0 = stride_block::seconds(time);
     input.contacts.clear();
     input.com_reference.clear();
     let contacts = [
@@ -38,7 +41,7 @@ fn ticks_allocate_nothing_once_every_size_has_occurred() {
     let pass = |mpc: &mut CentroidalMpc, input: &mut CentroidalMpcInput| {
         let mut moved = 0.0_f64;
         for k in 0..20 {
-            fill(input, &config, 0.05 * k as f64);
+            fill(input, &config, Duration::from_millis(50 * k));
             let out = mpc.step(input).unwrap();
             if let Some(c) = out.next_adjusted() {
                 moved = moved.max((c.position - c.planned.position).norm());

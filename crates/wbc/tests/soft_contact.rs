@@ -10,7 +10,6 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix6, Rotation3, Vector3, Vector6};
 use rand::Rng;
-use stride_block::Block;
 use stride_model::{Model, RobotState};
 use stride_sim::{ContactMode, IntegratorKind, SimInput, SimRobot};
 use stride_wbc::{GroundParameters, SoleAcceleration, SoleState};

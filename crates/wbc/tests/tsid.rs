@@ -10,7 +10,6 @@ use std::time::Duration;
 use common::*;
 use nalgebra::{DVector, Vector2, Vector3, Vector6};
 use rand::Rng;
-use stride_block::Block;
 use stride_model::{ExternalWrench, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_qp::{Backend, QpStatus};
 use stride_wbc::{Priority, TaskConfig, Tsid, TsidConfig, TsidOutput, WbcInput, Weight};

@@ -15,23 +15,10 @@ pub fn humanoid_urdf() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/stride_humanoid.urdf")
 }
 
-/// The bundled humanoid's crouched posture of `configs/robots/stride_humanoid.toml`.
+/// The bundled humanoid's crouched posture (`stride_model::bundled::POSTURE`).
 pub fn crouch(model: &Model) -> DVector<f64> {
     let mut q = DVector::zeros(model.dof());
-    for (name, v) in [
-        ("l_hip_pitch", 0.35),
-        ("l_knee", 0.7),
-        ("l_ankle_pitch", 0.35),
-        ("r_hip_pitch", 0.35),
-        ("r_knee", 0.7),
-        ("r_ankle_pitch", 0.35),
-        ("l_shoulder_pitch", 0.2),
-        ("l_shoulder_roll", 0.25),
-        ("l_elbow", 0.5),
-        ("r_shoulder_pitch", 0.2),
-        ("r_shoulder_roll", 0.25),
-        ("r_elbow", 0.5),
-    ] {
+    for (name, v) in stride_model::bundled::POSTURE {
         q[model.joint_index(name).expect("joint")] = v;
     }
     q

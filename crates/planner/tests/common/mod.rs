@@ -1,8 +1,17 @@
 //! Independent checks of a plan's invariants, shared by the scenario and property tests.
 #![allow(dead_code)]
 
+use std::time::Duration;
+
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector2, Vector3};
 use stride_planner::{Foot, Plan, PlanSample, PlannerConfig};
+
+/// The instant `t` \[s\] rounded to whole nanoseconds: the `Duration` the planner's API takes and the plan
+/// time \[s\] it stands for (`stride_block::seconds`).
+pub fn instant(t: f64) -> (Duration, f64) {
+    let d = Duration::from_secs_f64(t);
+    (d, stride_block::seconds(d))
+}
 
 /// Gravity magnitude the tests plan with \[m/s²\] (the runner passes the scenario's).
 pub const GRAVITY: f64 = 9.81;

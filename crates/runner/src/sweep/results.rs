@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::run::{Outcome, RunSummary};
 
 /// The columns after the axes, in order.
-pub const METRIC_COLUMNS: [&str; 18] = [
+pub const METRIC_COLUMNS: [&str; 20] = [
     "outcome",
     "distance",
     "goal_distance",
@@ -31,6 +31,8 @@ pub const METRIC_COLUMNS: [&str; 18] = [
     "fall_direction_deg",
     "fall_kind",
     "zmp_edge_time",
+    "zmp_rms",
+    "com_rms",
 ];
 
 /// One cell.
@@ -155,6 +157,8 @@ pub fn metric_cells(summary: Option<&RunSummary>, wall_s: f64) -> Vec<Cell> {
             .fall
             .map_or(Cell::Empty, |f| Cell::Str(f.kind.into())),
         Cell::Float(s.diagnosis.zmp_edge.at_edge),
+        Cell::Float(s.zmp_error.rms),
+        Cell::Float(s.com_error.rms),
     ]
 }
 

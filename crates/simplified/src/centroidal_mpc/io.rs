@@ -1,9 +1,11 @@
 //! Data-only input and output of the centroidal MPC.
 
+use std::time::Duration;
+
 use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{check_finite, Result, SimplifiedError};
+use crate::error::{Result, SimplifiedError};
 use stride_block::Foot;
 
 /// Most contacts one input can list (both feet's current and next contacts over a horizon).
@@ -41,8 +43,8 @@ impl MpcContact {
 /// Everything one MPC tick needs (plain data; build once with [`CentroidalMpcInput::new`] and refill).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CentroidalMpcInput {
-    /// Current time `t₀` \[s\].
-    pub time: f64,
+    /// Current time; `t₀ = stride_block::seconds(time)` in the plan time of the contact times \[s\].
+    pub time: Duration,
     /// Measured CoM \[m\].
     pub com_position: Vector3<f64>,
     /// Measured CoM velocity `h^p/m` \[m/s\].
@@ -66,7 +68,7 @@ impl CentroidalMpcInput {
     /// An input with room for `stages + 1` CoM samples and [`MAX_MPC_CONTACTS`] contacts.
     pub fn new(stages: usize) -> Self {
         Self {
-            time: 0.0,
+            time: Duration::ZERO,
             com_position: Vector3::zeros(),
             com_velocity: Vector3::zeros(),
             angular_momentum: Vector3::zeros(),
@@ -90,6 +92,11 @@ impl CentroidalMpcInput {
         Ok(())
     }
 
+    /// `t₀`, the input's time in seconds \[s\].
+    pub(crate) fn t0(&self) -> f64 {
+        stride_block::seconds(self.time)
+    }
+
     /// The nominal CoM of stage `k` (the last sample held past the end).
     pub(crate) fn reference(&self, k: usize) -> Vector3<f64> {
         self.com_reference
@@ -101,7 +108,6 @@ impl CentroidalMpcInput {
 
     /// Finite numbers, positive foot sizes, ordered contact times, at least one CoM sample.
     pub(crate) fn validate(&self) -> Result<()> {
-        check_finite("time", self.time)?;
         let vectors = [
             ("com_position", &self.com_position),
             ("com_velocity", &self.com_velocity),

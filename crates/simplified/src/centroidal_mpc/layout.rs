@@ -56,7 +56,7 @@ impl Layout {
     ) -> Result<()> {
         let dt = config.stage_duration;
         let active = |c: &super::io::MpcContact, k: usize| {
-            let t = input.time + (k as f64 + 0.5) * dt;
+            let t = input.t0() + (k as f64 + 0.5) * dt;
             c.activation <= t && t < c.deactivation
         };
         self.blocks.clear();
@@ -96,7 +96,7 @@ impl Layout {
             }
         }
         for (i, c) in input.contacts.iter().enumerate() {
-            if used[i] && c.activation > input.time + config.min_remaining_time {
+            if used[i] && c.activation > input.t0() + config.min_remaining_time {
                 self.displacement[i] = Some(n);
                 n += 2;
             }

@@ -81,7 +81,7 @@ impl Linearization {
     pub fn prepare(&mut self, input: &CentroidalMpcInput, layout: &Layout, dt: f64, weight: f64) {
         self.com_bar.clear();
         for k in 0..=layout.stages.len() {
-            let t = input.time + k as f64 * dt;
+            let t = input.t0() + k as f64 * dt;
             let x = if self.valid && self.com.len() > 1 {
                 let s =
                     ((t - self.time) / self.stage_duration).clamp(0.0, (self.com.len() - 1) as f64);
@@ -94,7 +94,7 @@ impl Linearization {
         }
         self.force_bar.clear();
         for (k, slots) in layout.stages.iter().enumerate() {
-            let t = input.time + (k as f64 + 0.5) * dt;
+            let t = input.t0() + (k as f64 + 0.5) * dt;
             let active = slots.iter().flatten().count().max(1);
             let share = Vector3::new(0.0, 0.0, weight / (active * CORNERS) as f64);
             let mut bar = [[share; CORNERS]; MAX_ACTIVE];
@@ -139,7 +139,7 @@ impl Linearization {
         displacement: impl Fn(usize) -> Option<Vector2<f64>>,
     ) {
         self.valid = true;
-        self.time = input.time;
+        self.time = input.t0();
         self.stage_duration = dt;
         self.com.clear();
         self.com.extend(com);

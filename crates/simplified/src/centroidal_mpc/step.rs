@@ -26,7 +26,7 @@ impl CentroidalMpc {
         let n = self.layout.n;
         let z = self.z.rows(0, n);
         let out = &mut self.output;
-        out.time = input.time;
+        out.time = input.t0();
         out.stage_duration = self.config.stage_duration;
         out.predicted.clear();
         for k in 0..=self.layout.stages.len() {
