@@ -12,6 +12,9 @@ use stride_estimation::calibration::*;
 use stride_model::{KinDyn, Model, RobotState};
 
 const G: f64 = 9.81;
+
+/// Raw readings and the gravity in the sensor frame at each.
+type Dataset = (Vec<Vector6<f64>>, Vec<Vector3<f64>>);
 /// Default simulator noise σ per axis (docs/sim.md, `sensors.ft.force_noise`, `torque_noise`).
 const NOISE: [f64; 6] = [1.5, 1.5, 1.5, 0.05, 0.05, 0.05];
 
@@ -61,7 +64,7 @@ fn readings(
     (m, h): (f64, Vector3<f64>),
     n: usize,
     noise_scale: f64,
-) -> (Vec<Vector6<f64>>, Vec<Vector3<f64>>) {
+) -> Dataset {
     let ci = c.try_inverse().expect("invertible");
     let mm = gravity_wrench_matrix(m, &h);
     let mut raw = Vec::with_capacity(n);
@@ -98,8 +101,8 @@ fn offsets_from_rotations_at_the_default_noise() {
     let fit = offset_from_rotations(&raw, &grav).expect("identifiable");
     // The noise level of an offset estimated from n samples: σ √(k / n) with k ≈ 4 unknowns per axis
     // (the gravity gains and the offset); asserted within 4 of those.
-    for i in 0..6 {
-        let level = NOISE[i] * (4.0 / n as f64).sqrt();
+    for (i, sigma) in NOISE.iter().enumerate() {
+        let level = sigma * (4.0 / n as f64).sqrt();
         let err = (fit.offset[i] - cal.1[i]).abs();
         assert!(
             err < 4.0 * level,
@@ -151,7 +154,7 @@ fn datasets(
     cal: &(Matrix6<f64>, Vector6<f64>),
     n: usize,
     noise_scale: f64,
-) -> Vec<(Vec<Vector6<f64>>, Vec<Vector3<f64>>)> {
+) -> Vec<Dataset> {
     let (m, c) = body();
     added_masses()
         .iter()
@@ -163,7 +166,7 @@ fn datasets(
         .collect()
 }
 
-fn as_datasets(data: &[(Vec<Vector6<f64>>, Vec<Vector3<f64>>)]) -> Vec<AddedMassDataset<'_>> {
+fn as_datasets(data: &[Dataset]) -> Vec<AddedMassDataset<'_>> {
     data.iter()
         .zip(added_masses())
         .map(|((raw, grav), (ma, ca))| AddedMassDataset {
@@ -177,10 +180,7 @@ fn as_datasets(data: &[(Vec<Vector6<f64>>, Vec<Vector3<f64>>)]) -> Vec<AddedMass
 
 /// The thesis's stacked system (5.11c–f) written literally with Kronecker products, offsets removed with the
 /// true offset: `Θ = [R_jᵀ ⊗ 1₆, −(G_jᵀ ⊗ 1₆) H]`, `β = vec(M_a^j G_j)`, solved densely.
-fn thesis_system(
-    data: &[(Vec<Vector6<f64>>, Vec<Vector3<f64>>)],
-    offset: &Vector6<f64>,
-) -> DVector<f64> {
+fn thesis_system(data: &[Dataset], offset: &Vector6<f64>) -> DVector<f64> {
     let rows: usize = data.iter().map(|(r, _)| 6 * r.len()).sum();
     let mut theta = DMatrix::zeros(rows, 40);
     let mut beta = DVector::zeros(rows);
