@@ -3,7 +3,7 @@
 
 use nalgebra::{DVector, Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
 
-use super::check::{check_finite3, check_finite6};
+use super::check::{check_pairs, fit_gravity_response};
 use super::lsq::{StackedLeastSquares, RANK_TOLERANCE};
 use super::CalibrationError;
 
@@ -123,49 +123,17 @@ fn skew_derivative(i: usize) -> Matrix3<f64> {
 fn fit_dataset(
     d: &AddedMassDataset<'_>,
 ) -> Result<(Matrix6x3<f64>, Vector6<f64>), CalibrationError> {
-    if d.raw.len() != d.gravity.len() {
-        return Err(CalibrationError::Size {
-            what: "gravity samples (one per raw reading)",
-            expected: d.raw.len(),
-            actual: d.gravity.len(),
-        });
-    }
-    if d.raw.len() < super::offset::MIN_POSES {
-        return Err(CalibrationError::TooFewSamples {
-            what: "calibration dataset",
-            needed: super::offset::MIN_POSES,
-            got: d.raw.len(),
-        });
-    }
-    check_finite6("raw reading", d.raw)?;
-    check_finite3("gravity", d.gravity)?;
+    check_pairs("calibration dataset", d.raw, d.gravity)?;
     if !d.added_mass.is_finite() || !d.added_com.iter().all(|v| v.is_finite()) {
         return Err(CalibrationError::NonFinite {
             what: "added mass or its centre",
             index: 0,
         });
     }
-    let mut ls = StackedLeastSquares::new(24);
-    let mut row = [0.0; 24];
-    for (r, g) in d.raw.iter().zip(d.gravity) {
-        for a in 0..6 {
-            row.fill(0.0);
-            for c in 0..3 {
-                row[6 * c + a] = g[c];
-            }
-            row[18 + a] = 1.0;
-            ls.add_row(&row, r[a]);
-        }
-    }
-    let sol = ls.solve(RANK_TOLERANCE);
-    if sol.rank < 24 {
-        return Err(CalibrationError::NotIdentifiable {
-            what: "a dataset's gravity response",
-            rank: sol.rank,
-            unknowns: 24,
-            hint: "rotate the sensor so that gravity takes directions off one plane (two axes)",
-        });
-    }
+    let sol = fit_gravity_response(
+        "a dataset's gravity response",
+        d.raw.iter().copied().zip(d.gravity.iter().copied()),
+    )?;
     let dj = Matrix6x3::from_column_slice(&sol.x.as_slice()[0..18]);
     let b = Vector6::from_column_slice(&sol.x.as_slice()[18..24]);
     Ok((dj, b))

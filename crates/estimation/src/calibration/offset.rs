@@ -3,8 +3,7 @@
 
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector3, Vector6};
 
-use super::check::{check_finite3, check_finite6};
-use super::lsq::{StackedLeastSquares, RANK_TOLERANCE};
+use super::check::{check_pairs, fit_gravity_response};
 use super::CalibrationError;
 
 /// Minimum number of static poses: the 12 unknowns of (5.10) need 4 gravity directions.
@@ -43,22 +42,7 @@ pub fn offset_from_rotations(
     raw: &[Vector6<f64>],
     gravity: &[Vector3<f64>],
 ) -> Result<RotationOffset, CalibrationError> {
-    if raw.len() != gravity.len() {
-        return Err(CalibrationError::Size {
-            what: "gravity samples (one per raw reading)",
-            expected: raw.len(),
-            actual: gravity.len(),
-        });
-    }
-    if raw.len() < MIN_POSES {
-        return Err(CalibrationError::TooFewSamples {
-            what: "offset from rotations",
-            needed: MIN_POSES,
-            got: raw.len(),
-        });
-    }
-    check_finite6("raw reading", raw)?;
-    check_finite3("gravity", gravity)?;
+    check_pairs("offset from rotations", raw, gravity)?;
     let n = raw.len() as f64;
     let mean = raw.iter().sum::<Vector6<f64>>() / n;
     let mut scatter = Matrix6::zeros();
@@ -67,29 +51,9 @@ pub fn offset_from_rotations(
         scatter += d * d.transpose();
     }
     let (u1, singular_values) = principal_directions(&scatter);
-    let mut ls = StackedLeastSquares::new(12);
-    let mut row = [0.0; 12];
-    for (r, g) in raw.iter().zip(gravity) {
-        let p = u1.transpose() * (r - mean);
-        for a in 0..3 {
-            row.fill(0.0);
-            // vec(K g) = (gᵀ ⊗ 1₃) vec(K): entry (a, 3c + a) = g_c.
-            for c in 0..3 {
-                row[3 * c + a] = g[c];
-            }
-            row[9 + a] = 1.0;
-            ls.add_row(&row, p[a]);
-        }
-    }
-    let sol = ls.solve(RANK_TOLERANCE);
-    if sol.rank < 12 {
-        return Err(CalibrationError::NotIdentifiable {
-            what: "the offset",
-            rank: sol.rank,
-            unknowns: 12,
-            hint: "rotate the sensor so that gravity takes directions off one plane (two axes)",
-        });
-    }
+    // (5.10): U₁ᵀ (r_i − r_m) = K g_i + λ_b.
+    let projected = raw.iter().map(|r| u1.transpose() * (r - mean));
+    let sol = fit_gravity_response("the offset", projected.zip(gravity.iter().copied()))?;
     let k = Matrix3::from_column_slice(&sol.x.as_slice()[0..9]);
     let lambda = Vector3::new(sol.x[9], sol.x[10], sol.x[11]);
     Ok(RotationOffset {
