@@ -8,6 +8,7 @@
 
 #![warn(missing_docs)]
 
+pub mod calibration;
 mod config;
 pub mod ekf;
 mod error;

@@ -131,6 +131,18 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Estimate the force/torque sensors' offsets from a log of a calibration run (robot on a pole, limbs
+    /// swung through rotations: `configs/identify_ft_legs.toml`) and write them as a scenario overlay.
+    Calibrate {
+        /// MCAP log written by `stride run`.
+        log: PathBuf,
+        /// Calibrate only this sensor (default: every force/torque sensor of the model).
+        #[arg(long)]
+        sensor: Option<String>,
+        /// Write the offsets to this TOML file (`estimation.ft_offsets.initial`).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
     /// SVG figures of a run's log (tracking, feet, forces, torques, solve times) or a sweep's survival map.
     Plot {
         /// MCAP log written by `stride run`, or a sweep's `results.json`.

@@ -280,6 +280,22 @@ pub fn plot(
     Ok(ExitCode::SUCCESS)
 }
 
+/// `stride calibrate`: the offsets table, and the overlay file with `--output`.
+pub fn calibrate(
+    log: &Path,
+    sensor: Option<&str>,
+    output: Option<&Path>,
+) -> Result<ExitCode, CliError> {
+    let report = crate::calibrate::calibrate_log(log, sensor).map_err(err)?;
+    crate::out!("{}", report.render());
+    if let Some(o) = output {
+        std::fs::write(o, report.to_toml(log))
+            .map_err(|e| CliError::msg(format!("cannot write {}: {e}", o.display())))?;
+        crate::outln!("offsets written to {}", o.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 fn err<E: std::error::Error + 'static>(e: E) -> CliError {
     CliError::msg(crate::cli::one_paragraph(&e))
 }
@@ -339,6 +355,11 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             config,
             output,
         } => replay(&log, layer, config, output),
+        Command::Calibrate {
+            log,
+            sensor,
+            output,
+        } => calibrate(&log, sensor.as_deref(), output.as_deref()),
         Command::Sweep(args) => crate::sweep_cmd::sweep(args),
         Command::Plot {
             input,

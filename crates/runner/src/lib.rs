@@ -13,6 +13,7 @@ macro_rules! out {
     ($($t:tt)*) => { $crate::cli::write_stdout(format_args!($($t)*)) };
 }
 
+pub mod calibrate;
 pub mod centroidal;
 pub mod check;
 pub mod cli;
@@ -23,6 +24,7 @@ pub mod error;
 pub mod estimation_summary;
 pub mod feet;
 pub mod gait;
+pub mod joint_trajectory;
 pub mod log;
 pub mod model_cmd;
 #[cfg(feature = "mujoco")]

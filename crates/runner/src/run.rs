@@ -203,6 +203,8 @@ struct Loop<'a> {
     realtime: bool,
     wall_start: Instant,
     last_phase: &'static str,
+    /// `[joint_trajectory]`: replaces the whole-body command when enabled.
+    trajectory: Option<crate::joint_trajectory::JointTrajectory>,
 }
 
 impl<'a> Loop<'a> {
@@ -224,6 +226,9 @@ impl<'a> Loop<'a> {
             schedule.total_ticks / schedule.simplified_every + 2,
             schedule.total_ticks as f64 * schedule.base_ns as f64 * 1e-9,
         );
+        let q0 = crate::setup::initial_joint_positions(scenario, stack.model())?;
+        let trajectory =
+            crate::joint_trajectory::JointTrajectory::from_scenario(scenario, stack.model(), &q0)?;
         Ok(Self {
             scenario,
             schedule,
@@ -234,6 +239,7 @@ impl<'a> Loop<'a> {
             realtime: options.realtime,
             wall_start: Instant::now(),
             last_phase: "",
+            trajectory,
         })
     }
 
@@ -308,6 +314,11 @@ impl<'a> Loop<'a> {
             }
         }
         if run_plant {
+            if let Some(trajectory) = &self.trajectory {
+                // At the plant rate: a staircase at the whole-body rate would shake stiff servos.
+                trajectory.command(t as f64 * 1e-9, &mut self.stack.command);
+                self.robot.command(&self.stack.command)?;
+            }
             self.robot.advance()?;
             self.tracker
                 .plant_period(self.robot.measurement(), &self.stack);
@@ -395,7 +406,9 @@ impl<'a> Loop<'a> {
             self.last_phase = phase;
             self.event(t, "phase", phase.to_string())?;
         }
-        self.robot.command(&self.stack.command)?;
+        if self.trajectory.is_none() {
+            self.robot.command(&self.stack.command)?;
+        }
         if self.realtime {
             self.pace(t);
         }

@@ -15,6 +15,7 @@ use crate::error::SimError;
 /// |---|---|---|---|
 /// | `integrator` | – | `implicit` | [`IntegratorKind`] |
 /// | `momentum_projection` | – | `false` | correct the base velocity so that the centroidal momentum balance holds exactly each step |
+/// | `fixed_base` | – | `false` | hold the base where it starts, as a robot hung on a pole: the base acceleration and velocity are zero, the joints move under the fixed-base dynamics (implicit integrator only) |
 /// | `ground` | – | flat floor at z = 0 | [`GroundConfig`] |
 /// | `contact` | – | rigid floor, the humanoid's two soles | [`ContactConfig`] |
 /// | `actuation` | – | position servos on every joint, 0.1 N·m Coulomb friction, 2-step command delay | [`ActuationConfig`] |
@@ -31,6 +32,11 @@ pub struct SimConfig {
     /// `dt ×` the step's external wrench (gravity, contacts, pushes; torque about the CoM at the start of the
     /// step). Makes free-flight momentum exact at any rate. Default `false`.
     pub momentum_projection: bool,
+    /// Hold the base at its initial pose (a robot on a pole, for identification and calibration runs): the
+    /// base rows of the step are replaced by `ν̇_b = 0` and the base velocity is kept at zero, so the joints
+    /// follow the fixed-base dynamics `M_ss q̈ + h_s = τ + Σ J_sᵀ w`. Implicit integrator only; the
+    /// momentum projection is skipped. Default `false`.
+    pub fixed_base: bool,
     /// The ground plane.
     pub ground: GroundConfig,
     /// Contact surfaces and the contact law.
@@ -55,6 +61,7 @@ impl Default for SimConfig {
         Self {
             integrator: IntegratorKind::Implicit,
             momentum_projection: false,
+            fixed_base: false,
             ground: GroundConfig::default(),
             contact: ContactConfig::default(),
             actuation: ActuationConfig::default(),
@@ -669,6 +676,7 @@ impl ImuConfig {
 /// | `torque_noise` | N·m | 0.05 | torque white noise σ per step |
 /// | `force_range` | N | `[580, 580, 1160]` | full scale per force axis (clamped); 0 = unbounded |
 /// | `torque_range` | N·m | `[20, 20, 20]` | full scale per torque axis (clamped); 0 = unbounded |
+/// | `calibration_error` | – | 0 | bound of the entries of `E`, uniform, in the raw output `(1 + E) w + offset + …`: the sensor's calibration matrix `C = (1 + E)⁻¹` is that far from identity [Traversaro 2017, eq. (5.1)]; drawn per sensor after the other start-up errors, only when > 0; below 1/6 |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FtSensorConfig {
@@ -688,6 +696,10 @@ pub struct FtSensorConfig {
     pub force_range: [f64; 3],
     /// Full scale of each torque axis (the reading is clamped to ±range; 0 = unbounded), N·m.
     pub torque_range: [f64; 3],
+    /// Bound of the entries of the calibration error `E` (uniform per entry): the raw output is
+    /// `(1 + E) w + offset + drift + noise`, i.e. `w = C (r − b)` with `C = (1 + E)⁻¹` (5.1). 0 (default):
+    /// exact gains, nothing drawn. Must be below 1/6 so that `1 + E` is invertible.
+    pub calibration_error: f64,
 }
 
 impl Default for FtSensorConfig {
@@ -701,6 +713,7 @@ impl Default for FtSensorConfig {
             torque_noise: 0.05,
             force_range: [580.0, 580.0, 1160.0],
             torque_range: [20.0, 20.0, 20.0],
+            calibration_error: 0.0,
         }
     }
 }
@@ -717,6 +730,7 @@ impl FtSensorConfig {
             torque_noise: 0.0,
             force_range: [0.0; 3],
             torque_range: [0.0; 3],
+            calibration_error: 0.0,
         }
     }
 }
@@ -817,6 +831,16 @@ fn finite_nonneg(x: f64) -> bool {
 impl SimConfig {
     /// Checks the values that do not need the model (ranges, finiteness).
     pub fn validate(&self) -> Result<(), SimError> {
+        check(
+            !self.fixed_base || self.integrator == IntegratorKind::Implicit,
+            "fixed_base",
+            "needs integrator = \"implicit\"",
+        )?;
+        check(
+            self.sensors.ft.calibration_error < 1.0 / 6.0,
+            "sensors.ft.calibration_error",
+            "must be below 1/6 (the raw gains 1 + E must stay invertible)",
+        )?;
         self.validate_ground_and_contact()?;
         self.validate_actuation()?;
         self.validate_sensors_and_pushes()?;
@@ -984,6 +1008,7 @@ impl SimConfig {
             (ft.torque_drift, "ft.torque_drift"),
             (ft.force_noise, "ft.force_noise"),
             (ft.torque_noise, "ft.torque_noise"),
+            (ft.calibration_error, "ft.calibration_error"),
         ]
         .into_iter()
         .chain(ft.force_range.iter().map(|r| (*r, "ft.force_range")))

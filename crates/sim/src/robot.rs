@@ -289,6 +289,15 @@ impl SimRobot {
         &self.output.contact_points
     }
 
+    /// The force/torque sensors' true offsets and calibration matrices (see
+    /// [`crate::SensorModels::ft_offsets`] and [`crate::SensorModels::ft_calibration_matrices`]).
+    pub fn ft_calibration_truth(&self) -> (&[nalgebra::Vector6<f64>], Vec<nalgebra::Matrix6<f64>>) {
+        (
+            self.sensors.ft_offsets(),
+            self.sensors.ft_calibration_matrices(),
+        )
+    }
+
     /// The dynamics workspace, set to the current state (for tests and logging: CoM, momentum, energy).
     pub fn kin_dyn(&self) -> &KinDyn {
         &self.kd
@@ -384,7 +393,7 @@ impl SimRobot {
             *b = p.anchor;
         }
         self.friction_backup.copy_from_slice(&self.friction);
-        let momentum_start = if self.config.momentum_projection {
+        let momentum_start = if self.config.momentum_projection && !self.config.fixed_base {
             Some((self.kd.centroidal_momentum(), self.kd.com_position()))
         } else {
             None

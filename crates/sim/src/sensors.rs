@@ -11,7 +11,7 @@
 //! [`Sensors`]), [`crate::SensorTruth`] and [`crate::SensorReading`]: it fills the truth and calls
 //! [`Sensors::record`] each step (stride-mujoco does, so both plants feed the estimator the same sensors).
 
-use nalgebra::{DVector, Isometry3, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{DVector, Isometry3, Matrix6, UnitQuaternion, Vector3, Vector6};
 use stride_block::low_pass_gain;
 use stride_model::{JointKind, Model, RobotState};
 
@@ -128,6 +128,8 @@ pub struct Sensors {
     ft_offsets: Vec<Vector6<f64>>,
     /// Random-walk drift of each force/torque sensor `[f; τ]`.
     ft_drifts: Vec<Vector6<f64>>,
+    /// Raw gains `1 + E` of each force/torque sensor (the inverse of its calibration matrix).
+    ft_gains: Vec<Matrix6<f64>>,
     /// Delay line of `delay_steps + 1` readings; `ring[head]` receives the next fresh one.
     ring: Vec<Reading>,
     head: usize,
@@ -165,6 +167,7 @@ impl Sensors {
             yaw_rate: 0.0,
             ft_offsets: vec![Vector6::zeros(); n_ft],
             ft_drifts: vec![Vector6::zeros(); n_ft],
+            ft_gains: vec![Matrix6::identity(); n_ft],
             ring: vec![Reading::new(dof, n_ft); config.delay_steps + 1],
             head: 0,
         }
@@ -172,7 +175,8 @@ impl Sensors {
 
     /// Restarts the random sequence from the seed and draws the start-up errors, in this order: each
     /// force/torque sensor's offset (force then torque axes), the gyroscope bias, the accelerometer bias, the
-    /// roll and pitch error, the yaw drift rate. Drifts restart at zero.
+    /// roll and pitch error, the yaw drift rate, then (only when `ft.calibration_error > 0`) each sensor's
+    /// calibration error `E`, column by column. Drifts restart at zero.
     pub fn reset(&mut self) {
         self.noise.reset();
         let ft = &self.config.ft;
@@ -193,6 +197,30 @@ impl Sensors {
             self.noise.uniform(imu.tilt_error),
         ];
         self.yaw_rate = self.noise.uniform(imu.yaw_drift_rate);
+        let bound = self.config.ft.calibration_error;
+        for gain in &mut self.ft_gains {
+            *gain = Matrix6::identity();
+            if bound > 0.0 {
+                for e in gain.iter_mut() {
+                    *e += self.noise.uniform(bound);
+                }
+            }
+        }
+    }
+
+    /// Each force/torque sensor's offset `b` drawn at the last reset (`[f; τ]`, raw space), without the drift
+    /// accumulated since.
+    pub fn ft_offsets(&self) -> &[Vector6<f64>] {
+        &self.ft_offsets
+    }
+
+    /// Each force/torque sensor's calibration matrix `C = (1 + E)⁻¹`: the reading `r` gives the wrench
+    /// `C (r − b)` [Traversaro 2017, eq. (5.1)] (identity when `ft.calibration_error` is 0).
+    pub fn ft_calibration_matrices(&self) -> Vec<Matrix6<f64>> {
+        self.ft_gains
+            .iter()
+            .map(|g| g.try_inverse().unwrap_or_else(Matrix6::identity))
+            .collect()
     }
 
     /// Takes a reading of every sensor (encoders, IMU, force/torque sensors, drawing their noise in that order)
@@ -280,7 +308,7 @@ impl Sensors {
     }
 
     /// Each force/torque sensor: its drift takes a random-walk step (force then torque axes), then
-    /// `w + offset + drift + n` (force noise, torque noise) clamped at the full scale.
+    /// `(1 + E) w + offset + drift + n` (force noise, torque noise) clamped at the full scale.
     fn read_ft(&mut self, truth: &[Vector6<f64>], out: &mut [Vector6<f64>]) {
         let c = &self.config.ft;
         let sqrt_dt = self.dt.sqrt();
@@ -291,7 +319,12 @@ impl Sensors {
                 &self.noise.sample3(c.torque_drift * sqrt_dt),
             );
             *drift += d;
-            let biased = w + self.ft_offsets[i] + *drift;
+            let gained = if c.calibration_error > 0.0 {
+                self.ft_gains[i] * w
+            } else {
+                *w
+            };
+            let biased = gained + self.ft_offsets[i] + *drift;
             let mut f = lin(&biased) + self.noise.sample3(c.force_noise);
             let mut t = ang(&biased) + self.noise.sample3(c.torque_noise);
             clamp_axes(&mut f, &c.force_range);

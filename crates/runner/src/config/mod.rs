@@ -432,6 +432,8 @@ pub struct ScenarioConfig {
     pub log: LogSection,
     /// Run endings.
     pub end: EndSection,
+    /// Joint sinusoids played instead of the whole-body command (calibration and identification runs).
+    pub joint_trajectory: crate::joint_trajectory::JointTrajectorySection,
 }
 
 /// Sections that choose one alternative (`[goal.pose]`, `[goal.stand]`, ...): not pre-filled from the

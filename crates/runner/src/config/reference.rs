@@ -63,6 +63,9 @@ fn optional_key_type(key: &str) -> &'static str {
 /// Runner-owned keys present in the default configuration.
 pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "scenario.name", unit: "-", meaning: "Short name; the default log file is `<name>.mcap`." },
+    KeyDoc { key: "joint_trajectory.enabled", unit: "-", meaning: "Send joint sinusoids to the position servos instead of the whole-body layer's command (the other layers still run and are logged); position control only. For calibration and identification runs, e.g. with `sim.fixed_base = true` (`configs/identify_ft_legs.toml`)." },
+    KeyDoc { key: "joint_trajectory.ramp", unit: "s", meaning: "The amplitudes grow linearly from 0 over this time, ≥ 0." },
+    KeyDoc { key: "joint_trajectory.joints", unit: "rad or m, s, deg", meaning: "Table joint name → `{ amplitude, period, phase_deg }`: `q(t) = q₀ + A sin(2π t / T + φ)` about the initial position (clamped to the joint limits); joints not listed hold `q₀`. Unknown joints are rejected." },
     KeyDoc { key: "scenario.description", unit: "-", meaning: "One line saying what the scenario shows." },
     KeyDoc { key: "scenario.duration", unit: "s", meaning: "Simulated duration, 0 < value ≤ 3600; the run ends here at the latest (`--duration` overrides)." },
     KeyDoc { key: "scenario.control_mode", unit: "-", meaning: "`position` (QP-IK → joint position servos) or `torque` (TSID → joint torques)." },
@@ -174,6 +177,7 @@ const DATA_TABLES: &[&str] = &[
     "robot.initial_joint_positions",
     "robot.locked_joints",
     "wbc.walking.posture_joint_weights",
+    "joint_trajectory.joints",
 ];
 
 fn is_data_table(key: &str) -> bool {

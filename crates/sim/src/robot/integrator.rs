@@ -82,6 +82,9 @@ impl SimRobot {
         loop {
             self.assemble_joints(input);
             self.assemble_contacts();
+            if self.config.fixed_base {
+                self.hold_base();
+            }
             let factored = if solves == 0 {
                 self.factorization.factor(&self.system)
             } else if self.system_changed {
@@ -143,6 +146,27 @@ impl SimRobot {
             system[self.factorization.diagonal_index(i)] +=
                 a.armature + dt * (kd + damping) + dt * dt * kp;
             self.rhs[i] += motor - damping * qd[j] + slide;
+        }
+    }
+
+    /// A fixed base (`SimConfig::fixed_base`): the base rows and columns of the system become `1 · ν̇_b = 0`,
+    /// which leaves the joint rows as the fixed-base dynamics `M_ss q̈ = τ − h_s + …` (the base velocity is
+    /// zero, so `h_s` has no base terms). Applied after every assembly, so the refactorisation of unchanged
+    /// branches stays valid.
+    fn hold_base(&mut self) {
+        let n = self.factorization.len();
+        let system = self.system.values_mut();
+        for k in 0..6 {
+            for i in 0..k {
+                system[self.factorization.index(i, k)] = 0.0;
+            }
+            system[self.factorization.diagonal_index(k)] = 1.0;
+            self.rhs[k] = 0.0;
+        }
+        for k in 6..n {
+            for i in 0..6 {
+                system[self.factorization.index(i, k)] = 0.0;
+            }
         }
     }
 
@@ -310,6 +334,9 @@ impl SimRobot {
         self.next_state.copy_from(&self.state);
         for i in 0..6 {
             self.next_state.base_velocity[i] += dt * self.acceleration[i];
+        }
+        if self.config.fixed_base {
+            self.next_state.base_velocity = Vector6::zeros();
         }
         for j in 0..self.model.dof() {
             self.next_state.joint_velocities[j] += dt * self.acceleration[6 + j];
