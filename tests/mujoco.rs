@@ -78,8 +78,9 @@ fn position_control_stands_through_the_push_on_mujoco() {
 }
 
 /// The default walk, position control (QP-IK), on MuJoCo: its goal is reached with the measured ZMP
-/// low-passed at the default 5 Hz, and the same walk falls with the ZMP unfiltered (measured: goal 24 mm
-/// away, DCM 22.3 mm RMS; unfiltered, a fall at 6.7 s with the ankles saturated by the servos' damping
+/// low-passed at the default 5 Hz, and the same walk falls with the ZMP unfiltered (measured 2026-12-05 on the
+/// ground matched to stride-sim's: goal 6 mm away, DCM 14.8 mm RMS; 2026-12-02 on MuJoCo's default contact:
+/// 24 mm, 22.3 mm; unfiltered, a fall at 6.7 s with the ankles saturated by the servos' damping
 /// of the CoM velocity reference's jumps; docs/mujoco.md, "Position control").
 #[cfg(feature = "mujoco")]
 #[test]
@@ -188,7 +189,46 @@ fn sim_model_inertia_edits_reach_the_mujoco_plant() {
 #[test]
 fn an_out_of_range_mujoco_parameter_is_an_error_at_its_key() {
     let mut scenario = Scenario::load(&config_path("walk_straight.toml")).expect("scenario");
-    scenario.config.mujoco.solref = [0.0001, 1.0];
+    scenario.config.mujoco.solref = Some([0.0001, 1.0]);
     let message = error_on_mujoco(&scenario);
     assert!(message.contains("mujoco.solref"), "{message}");
+}
+
+/// The MuJoCo floor's `solref` is derived from the scenario's ground when `[mujoco]` writes none: the
+/// default floor under the bundled humanoid is a 6.1 ms contact with damping ratio 0.91 (docs/mujoco.md,
+/// "One ground for both plants"), a soft ground of the thesis's Table 8.1 a slower one, and a written
+/// `solref` wins.
+#[cfg(feature = "mujoco")]
+#[test]
+fn the_mujoco_floor_is_the_scenarios_ground() {
+    use std::sync::Arc;
+    use stride_runner::mujoco_plant::MujocoPlant;
+    use stride_runner::setup::{initial_joint_positions, load_plant_model};
+
+    let floor_solref = |scenario: &Scenario| {
+        let model =
+            Arc::new(stride_model::Model::from_urdf_file(&scenario.urdf_path).expect("model"));
+        let plant = load_plant_model(scenario, &model).expect("plant model");
+        let q0 = initial_joint_positions(scenario, &model).expect("posture");
+        let soles = ["l_sole", "r_sole"].map(|f| plant.frame_id(f).expect("sole"));
+        let mujoco = MujocoPlant::new(scenario, plant, &scenario.urdf_path, &q0, soles)
+            .expect("MuJoCo plant");
+        // The floor is the world body's only geom, so MuJoCo numbers it first.
+        mujoco.mujoco().mj_model().geom_solref()[0]
+    };
+    let mut scenario = Scenario::load(&config_path("walk_straight.toml")).expect("scenario");
+    let [tau, zeta] = floor_solref(&scenario);
+    assert!(
+        (tau - 6.07e-3).abs() < 0.01e-3 && (zeta - 0.907).abs() < 1e-3,
+        "{tau} s, {zeta}"
+    );
+    scenario.config.sim.contact.normal_stiffness = 8e5;
+    scenario.config.sim.contact.normal_damping = 1e4;
+    let [soft_tau, soft_zeta] = floor_solref(&scenario);
+    assert!(
+        soft_tau > 0.15 && soft_zeta < 0.2,
+        "{soft_tau} s, {soft_zeta}"
+    );
+    scenario.config.mujoco.solref = Some([0.02, 1.0]);
+    assert_eq!(floor_solref(&scenario), [0.02, 1.0]);
 }

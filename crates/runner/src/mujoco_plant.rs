@@ -32,6 +32,22 @@ pub fn has_inertia_edits(m: &stride_sim::PlantModelConfig) -> bool {
     m.mass_scale != 1.0 || !m.links.is_empty()
 }
 
+/// The MuJoCo plant's contact and solver parameters of `scenario` for the robot `plant` (the plant model):
+/// the `[mujoco]` section, its `solref` derived from `sim.contact` when not written
+/// ([`crate::config::mujoco::ground_solref`], the soles' area from `sim.contact.surfaces`).
+pub fn mujoco_config(scenario: &Scenario, plant: &Model) -> stride_mujoco::MujocoConfig {
+    let contact = &scenario.config.sim.contact;
+    let sole_area = contact.surfaces.iter().map(|s| s.length * s.width).sum();
+    let ground = crate::config::mujoco::ground_solref(
+        contact.normal_stiffness,
+        contact.normal_damping,
+        sole_area,
+        plant.total_mass(),
+        scenario.sim_period().as_secs_f64(),
+    );
+    scenario.config.mujoco.plant_config(ground)
+}
+
 impl MujocoPlant {
     /// Builds the MuJoCo model from `urdf` (the plant's), stepping at `scenario.sim_period()`, with every
     /// joint in `mode`, the plant model's inertias if `[sim.model]` edits them, and stands the robot at
@@ -58,7 +74,7 @@ impl MujocoPlant {
             &PlantSetup {
                 urdf,
                 sim: &sim,
-                mujoco: &c.mujoco.plant_config(),
+                mujoco: &mujoco_config(scenario, &model),
                 soles: [&names[0], &names[1]],
                 period: scenario.sim_period(),
                 inertias_from_model: has_inertia_edits(&c.sim.model),

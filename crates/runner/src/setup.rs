@@ -221,21 +221,21 @@ fn mujoco_robot(
     q0: &DVector<f64>,
 ) -> Result<Box<dyn Robot>, RunError> {
     let period = scenario.sim_period().as_secs_f64();
+    if let Some((key, reason)) = unsupported_by_mujoco(scenario) {
+        return Err(RunError::Config(scenario.invalid(key, reason)));
+    }
+    let plant = load_plant_model(scenario, model)?;
     if let Err(stride_mujoco::MujocoError::InvalidConfig {
         parameter,
         value,
         reason,
-    }) = scenario.config.mujoco.plant_config().validate(period)
+    }) = crate::mujoco_plant::mujoco_config(scenario, &plant).validate(period)
     {
         let key = format!("mujoco.{}", parameter.split('[').next().unwrap_or_default());
         return Err(RunError::Config(
             scenario.invalid(&key, format!("{value}: {reason}")),
         ));
     }
-    if let Some((key, reason)) = soft_ground_unsupported_by_mujoco(scenario) {
-        return Err(RunError::Config(scenario.invalid(key, reason)));
-    }
-    let plant = load_plant_model(scenario, model)?;
     let urdf = scenario
         .plant_urdf_path
         .clone()
@@ -250,26 +250,25 @@ fn mujoco_robot(
     )?))
 }
 
-/// The soft ground of a scenario, which the MuJoCo plant does not model: its contact is MuJoCo's own
-/// (`[mujoco] solref`/`solimp` on the soles' collision boxes), not stride-sim's visco-elastic grid, so a
-/// run on MuJoCo would silently walk on a rigid floor. Ground patches, or a normal stiffness or damping
-/// below stride-sim's default floor, are refused (the key and the reason); a stiffer floor is a rigid floor
-/// on both plants and passes.
+/// What a scenario asks of the plant that the MuJoCo plant does not model, as the key and the reason:
+/// ground patches of different stiffness along the path (its floor is one plane with one contact law) and
+/// a fixed base (its robot always floats). A uniform floor, soft or stiff, is modelled: its `sim.contact`
+/// stiffness and damping set MuJoCo's `solref` ([`crate::config::mujoco::ground_solref`]).
 #[cfg_attr(not(feature = "mujoco"), allow(dead_code))]
-pub(crate) fn soft_ground_unsupported_by_mujoco(
-    scenario: &Scenario,
-) -> Option<(&'static str, &'static str)> {
+pub(crate) fn unsupported_by_mujoco(scenario: &Scenario) -> Option<(&'static str, &'static str)> {
     let sim = &scenario.config.sim;
-    let floor = stride_sim::ContactConfig::default();
-    const REASON: &str = "a soft ground is modelled by stride-sim only: the MuJoCo plant's contact is \
-         MuJoCo's own ([mujoco] solref, solimp; docs/mujoco.md), so this run would walk on a rigid floor; \
-         run it with `--plant simulator`, or remove the key";
     if !sim.ground.patches.is_empty() {
-        Some(("sim.ground.patches", REASON))
-    } else if sim.contact.normal_stiffness < floor.normal_stiffness {
-        Some(("sim.contact.normal_stiffness", REASON))
-    } else if sim.contact.normal_damping < floor.normal_damping {
-        Some(("sim.contact.normal_damping", REASON))
+        Some((
+            "sim.ground.patches",
+            "ground patches are modelled by stride-sim only: the MuJoCo plant's floor is one plane with \
+             one contact law (docs/mujoco.md); run it with `--plant simulator`, or remove the key",
+        ))
+    } else if sim.fixed_base {
+        Some((
+            "sim.fixed_base",
+            "a fixed base is modelled by stride-sim only: the MuJoCo plant's robot floats (docs/mujoco.md); \
+             run it with `--plant simulator`",
+        ))
     } else {
         None
     }
@@ -328,17 +327,13 @@ mod tests {
     }
 
     #[test]
-    fn mujoco_refuses_the_soft_grounds_it_does_not_model_and_accepts_a_rigid_floor() {
+    fn mujoco_refuses_ground_patches_and_a_fixed_base_and_accepts_uniform_floors_soft_or_stiff() {
         let soft = scenario("walk_soft_ground_torque.toml");
-        let (key, _) = soft_ground_unsupported_by_mujoco(&soft).expect("refused");
-        assert_eq!(key, "sim.contact.normal_stiffness");
-        let mut patched = scenario("walk_straight.toml");
-        assert_eq!(soft_ground_unsupported_by_mujoco(&patched), None);
-        patched.config.sim.contact.normal_stiffness *= 10.0;
-        assert_eq!(soft_ground_unsupported_by_mujoco(&patched), None);
-        patched.config.sim.contact.normal_damping *= 0.5;
-        let (key, _) = soft_ground_unsupported_by_mujoco(&patched).expect("refused");
-        assert_eq!(key, "sim.contact.normal_damping");
+        assert_eq!(unsupported_by_mujoco(&soft), None);
+        let mut stiff = scenario("walk_straight.toml");
+        assert_eq!(unsupported_by_mujoco(&stiff), None);
+        stiff.config.sim.contact.normal_stiffness *= 10.0;
+        assert_eq!(unsupported_by_mujoco(&stiff), None);
         let mut with_patch = scenario("walk_straight.toml");
         with_patch
             .config
@@ -351,7 +346,11 @@ mod tests {
                 normal_stiffness: 1e6,
                 normal_damping: 1e4,
             });
-        let (key, _) = soft_ground_unsupported_by_mujoco(&with_patch).expect("refused");
+        let (key, _) = unsupported_by_mujoco(&with_patch).expect("refused");
         assert_eq!(key, "sim.ground.patches");
+        let on_a_pole = scenario("identify_ft_legs.toml");
+        assert!(on_a_pole.config.sim.fixed_base);
+        let (key, _) = unsupported_by_mujoco(&on_a_pole).expect("refused");
+        assert_eq!(key, "sim.fixed_base");
     }
 }

@@ -1,7 +1,9 @@
 //! `[mujoco]`: the MuJoCo plant's own contact and solver parameters (`stride_mujoco::MujocoConfig`, which
 //! documents each one and why its default is MuJoCo's). Read only with `scenario.plant = "mujoco"` (or
 //! `--plant mujoco`) in a build with the `mujoco` feature, and range-checked there (an out-of-range value is
-//! a configuration error at its key); the rest of the plant is the `[sim]` section shared with stride-sim.
+//! a configuration error at its key); the rest of the plant is the `[sim]` section shared with stride-sim,
+//! including the ground: without `solref` the contact's time constant and damping ratio are derived from
+//! `sim.contact` ([`ground_solref`]), so both plants stand on the same floor.
 
 use serde::{Deserialize, Serialize};
 
@@ -16,13 +18,15 @@ pub enum MujocoCone {
     Elliptic,
 }
 
-/// `[mujoco]`: the fields of `stride_mujoco::MujocoConfig`, with its defaults (MuJoCo's own, and a minimum
-/// joint armature of 0.01 kg·m²).
+/// `[mujoco]`: the fields of `stride_mujoco::MujocoConfig`, with its defaults (MuJoCo's own, a minimum
+/// joint armature of 0.01 kg·m², and `solref` derived from the scenario's ground when not written).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MujocoSection {
-    /// `solref`: contact time constant \[s\] (≥ 2 plant periods) and damping ratio (> 0).
-    pub solref: [f64; 2],
+    /// `solref`: contact time constant \[s\] (≥ 2 plant periods) and damping ratio (> 0); absent: the
+    /// scenario's ground ([`ground_solref`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub solref: Option<[f64; 2]>,
     /// `solimp`: `[d0, d_width, width (m), midpoint, power]` of the contact impedance.
     pub solimp: [f64; 5],
     /// Contact dimensionality: 1, 3, 4 or 6.
@@ -45,7 +49,7 @@ impl Default for MujocoSection {
     /// `stride_mujoco::MujocoConfig::default()` (a test of the `mujoco` build checks they agree).
     fn default() -> Self {
         Self {
-            solref: [0.02, 1.0],
+            solref: None,
             solimp: [0.9, 0.95, 0.001, 0.5, 2.0],
             condim: 3,
             cone: MujocoCone::Pyramidal,
@@ -58,12 +62,44 @@ impl Default for MujocoSection {
     }
 }
 
+/// Lowest damping ratio [`ground_solref`] returns (an undamped floor would need an infinite time constant).
+pub const MIN_GROUND_DAMPING_RATIO: f64 = 0.01;
+
+/// MuJoCo's contact `solref = [time constant (s), damping ratio]` for the floor stride-sim models with the
+/// area densities `normal_stiffness` \[N/m³\] and `normal_damping` \[N·s/m³\] (`sim.contact`): the robot of
+/// `mass` \[kg\] standing on soles of total area `sole_area` \[m²\] gets the same vertical mode on both
+/// plants.
+///
+/// On stride-sim the soles carry the stiffness `K = k A` and the damping `C = b A` [Romualdi 2022, Lemma 1],
+/// so the robot bounces at `ω = √(K/m)` with the damping ratio `ζ = C / (2√(K m))`. MuJoCo's soft contact
+/// drives a violated constraint towards the mass-normalised reference `a = −(2/τ) v − 1/(τ ζ)² r` (impedance
+/// at its plateau) [MuJoCo 3.17 documentation, "Solver parameters"]: frequency `1/(τ ζ)` and damping
+/// ratio `ζ`. Equal modes: `τ = 1/(ω ζ)`. The time constant is raised to two plant periods (`period` \[s\]),
+/// the floor MuJoCo itself clamps to, and `ζ` to [`MIN_GROUND_DAMPING_RATIO`]. The static sink is set by
+/// `solimp`, not by this. The default floor under the 32.8 kg humanoid (k 3·10⁷, b 3·10⁵, two 0.20 × 0.09 m
+/// soles): ω 181 rad/s, ζ 0.91, τ 6.1 ms, where MuJoCo's own default (τ 20 ms, ζ 1) is a floor 13× less
+/// stiff.
+pub fn ground_solref(
+    normal_stiffness: f64,
+    normal_damping: f64,
+    sole_area: f64,
+    mass: f64,
+    period: f64,
+) -> [f64; 2] {
+    let stiffness = normal_stiffness * sole_area;
+    let damping = normal_damping * sole_area;
+    let omega = (stiffness / mass).sqrt();
+    let zeta = (damping / (2.0 * (stiffness * mass).sqrt())).max(MIN_GROUND_DAMPING_RATIO);
+    [(1.0 / (omega * zeta)).max(2.0 * period), zeta]
+}
+
 #[cfg(feature = "mujoco")]
 impl MujocoSection {
-    /// The plant's configuration.
-    pub fn plant_config(&self) -> stride_mujoco::MujocoConfig {
+    /// The plant's configuration; `ground` is the `solref` used when the section does not set one
+    /// ([`ground_solref`]).
+    pub fn plant_config(&self, ground: [f64; 2]) -> stride_mujoco::MujocoConfig {
         stride_mujoco::MujocoConfig {
-            solref: self.solref,
+            solref: self.solref.unwrap_or(ground),
             solimp: self.solimp,
             condim: self.condim,
             cone: match self.cone {
@@ -85,8 +121,9 @@ mod tests {
 
     #[test]
     fn the_section_defaults_are_the_plant_defaults() {
+        let ground = stride_mujoco::MujocoConfig::default().solref;
         assert_eq!(
-            MujocoSection::default().plant_config(),
+            MujocoSection::default().plant_config(ground),
             stride_mujoco::MujocoConfig::default()
         );
     }
@@ -94,7 +131,7 @@ mod tests {
     #[test]
     fn every_field_reaches_the_plant() {
         let s = MujocoSection {
-            solref: [0.005, 0.9],
+            solref: Some([0.005, 0.9]),
             solimp: [0.8, 0.9, 0.002, 0.4, 3.0],
             condim: 4,
             cone: MujocoCone::Elliptic,
@@ -104,10 +141,16 @@ mod tests {
             min_armature: 0.1,
             joint_limits: false,
         };
-        let c = s.plant_config();
+        let c = s.plant_config([0.02, 1.0]);
         assert_eq!(
             (c.solref, c.solimp, c.condim, c.cone, c.impratio),
-            (s.solref, s.solimp, 4, stride_mujoco::Cone::Elliptic, 2.0)
+            (
+                [0.005, 0.9],
+                s.solimp,
+                4,
+                stride_mujoco::Cone::Elliptic,
+                2.0
+            )
         );
         assert_eq!(
             (
@@ -118,5 +161,55 @@ mod tests {
             ),
             (0.01, 0.001, 0.1, false)
         );
+    }
+}
+
+#[cfg(test)]
+mod ground_tests {
+    use super::*;
+
+    /// The reference acceleration MuJoCo builds from `solref` (impedance at its plateau), as a
+    /// mass-normalised spring and damper: `(stiffness, damping)` in 1/s² and 1/s.
+    fn mujoco_spring(solref: [f64; 2]) -> (f64, f64) {
+        let [tau, zeta] = solref;
+        (1.0 / (tau * zeta).powi(2), 2.0 / tau)
+    }
+
+    #[test]
+    fn the_derived_contact_has_the_floors_frequency_and_damping_per_unit_mass() {
+        for (k, b, area, mass) in [
+            (3e7, 3e5, 0.036, 32.8),
+            (8e5, 1e4, 0.036, 32.8),
+            (2e6, 1e3, 0.0285, 33.0),
+            (3e7, 3e5, 0.05, 95.0),
+        ] {
+            let solref = ground_solref(k, b, area, mass, 5e-4);
+            let (stiffness, damping) = mujoco_spring(solref);
+            assert!(
+                (stiffness - k * area / mass).abs() < 1e-9 * stiffness,
+                "{solref:?}"
+            );
+            assert!(
+                (damping - b * area / mass).abs() < 1e-9 * damping,
+                "{solref:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_default_floor_under_the_bundled_humanoid_is_a_six_millisecond_contact() {
+        let [tau, zeta] = ground_solref(3e7, 3e5, 2.0 * 0.20 * 0.09, 32.8, 5e-4);
+        assert!((tau - 6.07e-3).abs() < 0.01e-3, "{tau}");
+        assert!((zeta - 0.907).abs() < 1e-3, "{zeta}");
+    }
+
+    #[test]
+    fn a_floor_stiffer_than_two_plant_periods_allow_is_clamped_and_an_undamped_one_gets_the_least_damping(
+    ) {
+        let [tau, _] = ground_solref(1e12, 1e10, 0.036, 32.8, 5e-4);
+        assert_eq!(tau, 1e-3);
+        let [tau, zeta] = ground_solref(3e7, 0.0, 0.036, 32.8, 5e-4);
+        assert_eq!(zeta, MIN_GROUND_DAMPING_RATIO);
+        assert!(tau.is_finite() && tau > 0.1);
     }
 }

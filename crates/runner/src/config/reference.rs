@@ -44,12 +44,14 @@ pub const OPTIONAL_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "robot.right_sole.rpy", unit: "rad", meaning: "As `robot.left_sole.rpy`." },
     KeyDoc { key: "robot.right_sole.name", unit: "-", meaning: "Name of the added frame (default `right_sole`)." },
     KeyDoc { key: "robot.base_frame", unit: "-", meaning: "Floating-base frame the walking preset's `pelvis` tasks hold upright (absent: the model's root link)." },
+    KeyDoc { key: "mujoco.solref", unit: "s, -", meaning: "MuJoCo plant only (docs/mujoco.md): `[time constant, damping ratio]` of the floor–sole contact constraint; the time constant ≥ 2 plant periods, the ratio > 0. Absent: derived from `sim.contact.normal_stiffness`/`normal_damping`, the soles' area (`sim.contact.surfaces`) and the robot's mass so that both plants give the robot standing on its soles the same vertical frequency and damping ratio (`stride_runner::config::mujoco::ground_solref`; the default floor under the bundled humanoid: `[0.0061, 0.91]`)." },
     KeyDoc { key: "sim.actuation.default.effort_limit", unit: "N·m (N)", meaning: "Motor torque bound of every joint not overridden (absent: each joint's URDF `effort`, unbounded if the URDF has none); at the bound the torque saturates (`effort_limit_policy`). Per joint: `[[sim.actuation.joints]]` `effort_limit`." },
 ];
 
 /// TOML type of an [`OPTIONAL_KEYS`] entry.
 fn optional_key_type(key: &str) -> &'static str {
-    if key == "include" || key.ends_with(".xyz") || key.ends_with(".rpy") {
+    let array = ["include", "mujoco.solref"].contains(&key);
+    if array || key.ends_with(".xyz") || key.ends_with(".rpy") {
         "array"
     } else if key == "goal.stand" {
         "table"
@@ -95,7 +97,6 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "goal.pose.x", unit: "m", meaning: "`[goal.pose]`: goal x in the world frame (the robot starts near the origin, facing +x)." },
     KeyDoc { key: "goal.pose.y", unit: "m", meaning: "Goal y." },
     KeyDoc { key: "goal.pose.heading_deg", unit: "deg", meaning: "Goal heading about world z." },
-    KeyDoc { key: "mujoco.solref", unit: "s, -", meaning: "MuJoCo plant only (docs/mujoco.md): `[time constant, damping ratio]` of the floor–sole contact constraint; the time constant ≥ 2 plant periods, the ratio > 0. Default MuJoCo's `[0.02, 1]`." },
     KeyDoc { key: "mujoco.solimp", unit: "-, -, m, -, -", meaning: "MuJoCo plant: contact impedance `[d0, d_width, width, midpoint, power]`, 0 ≤ d0, d_width < 1, width > 0, 0 ≤ midpoint ≤ 1, power ≥ 1. Default MuJoCo's `[0.9, 0.95, 0.001, 0.5, 2]`." },
     KeyDoc { key: "mujoco.condim", unit: "-", meaning: "MuJoCo plant: contact dimensionality, 1 (frictionless), 3 (sliding friction, default), 4 (+ torsional) or 6 (+ rolling)." },
     KeyDoc { key: "mujoco.cone", unit: "-", meaning: "MuJoCo plant: friction cone, `pyramidal` (default) or `elliptic`." },
