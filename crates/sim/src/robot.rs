@@ -72,7 +72,6 @@ pub struct SimRobot {
     state: RobotState,
     next_state: RobotState,
     initial_state: RobotState,
-    mass: DMatrix<f64>,
     momentum_matrix: DMatrix<f64>,
     /// The tree factorisation of the implicit system, the mass matrix and the system in its packed pattern,
     /// and what a re-solve must refactorise (the system changed; in which branches of the tree).
@@ -212,7 +211,6 @@ impl SimRobot {
             next_state: state.clone(),
             initial_state: state.clone(),
             state,
-            mass: DMatrix::zeros(nv, nv),
             momentum_matrix: DMatrix::zeros(6, nv),
             mass_packed: factorization.matrix(),
             system: factorization.matrix(),

@@ -61,9 +61,10 @@ impl SimRobot {
     /// when only the right-hand side changed (a sliding point's normal-force estimate). Each solve gives the
     /// same result as assembling and factorising the whole system again.
     pub(super) fn solve_implicit(&mut self, input: &SimInput) -> Result<Solve, SimError> {
-        self.kd.mass_matrix(&mut self.mass)?;
+        let (tree, packed) = (&self.factorization, self.mass_packed.values_mut());
+        self.kd
+            .mass_matrix_lower(|row, col, v| packed[tree.lower_index(row, col)] = v);
         self.kd.bias_forces(&mut self.bias)?;
-        self.factorization.gather(&self.mass, &mut self.mass_packed);
         for s in &mut self.surfaces {
             self.kd.frame_jacobian(s.frame, &mut s.jacobian)?;
             s.find_columns();
