@@ -103,6 +103,10 @@ pub struct KinDyn {
     /// `force` holds the subtree wrenches of a [`KinDyn::ft_sensor_wrenches`] pass without external
     /// wrenches at the current state (for [`KinDyn::inverse_dynamics_after_ft_sensors`]).
     sensor_pass_ready: bool,
+    /// The bodies on the child sides of the force/torque sensors below their host bodies (the sensors'
+    /// `child_bodies` and their descendants), increasing, and the same as a mask per body.
+    sensor_subtrees: Vec<usize>,
+    in_sensor_subtree: Vec<bool>,
     // ---- scratch ----
     acc: Vec<Vector6<f64>>,
     force: Vec<Vector6<f64>>,
@@ -120,6 +124,7 @@ impl KinDyn {
     pub fn new(model: Arc<Model>) -> Self {
         let nb = model.body_count();
         let n = model.dof();
+        let in_sensor_subtree = sensor_subtree_mask(&model);
         let mut kd = Self {
             repr: VelocityRepresentation::Mixed,
             gravity: model.gravity(),
@@ -138,6 +143,8 @@ impl KinDyn {
             inertia: vec![Inertia::zero(); nb],
             inertia_ready: false,
             sensor_pass_ready: false,
+            sensor_subtrees: (0..nb).filter(|&i| in_sensor_subtree[i]).collect(),
+            in_sensor_subtree,
             acc: vec![Vector6::zeros(); nb],
             force: vec![Vector6::zeros(); nb],
             ext: vec![Vector6::zeros(); nb],
@@ -788,10 +795,7 @@ impl KinDyn {
         if velocity {
             self.proper_accelerations(nu_dot);
             for i in 0..nb {
-                let iv = self.inertia[i].mul_motion(&self.vel[i]);
-                self.force[i] = self.inertia[i].mul_motion(&self.acc[i])
-                    + cross_force(&self.vel[i], &iv)
-                    - self.ext[i];
+                self.force[i] = self.net_body_force(i);
             }
         } else {
             for i in 0..nb {
@@ -803,6 +807,35 @@ impl KinDyn {
             let p = m.parent[i];
             let f = self.force[i];
             self.force[p] += f;
+        }
+    }
+
+    /// `I a + v ×̄* I v − f^x` of body `i` (after [`Self::proper_accelerations`] and
+    /// [`Self::ensure_inertias`]) [Traversaro 2017, eq. 4.17].
+    #[inline]
+    fn net_body_force(&self, i: usize) -> Vector6<f64> {
+        let iv = self.inertia[i].mul_motion(&self.vel[i]);
+        self.inertia[i].mul_motion(&self.acc[i]) + cross_force(&self.vel[i], &iv) - self.ext[i]
+    }
+
+    /// [`Self::rnea_forces`] (with velocities) for the bodies of the sensors' child-side subtrees only: the
+    /// same `force[i]` for those bodies, bit for bit (each sum taken over the same children in the same
+    /// order); the others' are left stale.
+    fn sensor_subtree_forces(&mut self, nu_dot: &DVector<f64>) {
+        self.sensor_pass_ready = false;
+        self.ensure_inertias();
+        self.proper_accelerations(Some(nu_dot));
+        for k in 0..self.sensor_subtrees.len() {
+            let i = self.sensor_subtrees[k];
+            self.force[i] = self.net_body_force(i);
+        }
+        for k in (0..self.sensor_subtrees.len()).rev() {
+            let i = self.sensor_subtrees[k];
+            let p = self.model.parent[i];
+            if self.in_sensor_subtree[p] {
+                let f = self.force[i];
+                self.force[p] += f;
+            }
         }
     }
 
@@ -909,4 +942,22 @@ impl KinDyn {
         }
         Ok(())
     }
+}
+
+/// Per body: whether it lies on the child side of a force/torque sensor below the sensor's host body (a
+/// sensor's `child_bodies` and their descendants; parents come before their children).
+fn sensor_subtree_mask(model: &Model) -> Vec<bool> {
+    let nb = model.body_count();
+    let mut mask = vec![false; nb];
+    for side in &model.ft_sides {
+        for &c in &side.child_bodies {
+            mask[c] = true;
+        }
+    }
+    for i in 1..nb {
+        if mask[model.parent[i]] {
+            mask[i] = true;
+        }
+    }
+    mask
 }

@@ -70,6 +70,7 @@ fn exercise(model: Arc<Model>) {
                     kd.ft_sensor_wrench_map(s, frames[0], &mut ft_map).unwrap();
                     sink += reading[2] + ft_map[(0, 0)];
                 }
+                kd.ft_sensor_readings(&nu_dot, &wrenches, &mut ft).unwrap();
                 kd.ft_sensor_wrenches(&nu_dot, &[], &mut ft).unwrap();
                 kd.inverse_dynamics_after_ft_sensors(&wrenches, &mut vec_nv)
                     .unwrap();

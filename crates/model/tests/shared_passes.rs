@@ -1,7 +1,8 @@
 //! The entry points that share a pass with another computation, checked against the full computation:
 //! the mass matrix's tree entries (`mass_matrix_lower`) against the dense CRBA, and the inverse dynamics that
 //! reuses a force/torque sensor pass (`inverse_dynamics_after_ft_sensors`) against the RNEA with the
-//! external wrenches.
+//! external wrenches, and the sensor readings from the sensors' subtrees (`ft_sensor_readings`) against
+//! those of the whole pass.
 
 mod common;
 
@@ -150,4 +151,43 @@ fn inverse_dynamics_after_ft_sensors_needs_a_fresh_free_pass() {
     kd.inverse_dynamics_after_ft_sensors(&wrenches, &mut out)
         .unwrap();
     assert!(refused(&mut kd, &mut out), "a second time on one pass");
+}
+
+/// The readings from the sensors' subtrees are those of the whole RNEA, bit for bit, with wrenches on a
+/// sole (a child body's subtree), on the foot sensor's host body (its child side) and elsewhere.
+#[test]
+fn ft_sensor_readings_are_the_whole_pass_readings() {
+    let model = common::humanoid_model().unwrap();
+    let nv = model.nv();
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    let mut wrenches = two_wrenches(&model).to_vec();
+    for (frame, k) in [("l_sole", 1.0), ("r_foot_ft_sensor", -0.5), ("l_foot", 2.0)] {
+        wrenches.push(ExternalWrench {
+            frame: model.frame_id(frame).unwrap(),
+            wrench: Vector6::new(1.0, -2.0, 150.0, 0.3, -0.4, 0.1) * k,
+        });
+    }
+    let ns = model.ft_sensors().len();
+    assert!(ns >= 2, "the humanoid has its foot sensors");
+    let (mut subtree, mut whole) = (vec![Vector6::zeros(); ns], vec![Vector6::zeros(); ns]);
+    let bits = |r: &[Vector6<f64>]| {
+        r.iter()
+            .flat_map(|w| w.iter().map(|v| v.to_bits()))
+            .collect::<Vec<_>>()
+    };
+    for rep in REPRESENTATIONS {
+        kd.set_representation(rep);
+        for seed in 0..3 {
+            kd.set_state(&common::random_state(&model, seed)).unwrap();
+            let nu_dot = common::random_vector(nv, 20 + seed, 2.0);
+            for external in [&wrenches[..], &[]] {
+                kd.ft_sensor_readings(&nu_dot, external, &mut subtree)
+                    .unwrap();
+                kd.ft_sensor_wrenches(&nu_dot, external, &mut whole)
+                    .unwrap();
+                assert_eq!(bits(&subtree), bits(&whole), "{rep:?} seed {seed}");
+                assert!(whole.iter().all(|w| w.amax() > 0.0));
+            }
+        }
+    }
 }

@@ -433,7 +433,7 @@ impl SimRobot {
     }
 
     /// The wrench transmitted through each force/torque sensor during the step
-    /// ([`KinDyn::ft_sensor_wrenches`]) from the step's acceleration and external wrenches (each touching
+    /// ([`KinDyn::ft_sensor_readings`], the sensors' subtrees only) from the step's acceleration and external wrenches (each touching
     /// surface's point forces about its frame origin, the active pushes), at the start-of-step state the
     /// dynamics used.
     pub(super) fn compute_ft_truth(&mut self) -> Result<(), SimError> {
@@ -463,7 +463,7 @@ impl SimRobot {
             }
         }
         self.kd
-            .ft_sensor_wrenches(&self.acceleration, &self.ft_external, &mut self.ft_truth)?;
+            .ft_sensor_readings(&self.acceleration, &self.ft_external, &mut self.ft_truth)?;
         Ok(())
     }
 

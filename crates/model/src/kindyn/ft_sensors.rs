@@ -32,6 +32,40 @@ impl KinDyn {
         external: &[ExternalWrench],
         out: &mut [Vector6<f64>],
     ) -> Result<(), ModelError> {
+        self.check_sensor_arguments(nu_dot, external, out)?;
+        // `force[i]` = Σ over the subtree of i of (φ − f^x), frame A'.
+        self.rnea_forces(Some(nu_dot), true);
+        self.sensor_pass_ready = external.is_empty();
+        self.read_sensors(external, out);
+        Ok(())
+    }
+
+    /// The readings of [`KinDyn::ft_sensor_wrenches`], bit for bit, from the bodies of the sensors'
+    /// child sides only (the RNEA's backward pass over the subtrees below the sensors' host bodies, not the
+    /// whole tree): for a caller that needs the readings and nothing else of the pass (a simulator's sensor
+    /// model). Leaves nothing for [`KinDyn::inverse_dynamics_after_ft_sensors`].
+    ///
+    /// # Errors
+    /// As [`KinDyn::ft_sensor_wrenches`]. Does not allocate.
+    pub fn ft_sensor_readings(
+        &mut self,
+        nu_dot: &DVector<f64>,
+        external: &[ExternalWrench],
+        out: &mut [Vector6<f64>],
+    ) -> Result<(), ModelError> {
+        self.check_sensor_arguments(nu_dot, external, out)?;
+        self.sensor_subtree_forces(nu_dot);
+        self.read_sensors(external, out);
+        Ok(())
+    }
+
+    /// Sizes and finiteness of the arguments of the sensor passes; gathers the external wrenches.
+    fn check_sensor_arguments(
+        &mut self,
+        nu_dot: &DVector<f64>,
+        external: &[ExternalWrench],
+        out: &[Vector6<f64>],
+    ) -> Result<(), ModelError> {
         check_len("nu_dot", self.model.nv(), nu_dot.len())?;
         check_len(
             "ft_sensor_wrenches output",
@@ -41,10 +75,12 @@ impl KinDyn {
         if !nu_dot.iter().all(|v| v.is_finite()) {
             return Err(ModelError::NonFiniteInput { what: "nu_dot" });
         }
-        self.gather_wrenches(external)?;
-        // `force[i]` = Σ over the subtree of i of (φ − f^x), frame A'.
-        self.rnea_forces(Some(nu_dot), true);
-        self.sensor_pass_ready = external.is_empty();
+        self.gather_wrenches(external)
+    }
+
+    /// The readings from the subtree wrenches `force` of the child-side bodies ([Traversaro 2017,
+    /// eq. 4.23b]; see [`KinDyn::ft_sensor_wrenches`]).
+    fn read_sensors(&self, external: &[ExternalWrench], out: &mut [Vector6<f64>]) {
         let model = &*self.model;
         for (k, (sensor, side)) in model.ft_sensors.iter().zip(&model.ft_sides).enumerate() {
             let h = side.host;
@@ -80,7 +116,6 @@ impl KinDyn {
                 reading
             };
         }
-        Ok(())
     }
 
     /// Inverse dynamics ([`KinDyn::inverse_dynamics`]: `out = M ν̇ + h − Σ J_fᵀ w_f` = `[base wrench; τ]`)
