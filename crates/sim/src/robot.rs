@@ -77,6 +77,9 @@ pub struct SimRobot {
     /// and what a re-solve must refactorise (the system changed; in which branches of the tree).
     factorization: TreeCholesky,
     mass_packed: TreeMatrix,
+    /// Where each entry of [`KinDyn::mass_matrix_lower`] goes in `mass_packed`, in the order it reports
+    /// them (the same order at every state).
+    mass_slots: Vec<usize>,
     system: TreeMatrix,
     system_changed: bool,
     changed_branches: Vec<bool>,
@@ -213,6 +216,7 @@ impl SimRobot {
             state,
             momentum_matrix: DMatrix::zeros(6, nv),
             mass_packed: factorization.matrix(),
+            mass_slots: Vec::new(),
             system: factorization.matrix(),
             system_changed: false,
             changed_branches: vec![false; factorization.branch_count()],
@@ -242,6 +246,11 @@ impl SimRobot {
             config,
             model,
         };
+        let tree = &sim.factorization;
+        let mut slots = Vec::with_capacity(tree.matrix().values().len());
+        sim.kd
+            .mass_matrix_lower(|row, col, _| slots.push(tree.lower_index(row, col)));
+        sim.mass_slots = slots;
         let zero = sim.state.clone();
         sim.set_initial_state(&zero)?;
         Ok(sim)
@@ -593,6 +602,25 @@ mod tests {
         // it and needs a second solve.
         input.joint_positions[elbow] = 1.5;
         (sim, input, elbow)
+    }
+
+    /// The mass matrix the implicit step packs through its slots is the dense CRBA matrix gathered into
+    /// the tree pattern, bit for bit, after a few steps of motion.
+    #[test]
+    fn the_packed_mass_matrix_is_the_gathered_dense_one() {
+        let (mut sim, input, _) = standing_humanoid();
+        for _ in 0..5 {
+            sim.step(&input).expect("step");
+        }
+        sim.mass_packed.values_mut().fill(f64::NAN);
+        sim.pack_mass_matrix();
+        let nv = sim.model.nv();
+        let mut dense = DMatrix::zeros(nv, nv);
+        sim.kd.mass_matrix(&mut dense).unwrap();
+        let mut gathered = sim.factorization.matrix();
+        sim.factorization.gather(&dense, &mut gathered);
+        let bits = |m: &TreeMatrix| m.values().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&sim.mass_packed), bits(&gathered));
     }
 
     #[test]
