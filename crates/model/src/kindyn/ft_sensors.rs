@@ -32,12 +32,7 @@ impl KinDyn {
         external: &[ExternalWrench],
         out: &mut [Vector6<f64>],
     ) -> Result<(), ModelError> {
-        self.check_sensor_arguments(nu_dot, external, out)?;
-        // `force[i]` = Σ over the subtree of i of (φ − f^x), frame A'.
-        self.rnea_forces(Some(nu_dot), true);
-        self.sensor_pass_ready = external.is_empty();
-        self.read_sensors(external, out);
-        Ok(())
+        self.sensor_pass(nu_dot, external, out, true)
     }
 
     /// The readings of [`KinDyn::ft_sensor_wrenches`], bit for bit, from the bodies of the sensors'
@@ -53,18 +48,18 @@ impl KinDyn {
         external: &[ExternalWrench],
         out: &mut [Vector6<f64>],
     ) -> Result<(), ModelError> {
-        self.check_sensor_arguments(nu_dot, external, out)?;
-        self.sensor_subtree_forces(nu_dot);
-        self.read_sensors(external, out);
-        Ok(())
+        self.sensor_pass(nu_dot, external, out, false)
     }
 
-    /// Sizes and finiteness of the arguments of the sensor passes; gathers the external wrenches.
-    fn check_sensor_arguments(
+    /// The readings, from the RNEA over the whole tree (`whole`, then reusable by
+    /// [`KinDyn::inverse_dynamics_after_ft_sensors`] when `external` is empty) or over the sensors'
+    /// subtrees. Checks sizes and finiteness and gathers the external wrenches first.
+    fn sensor_pass(
         &mut self,
         nu_dot: &DVector<f64>,
         external: &[ExternalWrench],
-        out: &[Vector6<f64>],
+        out: &mut [Vector6<f64>],
+        whole: bool,
     ) -> Result<(), ModelError> {
         check_len("nu_dot", self.model.nv(), nu_dot.len())?;
         check_len(
@@ -75,7 +70,16 @@ impl KinDyn {
         if !nu_dot.iter().all(|v| v.is_finite()) {
             return Err(ModelError::NonFiniteInput { what: "nu_dot" });
         }
-        self.gather_wrenches(external)
+        self.gather_wrenches(external)?;
+        if whole {
+            // `force[i]` = Σ over the subtree of i of (φ − f^x), frame A'.
+            self.rnea_forces(Some(nu_dot), true);
+            self.sensor_pass_ready = external.is_empty();
+        } else {
+            self.sensor_subtree_forces(nu_dot);
+        }
+        self.read_sensors(external, out);
+        Ok(())
     }
 
     /// The readings from the subtree wrenches `force` of the child-side bodies ([Traversaro 2017,
