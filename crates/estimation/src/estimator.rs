@@ -480,14 +480,15 @@ impl Estimator {
         }
     }
 
-    /// Step 8: joint torques.
+    /// Step 8: joint torques, from the RNEA of [`Self::foot_wrenches`] (same state and `ν̇`) with the foot
+    /// wrenches subtracted ([`KinDyn::inverse_dynamics_after_ft_sensors`]).
     fn joint_torques(&mut self, wrenches: &[Vector6<f64>; 2]) -> Result<()> {
         let external = [0, 1].map(|foot| ExternalWrench {
             frame: self.soles[foot],
             wrench: wrenches[foot],
         });
         self.kd
-            .inverse_dynamics(&self.nu_dot, &external, &mut self.generalized)?;
+            .inverse_dynamics_after_ft_sensors(&external, &mut self.generalized)?;
         let n = self.model.dof();
         self.output
             .joint_torques

@@ -128,6 +128,11 @@ pub enum ModelError {
         /// Which argument.
         what: &'static str,
     },
+    /// [`KinDyn::inverse_dynamics_after_ft_sensors`](crate::KinDyn::inverse_dynamics_after_ft_sensors)
+    /// without a pass of [`KinDyn::ft_sensor_wrenches`](crate::KinDyn::ft_sensor_wrenches) free of external
+    /// wrenches at the current state.
+    #[error("no force/torque sensor pass without external wrenches at the current state to reuse")]
+    NoSensorPass,
     /// A frame id that does not belong to this model.
     #[error("frame id {index} is out of range (the model has {count} frames)")]
     FrameOutOfRange {

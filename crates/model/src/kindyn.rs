@@ -100,6 +100,13 @@ pub struct KinDyn {
     /// World inertias (valid when `inertia_ready`).
     inertia: Vec<Inertia>,
     inertia_ready: bool,
+    /// `force` holds the subtree wrenches of a [`KinDyn::ft_sensor_wrenches`] pass without external
+    /// wrenches at the current state (for [`KinDyn::inverse_dynamics_after_ft_sensors`]).
+    sensor_pass_ready: bool,
+    /// The bodies on the child sides of the force/torque sensors below their host bodies (the sensors'
+    /// `child_bodies` and their descendants), increasing, and the same as a mask per body.
+    sensor_subtrees: Vec<usize>,
+    in_sensor_subtree: Vec<bool>,
     // ---- scratch ----
     acc: Vec<Vector6<f64>>,
     force: Vec<Vector6<f64>>,
@@ -117,6 +124,7 @@ impl KinDyn {
     pub fn new(model: Arc<Model>) -> Self {
         let nb = model.body_count();
         let n = model.dof();
+        let in_sensor_subtree = sensor_subtree_mask(&model);
         let mut kd = Self {
             repr: VelocityRepresentation::Mixed,
             gravity: model.gravity(),
@@ -134,6 +142,9 @@ impl KinDyn {
             bias: vec![Vector6::zeros(); nb],
             inertia: vec![Inertia::zero(); nb],
             inertia_ready: false,
+            sensor_pass_ready: false,
+            sensor_subtrees: (0..nb).filter(|&i| in_sensor_subtree[i]).collect(),
+            in_sensor_subtree,
             acc: vec![Vector6::zeros(); nb],
             force: vec![Vector6::zeros(); nb],
             ext: vec![Vector6::zeros(); nb],
@@ -174,6 +185,7 @@ impl KinDyn {
     /// Sets this workspace's gravity acceleration in world coordinates (m/s²; default the model's).
     pub fn set_gravity(&mut self, gravity: Vector3<f64>) {
         self.gravity = gravity;
+        self.sensor_pass_ready = false;
     }
 
     /// Sets the state (base velocity in the current representation) and computes the kinematics of every
@@ -231,6 +243,7 @@ impl KinDyn {
             _ => Vector6::zeros(),
         };
         self.inertia_ready = false;
+        self.sensor_pass_ready = false;
         for i in 1..m.body_count() {
             let p = m.parent[i];
             let j = i - 1;
@@ -656,28 +669,59 @@ impl KinDyn {
         check_shape("mass_matrix output", (nv, nv), out.shape())?;
         self.composites();
         out.as_mut_slice().fill(0.0);
+        out.fixed_view_mut::<6, 6>(0, 0)
+            .copy_from(&self.base_mass_block());
+        self.joint_mass_entries(|row, col, v| {
+            out[(row, col)] = v;
+            out[(col, row)] = v;
+        });
+        Ok(())
+    }
+
+    /// The entries of the mass matrix's lower triangle that a kinematic tree may have non-zero
+    /// [Featherstone 2008, §6.5], by the composite-rigid-body algorithm in the current representation:
+    /// `put(row, col, value)` with `row ≥ col` for the base block's lower triangle, then, for every joint
+    /// DoF `d = 6 + j`, its diagonal, its entries with the DoFs of the joints between it and the base, and
+    /// its six entries with the base DoFs. The same values as [`KinDyn::mass_matrix`]'s lower triangle, bit
+    /// for bit; no other entry is non-zero. Lets a sparse factorisation fill its own storage (no dense
+    /// `nv × nv` matrix to clear and gather from). Does not allocate.
+    pub fn mass_matrix_lower(&mut self, mut put: impl FnMut(usize, usize, f64)) {
+        self.composites();
+        let base = self.base_mass_block();
+        for col in 0..6 {
+            for row in col..6 {
+                put(row, col, base[(row, col)]);
+            }
+        }
+        self.joint_mass_entries(put);
+    }
+
+    /// `Tᵀ I_c T`: the base block of the mass matrix from the whole robot's composite inertia (after
+    /// [`Self::composites`]).
+    fn base_mass_block(&self) -> Matrix6<f64> {
         let t = self.base_t();
-        let base = t.transpose() * self.composite[0].matrix() * t;
-        out.fixed_view_mut::<6, 6>(0, 0).copy_from(&base);
+        t.transpose() * self.composite[0].matrix() * t
+    }
+
+    /// The mass matrix's joint columns (after [`Self::composites`]): `put(d, col, v)` for every joint DoF
+    /// `d`, with `col` = `d`, the DoFs of the joints above it, then the six base DoFs ([Featherstone 2008],
+    /// CRBA: `F = I_c S_i`, `M_ki = S_kᵀ F` up the tree, base entries `Tᵀ F`).
+    fn joint_mass_entries(&self, mut put: impl FnMut(usize, usize, f64)) {
         let m = &*self.model;
         for i in 1..m.body_count() {
             let f = self.composite[i].mul_motion(&self.s[i]);
             let col = 5 + i;
-            out[(col, col)] = self.s[i].dot(&f);
+            put(col, col, self.s[i].dot(&f));
             let mut k = m.parent[i];
             while k != 0 {
-                let v = self.s[k].dot(&f);
-                out[(5 + k, col)] = v;
-                out[(col, 5 + k)] = v;
+                put(col, 5 + k, self.s[k].dot(&f));
                 k = m.parent[k];
             }
             let fb = self.base_t_tr_mul(&f);
             for r in 0..6 {
-                out[(r, col)] = fb[r];
-                out[(col, r)] = fb[r];
+                put(col, r, fb[r]);
             }
         }
-        Ok(())
     }
 
     /// Generalized bias forces `h = C ν + G` (nv), base part dual to the representation's base velocity.
@@ -723,6 +767,12 @@ impl KinDyn {
     /// RNEA in frame A'. `velocity = false` computes gravity only.
     fn rnea(&mut self, nu_dot: Option<&DVector<f64>>, velocity: bool, out: &mut DVector<f64>) {
         self.rnea_forces(nu_dot, velocity);
+        self.project_forces(out);
+    }
+
+    /// The RNEA's projection of the subtree wrenches `force` on the joints and the base: `τ_i = S_iᵀ f_i`,
+    /// base `Tᵀ f_0` [Featherstone 2008].
+    fn project_forces(&self, out: &mut DVector<f64>) {
         let nb = self.model.body_count();
         for i in 1..nb {
             out[5 + i] = self.s[i].dot(&self.force[i]);
@@ -738,16 +788,14 @@ impl KinDyn {
     /// `i`, `Σ (I a + v ×̄* I v − f^x)` over the subtree [Traversaro 2017, eqs. 4.17, 4.23 with erratum E12].
     /// `velocity = false` computes gravity only (`acc` untouched).
     fn rnea_forces(&mut self, nu_dot: Option<&DVector<f64>>, velocity: bool) {
+        self.sensor_pass_ready = false;
         self.ensure_inertias();
         let nb = self.model.body_count();
         let g6 = self.world_gravity6();
         if velocity {
             self.proper_accelerations(nu_dot);
             for i in 0..nb {
-                let iv = self.inertia[i].mul_motion(&self.vel[i]);
-                self.force[i] = self.inertia[i].mul_motion(&self.acc[i])
-                    + cross_force(&self.vel[i], &iv)
-                    - self.ext[i];
+                self.force[i] = self.net_body_force(i);
             }
         } else {
             for i in 0..nb {
@@ -759,6 +807,35 @@ impl KinDyn {
             let p = m.parent[i];
             let f = self.force[i];
             self.force[p] += f;
+        }
+    }
+
+    /// `I a + v ×̄* I v − f^x` of body `i` (after [`Self::proper_accelerations`] and
+    /// [`Self::ensure_inertias`]) [Traversaro 2017, eq. 4.17].
+    #[inline]
+    fn net_body_force(&self, i: usize) -> Vector6<f64> {
+        let iv = self.inertia[i].mul_motion(&self.vel[i]);
+        self.inertia[i].mul_motion(&self.acc[i]) + cross_force(&self.vel[i], &iv) - self.ext[i]
+    }
+
+    /// [`Self::rnea_forces`] (with velocities) for the bodies of the sensors' child-side subtrees only: the
+    /// same `force[i]` for those bodies, bit for bit (each sum taken over the same children in the same
+    /// order); the others' are left stale.
+    fn sensor_subtree_forces(&mut self, nu_dot: &DVector<f64>) {
+        self.sensor_pass_ready = false;
+        self.ensure_inertias();
+        self.proper_accelerations(Some(nu_dot));
+        for k in 0..self.sensor_subtrees.len() {
+            let i = self.sensor_subtrees[k];
+            self.force[i] = self.net_body_force(i);
+        }
+        for k in (0..self.sensor_subtrees.len()).rev() {
+            let i = self.sensor_subtrees[k];
+            let p = self.model.parent[i];
+            if self.in_sensor_subtree[p] {
+                let f = self.force[i];
+                self.force[p] += f;
+            }
         }
     }
 
@@ -800,6 +877,7 @@ impl KinDyn {
             return Err(ModelError::NonFiniteInput { what: "tau" });
         }
         self.gather_wrenches(wrenches)?;
+        self.sensor_pass_ready = false;
         self.ensure_inertias();
         let nb = self.model.body_count();
         for i in 0..nb {
@@ -864,4 +942,22 @@ impl KinDyn {
         }
         Ok(())
     }
+}
+
+/// Per body: whether it lies on the child side of a force/torque sensor below the sensor's host body (a
+/// sensor's `child_bodies` and their descendants; parents come before their children).
+fn sensor_subtree_mask(model: &Model) -> Vec<bool> {
+    let nb = model.body_count();
+    let mut mask = vec![false; nb];
+    for side in &model.ft_sides {
+        for &c in &side.child_bodies {
+            mask[c] = true;
+        }
+    }
+    for i in 1..nb {
+        if mask[model.parent[i]] {
+            mask[i] = true;
+        }
+    }
+    mask
 }

@@ -63,12 +63,17 @@ fn exercise(model: Arc<Model>) {
                 sink += kd.centroidal_momentum()[4] + kd.centroidal_momentum_bias()[5];
                 kd.centroidal_momentum_matrix(&mut cmm).unwrap();
                 kd.mass_matrix(&mut mass).unwrap();
+                kd.mass_matrix_lower(|r, c, v| sink += v * (r + c) as f64);
                 kd.bias_forces(&mut vec_nv).unwrap();
                 kd.ft_sensor_wrenches(&nu_dot, &wrenches, &mut ft).unwrap();
                 for (s, reading) in ft.iter().enumerate() {
                     kd.ft_sensor_wrench_map(s, frames[0], &mut ft_map).unwrap();
                     sink += reading[2] + ft_map[(0, 0)];
                 }
+                kd.ft_sensor_readings(&nu_dot, &wrenches, &mut ft).unwrap();
+                kd.ft_sensor_wrenches(&nu_dot, &[], &mut ft).unwrap();
+                kd.inverse_dynamics_after_ft_sensors(&wrenches, &mut vec_nv)
+                    .unwrap();
                 kd.gravity_forces(&mut vec_nv).unwrap();
                 kd.inverse_dynamics(&nu_dot, &wrenches, &mut vec_nv)
                     .unwrap();

@@ -234,6 +234,16 @@ impl TreeCholesky {
         self.starts[k] + self.depth(k) - self.depth(ancestor)
     }
 
+    /// Where the lower-triangle entry `(row, col)` (`row ≥ col`) lies in [`TreeMatrix::values`]: the
+    /// diagonal when `row == col`, else [`TreeCholesky::index`] (`col` must be an ancestor of `row`).
+    pub fn lower_index(&self, row: usize, col: usize) -> usize {
+        if row == col {
+            self.diagonal_index(row)
+        } else {
+            self.index(col, row)
+        }
+    }
+
     /// The branch of degree of freedom `k` (`None` on the trunk; see the type's documentation).
     pub fn branch_of(&self, k: usize) -> Option<usize> {
         self.branch[k]
@@ -244,7 +254,9 @@ impl TreeCholesky {
         self.branch_rows.len()
     }
 
-    /// Copies the pattern's entries of the dense symmetric matrix `h` (its lower triangle) into `out`.
+    /// Copies the pattern's entries of the dense symmetric matrix `h` (its lower triangle) into `out` (the
+    /// tests' reference for the entries written in place, [`TreeCholesky::lower_index`]).
+    #[cfg(test)]
     pub fn gather(&self, h: &DMatrix<f64>, out: &mut TreeMatrix) {
         let n = self.len();
         let a = h.as_slice();
@@ -530,6 +542,38 @@ mod tests {
             tree.solve(&mut x);
             assert!((&h * &x - b.rows(0, n)).norm() < 1e-12);
         }
+    }
+
+    /// The humanoid's mass matrix written straight into the floating-base pattern (`mass_matrix_lower` +
+    /// `lower_index`, as the implicit step does) is the dense CRBA matrix gathered, bit for bit.
+    #[test]
+    fn mass_matrix_written_into_the_pattern_is_the_gathered_dense_one() {
+        use std::sync::Arc;
+        let model = Arc::new(stride_model::bundled::model().unwrap());
+        let mut kd = stride_model::KinDyn::new(Arc::clone(&model));
+        let mut state = stride_model::bundled::standing_state(&model).unwrap();
+        state
+            .joint_velocities
+            .iter_mut()
+            .enumerate()
+            .for_each(|(j, v)| *v = 0.1 * j as f64 - 1.0);
+        state
+            .joint_positions
+            .iter_mut()
+            .enumerate()
+            .for_each(|(j, q)| *q += 0.05 * (j as f64).sin());
+        kd.set_state(&state).unwrap();
+        let tree = TreeCholesky::floating_base(&model).unwrap();
+        let mut dense = DMatrix::zeros(model.nv(), model.nv());
+        kd.mass_matrix(&mut dense).unwrap();
+        let mut gathered = tree.matrix();
+        tree.gather(&dense, &mut gathered);
+        let mut direct = tree.matrix();
+        let values = direct.values_mut();
+        values.fill(f64::NAN);
+        kd.mass_matrix_lower(|row, col, v| values[tree.lower_index(row, col)] = v);
+        let bits = |m: &TreeMatrix| m.values().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&direct), bits(&gathered));
     }
 
     #[test]

@@ -72,12 +72,14 @@ pub struct SimRobot {
     state: RobotState,
     next_state: RobotState,
     initial_state: RobotState,
-    mass: DMatrix<f64>,
     momentum_matrix: DMatrix<f64>,
     /// The tree factorisation of the implicit system, the mass matrix and the system in its packed pattern,
     /// and what a re-solve must refactorise (the system changed; in which branches of the tree).
     factorization: TreeCholesky,
     mass_packed: TreeMatrix,
+    /// Where each entry of [`KinDyn::mass_matrix_lower`] goes in `mass_packed`, in the order it reports
+    /// them (the same order at every state).
+    mass_slots: Vec<usize>,
     system: TreeMatrix,
     system_changed: bool,
     changed_branches: Vec<bool>,
@@ -212,9 +214,9 @@ impl SimRobot {
             next_state: state.clone(),
             initial_state: state.clone(),
             state,
-            mass: DMatrix::zeros(nv, nv),
             momentum_matrix: DMatrix::zeros(6, nv),
             mass_packed: factorization.matrix(),
+            mass_slots: Vec::new(),
             system: factorization.matrix(),
             system_changed: false,
             changed_branches: vec![false; factorization.branch_count()],
@@ -244,6 +246,11 @@ impl SimRobot {
             config,
             model,
         };
+        let tree = &sim.factorization;
+        let mut slots = Vec::with_capacity(tree.matrix().values().len());
+        sim.kd
+            .mass_matrix_lower(|row, col, _| slots.push(tree.lower_index(row, col)));
+        sim.mass_slots = slots;
         let zero = sim.state.clone();
         sim.set_initial_state(&zero)?;
         Ok(sim)
@@ -435,7 +442,7 @@ impl SimRobot {
     }
 
     /// The wrench transmitted through each force/torque sensor during the step
-    /// ([`KinDyn::ft_sensor_wrenches`]) from the step's acceleration and external wrenches (each touching
+    /// ([`KinDyn::ft_sensor_readings`], the sensors' subtrees only) from the step's acceleration and external wrenches (each touching
     /// surface's point forces about its frame origin, the active pushes), at the start-of-step state the
     /// dynamics used.
     pub(super) fn compute_ft_truth(&mut self) -> Result<(), SimError> {
@@ -465,7 +472,7 @@ impl SimRobot {
             }
         }
         self.kd
-            .ft_sensor_wrenches(&self.acceleration, &self.ft_external, &mut self.ft_truth)?;
+            .ft_sensor_readings(&self.acceleration, &self.ft_external, &mut self.ft_truth)?;
         Ok(())
     }
 
@@ -595,6 +602,25 @@ mod tests {
         // it and needs a second solve.
         input.joint_positions[elbow] = 1.5;
         (sim, input, elbow)
+    }
+
+    /// The mass matrix the implicit step packs through its slots is the dense CRBA matrix gathered into
+    /// the tree pattern, bit for bit, after a few steps of motion.
+    #[test]
+    fn the_packed_mass_matrix_is_the_gathered_dense_one() {
+        let (mut sim, input, _) = standing_humanoid();
+        for _ in 0..5 {
+            sim.step(&input).expect("step");
+        }
+        sim.mass_packed.values_mut().fill(f64::NAN);
+        sim.pack_mass_matrix();
+        let nv = sim.model.nv();
+        let mut dense = DMatrix::zeros(nv, nv);
+        sim.kd.mass_matrix(&mut dense).unwrap();
+        let mut gathered = sim.factorization.matrix();
+        sim.factorization.gather(&dense, &mut gathered);
+        let bits = |m: &TreeMatrix| m.values().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&sim.mass_packed), bits(&gathered));
     }
 
     #[test]

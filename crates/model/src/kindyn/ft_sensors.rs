@@ -32,6 +32,35 @@ impl KinDyn {
         external: &[ExternalWrench],
         out: &mut [Vector6<f64>],
     ) -> Result<(), ModelError> {
+        self.sensor_pass(nu_dot, external, out, true)
+    }
+
+    /// The readings of [`KinDyn::ft_sensor_wrenches`], bit for bit, from the bodies of the sensors'
+    /// child sides only (the RNEA's backward pass over the subtrees below the sensors' host bodies, not the
+    /// whole tree): for a caller that needs the readings and nothing else of the pass (a simulator's sensor
+    /// model). Leaves nothing for [`KinDyn::inverse_dynamics_after_ft_sensors`].
+    ///
+    /// # Errors
+    /// As [`KinDyn::ft_sensor_wrenches`]. Does not allocate.
+    pub fn ft_sensor_readings(
+        &mut self,
+        nu_dot: &DVector<f64>,
+        external: &[ExternalWrench],
+        out: &mut [Vector6<f64>],
+    ) -> Result<(), ModelError> {
+        self.sensor_pass(nu_dot, external, out, false)
+    }
+
+    /// The readings, from the RNEA over the whole tree (`whole`, then reusable by
+    /// [`KinDyn::inverse_dynamics_after_ft_sensors`] when `external` is empty) or over the sensors'
+    /// subtrees. Checks sizes and finiteness and gathers the external wrenches first.
+    fn sensor_pass(
+        &mut self,
+        nu_dot: &DVector<f64>,
+        external: &[ExternalWrench],
+        out: &mut [Vector6<f64>],
+        whole: bool,
+    ) -> Result<(), ModelError> {
         check_len("nu_dot", self.model.nv(), nu_dot.len())?;
         check_len(
             "ft_sensor_wrenches output",
@@ -42,8 +71,20 @@ impl KinDyn {
             return Err(ModelError::NonFiniteInput { what: "nu_dot" });
         }
         self.gather_wrenches(external)?;
-        // `force[i]` = Σ over the subtree of i of (φ − f^x), frame A'.
-        self.rnea_forces(Some(nu_dot), true);
+        if whole {
+            // `force[i]` = Σ over the subtree of i of (φ − f^x), frame A'.
+            self.rnea_forces(Some(nu_dot), true);
+            self.sensor_pass_ready = external.is_empty();
+        } else {
+            self.sensor_subtree_forces(nu_dot);
+        }
+        self.read_sensors(external, out);
+        Ok(())
+    }
+
+    /// The readings from the subtree wrenches `force` of the child-side bodies ([Traversaro 2017,
+    /// eq. 4.23b]; see [`KinDyn::ft_sensor_wrenches`]).
+    fn read_sensors(&self, external: &[ExternalWrench], out: &mut [Vector6<f64>]) {
         let model = &*self.model;
         for (k, (sensor, side)) in model.ft_sensors.iter().zip(&model.ft_sides).enumerate() {
             let h = side.host;
@@ -79,6 +120,53 @@ impl KinDyn {
                 reading
             };
         }
+    }
+
+    /// Inverse dynamics ([`KinDyn::inverse_dynamics`]: `out = M ν̇ + h − Σ J_fᵀ w_f` = `[base wrench; τ]`)
+    /// with the `nu_dot` of the last [`KinDyn::ft_sensor_wrenches`] call, which must have had no external
+    /// wrench and the current state, reusing that call's RNEA: its subtree wrenches `Σ φ` less, on the path
+    /// from each wrench's body to the root, the wrench moved to the A' origin (the RNEA is linear in the
+    /// external wrenches, [Featherstone 2008, §5.3]), projected on the joints. Equal to
+    /// [`KinDyn::inverse_dynamics`] to rounding (the sums are taken in another order), at the cost of one
+    /// walk up the tree per wrench. Lets an estimator predict the sensor readings, estimate the contact
+    /// wrenches from them, then compute the joint torques with one RNEA.
+    ///
+    /// # Errors
+    /// [`ModelError::NoSensorPass`] without such a pass (or after a change of state, representation or
+    /// gravity, or another dynamics call), [`ModelError::DimensionMismatch`] when `out` is not nv long,
+    /// [`ModelError::NonFiniteInput`], [`ModelError::FrameOutOfRange`] for a wrench. Does not allocate.
+    pub fn inverse_dynamics_after_ft_sensors(
+        &mut self,
+        wrenches: &[ExternalWrench],
+        out: &mut DVector<f64>,
+    ) -> Result<(), ModelError> {
+        check_len("inverse_dynamics output", self.model.nv(), out.len())?;
+        if !self.sensor_pass_ready {
+            return Err(ModelError::NoSensorPass);
+        }
+        for w in wrenches {
+            self.frame_checked(w.frame)?;
+            if !w.wrench.iter().all(|v| v.is_finite()) {
+                return Err(ModelError::NonFiniteInput {
+                    what: "external wrench",
+                });
+            }
+        }
+        self.sensor_pass_ready = false;
+        for w in wrenches {
+            let (b, _, p) = self.frame_rt(w.frame);
+            let f = lin(&w.wrench);
+            let at_origin = join(&f, &(ang(&w.wrench) + p.cross(&f)));
+            let mut k = b;
+            loop {
+                self.force[k] -= at_origin;
+                if k == 0 {
+                    break;
+                }
+                k = self.model.parent[k];
+            }
+        }
+        self.project_forces(out);
         Ok(())
     }
 

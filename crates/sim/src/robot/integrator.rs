@@ -61,9 +61,8 @@ impl SimRobot {
     /// when only the right-hand side changed (a sliding point's normal-force estimate). Each solve gives the
     /// same result as assembling and factorising the whole system again.
     pub(super) fn solve_implicit(&mut self, input: &SimInput) -> Result<Solve, SimError> {
-        self.kd.mass_matrix(&mut self.mass)?;
+        self.pack_mass_matrix();
         self.kd.bias_forces(&mut self.bias)?;
-        self.factorization.gather(&self.mass, &mut self.mass_packed);
         for s in &mut self.surfaces {
             self.kd.frame_jacobian(s.frame, &mut s.jacobian)?;
             s.find_columns();
@@ -111,6 +110,18 @@ impl SimRobot {
                 });
             }
         }
+    }
+
+    /// The mass matrix at the current state of `kd`, written straight into its packed tree pattern
+    /// (`mass_packed`) through the slots found at construction (no dense matrix).
+    pub(super) fn pack_mass_matrix(&mut self) {
+        let (slots, packed) = (&self.mass_slots, self.mass_packed.values_mut());
+        let mut next = slots.iter();
+        self.kd.mass_matrix_lower(|_, _, v| {
+            if let Some(&slot) = next.next() {
+                packed[slot] = v;
+            }
+        });
     }
 
     /// Starts `(M + dt D + dt² K) ν̇ = rhs` with the mass matrix and the joints: each servo adds
