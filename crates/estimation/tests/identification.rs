@@ -234,7 +234,7 @@ fn whole_robot_base_parameters_recovered_and_every_body_physical() {
         kd.set_state(&state).unwrap();
         kd.inverse_dynamics_regressor(&nu_dot, &mut y).unwrap();
         let joint_rows = y.rows(6, dof);
-        let tau = &joint_rows * &truth;
+        let tau = joint_rows * &truth;
         for j in 0..dof {
             let sign = state.joint_velocities[j].signum();
             let mut row = DVector::zeros(10 * nb + dof);

@@ -155,6 +155,10 @@ pub enum Command {
         /// Also write a TOML report: parameters before and after, residuals, singular values.
         #[arg(long)]
         report: Option<PathBuf>,
+        /// Also write the simulated plant's parameters (`[sim.model]` applied to the logged URDF) as a URDF
+        /// in the same form, for comparisons (simulated logs only).
+        #[arg(long)]
+        plant_urdf: Option<PathBuf>,
         /// Use only the motor torques (not the force/torque sensors).
         #[arg(long, conflicts_with = "ft_only")]
         torques_only: bool,

@@ -301,6 +301,7 @@ pub fn identify(
     logs: &[PathBuf],
     output: &Path,
     report_path: Option<&Path>,
+    plant_urdf: Option<&Path>,
     options: &crate::identify::IdentifyOptions,
 ) -> Result<ExitCode, CliError> {
     let report = crate::identify::identify_logs(logs, options).map_err(err)?;
@@ -317,6 +318,17 @@ pub fn identify(
     if let Some(r) = report_path {
         write(r, &report.to_toml())?;
         crate::outln!("report written to {}", r.display());
+    }
+    if let Some(p) = plant_urdf {
+        let truth = report.truth.as_ref().ok_or_else(|| {
+            CliError::msg(
+                "--plant-urdf: the logs are not simulations of the logged URDF".to_string(),
+            )
+        })?;
+        let text = crate::identify::identified_urdf(&report.prior_urdf, &report.model, truth)
+            .map_err(err)?;
+        write(p, &text)?;
+        crate::outln!("plant URDF written to {}", p.display());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -389,12 +401,14 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             logs,
             output,
             report,
+            plant_urdf,
             torques_only,
             ft_only,
         } => identify(
             &logs,
             &output,
             report.as_deref(),
+            plant_urdf.as_deref(),
             &crate::identify::IdentifyOptions {
                 use_torques: !ft_only,
                 use_ft: !torques_only,

@@ -253,9 +253,8 @@ fn check(
             reason: "non-finite",
         });
     }
-    if !(options.prior_weight.is_finite() && options.prior_weight >= 0.0)
-        || !(options.tolerance.is_finite() && options.tolerance >= 0.0)
-    {
+    let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+    if !non_negative(options.prior_weight) || !non_negative(options.tolerance) {
         return Err(IdentificationError::Invalid {
             what: "manifold options",
             index: 0,

@@ -164,7 +164,8 @@ pub fn identify_logs(
     let Some(first) = paths.first() else {
         return Err(IdentifyError::Content("no log given".into()));
     };
-    let (model, prior_urdf, truth) = load_model(first)?;
+    let logged = load_model(first)?;
+    let model = Arc::clone(&logged.model);
     let ns = model.ft_sensors().len();
     let layout = Layout {
         psi: 10 * (model.body_count() + ns),
@@ -175,8 +176,7 @@ pub fn identify_logs(
     let mut kd = KinDyn::new(Arc::clone(&model));
     let mut samples = 0;
     for path in paths {
-        let (log_model, urdf, _) = load_model(path)?;
-        if urdf != prior_urdf || log_model.dof() != model.dof() {
+        if load_model(path)?.urdf != logged.urdf {
             return Err(IdentifyError::Content(format!(
                 "{} holds another robot model than {}",
                 path.display(),
@@ -185,13 +185,21 @@ pub fn identify_logs(
         }
         samples += add_log(path, &mut kd, &layout, options, &mut data)?;
     }
-    solve(
-        model, prior_urdf, truth, paths, samples, &layout, &data, options,
-    )
+    solve(logged, paths, samples, &layout, &data, options)
+}
+
+/// The model a log holds.
+struct LoggedModel {
+    /// The controllers' model, with the scenario's gravity.
+    model: Arc<Model>,
+    /// Its URDF text.
+    urdf: String,
+    /// The simulated plant's ψ (FT-split layout), for simulator logs of that URDF.
+    truth: Option<DVector<f64>>,
 }
 
 /// The logged model (gravity of the scenario), its URDF text and, for simulated logs, the plant's ψ.
-fn load_model(path: &Path) -> Result<(Arc<Model>, String, Option<DVector<f64>>), IdentifyError> {
+fn load_model(path: &Path) -> Result<LoggedModel, IdentifyError> {
     let log = read_log(path).map_err(ReplayError::from)?;
     let scenario = logged_scenario(&log, path)?;
     let mut model = (*logged_model(&log, path, &scenario)?).clone();
@@ -213,7 +221,11 @@ fn load_model(path: &Path) -> Result<(Arc<Model>, String, Option<DVector<f64>>),
         let plant = Model::from_urdf_str_reduced(&urdf, &edits, &locks)?;
         Some(plant.ft_split_inertial_parameters()?)
     };
-    Ok((Arc::new(model), urdf, truth))
+    Ok(LoggedModel {
+        model: Arc::new(model),
+        urdf,
+        truth,
+    })
 }
 
 /// Adds the rows of one log; returns the number of samples used.
@@ -352,17 +364,19 @@ impl Rows {
 }
 
 /// Solves the manifold and the unconstrained problems and collects the report.
-#[allow(clippy::too_many_arguments)]
 fn solve(
-    model: Arc<Model>,
-    prior_urdf: String,
-    truth: Option<DVector<f64>>,
+    logged: LoggedModel,
     paths: &[PathBuf],
     samples: usize,
     layout: &Layout,
     data: &IdentificationData,
     options: &IdentifyOptions,
 ) -> Result<IdentificationReport, IdentifyError> {
+    let LoggedModel {
+        model,
+        urdf: prior_urdf,
+        truth,
+    } = logged;
     let reduced = data.reduce()?;
     let prior_psi = model.ft_split_inertial_parameters()?;
     let prior = Prior {
