@@ -13,6 +13,7 @@ mod config;
 pub mod ekf;
 mod error;
 mod estimator;
+pub mod identification;
 mod io;
 mod schmitt;
 

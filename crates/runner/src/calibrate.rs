@@ -73,11 +73,13 @@ pub struct CalibrationReport {
     pub duration: f64,
 }
 
-/// A paired sample: the state, its acceleration and every sensor's reading.
-struct Sample {
-    state: RobotState,
-    nu_dot: DVector<f64>,
-    readings: Vec<Vector6<f64>>,
+/// A paired sample: the state, its acceleration, the motor torques and every sensor's reading.
+pub(crate) struct Sample {
+    pub(crate) state: RobotState,
+    pub(crate) nu_dot: DVector<f64>,
+    /// Motor torques of `/sim/state` (N·m or N; empty in logs without them).
+    pub(crate) joint_torques: DVector<f64>,
+    pub(crate) readings: Vec<Vector6<f64>>,
 }
 
 /// `/sim/state` message.
@@ -86,6 +88,8 @@ struct StateMsg {
     time: f64,
     #[serde(flatten)]
     state: StateRecord<'static>,
+    #[serde(default)]
+    joint_torques: Vec<f64>,
 }
 
 /// `/sensors/ft` message.
@@ -150,7 +154,7 @@ pub fn calibrate_log(
     })
 }
 
-fn log_span(log: &crate::log::LogContents) -> f64 {
+pub(crate) fn log_span(log: &crate::log::LogContents) -> f64 {
     let mut times = log.topic("/sensors/ft").map(|m| m.time_ns);
     let first = times.next().unwrap_or(0);
     let last = times.last().unwrap_or(first);
@@ -198,7 +202,7 @@ fn calibrate_sensor(
 
 /// `/sim/state` and `/sensors/ft` paired by time, with `ν̇` from central differences of the velocities
 /// (the first and last states, without two neighbours, are dropped).
-fn paired_samples(
+pub(crate) fn paired_samples(
     log: &crate::log::LogContents,
     model: &Model,
     names: &[String],
@@ -214,7 +218,7 @@ fn paired_samples(
         msg.state
             .to_state(&mut s)
             .map_err(|e| CalibrateError::Content(format!("/sim/state: {e}")))?;
-        states.push((msg.time, s));
+        states.push((msg.time, s, DVector::from_vec(msg.joint_torques)));
     }
     let mut readings = std::collections::BTreeMap::new();
     for m in log.topic("/sensors/ft") {
@@ -235,12 +239,12 @@ fn paired_samples(
     }
     let mut out = Vec::new();
     for i in 1..states.len().saturating_sub(1) {
-        let (t, s) = &states[i];
+        let (t, s, tau) = &states[i];
         let Some(r) = readings.get(&time_key(*t)) else {
             continue;
         };
-        let (t0, s0) = &states[i - 1];
-        let (t1, s1) = &states[i + 1];
+        let (t0, s0, _) = &states[i - 1];
+        let (t1, s1, _) = &states[i + 1];
         let dt = t1 - t0;
         if dt <= 0.0 {
             continue;
@@ -255,6 +259,7 @@ fn paired_samples(
         out.push(Sample {
             state: s.clone(),
             nu_dot,
+            joint_torques: tau.clone(),
             readings: r.clone(),
         });
     }

@@ -143,6 +143,29 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Identify the robot's inertial parameters from logs of an identification run (robot on a pole, joints
+    /// moved: `configs/identify_legs.toml`) and write a URDF with them, every body physically consistent.
+    Identify {
+        /// MCAP logs written by `stride run` (same robot model).
+        #[arg(required = true)]
+        logs: Vec<PathBuf>,
+        /// The identified URDF (the logged URDF with every link's inertial replaced).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Also write a TOML report: parameters before and after, residuals, singular values.
+        #[arg(long)]
+        report: Option<PathBuf>,
+        /// Also write the simulated plant's parameters (`[sim.model]` applied to the logged URDF) as a URDF
+        /// in the same form, for comparisons (simulated logs only).
+        #[arg(long)]
+        plant_urdf: Option<PathBuf>,
+        /// Use only the motor torques (not the force/torque sensors).
+        #[arg(long, conflicts_with = "ft_only")]
+        torques_only: bool,
+        /// Use only the force/torque sensors (not the motor torques).
+        #[arg(long)]
+        ft_only: bool,
+    },
     /// SVG figures of a run's log (tracking, feet, forces, torques, solve times) or a sweep's survival map.
     Plot {
         /// MCAP log written by `stride run`, or a sweep's `results.json`.

@@ -296,6 +296,43 @@ pub fn calibrate(
     Ok(ExitCode::SUCCESS)
 }
 
+/// `stride identify`: the table, the identified URDF and, with `--report`, the TOML report.
+pub fn identify(
+    logs: &[PathBuf],
+    output: &Path,
+    report_path: Option<&Path>,
+    plant_urdf: Option<&Path>,
+    options: &crate::identify::IdentifyOptions,
+) -> Result<ExitCode, CliError> {
+    let report = crate::identify::identify_logs(logs, options).map_err(err)?;
+    crate::out!("{}", report.render());
+    let urdf =
+        crate::identify::identified_urdf(&report.prior_urdf, &report.model, &report.identified)
+            .map_err(err)?;
+    let write = |path: &Path, text: &str| {
+        std::fs::write(path, text)
+            .map_err(|e| CliError::msg(format!("cannot write {}: {e}", path.display())))
+    };
+    write(output, &urdf)?;
+    crate::outln!("identified URDF written to {}", output.display());
+    if let Some(r) = report_path {
+        write(r, &report.to_toml())?;
+        crate::outln!("report written to {}", r.display());
+    }
+    if let Some(p) = plant_urdf {
+        let truth = report.truth.as_ref().ok_or_else(|| {
+            CliError::msg(
+                "--plant-urdf: the logs are not simulations of the logged URDF".to_string(),
+            )
+        })?;
+        let text = crate::identify::identified_urdf(&report.prior_urdf, &report.model, truth)
+            .map_err(err)?;
+        write(p, &text)?;
+        crate::outln!("plant URDF written to {}", p.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 fn err<E: std::error::Error + 'static>(e: E) -> CliError {
     CliError::msg(crate::cli::one_paragraph(&e))
 }
@@ -360,6 +397,24 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             sensor,
             output,
         } => calibrate(&log, sensor.as_deref(), output.as_deref()),
+        Command::Identify {
+            logs,
+            output,
+            report,
+            plant_urdf,
+            torques_only,
+            ft_only,
+        } => identify(
+            &logs,
+            &output,
+            report.as_deref(),
+            plant_urdf.as_deref(),
+            &crate::identify::IdentifyOptions {
+                use_torques: !ft_only,
+                use_ft: !torques_only,
+                ..Default::default()
+            },
+        ),
         Command::Sweep(args) => crate::sweep_cmd::sweep(args),
         Command::Plot {
             input,

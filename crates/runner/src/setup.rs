@@ -117,18 +117,7 @@ pub fn load_plant_model(scenario: &Scenario, model: &Arc<Model>) -> Result<Arc<M
         .plant_urdf_path
         .clone()
         .unwrap_or_else(|| scenario.urdf_path.clone());
-    let edits = InertiaEdits {
-        mass_scale: m.mass_scale,
-        links: m
-            .links
-            .iter()
-            .map(|(link, change)| LinkInertiaEdit {
-                link: link.clone(),
-                mass_scale: change.mass_scale,
-                com_offset: Vector3::from(change.com_offset),
-            })
-            .collect(),
-    };
+    let edits = plant_inertia_edits(scenario);
     let load_error = |source| RunError::ModelLoad {
         path: path.clone(),
         source,
@@ -139,6 +128,23 @@ pub fn load_plant_model(scenario: &Scenario, model: &Arc<Model>) -> Result<Arc<M
     add_sole_frames(scenario, &mut plant)?;
     check_same_joints(scenario, model, &plant)?;
     Ok(Arc::new(plant))
+}
+
+/// `[sim.model]`'s inertia changes (mass scale, per-link mass scales and CoM offsets) as model edits.
+pub fn plant_inertia_edits(scenario: &Scenario) -> InertiaEdits {
+    let m = &scenario.config.sim.model;
+    InertiaEdits {
+        mass_scale: m.mass_scale,
+        links: m
+            .links
+            .iter()
+            .map(|(link, change)| LinkInertiaEdit {
+                link: link.clone(),
+                mass_scale: change.mass_scale,
+                com_offset: Vector3::from(change.com_offset),
+            })
+            .collect(),
+    }
 }
 
 /// The plant must have the controllers' joints, in the same order.

@@ -97,14 +97,21 @@ impl StackedLeastSquares {
         self.filled = 0;
     }
 
-    /// Solves with the relative rank tolerance `tolerance` (see [`RANK_TOLERANCE`]).
-    pub fn solve(&self, tolerance: f64) -> LeastSquaresSolution {
+    /// The triangular factor of the rows so far: `(R, Qᵀb, ρ)` with `‖A x − b‖² = ‖R x − Qᵀb‖² + ρ²` for
+    /// every `x` (`R` upper-triangular, `n × n`).
+    pub fn triangular_factor(&self) -> (DMatrix<f64>, DVector<f64>, f64) {
         let mut this = self.clone();
         this.fold();
         let n = this.unknowns;
         let ra = this.r.view((0, 0), (n, n)).into_owned();
-        let qb = this.r.view((0, n), (n, 1)).into_owned();
-        let rho = this.r[(n, n)];
+        let qb = this.r.column(n).rows(0, n).into_owned();
+        (ra, qb, this.r[(n, n)])
+    }
+
+    /// Solves with the relative rank tolerance `tolerance` (see [`RANK_TOLERANCE`]).
+    pub fn solve(&self, tolerance: f64) -> LeastSquaresSolution {
+        let (ra, qb, rho) = self.triangular_factor();
+        let n = self.unknowns;
         let svd = ra.svd(true, true);
         let (u, v_t) = match (svd.u, svd.v_t) {
             (Some(u), Some(v_t)) => (u, v_t),
@@ -137,7 +144,7 @@ impl StackedLeastSquares {
             null_space,
             covariance,
             residual_squared,
-            rows: this.rows,
+            rows: self.rows,
         }
     }
 }
