@@ -21,6 +21,7 @@ use crate::contact::{build_surfaces, GroundPlane, Point, Surface};
 use crate::error::{find_frame, SimError};
 use crate::io::{ContactPointState, SimInput, SimOutput};
 use crate::linalg::{join, lin, TreeCholesky, TreeMatrix};
+use crate::passive::install_passive_joints;
 use crate::patches::GroundCompliance;
 use crate::push::Push;
 use crate::sensors::{Sensors, Truth};
@@ -62,6 +63,8 @@ pub struct SimRobot {
     /// The ground's normal densities along the path (its patches).
     compliance: GroundCompliance,
     actuators: Vec<Actuator>,
+    /// Model indices of the passive joints (`config.passive_joints`): their commands are discarded.
+    passive: Vec<usize>,
     surfaces: Vec<Surface>,
     points: Vec<Point>,
     pushes: Vec<Push>,
@@ -164,7 +167,8 @@ impl SimRobot {
         let period_ns = period_ns(period)?;
         let n = model.dof();
         let nv = model.nv();
-        let actuators = resolve_actuators(&model, &config.actuation)?;
+        let mut actuators = resolve_actuators(&model, &config.actuation)?;
+        let passive = install_passive_joints(&model, &config.passive_joints, &mut actuators)?;
         let (surfaces, points) = build_surfaces(&model, &config.contact)?;
         let pushes = config
             .pushes
@@ -202,6 +206,7 @@ impl SimRobot {
             ground: GroundPlane::from_config(&config.ground),
             compliance: GroundCompliance::from_config(&config.ground, &config.contact),
             actuators,
+            passive,
             anchor_backup: vec![None; points.len()],
             surfaces,
             points,
@@ -340,6 +345,12 @@ impl SimRobot {
                 parameter: "set_joint_actuator".into(),
                 joint: joint.to_string(),
             })?;
+        if self.passive.contains(&index) {
+            return Err(SimError::InvalidConfig {
+                parameter: format!("passive_joints.{joint}"),
+                message: "a passive joint has no actuator to change".into(),
+            });
+        }
         if self.config.integrator == IntegratorKind::Explicit && actuator.armature > 0.0 {
             return Err(SimError::InvalidConfig {
                 parameter: "armature".into(),
@@ -361,6 +372,7 @@ impl SimRobot {
         let delayed = (self.command_head + 1) % self.commands.len();
         let mut applied = std::mem::replace(&mut self.applied, SimInput::zeros(0));
         copy_input(&mut applied, &self.commands[delayed]);
+        self.discard_passive_commands(&mut applied);
         self.lag_torques(&mut applied);
         let result = self.advance(&applied);
         self.applied = applied;
@@ -368,6 +380,16 @@ impl SimRobot {
             self.command_head = delayed;
         }
         result
+    }
+
+    /// Passive joints have no motor: their spring-damper servo ([`crate::passive`]) pulls to `q = 0`,
+    /// `q̇ = 0` with no feed-forward, whatever the controllers commanded.
+    fn discard_passive_commands(&self, applied: &mut SimInput) {
+        for &j in &self.passive {
+            applied.joint_positions[j] = 0.0;
+            applied.joint_velocities[j] = 0.0;
+            applied.joint_torques[j] = 0.0;
+        }
     }
 
     /// Torque-mode joints: the motor torque follows the command through the first-order lag of the joint's
