@@ -5,8 +5,6 @@
 //! feed-forward and no effort bound, and discards every command the controllers send to it: the servo law
 //! is then exactly the spring-damper, and the implicit integrator treats it as stiffly as a servo.
 
-use std::collections::BTreeMap;
-
 use serde::{Deserialize, Serialize};
 use stride_model::Model;
 
@@ -14,28 +12,37 @@ use crate::actuator::Actuator;
 use crate::config::ActuationMode;
 use crate::error::SimError;
 
-/// One passive joint of `[sim.passive_joints.<joint>]`.
+/// One entry of `[[sim.passive_joints]]`: joints that share one spring-damper law.
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
+/// | `joints` | – | – (required) | joint names (each in one entry at most) |
 /// | `stiffness` | N·m/rad (N/m) | – (required) | `k` of `τ = −k q − b q̇`, > 0 |
 /// | `damping` | N·m·s/rad (N·s/m) | `2√k` (the thesis's choice, value of `k` in SI units) | `b`, ≥ 0 |
+/// | `encoder` | – | `false` | the joints have encoders; without (the thesis's case) their encoder readings are 0 and the deflection must be estimated ([Romualdi 2022, §9.3]) |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PassiveJointConfig {
+    /// The joints with this law, by name.
+    pub joints: Vec<String>,
     /// Stiffness `k`, N·m/rad.
     pub stiffness: f64,
     /// Damping `b`, N·m·s/rad; `None` = `2√k` [Romualdi 2022, §9.4].
     #[serde(default)]
     pub damping: Option<f64>,
+    /// Whether the joints have encoders (default `false`: their readings are 0, the deflection unmeasured).
+    #[serde(default)]
+    pub encoder: bool,
 }
 
 impl PassiveJointConfig {
-    /// The spring `k` with the thesis's damping `b = 2√k` (SI values).
-    pub fn with_default_damping(stiffness: f64) -> Self {
+    /// The joints `joints` with the spring `k` and the thesis's damping `b = 2√k` (SI values).
+    pub fn with_default_damping(joints: &[&str], stiffness: f64) -> Self {
         Self {
+            joints: joints.iter().map(|j| j.to_string()).collect(),
             stiffness,
             damping: None,
+            encoder: false,
         }
     }
 
@@ -49,8 +56,14 @@ impl PassiveJointConfig {
         -self.stiffness * position - self.damping() * velocity
     }
 
-    /// Checks `k > 0` and `b ≥ 0`, both finite; `parameter` names the table in errors.
+    /// Checks `k > 0` and `b ≥ 0`, both finite, and a non-empty joint list; `parameter` names the entry.
     pub(crate) fn validate(&self, parameter: &str) -> Result<(), SimError> {
+        if self.joints.is_empty() {
+            return Err(SimError::InvalidConfig {
+                parameter: format!("{parameter}.joints"),
+                message: "empty: expected at least one joint name".into(),
+            });
+        }
         if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
             return Err(SimError::InvalidConfig {
                 parameter: format!("{parameter}.stiffness"),
@@ -68,25 +81,44 @@ impl PassiveJointConfig {
     }
 }
 
+/// The model indices of the passive joints without encoders in `passive`.
+pub(crate) fn unmeasured_joints(model: &Model, passive: &[PassiveJointConfig]) -> Vec<usize> {
+    passive
+        .iter()
+        .filter(|p| !p.encoder)
+        .flat_map(|p| p.joints.iter().filter_map(|j| model.joint_index(j)))
+        .collect()
+}
+
 /// The model indices of the passive joints, with the actuators in `actuators` (model order) replaced by
-/// their spring-dampers. Errors name the joint the model does not have.
+/// their spring-dampers. Errors name the joint the model does not have, or one listed twice.
 pub(crate) fn install_passive_joints(
     model: &Model,
-    passive: &BTreeMap<String, PassiveJointConfig>,
+    passive: &[PassiveJointConfig],
     actuators: &mut [Actuator],
 ) -> Result<Vec<usize>, SimError> {
-    let mut indices = Vec::with_capacity(passive.len());
-    for (name, p) in passive {
-        let parameter = format!("passive_joints.{name}");
+    let mut indices = Vec::new();
+    for (i, p) in passive.iter().enumerate() {
+        let parameter = format!("passive_joints[{i}]");
         p.validate(&parameter)?;
-        let index = model
-            .joint_index(name)
-            .ok_or_else(|| SimError::UnknownJoint {
-                parameter: parameter.clone(),
-                joint: name.clone(),
-            })?;
-        actuators[index] = Actuator::spring_damper(p.stiffness, p.damping());
-        indices.push(index);
+        for name in &p.joints {
+            let index = model
+                .joint_index(name)
+                .ok_or_else(|| SimError::UnknownJoint {
+                    parameter: format!("{parameter}.joints"),
+                    joint: name.clone(),
+                })?;
+            if indices.contains(&index) {
+                return Err(SimError::InvalidConfig {
+                    parameter: format!("{parameter}.joints"),
+                    message: format!(
+                        "`{name}` is already passive; expected each joint in one entry"
+                    ),
+                });
+            }
+            actuators[index] = Actuator::spring_damper(p.stiffness, p.damping());
+            indices.push(index);
+        }
     }
     Ok(indices)
 }

@@ -21,7 +21,7 @@ use crate::contact::{build_surfaces, GroundPlane, Point, Surface};
 use crate::error::{find_frame, SimError};
 use crate::io::{ContactPointState, SimInput, SimOutput};
 use crate::linalg::{join, lin, TreeCholesky, TreeMatrix};
-use crate::passive::install_passive_joints;
+use crate::passive::{install_passive_joints, unmeasured_joints};
 use crate::patches::GroundCompliance;
 use crate::push::Push;
 use crate::sensors::{Sensors, Truth};
@@ -65,6 +65,8 @@ pub struct SimRobot {
     actuators: Vec<Actuator>,
     /// Model indices of the passive joints (`config.passive_joints`): their commands are discarded.
     passive: Vec<usize>,
+    /// Model indices of the passive joints without encoders: their encoder readings are 0.
+    unmeasured: Vec<usize>,
     surfaces: Vec<Surface>,
     points: Vec<Point>,
     pushes: Vec<Push>,
@@ -169,6 +171,7 @@ impl SimRobot {
         let nv = model.nv();
         let mut actuators = resolve_actuators(&model, &config.actuation)?;
         let passive = install_passive_joints(&model, &config.passive_joints, &mut actuators)?;
+        let unmeasured = unmeasured_joints(&model, &config.passive_joints);
         let (surfaces, points) = build_surfaces(&model, &config.contact)?;
         let pushes = config
             .pushes
@@ -207,6 +210,7 @@ impl SimRobot {
             compliance: GroundCompliance::from_config(&config.ground, &config.contact),
             actuators,
             passive,
+            unmeasured,
             anchor_backup: vec![None; points.len()],
             surfaces,
             points,
@@ -347,8 +351,8 @@ impl SimRobot {
             })?;
         if self.passive.contains(&index) {
             return Err(SimError::InvalidConfig {
-                parameter: format!("passive_joints.{joint}"),
-                message: "a passive joint has no actuator to change".into(),
+                parameter: "passive_joints".into(),
+                message: format!("`{joint}` is passive: it has no actuator to change"),
             });
         }
         if self.config.integrator == IntegratorKind::Explicit && actuator.armature > 0.0 {
@@ -524,6 +528,10 @@ impl SimRobot {
             fresh_start,
         };
         self.sensors.measure(&truth, out);
+        for &j in &self.unmeasured {
+            out.joint_positions[j] = 0.0;
+            out.joint_velocities[j] = 0.0;
+        }
         self.detect_fall();
     }
 

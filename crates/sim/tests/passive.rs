@@ -49,7 +49,7 @@ fn sim(model: &Arc<Model>, spring: PassiveJointConfig, rate_hz: u32, q0: f64) ->
     config.fixed_base = true;
     config.contact.surfaces.clear();
     config.actuation.default.mode = ActuationMode::Torque;
-    config.passive_joints.insert("spring".into(), spring);
+    config.passive_joints.push(spring);
     let mut sim = SimRobot::new(Arc::clone(model), config, common::period(rate_hz)).unwrap();
     let mut state = RobotState::zero(model);
     state.joint_positions[0] = q0;
@@ -95,7 +95,7 @@ fn run(sim: &mut SimRobot, seconds: f64) -> Vec<(f64, f64)> {
 
 #[test]
 fn damping_defaults_to_twice_the_square_root_of_the_stiffness() {
-    let spring = PassiveJointConfig::with_default_damping(400.0);
+    let spring = PassiveJointConfig::with_default_damping(&["spring"], 400.0);
     assert_eq!(spring.damping(), 40.0);
     assert_eq!(spring.torque(0.01, -0.5), -400.0 * 0.01 + 40.0 * 0.5);
 }
@@ -108,6 +108,8 @@ fn free_vibration_matches_the_damped_oscillator() {
     let (i, theta0) = (inertia(), 0.2);
     let b = 0.2 * (K * i).sqrt(); // ζ = 0.1
     let spring = PassiveJointConfig {
+        joints: vec!["spring".into()],
+        encoder: false,
         stiffness: K,
         damping: Some(b),
     };
@@ -150,7 +152,7 @@ fn free_vibration_matches_the_damped_oscillator() {
 fn default_damping_follows_the_overdamped_closed_form() {
     let model = arm_model("0 0 1");
     let (i, theta0) = (inertia(), 0.2);
-    let spring = PassiveJointConfig::with_default_damping(K);
+    let spring = PassiveJointConfig::with_default_damping(&["spring"], K);
     let b = spring.damping();
     let mut sim = sim(&model, spring, 10_000, theta0);
     let dt = sim.period();
@@ -170,7 +172,7 @@ fn default_damping_follows_the_overdamped_closed_form() {
 #[test]
 fn static_deflection_under_gravity_balances_the_spring() {
     let model = arm_model("0 1 0");
-    let spring = PassiveJointConfig::with_default_damping(K);
+    let spring = PassiveJointConfig::with_default_damping(&["spring"], K);
     let mut sim = sim(&model, spring, 2_000, 0.0);
     let trace = run(&mut sim, 8.0);
     let (q, v) = *trace.last().unwrap();
@@ -181,6 +183,9 @@ fn static_deflection_under_gravity_balances_the_spring() {
         theta -= (K * theta - mgl * theta.cos()) / (K + mgl * theta.sin());
     }
     assert!(v.abs() < 1e-6, "settled: velocity {v}");
+    // No encoder (the default): the reading is 0 whatever the deflection.
+    assert_eq!(sim.output().joint_positions[0], 0.0);
+    assert_eq!(sim.output().joint_velocities[0], 0.0);
     assert!(
         (q - theta).abs() < 1e-6,
         "deflection {q} rad, closed form {theta} rad"
@@ -195,6 +200,8 @@ fn energy_is_kept_without_damping_and_dissipated_by_the_damper() {
     let i = inertia();
     let energy = |(q, v): (f64, f64)| 0.5 * i * v * v + 0.5 * K * q * q;
     let undamped = PassiveJointConfig {
+        joints: vec!["spring".into()],
+        encoder: false,
         stiffness: K,
         damping: Some(0.0),
     };
@@ -217,6 +224,8 @@ fn energy_is_kept_without_damping_and_dissipated_by_the_damper() {
 
     let b = 0.2 * (K * i).sqrt();
     let damped = PassiveJointConfig {
+        joints: vec!["spring".into()],
+        encoder: false,
         stiffness: K,
         damping: Some(b),
     };
@@ -231,25 +240,51 @@ fn energy_is_kept_without_damping_and_dissipated_by_the_damper() {
     );
 }
 
+/// With `encoder = true` the deflection is read like any joint's (ideal encoders here).
 #[test]
-fn a_passive_joint_the_model_lacks_or_a_bad_stiffness_is_refused() {
+fn a_passive_joint_with_an_encoder_is_measured() {
+    let model = arm_model("0 1 0");
+    let spring = PassiveJointConfig {
+        encoder: true,
+        ..PassiveJointConfig::with_default_damping(&["spring"], K)
+    };
+    let mut sim = sim(&model, spring, 2_000, 0.0);
+    run(&mut sim, 1.0);
+    let q = sim.state().joint_positions[0];
+    assert!(q > 0.05, "deflected: {q}");
+    assert!((sim.output().joint_positions[0] - q).abs() < 1e-9);
+}
+
+#[test]
+fn a_passive_joint_the_model_lacks_a_bad_stiffness_or_a_joint_listed_twice_is_refused() {
     let model = arm_model("0 0 1");
     let mut config = common::ideal_config();
     config.contact.surfaces.clear();
-    config.passive_joints.insert(
-        "no_such_joint".into(),
-        PassiveJointConfig::with_default_damping(K),
-    );
-    let err = SimRobot::new(Arc::clone(&model), config.clone(), common::PERIOD).unwrap_err();
-    assert!(err.to_string().contains("no_such_joint"), "{err}");
-    config.passive_joints.clear();
-    config.passive_joints.insert(
-        "spring".into(),
-        PassiveJointConfig::with_default_damping(-1.0),
-    );
-    let err = SimRobot::new(Arc::clone(&model), config, common::PERIOD).unwrap_err();
+    let refused = |entries: Vec<PassiveJointConfig>| {
+        let mut config = config.clone();
+        config.passive_joints = entries;
+        SimRobot::new(Arc::clone(&model), config, common::PERIOD)
+            .unwrap_err()
+            .to_string()
+    };
+    let err = refused(vec![PassiveJointConfig::with_default_damping(
+        &["no_such_joint"],
+        K,
+    )]);
+    assert!(err.contains("no_such_joint"), "{err}");
+    let err = refused(vec![PassiveJointConfig::with_default_damping(
+        &["spring"],
+        -1.0,
+    )]);
+    assert!(err.contains("passive_joints[0].stiffness"), "{err}");
+    let err = refused(vec![
+        PassiveJointConfig::with_default_damping(&["spring"], K),
+        PassiveJointConfig::with_default_damping(&["spring"], K),
+    ]);
     assert!(
-        err.to_string().contains("passive_joints.spring.stiffness"),
+        err.contains("passive_joints[1].joints") && err.contains("already passive"),
         "{err}"
     );
+    let err = refused(vec![PassiveJointConfig::with_default_damping(&[], K)]);
+    assert!(err.contains("passive_joints[0].joints"), "{err}");
 }
