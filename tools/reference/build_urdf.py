@@ -17,9 +17,10 @@ Conventions (see docs/models.md):
 Usage: python3 tools/reference/build_urdf.py [--flex] [output]
   default output: models/stride_humanoid.urdf, with --flex models/stride_humanoid_flex.urdf.
 
---flex writes the variant with flexible hips (Romualdi 2022, ch. 9, after Villa et al. 2022): between the pelvis and
+--flex writes the variant with flexible hips (Romualdi 2022, ch. 9): between the pelvis and
 each leg, a passive pitch joint (<side>_hip_flex_pitch, axis as <side>_hip_pitch) and a passive roll joint
-(<side>_hip_flex_roll, axis as <side>_hip_roll), both at the hip's origin, through two massless links. Everything
+(<side>_hip_flex_roll, axis as <side>_hip_roll), both 6 cm above the hip (in the pelvis), through two massless
+links. Everything
 else is the bundled humanoid unchanged; the zero configuration (flex joints at 0) is the same robot. The joints
 are passive visco-elastic springs in the simulator (`[sim.passive_joints]`), not motors.
 """
@@ -149,6 +150,7 @@ def deg(x):
 
 
 FLEX_RANGE = 0.5  # [rad] range of the passive hip joints (far beyond any deflection a walk produces)
+FLEX_ABOVE_HIP = 0.06  # [m] the passive hip joints are at the pelvis, this far above the hip joints
 FLEX_EFFORT = 1000.0  # [N m] nominal effort bound of the passive hip joints (no motor: never commanded)
 
 
@@ -234,14 +236,18 @@ def build(flex=False):
 
         hip_parent, hip_xyz = "root_link", (0.0, s * HIP_Y, -0.06)
         if flex:
+            # The passive joints sit FLEX_ABOVE_HIP above the hip: at the hip itself, through massless links,
+            # the passive pitch would be coaxial with the hip pitch and the mass matrix singular (the two
+            # joints turning opposite ways would move nothing).
             flex_limits = (-FLEX_RANGE, FLEX_RANGE, 10.0, FLEX_EFFORT)
             L(Link(up + "hip_flex_1", comment="massless link between the passive hip joints"))
             L(Link(up + "hip_flex_2", comment="massless link between the passive hip joints and the leg"))
-            J(Joint(up + "hip_flex_pitch", "revolute", "root_link", up + "hip_flex_1", hip_xyz, (0, -1, 0),
+            flex_xyz = (0.0, s * HIP_Y, -0.06 + FLEX_ABOVE_HIP)
+            J(Joint(up + "hip_flex_pitch", "revolute", "root_link", up + "hip_flex_1", flex_xyz, (0, -1, 0),
                     flex_limits, comment="passive visco-elastic joint (no motor), axis as the hip pitch"))
             J(Joint(up + "hip_flex_roll", "revolute", up + "hip_flex_1", up + "hip_flex_2", (0.0, 0.0, 0.0),
                     (s, 0, 0), flex_limits, comment="passive visco-elastic joint (no motor), axis as the hip roll"))
-            hip_parent, hip_xyz = up + "hip_flex_2", (0.0, 0.0, 0.0)
+            hip_parent, hip_xyz = up + "hip_flex_2", (0.0, 0.0, -FLEX_ABOVE_HIP)
         J(Joint(up + "hip_pitch", "revolute", hip_parent, up + "hip_1", hip_xyz, (0, -1, 0),
                 (deg(-40), deg(120), 10.0, 60.0), comment="positive: flexion (leg forward)"))
         J(Joint(up + "hip_roll", "revolute", up + "hip_1", up + "hip_2", (0.0, 0.0, 0.0), (s, 0, 0),

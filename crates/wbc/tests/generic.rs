@@ -65,30 +65,6 @@ fn hand_tsid_config() -> TsidConfig {
         .unwrap()
 }
 
-/// `M ν̇ + h − Σ Jᵀ w − [0; τ]` (largest entry) with stride-model's RNEA.
-fn dynamics_residual(
-    model: &Arc<Model>,
-    state: &RobotState,
-    frames: &[String],
-    out: &TsidOutput,
-) -> f64 {
-    let mut kd = kd_at(model, state);
-    let wrenches: Vec<ExternalWrench> = frames
-        .iter()
-        .zip(&out.contact_wrenches)
-        .map(|(f, w)| ExternalWrench {
-            frame: model.frame_id(f).unwrap(),
-            wrench: *w,
-        })
-        .collect();
-    let mut gen = DVector::zeros(model.nv());
-    kd.inverse_dynamics(&out.accelerations, &wrenches, &mut gen)
-        .unwrap();
-    let base = gen.rows(0, 6).amax();
-    let joints = (gen.rows(6, model.dof()) - &out.joint_torques).amax();
-    base.max(joints)
-}
-
 #[test]
 fn tsid_with_a_hand_contact_and_a_hand_task_holds_the_dynamics_and_the_hand_cone() {
     let model = bundled_model();
