@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use common::*;
 use nalgebra::{DMatrix, DVector, Isometry3, Translation3, Vector3, Vector6};
-use stride_model::{bundled, ExternalWrench, KinDyn, Model, RobotState, VelocityRepresentation};
+use stride_model::{bundled, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_wbc::prelude::*;
 use stride_wbc::{ContactTaskConfig, IkFeedback};
 
