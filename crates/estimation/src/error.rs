@@ -24,6 +24,14 @@ pub enum EstimatorError {
         /// The frame name.
         name: String,
     },
+    /// A joint named in the configuration is not in the model.
+    #[error("joint `{name}` (configuration key `{key}`) is not in the model")]
+    UnknownJoint {
+        /// Configuration key.
+        key: &'static str,
+        /// The joint name.
+        name: String,
+    },
     /// A force/torque sensor named in the configuration is not in the model.
     #[error("force/torque sensor `{name}` (configuration key `{key}`) is not in the model")]
     UnknownFtSensor {

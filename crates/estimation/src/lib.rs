@@ -13,6 +13,7 @@ mod config;
 pub mod ekf;
 mod error;
 mod estimator;
+mod flexible;
 pub mod identification;
 mod io;
 mod schmitt;
@@ -21,6 +22,7 @@ pub use config::{ContactConfig, EkfConfig, EkfPrior, EstimatorConfig, FtOffsetCo
 pub use ekf::{EkfState, InvariantEkf};
 pub use error::{EstimatorError, Result};
 pub use estimator::Estimator;
+pub use flexible::{FlexibleJoint, FlexibleJointObserver};
 pub use io::{EstimatorInput, EstimatorOutput, ImuReading};
 pub use schmitt::SchmittTrigger;
 

@@ -23,6 +23,7 @@ pub mod diagnosis;
 pub mod error;
 pub mod estimation_summary;
 pub mod feet;
+pub mod flexible;
 pub mod gait;
 pub mod identify;
 pub mod joint_trajectory;

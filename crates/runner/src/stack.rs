@@ -32,6 +32,7 @@ use stride_wbc::{QpIk, Tsid, WbcInput};
 use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
 use crate::config::{ControlMode, EstimationKind, Goal, Scenario};
 use crate::error::RunError;
+use crate::flexible::{FlexibleObserver, FlexibleSprings};
 use crate::robot::{JointCommand, Measurement};
 use crate::setup::frame_of;
 use crate::step_adjust::{AdjustedFootstepMsg, StepTracker};
@@ -290,6 +291,10 @@ pub struct Stack {
     /// Angular momentum reference of the last simplified tick (the centroidal MPC's; zero otherwise)
     /// \[kg m²/s\].
     angular_momentum_reference: Vector3<f64>,
+    /// The springs of TSID-Flex's flexible joints (empty for the rigid TSID and the QP-IK).
+    flexible: FlexibleSprings,
+    /// The observer of TSID-Flex's unmeasured flexible joints, in the estimation loop.
+    flexible_observer: Option<FlexibleObserver>,
     /// Fallback/hold counters: simplified errors held, wbc QP fallbacks, wbc holds.
     pub counters: Counters,
 }
@@ -334,7 +339,19 @@ impl Stack {
         let simplified_period =
             Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
         let simplified = SimplifiedController::new(&c.simplified, simplified_period)?;
-        let wbc = Wbc::new(scenario, &model)?;
+        let mut wbc = Wbc::new(scenario, &model)?;
+        let flexible = match &mut wbc {
+            Wbc::Tsid(t) => {
+                let springs = FlexibleSprings::new(scenario, &model, &t.config().flexible_joints)?;
+                t.set_flexible_springs(&springs.springs())?;
+                springs
+            }
+            Wbc::Ik(_) => FlexibleSprings::default(),
+        };
+        let flexible_observer = match c.estimation.kind {
+            EstimationKind::Ekf => flexible.observer(&model, scenario.sim_period())?,
+            EstimationKind::GroundTruth => None,
+        };
         let simplified_glue =
             SimplifiedInputBuilder::new(&simplified, c.planner.foot_length, c.planner.foot_width);
         let simplified_input =
@@ -397,6 +414,8 @@ impl Stack {
                 _ => None,
             },
             angular_momentum_reference: Vector3::zeros(),
+            flexible,
+            flexible_observer,
             counters: Counters::default(),
             kd,
             model,
@@ -414,13 +433,20 @@ impl Stack {
     pub fn sense(&mut self, m: &Measurement) -> Result<(), RunError> {
         match &mut self.estimation {
             Estimation::Estimator(estimator) => {
-                let out = estimator.step(&m.sensors)?;
+                let sensors = match &mut self.flexible_observer {
+                    Some(o) => o.readings(&m.sensors)?,
+                    None => &m.sensors,
+                };
+                let out = estimator.step(sensors)?;
                 self.estimate.state.copy_from(&out.state);
                 self.estimate.contacts = out.contacts;
                 self.estimate.foot_wrenches = out.foot_wrenches;
                 self.estimate.joint_torques.copy_from(&out.joint_torques);
                 for (o, e) in self.estimate.ft_offsets.iter_mut().zip(&out.ft_offsets) {
                     *o = *e;
+                }
+                if let Some(o) = &mut self.flexible_observer {
+                    o.update(&out.joint_torques, &mut self.estimate.state)?;
                 }
             }
             Estimation::GroundTruth => {
@@ -668,6 +694,8 @@ impl Stack {
         stride_walking::fill_wbc_input(i, &self.wbc_handles, s, simplified)?;
         i.posture = None;
         i.angular_momentum = self.angular_momentum_reference;
+        self.flexible
+            .fill(&self.estimate.state, &mut i.flexible_torques);
         let cmd = &mut self.command;
         cmd.contacts = [s.left.in_contact, s.right.in_contact];
         match &mut self.wbc {

@@ -19,6 +19,7 @@ use crate::error::SimError;
 /// | `ground` | – | flat floor at z = 0 | [`GroundConfig`] |
 /// | `contact` | – | rigid floor, the humanoid's two soles | [`ContactConfig`] |
 /// | `actuation` | – | position servos on every joint, 0.1 N·m Coulomb friction, 2-step command delay | [`ActuationConfig`] |
+/// | `passive_joints` | – | none | passive visco-elastic joints, no motor: [`crate::PassiveJointConfig`] list |
 /// | `sensors` | – | iCub-class encoders, IMU on `imu_frame` and force/torque sensors, 2-step delay | [`SensorConfig`] |
 /// | `pushes` | – | none | [`PushConfig`] list |
 /// | `fall` | – | base below 0.25 m or tilted beyond 1 rad | [`FallConfig`] |
@@ -43,6 +44,8 @@ pub struct SimConfig {
     pub contact: ContactConfig,
     /// Joint actuation (servo modes, gains, limits, passive damping).
     pub actuation: ActuationConfig,
+    /// Passive visco-elastic joints `τ = −k q − b q̇`, no motor: their commands are discarded.
+    pub passive_joints: Vec<crate::PassiveJointConfig>,
     /// Sensors and their noise.
     pub sensors: SensorConfig,
     /// Scheduled external wrenches ("pushes").
@@ -65,6 +68,7 @@ impl Default for SimConfig {
             ground: GroundConfig::default(),
             contact: ContactConfig::default(),
             actuation: ActuationConfig::default(),
+            passive_joints: Vec::new(),
             sensors: SensorConfig::default(),
             pushes: Vec::new(),
             fall: FallConfig::default(),
@@ -956,6 +960,9 @@ impl SimConfig {
     fn validate_actuation(&self) -> Result<(), SimError> {
         let a = &self.actuation;
         check_actuator(&a.default, "actuation.default")?;
+        for (i, p) in self.passive_joints.iter().enumerate() {
+            p.validate(&format!("passive_joints[{i}]"))?;
+        }
         for j in &a.joints {
             let p = format!("actuation.joints[{}]", j.name);
             for (v, n) in [

@@ -15,7 +15,8 @@
 //!   and damping are area densities (N/m³, N·s/m³) of the visco-elastic contact model
 //!   [Romualdi 2022, Lemma 1], so a fine grid reproduces that lemma's wrench.
 //! * **Actuation** per joint: position PD servo, velocity servo or torque, with effort limits, passive
-//!   damping, armature, Coulomb friction, a torque-tracking lag and a command delay.
+//!   damping, armature, Coulomb friction, a torque-tracking lag and a command delay; passive visco-elastic
+//!   joints with no motor, `τ = −k q − b q̇` ([`PassiveJointConfig`], [Romualdi 2022, eq. (9.1.1)]).
 //! * **Sensors** as an iCub-class robot has them: quantised encoders with differenced, low-passed
 //!   velocities; an IMU with biases, noise and a filter-like orientation; the six-axis force/torque sensors
 //!   of the URDF with offsets, drift, noise and saturation; a sensor delay; all from one seeded generator.
@@ -32,6 +33,7 @@ mod error;
 mod io;
 mod linalg;
 mod noise;
+mod passive;
 mod patches;
 mod push;
 mod robot;
@@ -48,6 +50,7 @@ pub use error::SimError;
 pub use io::{ContactPointState, ImuMeasurement, SimInput, SimOutput, SurfaceMeasurement};
 pub use linalg::{cholesky_in_place, cholesky_solve_in_place, TreeCholesky, TreeMatrix};
 pub use noise::GaussianNoise;
+pub use passive::PassiveJointConfig;
 pub use patches::{GroundCompliance, NormalDensities};
 pub use robot::SimRobot;
 /// The sensor models of [`SimRobot`] for another plant (stride-mujoco): fill a [`SensorTruth`] each step and

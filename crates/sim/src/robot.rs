@@ -21,6 +21,7 @@ use crate::contact::{build_surfaces, GroundPlane, Point, Surface};
 use crate::error::{find_frame, SimError};
 use crate::io::{ContactPointState, SimInput, SimOutput};
 use crate::linalg::{join, lin, TreeCholesky, TreeMatrix};
+use crate::passive::{install_passive_joints, unmeasured_joints};
 use crate::patches::GroundCompliance;
 use crate::push::Push;
 use crate::sensors::{Sensors, Truth};
@@ -62,6 +63,10 @@ pub struct SimRobot {
     /// The ground's normal densities along the path (its patches).
     compliance: GroundCompliance,
     actuators: Vec<Actuator>,
+    /// Model indices of the passive joints (`config.passive_joints`): their commands are discarded.
+    passive: Vec<usize>,
+    /// Model indices of the passive joints without encoders: their encoder readings are 0.
+    unmeasured: Vec<usize>,
     surfaces: Vec<Surface>,
     points: Vec<Point>,
     pushes: Vec<Push>,
@@ -166,7 +171,9 @@ impl SimRobot {
         let period_ns = period_ns(period)?;
         let n = model.dof();
         let nv = model.nv();
-        let actuators = resolve_actuators(&model, &config.actuation)?;
+        let mut actuators = resolve_actuators(&model, &config.actuation)?;
+        let passive = install_passive_joints(&model, &config.passive_joints, &mut actuators)?;
+        let unmeasured = unmeasured_joints(&model, &config.passive_joints);
         let (surfaces, points) = build_surfaces(&model, &config.contact)?;
         let pushes = config
             .pushes
@@ -204,6 +211,8 @@ impl SimRobot {
             ground: GroundPlane::from_config(&config.ground),
             compliance: GroundCompliance::from_config(&config.ground, &config.contact),
             actuators,
+            passive,
+            unmeasured,
             anchor_backup: vec![None; points.len()],
             surfaces,
             points,
@@ -347,6 +356,12 @@ impl SimRobot {
                 parameter: "set_joint_actuator".into(),
                 joint: joint.to_string(),
             })?;
+        if self.passive.contains(&index) {
+            return Err(SimError::InvalidConfig {
+                parameter: "passive_joints".into(),
+                message: format!("`{joint}` is passive: it has no actuator to change"),
+            });
+        }
         if self.config.integrator == IntegratorKind::Explicit && actuator.armature > 0.0 {
             return Err(SimError::InvalidConfig {
                 parameter: "armature".into(),
@@ -368,6 +383,7 @@ impl SimRobot {
         let delayed = (self.command_head + 1) % self.commands.len();
         let mut applied = std::mem::replace(&mut self.applied, SimInput::zeros(0));
         copy_input(&mut applied, &self.commands[delayed]);
+        self.discard_passive_commands(&mut applied);
         self.lag_torques(&mut applied);
         let result = self.advance(&applied);
         self.applied = applied;
@@ -375,6 +391,16 @@ impl SimRobot {
             self.command_head = delayed;
         }
         result
+    }
+
+    /// Passive joints have no motor: their spring-damper servo ([`crate::passive`]) pulls to `q = 0`,
+    /// `q̇ = 0` with no feed-forward, whatever the controllers commanded.
+    fn discard_passive_commands(&self, applied: &mut SimInput) {
+        for &j in &self.passive {
+            applied.joint_positions[j] = 0.0;
+            applied.joint_velocities[j] = 0.0;
+            applied.joint_torques[j] = 0.0;
+        }
     }
 
     /// Torque-mode joints: the motor torque follows the command through the first-order lag of the joint's
@@ -509,6 +535,10 @@ impl SimRobot {
             fresh_start,
         };
         self.sensors.measure(&truth, out);
+        for &j in &self.unmeasured {
+            out.joint_positions[j] = 0.0;
+            out.joint_velocities[j] = 0.0;
+        }
         self.detect_fall();
     }
 

@@ -1,6 +1,6 @@
 //! Full ticks (task update + QP build + solve) of the QP-IK and the TSID, both backends, on the bundled
 //! model and, when `STRIDE_ICUB_MODELS_DIR` points at a directory containing `iCubGazeboV2_7/model.urdf`,
-//! on iCub v2.7.
+//! on iCub v2.7; TSID-Flex (`flexible_joints`, the passive hips of `models/stride_humanoid_flex.urdf`).
 //!
 //! `cargo bench -p stride-wbc --bench tick -- --warm-up-time 1 --measurement-time 2`
 
@@ -25,10 +25,12 @@ struct Robot {
 }
 
 fn bundled() -> Robot {
-    let path = format!(
-        "{}/../../models/stride_humanoid.urdf",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    bundled_from("stride_humanoid")
+}
+
+/// The bundled model `name` (`models/<name>.urdf`) at the bundled posture.
+fn bundled_from(name: &'static str) -> Robot {
+    let path = format!("{}/../../models/{name}.urdf", env!("CARGO_MANIFEST_DIR"));
     let model = Arc::new(Model::from_urdf_file(path).expect("bundled model"));
     let mut posture = DVector::zeros(model.dof());
     for (name, v) in bundled_posture() {
@@ -37,7 +39,7 @@ fn bundled() -> Robot {
         }
     }
     Robot {
-        name: "stride_humanoid",
+        name,
         model,
         left: "l_sole",
         right: "r_sole",
@@ -216,5 +218,39 @@ fn bench(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench);
+/// TSID-Flex on the flexible-hip humanoid: the four passive hips (k = 2085 N·m/rad, b = 2√k), deflected.
+fn bench_tsid_flex(c: &mut Criterion) {
+    let robot = bundled_from("stride_humanoid_flex");
+    let mut input = input(&robot);
+    let flex = [
+        "l_hip_flex_pitch",
+        "l_hip_flex_roll",
+        "r_hip_flex_pitch",
+        "r_hip_flex_roll",
+    ];
+    let (k, b) = (2085.0, 2.0 * 2085f64.sqrt());
+    for name in flex {
+        input.flexible_torques[robot.model.joint_index(name).unwrap()] = -k * 0.01;
+    }
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.flexible_joints = flex.iter().map(|s| s.to_string()).collect();
+    let mut tsid = Tsid::new(
+        Arc::clone(&robot.model),
+        config,
+        std::time::Duration::from_millis(2),
+    )
+    .expect("TSID-Flex builds");
+    tsid.set_flexible_springs(&[(k, b); 4]).unwrap();
+    tsid.step(&input).unwrap();
+    c.bench_function("tsid_flex/stride_humanoid_flex/active_set", |bench| {
+        bench.iter(|| tsid.step(&input).unwrap().report.iterations)
+    });
+    let report = tsid.step(&input).unwrap().report;
+    assert!(
+        report.status.is_success() && !report.fallback,
+        "the benchmarked TSID-Flex tick must be a nominal solve: {report:?}"
+    );
+}
+
+criterion_group!(benches, bench, bench_tsid_flex);
 criterion_main!(benches);

@@ -110,6 +110,7 @@ impl TsidConfig {
             config: TsidConfig {
                 qp: QpSettings::default(),
                 eliminate_equalities: true,
+                flexible_joints: Vec::new(),
                 tasks: vec![TaskConfig::FloatingBaseDynamics(
                     FloatingBaseDynamicsTaskConfig {
                         name: "dynamics".into(),

@@ -620,6 +620,12 @@ pub struct TsidConfig {
     pub eliminate_equalities: bool,
     /// Tasks.
     pub tasks: Vec<TaskConfig>,
+    /// Passive flexible joints (TSID-Flex, [Romualdi 2022, §9.2]): joint names whose torque is not a
+    /// decision but the measured passive torque `WbcInput::flexible_torques`; their rows of the joint
+    /// dynamics join the `floating_base_dynamics` task as hard equalities [Romualdi 2022, eq. (9.2.6)].
+    /// Empty (default): every joint is actuated (the rigid TSID).
+    #[serde(default)]
+    pub flexible_joints: Vec<String>,
 }
 
 /// Default posture of the bundled model (rad), slightly crouched, arms off the torso:

@@ -102,6 +102,9 @@ pub struct WbcInput {
     pub posture: Option<DVector<f64>>,
     /// Centroidal angular momentum reference (kg m²/s) for `angular_momentum` tasks.
     pub angular_momentum: Vector3<f64>,
+    /// Torque of each passive flexible joint (n entries, model order, N·m; only the TSID's
+    /// `flexible_joints` are read): `τ^f = −k s^f − d ṡ^f` as estimated [Romualdi 2022, eq. (9.1.1), §9.3].
+    pub flexible_torques: DVector<f64>,
     layout: Arc<InputLayout>,
     frames: Vec<FrameReference>,
     contacts: Vec<ContactInput>,
@@ -136,6 +139,7 @@ impl WbcInput {
     /// [`crate::QpIk::input`] give one with the controller's layout.
     pub fn new(state: RobotState, layout: Arc<InputLayout>) -> Self {
         WbcInput {
+            flexible_torques: DVector::zeros(state.joint_positions.len()),
             state,
             com_position: Vector3::zeros(),
             com_velocity: Vector3::zeros(),

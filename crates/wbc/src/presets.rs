@@ -261,6 +261,7 @@ pub fn walking_tsid(p: &WalkingPreset) -> TsidConfig {
     let mut config = TsidConfig {
         qp: QpSettings::default(),
         eliminate_equalities: true,
+        flexible_joints: Vec::new(),
         tasks: vec![
             TaskConfig::FloatingBaseDynamics(FloatingBaseDynamicsTaskConfig {
                 name: "dynamics".into(),

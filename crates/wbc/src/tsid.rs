@@ -24,7 +24,8 @@ use crate::names::input_layout;
 use crate::names::Resolver;
 use crate::tasks::contact::fill_wrench_regularization;
 use crate::tasks::dynamics::{
-    fill_base_dynamics, fill_torque_limits, fill_torque_regularization, joint_torques,
+    fill_base_dynamics, fill_flexible_dynamics, fill_torque_limits, fill_torque_regularization,
+    joint_torques,
 };
 use crate::tasks::joint::acceleration_bounds;
 use crate::tasks::zmp::fill_zmp;
@@ -32,6 +33,28 @@ use crate::tasks::{
     check_gain, joint_limits, position_limit_bounds, AngularMomentumRateTask, ComMomentumTask,
     Contact, FrameTask, JointRegularizationTask, Level, TsidContext,
 };
+
+/// Model indices of the flexible joints named in `names`: each a joint of the model, none twice.
+fn flexible_joints(model: &Model, names: &[String]) -> Result<Vec<usize>, WbcError> {
+    let mut out = Vec::with_capacity(names.len());
+    for name in names {
+        let j = model
+            .joint_index(name)
+            .ok_or_else(|| WbcError::UnknownJoint {
+                task: "flexible_joints".into(),
+                joint: name.clone(),
+            })?;
+        if out.contains(&j) {
+            return Err(WbcError::InvalidConfig {
+                task: "<tsid>".into(),
+                key: "flexible_joints",
+                reason: format!("`{name}` is listed twice"),
+            });
+        }
+        out.push(j);
+    }
+    Ok(out)
+}
 
 /// Maximum number of contacts (2^k QPs are prebuilt).
 pub const MAX_CONTACTS: usize = 4;
@@ -71,6 +94,8 @@ struct TaskSet {
     zmp_hard: bool,
     has_zmp: bool,
     has_dynamics: bool,
+    /// Model indices of the passive flexible joints (`TsidConfig::flexible_joints`).
+    flexible: Vec<usize>,
 }
 
 impl TaskSet {
@@ -90,6 +115,7 @@ impl TaskSet {
             zmp_hard: false,
             has_zmp: false,
             has_dynamics: false,
+            flexible: flexible_joints(model, &config.flexible_joints)?,
         };
         check_unique_names(&config.tasks)?;
         for task in &config.tasks {
@@ -258,7 +284,7 @@ impl TaskSet {
             _ => layout.hard(name, rows),
         };
         match self.tasks[ti] {
-            TsidTask::Dynamics => push(eq(6)),
+            TsidTask::Dynamics => push(eq(6 + self.flexible.len())),
             TsidTask::Frame(f) => {
                 // the contact constraint of a loaded contact replaces a frame task on its frame
                 let frame = self.frame_tasks[f].frame;
@@ -410,6 +436,9 @@ pub struct Tsid {
     position_limits: Option<(Vec<f64>, Vec<f64>, f64)>,
     velocity_limits: Option<(Vec<f64>, f64)>,
     effort: Vec<f64>,
+    /// The passive flexible joints (TSID-Flex; empty: the rigid TSID): model index, `k` N·m/rad, `b`
+    /// N·m·s/rad (zero until [`Tsid::set_flexible_springs`]).
+    flexible: Vec<(usize, f64, f64)>,
     has_zmp: bool,
     mass: f64,
     gravity: Vector3<f64>,
@@ -495,6 +524,7 @@ impl Tsid {
             position_limits: set.position_limits,
             velocity_limits: set.velocity_limits,
             effort,
+            flexible: set.flexible.iter().map(|&j| (j, 0.0, 0.0)).collect(),
             has_zmp: set.has_zmp,
             output,
             last_valid: false,
@@ -679,6 +709,65 @@ impl Tsid {
         base + mask
     }
 
+    /// `input.flexible_torques` has one entry per joint, finite on the flexible joints.
+    fn check_flexible_torques(&self, input: &WbcInput) -> Result<(), WbcError> {
+        let t = &input.flexible_torques;
+        if t.len() != self.model.dof() {
+            return Err(WbcError::InvalidInput(format!(
+                "flexible_torques has {} entries, expected {} (one per joint)",
+                t.len(),
+                self.model.dof()
+            )));
+        }
+        match self.flexible.iter().find(|&&(j, _, _)| !t[j].is_finite()) {
+            Some(&(j, _, _)) => Err(WbcError::InvalidInput(format!(
+                "flexible_torques: non-finite torque {} for `{}`",
+                t[j],
+                self.model.joints()[j].name
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// The passive flexible joints (TSID-Flex; empty for the rigid TSID): model index, stiffness `k`
+    /// (N·m/rad), damping `b` (N·m·s/rad), in the order of `TsidConfig::flexible_joints`.
+    pub fn flexible_joints(&self) -> &[(usize, f64, f64)] {
+        &self.flexible
+    }
+
+    /// The springs `(k N·m/rad, b N·m·s/rad)` of the flexible joints, in the order of
+    /// `TsidConfig::flexible_joints`: their rows then hold the passive torque advanced over the period by
+    /// the chosen acceleration (linearly implicit, see `fill_flexible_dynamics`); without springs (the
+    /// default, or zeros) the torque is held at `WbcInput::flexible_torques`. Errors: a wrong count, a
+    /// negative or non-finite value.
+    pub fn set_flexible_springs(&mut self, springs: &[(f64, f64)]) -> Result<(), WbcError> {
+        let invalid = |reason: String| WbcError::InvalidConfig {
+            task: "<tsid>".into(),
+            key: "flexible_joints",
+            reason,
+        };
+        if springs.len() != self.flexible.len() {
+            return Err(invalid(format!(
+                "{} springs for {} flexible joints",
+                springs.len(),
+                self.flexible.len()
+            )));
+        }
+        if let Some((k, b)) = springs
+            .iter()
+            .find(|(k, b)| !(k.is_finite() && *k >= 0.0 && b.is_finite() && *b >= 0.0))
+        {
+            return Err(invalid(format!(
+                "spring k = {k}, b = {b}: expected finite values ≥ 0"
+            )));
+        }
+        for (f, &(k, b)) in self.flexible.iter_mut().zip(springs) {
+            f.1 = k;
+            f.2 = b;
+        }
+        Ok(())
+    }
+
     fn compute_dynamics(&mut self, input: &WbcInput) -> Result<(), WbcError> {
         self.kd.set_state(&input.state)?;
         self.kd.mass_matrix(&mut self.mass_matrix)?;
@@ -716,7 +805,17 @@ impl Tsid {
             }
             let b = &mut variant.bridge.rows_mut(slots[0]);
             match *task {
-                TsidTask::Dynamics => fill_base_dynamics(&ctx, b),
+                TsidTask::Dynamics => {
+                    fill_base_dynamics(&ctx, b);
+                    fill_flexible_dynamics(
+                        &ctx,
+                        &self.flexible,
+                        self.period,
+                        &input.state.joint_velocities,
+                        &input.flexible_torques,
+                        b,
+                    );
+                }
                 TsidTask::Frame(f) => {
                     self.frame_tasks[f].update(&self.kd, &self.names, input, b.reborrow())?
                 }
@@ -813,6 +912,7 @@ impl Tsid {
         let start = Instant::now();
         check_state(&self.model, &input.state)?;
         check_references(&self.model, input)?;
+        self.check_flexible_torques(input)?;
         self.names.resolve(input)?;
         self.compute_dynamics(input)?;
         let period = self.period;

@@ -113,3 +113,42 @@ fn soft_contact_model_and_ground_estimator_allocate_nothing() {
     });
     assert_eq!(n, 0, "soft-contact model and estimator allocated {n} times");
 }
+
+/// TSID-Flex (`flexible_joints`: the passive hips of `models/stride_humanoid_flex.urdf`) ticks allocate
+/// nothing, with the passive torques changing every tick.
+#[test]
+fn tsid_flex_ticks_allocate_nothing() {
+    let path = format!(
+        "{}/../../models/stride_humanoid_flex.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let model = Arc::new(stride_model::Model::from_urdf_file(path).unwrap());
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    let flex = [
+        "l_hip_flex_pitch",
+        "l_hip_flex_roll",
+        "r_hip_flex_pitch",
+        "r_hip_flex_roll",
+    ];
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.flexible_joints = flex.iter().map(|s| s.to_string()).collect();
+    let mut tsid = Tsid::new(
+        Arc::clone(&model),
+        config,
+        std::time::Duration::from_millis(1),
+    )
+    .unwrap();
+    let joints: Vec<usize> = flex.iter().map(|n| model.joint_index(n).unwrap()).collect();
+    tsid.step(&input).unwrap();
+    let (_, n) = ALLOC.allocations_during(|| {
+        for k in 0..40 {
+            for &j in &joints {
+                input.flexible_torques[j] = 0.1 * k as f64;
+            }
+            input.set_contact("right_foot", k < 20).unwrap();
+            assert!(tsid.step(&input).unwrap().report.status.is_success());
+        }
+    });
+    assert_eq!(n, 0, "TSID-Flex ticks allocated {n} times");
+}

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use common::*;
 use nalgebra::{DMatrix, DVector, Isometry3, Translation3, Vector3, Vector6};
-use stride_model::{bundled, ExternalWrench, KinDyn, Model, RobotState, VelocityRepresentation};
+use stride_model::{bundled, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_wbc::prelude::*;
 use stride_wbc::{ContactTaskConfig, IkFeedback};
 
@@ -63,30 +63,6 @@ fn hand_tsid_config() -> TsidConfig {
         .limits(0.05)
         .build()
         .unwrap()
-}
-
-/// `M ν̇ + h − Σ Jᵀ w − [0; τ]` (largest entry) with stride-model's RNEA.
-fn dynamics_residual(
-    model: &Arc<Model>,
-    state: &RobotState,
-    frames: &[String],
-    out: &TsidOutput,
-) -> f64 {
-    let mut kd = kd_at(model, state);
-    let wrenches: Vec<ExternalWrench> = frames
-        .iter()
-        .zip(&out.contact_wrenches)
-        .map(|(f, w)| ExternalWrench {
-            frame: model.frame_id(f).unwrap(),
-            wrench: *w,
-        })
-        .collect();
-    let mut gen = DVector::zeros(model.nv());
-    kd.inverse_dynamics(&out.accelerations, &wrenches, &mut gen)
-        .unwrap();
-    let base = gen.rows(0, 6).amax();
-    let joints = (gen.rows(6, model.dof()) - &out.joint_torques).amax();
-    base.max(joints)
 }
 
 #[test]

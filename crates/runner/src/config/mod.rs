@@ -719,6 +719,13 @@ impl Scenario {
                  locked joints with `scenario.plant = \"mujoco\"` (or the simulator plant)",
             ));
         }
+        if c.scenario.plant != PlantKind::Simulator && !c.sim.passive_joints.is_empty() {
+            return Err(self.invalid(
+                "sim.passive_joints",
+                "passive visco-elastic joints are modelled by stride-sim only; expected no passive \
+                 joints unless `scenario.plant = \"simulator\"`",
+            ));
+        }
         if c.scenario.plant == PlantKind::Ideal && c.estimation.kind != EstimationKind::GroundTruth
         {
             return Err(self.invalid(

@@ -23,6 +23,10 @@ pub struct KeyDoc {
 /// Keys that may be absent from the default configuration (optional or alternative shapes).
 pub const OPTIONAL_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "include", unit: "-", meaning: "Files merged before this one (paths relative to this file), in order; later files and this file override earlier ones (tables merge key by key, other values are replaced)." },
+    KeyDoc { key: "sim.passive_joints[].joints", unit: "-", meaning: "`[[sim.passive_joints]]`: joints with no motor that are springs `τ = −k q − b q̇` in stride-sim (commands discarded); each joint in one entry (docs/flexible-joints.md)." },
+    KeyDoc { key: "sim.passive_joints[].stiffness", unit: "N·m/rad", meaning: "The entry's stiffness `k` (> 0)." },
+    KeyDoc { key: "sim.passive_joints[].damping", unit: "N·m·s/rad", meaning: "The entry's damping `b` (≥ 0); absent: `2√k` [Romualdi 2022, §9.4]." },
+    KeyDoc { key: "sim.passive_joints[].encoder", unit: "-", meaning: "The joints have encoders (default `false`: they read 0 and the deflection is unmeasured; TSID-Flex then estimates it)." },
     KeyDoc { key: "goal.waypoints.points[].x", unit: "m", meaning: "`[goal.waypoints]`: waypoint x; `[[goal.waypoints.points]]` entries are visited in order, the robot stops at the last." },
     KeyDoc { key: "goal.waypoints.points[].y", unit: "m", meaning: "Waypoint y." },
     KeyDoc { key: "goal.waypoints.points[].heading_deg", unit: "deg", meaning: "Waypoint heading about world z." },

@@ -28,6 +28,41 @@ pub(crate) fn fill_base_dynamics(s: &TsidContext, b: &mut TaskDataMut) {
     }
 }
 
+/// Flexible-joint rows of TSID-Flex [Romualdi 2022, eq. (9.2.6), last n_f rows]: the torque of a passive
+/// joint is its spring-damper's, not a decision. One row per entry of `flexible` (model joint index, `k`
+/// N·m/rad, `b` N·m·s/rad), after the 6 base rows (N m):
+///
+/// `M_{s,j} ν̇ + (b h + k h²) s̈_j − Σ_c J_{c,s,j}ᵀ w_c = τ^f_j − k h ṡ_j − h_{s,j}`,
+///
+/// i.e. the joint torque equals the passive torque `τ^f = −k s − b ṡ` (`torques`, measured) advanced over the
+/// controller's period `h` by the chosen acceleration (`s⁺ = s + h ṡ + h² s̈`, `ṡ⁺ = ṡ + h s̈`), the linearly
+/// implicit form a simulator uses for a stiff spring-damper: with `k = b = 0` it is the explicit
+/// `τ_j = τ^f_j`. The implicit form keeps the loop stable when `b h` exceeds the inertia the joint moves.
+pub(crate) fn fill_flexible_dynamics(
+    s: &TsidContext,
+    flexible: &[(usize, f64, f64)],
+    period: f64,
+    state_velocities: &DVector<f64>,
+    torques: &DVector<f64>,
+    b: &mut TaskDataMut,
+) {
+    let nv = s.mass_matrix.ncols();
+    for (r, &(j, k, d)) in flexible.iter().enumerate() {
+        let row = 6 + r;
+        b.a.view_mut((row, 0), (1, nv))
+            .copy_from(&s.mass_matrix.view((6 + j, 0), (1, nv)));
+        b.a[(row, 6 + j)] += d * period + k * period * period;
+        for (c, contact) in s.contacts.iter().enumerate() {
+            if let Some(off) = s.offsets[c] {
+                for kk in 0..6 {
+                    b.a[(row, off + kk)] = -contact.jacobian[(kk, 6 + j)];
+                }
+            }
+        }
+        b.b[row] = torques[j] - k * period * state_velocities[j] - s.bias_forces[6 + j];
+    }
+}
+
 /// Joint torque limits: `−scale τ_max − h_s ≤ M_s ν̇ − Σ_c J_{c,s}ᵀ w_c ≤ scale τ_max − h_s` (n rows; `effort`
 /// is `τ_max` per joint, N m).
 pub(crate) fn fill_torque_limits(s: &TsidContext, scale: f64, effort: &[f64], b: &mut TaskDataMut) {

@@ -172,3 +172,30 @@ pub fn flatten_on(model: &Arc<Model>, state: &mut RobotState, frame: &str) {
     );
     state.base_pose = flat * sole.inverse() * state.base_pose;
 }
+
+/// `M ν̇ + h − Σ Jᵀ w − [0; τ]` (largest entry) with stride-model's RNEA: how far a TSID output is from the
+/// equations of motion at `state`, its contact wrenches acting at `frames`.
+pub fn dynamics_residual(
+    model: &Arc<Model>,
+    state: &RobotState,
+    frames: &[String],
+    out: &stride_wbc::TsidOutput,
+) -> f64 {
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    kd.set_state(state).unwrap();
+    let wrenches: Vec<stride_model::ExternalWrench> = frames
+        .iter()
+        .zip(&out.contact_wrenches)
+        .map(|(f, w)| stride_model::ExternalWrench {
+            frame: model.frame_id(f).unwrap(),
+            wrench: *w,
+        })
+        .collect();
+    let mut gen = DVector::zeros(model.nv());
+    kd.inverse_dynamics(&out.accelerations, &wrenches, &mut gen)
+        .unwrap();
+    let base = gen.rows(0, 6).amax();
+    let joints = (gen.rows(6, model.dof()) - &out.joint_torques).amax();
+    base.max(joints)
+}
