@@ -257,8 +257,9 @@ fn mujoco_robot(
 }
 
 /// What a scenario asks of the plant that the MuJoCo plant does not model, as the key and the reason:
-/// ground patches of different stiffness along the path (its floor is one plane with one contact law) and
-/// a fixed base (its robot always floats). A uniform floor, soft or stiff, is modelled: its `sim.contact`
+/// ground patches of different stiffness along the path (its floor is one plane with one contact law),
+/// passive joints (`--plant mujoco` on a scenario written for stride-sim) and a fixed base (its robot always
+/// floats). A uniform floor, soft or stiff, is modelled: its `sim.contact`
 /// stiffness and damping set MuJoCo's `solref` ([`crate::config::mujoco::ground_solref`]).
 #[cfg_attr(not(feature = "mujoco"), allow(dead_code))]
 pub(crate) fn unsupported_by_mujoco(scenario: &Scenario) -> Option<(&'static str, &'static str)> {
@@ -268,6 +269,12 @@ pub(crate) fn unsupported_by_mujoco(scenario: &Scenario) -> Option<(&'static str
             "sim.ground.patches",
             "ground patches are modelled by stride-sim only: the MuJoCo plant's floor is one plane with \
              one contact law (docs/mujoco.md); run it with `--plant simulator`, or remove the key",
+        ))
+    } else if !sim.passive_joints.is_empty() {
+        Some((
+            "sim.passive_joints",
+            "passive visco-elastic joints are modelled by stride-sim only (docs/flexible-joints.md); run it \
+             with `--plant simulator`",
         ))
     } else if sim.fixed_base {
         Some((
@@ -358,5 +365,8 @@ mod tests {
         assert!(on_a_pole.config.sim.fixed_base);
         let (key, _) = unsupported_by_mujoco(&on_a_pole).expect("refused");
         assert_eq!(key, "sim.fixed_base");
+        let flexible = scenario("walk_flexible_hips_torque.toml");
+        let (key, _) = unsupported_by_mujoco(&flexible).expect("refused");
+        assert_eq!(key, "sim.passive_joints");
     }
 }
