@@ -24,6 +24,7 @@ pub mod error;
 pub mod estimation_summary;
 pub mod feet;
 pub mod gait;
+pub mod init;
 pub mod joint_trajectory;
 pub mod log;
 pub mod model_cmd;
