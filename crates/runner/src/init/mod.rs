@@ -131,6 +131,9 @@ pub struct RobotSetup {
     pub scaled: scaling::Scaled,
     /// Force/torque sensors in the URDF.
     pub ft_sensors: usize,
+    /// The simulated contact grid when both feet touch the ground through spheres in a grid
+    /// ([`FootProposal::point_contact_grid`]); `None`: the simulator's default grid for flat soles.
+    pub contact_grid: Option<[usize; 2]>,
 }
 
 /// Expands `${VAR}` in `written` and checks that the file exists.
@@ -243,6 +246,9 @@ pub fn derive(urdf: &Path, target_height: Option<f64>) -> Result<RobotSetup, Ini
         stance,
         scaled,
         ft_sensors: model.ft_sensors().len(),
+        contact_grid: feet[0]
+            .point_contact_grid()
+            .filter(|g| Some(*g) == feet[1].point_contact_grid()),
     })
 }
 

@@ -238,7 +238,19 @@ pub fn robot_file(s: &RobotSetup, urdf: &str, name: &str) -> String {
         sc.servo_kp,
         sc.servo_kd
     );
-    let _ = writeln!(w, "\n# The simulated feet: the sole rectangles.");
+    let grid = match s.contact_grid {
+        Some([nx, ny]) => format!("grid = [{nx}, {ny}]\n"),
+        None => String::new(),
+    };
+    let _ = match s.contact_grid {
+        Some(_) => writeln!(
+            w,
+            "\n# The simulated feet: the sole rectangles, one contact point per collision sphere of the URDF's feet\n\
+             # (a grid across the width doubles the ground's roll stiffness under the sole, k·L·W³/4 against k·L·W³/8\n\
+             # for the default 3 points; docs/new-robot.md)."
+        ),
+        None => writeln!(w, "\n# The simulated feet: the sole rectangles."),
+    };
     for (side, sole) in ["left", "right"].iter().zip(&s.soles) {
         let frame = match sole {
             Sole::Frame(n) => n.clone(),
@@ -246,7 +258,7 @@ pub fn robot_file(s: &RobotSetup, urdf: &str, name: &str) -> String {
         };
         let _ = writeln!(
             w,
-            "[[sim.contact.surfaces]]\nname = \"{side}\"\nframe = \"{frame}\"\nlength = {:.4}\nwidth = {:.4}",
+            "[[sim.contact.surfaces]]\nname = \"{side}\"\nframe = \"{frame}\"\nlength = {:.4}\nwidth = {:.4}\n{grid}",
             s.foot[0], s.foot[1]
         );
     }
