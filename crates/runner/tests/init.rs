@@ -8,7 +8,9 @@ mod common;
 use common::{root, Scratch};
 use stride_runner::check::check_scenario;
 use stride_runner::config::Scenario;
-use stride_runner::init::{derive, resolve_urdf, scaling, write::write, InitError, Sole};
+use stride_runner::init::{
+    derive, resolve_urdf, scaling, write::write, InitError, RobotSetup, Sole,
+};
 use stride_runner::run::{run_scenario, Outcome, RunOptions};
 
 fn bundled_urdf() -> std::path::PathBuf {
@@ -206,15 +208,21 @@ fn example_robot(test: &str, rel: &str) -> Option<String> {
 
 /// `stride init` into a scratch directory; the two generated walks, loaded with `edits` (TOML text
 /// included after the generated file: the keys a user would edit) applied to each.
-fn init_and_load(dir: &Scratch, written: &str, name: &str, edits: &str) -> [Scenario; 2] {
+fn init_and_load(
+    dir: &Scratch,
+    written: &str,
+    name: &str,
+    edits: &str,
+) -> (RobotSetup, [Scenario; 2]) {
     let path = resolve_urdf(written).unwrap();
     let s = derive(&path, None).unwrap();
     let files = write(&s, written, name, &dir.0, false).unwrap();
-    [&files[1], &files[2]].map(|f| {
+    let scenarios = [&files[1], &files[2]].map(|f| {
         let overlay = format!("include = [{:?}]\n{edits}", f.display().to_string());
         let stem = f.file_stem().unwrap().to_string_lossy();
         Scenario::load(&dir.write(&format!("{stem}_edited.toml"), &overlay)).unwrap()
-    })
+    });
+    (s, scenarios)
 }
 
 /// Keys edited by hand after `stride init` on the G1 and TALOS: none.
@@ -227,7 +235,13 @@ fn the_g1_walks_two_metres_from_stride_init_in_both_modes() {
         return;
     };
     let dir = Scratch::new("init-g1");
-    for s in init_and_load(&dir, &urdf, "g1", NO_EDITS) {
+    let (setup, scenarios) = init_and_load(&dir, &urdf, "g1", NO_EDITS);
+    // The G1 29-DoF has no hand joints; its feet are four corner spheres; its URDF has no sole frame.
+    assert!(setup.locks.is_empty(), "{:?}", setup.locks);
+    assert_eq!(setup.contact_grid, Some([2, 2]));
+    assert!(matches!(setup.soles[0], Sole::Attached { .. }));
+    assert_eq!(setup.knees[0], ("left_knee_joint".to_string(), 1.0));
+    for s in scenarios {
         let end = outcome(&s);
         assert!(
             matches!(end, Outcome::GoalReached),
@@ -261,7 +275,7 @@ frame = "right_sole"
 length = 0.17
 width = 0.06
 "#;
-    let [position, _] = init_and_load(&dir, &urdf, "g1", default_grid);
+    let (_, [position, _]) = init_and_load(&dir, &urdf, "g1", default_grid);
     let end = outcome(&position);
     assert!(matches!(end, Outcome::Fell { .. }), "{end:?}");
 }
@@ -273,7 +287,20 @@ fn talos_walks_two_metres_from_stride_init_in_both_modes() {
         return;
     };
     let dir = Scratch::new("init-talos");
-    for s in init_and_load(&dir, &urdf, "talos", NO_EDITS) {
+    let (setup, scenarios) = init_and_load(&dir, &urdf, "talos", NO_EDITS);
+    // The grippers (one joint each, light) are locked. The soles are attached at the centres of the
+    // collision patches, 5.6 mm behind TALOS's own `left_sole_link` / `right_sole_link` (on their plane).
+    let locked: Vec<&str> = setup.locks.iter().map(|(j, _)| j.as_str()).collect();
+    assert_eq!(locked, ["gripper_left_joint", "gripper_right_joint"]);
+    assert_eq!(setup.contact_grid, None);
+    assert_eq!(setup.torso_frame, "torso_2_link");
+    let Sole::Attached { parent, xyz, .. } = &setup.soles[0] else {
+        panic!("{:?}", setup.soles[0]);
+    };
+    assert_eq!(parent, "leg_left_6_link");
+    close("sole x", xyz[0], -0.0056, 1e-4);
+    close("sole z", xyz[2], -0.107, 1e-4);
+    for s in scenarios {
         let end = outcome(&s);
         assert!(
             matches!(end, Outcome::GoalReached),
@@ -281,4 +308,29 @@ fn talos_walks_two_metres_from_stride_init_in_both_modes() {
             s.config.scenario.name
         );
     }
+}
+
+/// iCub: knees flexed by negative positions, a root link and chest that are not x forward (the preset
+/// then holds their initial orientation), a crouch near the hand-written one; the torque walk reaches
+/// the goal. (The generated position walk falls at 11 s with the hip rolls at their effort limits: the
+/// hand-written iCub file keeps the iCub walking controllers' gains and a larger contact rectangle.)
+#[test]
+fn init_on_icub_finds_its_negative_knees_and_walks_in_torque_control() {
+    let test = "init_on_icub_finds_its_negative_knees_and_walks_in_torque_control";
+    let Some(urdf) = stride_testkit::icub_model_urdf(test, "iCubGazeboV2_7") else {
+        return;
+    };
+    let s = derive(&urdf, None).unwrap();
+    assert_eq!(s.knees[0], ("l_knee".to_string(), -1.0));
+    assert_eq!(s.knees[1], ("r_knee".to_string(), -1.0));
+    assert!(s.upright_initial);
+    let hand = Scenario::load(&root().join("configs/walk_straight_icub.toml")).unwrap();
+    let p = &hand.config.planner;
+    // Within stride check's tolerances (5 % on the CoM height, 10 % on the width).
+    close("com_height", s.stance.com_height(), p.com_height, 0.05 * p.com_height);
+    close("nominal_width", s.stance.feet_width(), p.nominal_width, 0.1 * p.nominal_width);
+    let dir = Scratch::new("init-icub");
+    let files = write(&s, urdf.to_str().unwrap(), "icub", &dir.0, false).unwrap();
+    let end = outcome(&Scenario::load(&files[2]).unwrap());
+    assert!(matches!(end, Outcome::GoalReached), "{end:?}");
 }

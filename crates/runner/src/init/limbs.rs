@@ -87,8 +87,8 @@ fn joint_frame(model: &Model, kd: &KinDyn, j: usize) -> Option<(Vector3<f64>, Ve
 ///
 /// The knee is the pitch joint (axis within [`PITCH_AXIS_TOLERANCE_DEG`] of the model's y) that is
 /// neither the highest nor the lowest pitch joint of the chain and is farthest from both (the middle of
-/// the leg); its flexion sign is the sign of the position that moves the sole backwards (−x in the
-/// model frame, the direction the toes do not point), probed at the zero posture.
+/// the leg); its flexion sign is the sign of the position that moves the sole backwards (against the
+/// sole frame's x axis, where the toes point), probed at the zero posture.
 pub fn find_leg(model: &Arc<Model>, sole: FrameId, side: &'static str) -> Result<Leg, LimbError> {
     let joints = chain_to(model, sole);
     let link = model.bodies()[model.frames()[sole.index()].link].name.clone();
@@ -130,10 +130,11 @@ pub fn find_leg(model: &Arc<Model>, sole: FrameId, side: &'static str) -> Result
         })
         .ok_or_else(no_knee)?
         .0;
+    let forward = kd.frame_pose(sole).rotation * Vector3::x();
     let mut state = RobotState::zero(model);
     state.joint_positions[knee] = KNEE_PROBE;
     kd.set_state(&state)?;
-    let moved = kd.frame_pose(sole).translation.x - sole_pos.x;
+    let moved = (kd.frame_pose(sole).translation.vector - sole_pos).dot(&forward);
     if moved.abs() < 1e-6 {
         return Err(no_knee());
     }

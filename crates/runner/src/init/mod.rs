@@ -134,7 +134,14 @@ pub struct RobotSetup {
     /// The simulated contact grid when both feet touch the ground through spheres in a grid
     /// ([`FootProposal::point_contact_grid`]); `None`: the simulator's default grid for flat soles.
     pub contact_grid: Option<[usize; 2]>,
+    /// Whether the torso frame or the root body is not x forward, z up in the crouch (more than
+    /// [`UPRIGHT_TOLERANCE_DEG`] from the left sole's orientation): the walking preset then holds their
+    /// initial orientation (`wbc.walking.upright_offset = "initial"`, as iCub's).
+    pub upright_initial: bool,
 }
+
+/// See [`RobotSetup::upright_initial`] \[deg\].
+pub const UPRIGHT_TOLERANCE_DEG: f64 = 1.0;
 
 /// Expands `${VAR}` in `written` and checks that the file exists.
 pub fn resolve_urdf(written: &str) -> Result<PathBuf, InitError> {
@@ -186,6 +193,14 @@ pub fn derive(urdf: &Path, target_height: Option<f64>) -> Result<RobotSetup, Ini
     let leg_length = 0.5 * (legs[0].length + legs[1].length);
     let target =
         target_height.unwrap_or_else(|| crouch::default_target_height(zero.com_height(), leg_length));
+    let torso_frame = arms
+        .iter()
+        .find_map(|a| a.first())
+        .and_then(|&j| model.bodies()[j + 1].parent)
+        .map_or_else(
+            || model.root_link().to_string(),
+            |b| model.bodies()[b].name.clone(),
+        );
     let q = crouch::crouch(&model, sole_ids, [&legs[0], &legs[1]], &start, target).map_err(
         |source| InitError::Crouch {
             path: urdf.to_path_buf(),
@@ -193,6 +208,8 @@ pub fn derive(urdf: &Path, target_height: Option<f64>) -> Result<RobotSetup, Ini
         },
     )?;
     let stance = Stance::new(&model, &q, sole_ids).map_err(|e| model_err(e.to_string()))?;
+    let upright_initial = !upright_frames(&model, &q, sole_ids, &torso_frame)
+        .map_err(|e| model_err(e.to_string()))?;
     let foot = [
         feet[0].patch.length.min(feet[1].patch.length),
         feet[0].patch.width.min(feet[1].patch.width),
@@ -210,14 +227,6 @@ pub fn derive(urdf: &Path, target_height: Option<f64>) -> Result<RobotSetup, Ini
             .map(|&j| model.joints()[j].name.clone())
             .collect()
     };
-    let torso_frame = arms
-        .iter()
-        .find_map(|a| a.first())
-        .and_then(|&j| model.bodies()[j + 1].parent)
-        .map_or_else(
-            || model.root_link().to_string(),
-            |b| model.bodies()[b].name.clone(),
-        );
     Ok(RobotSetup {
         urdf: urdf.to_path_buf(),
         model_name: model.name().to_string(),
@@ -246,6 +255,7 @@ pub fn derive(urdf: &Path, target_height: Option<f64>) -> Result<RobotSetup, Ini
         stance,
         scaled,
         ft_sensors: model.ft_sensors().len(),
+        upright_initial,
         contact_grid: feet[0]
             .point_contact_grid()
             .filter(|g| Some(*g) == feet[1].point_contact_grid()),
@@ -304,6 +314,27 @@ fn with_soles(
     };
     let soles = [soles[0].clone(), soles[1].clone()];
     Ok((Arc::new(model), soles, [l, r]))
+}
+
+/// Whether the torso frame and the root body are x forward, z up (within [`UPRIGHT_TOLERANCE_DEG`] of
+/// the left sole) with the robot standing at `q`.
+fn upright_frames(
+    model: &Arc<Model>,
+    q: &DVector<f64>,
+    soles: [FrameId; 2],
+    torso: &str,
+) -> Result<bool, stride_model::ModelError> {
+    let state = RobotState::standing(model, q, soles[0], soles[1])?;
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_state(&state)?;
+    let sole = kd.frame_pose(soles[0]).rotation;
+    let tol = UPRIGHT_TOLERANCE_DEG.to_radians();
+    let aligned = |name: &str| {
+        model
+            .frame_id(name)
+            .is_some_and(|f| sole.angle_to(&kd.frame_pose(f).rotation) <= tol)
+    };
+    Ok(aligned(torso) && aligned(model.root_link()))
 }
 
 /// Both legs.

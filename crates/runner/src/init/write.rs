@@ -211,6 +211,13 @@ pub fn robot_file(s: &RobotSetup, urdf: &str, name: &str) -> String {
         array(&[-sc.cop_half[0], sc.cop_half[0]]),
         array(&[-sc.cop_half[1], sc.cop_half[1]])
     );
+    if s.upright_initial {
+        let _ = writeln!(
+            w,
+            "# The torso frame or the root body is not x forward, z up in the crouch: the torso and pelvis tasks\n\
+             # hold their initial orientation.\nupright_offset = \"initial\""
+        );
+    }
     let arm_joints: Vec<&String> = s.arms.iter().flatten().collect();
     if !arm_joints.is_empty() {
         let _ = writeln!(
