@@ -43,7 +43,7 @@ pub enum CrouchError {
 
 /// Fraction of the hip drop by which the CoM drops in a crouch [-]: the legs (about a third of the mass)
 /// drop less than the hips. Measured on the hand-chosen 0.7 rad crouches (`stride check`): the bundled
-/// humanoid's CoM drops by 0.61 of its 0.7 rad hip drop, the G1's by 0.84.
+/// humanoid's CoM drops by 0.61 of its 0.7 rad hip drop, the G1's by 0.83.
 pub const COM_DROP_FRACTION: f64 = 0.75;
 
 /// The default target CoM height: the zero posture's CoM height above the soles `h0` lowered by

@@ -103,9 +103,15 @@ fn normalised(p: &Path) -> Vec<Component<'_>> {
     out
 }
 
-/// `[a, b, c]` with 4 decimals.
+/// `[a, b, c]` with 4 decimals (no `-0.0000`).
 fn array(v: &[f64]) -> String {
-    let items: Vec<String> = v.iter().map(|x| format!("{x:.4}")).collect();
+    let items: Vec<String> = v
+        .iter()
+        .map(|x| {
+            let r = (x * 1e4).round() / 1e4;
+            format!("{:.4}", r + 0.0)
+        })
+        .collect();
     format!("[{}]", items.join(", "))
 }
 
@@ -169,7 +175,7 @@ pub fn robot_file(s: &RobotSetup, urdf: &str, name: &str) -> String {
     let _ = writeln!(
         w,
         "\n# The flat-footed crouch: soles level, CoM {:.3} m above them (target: the zero posture's CoM lowered\n\
-         # by the hip drop of a {:.0}° knee bend of a {:.3} m leg) and over the feet's centre, base upright [rad].\n\
+         # by 3/4 of the hip drop of a {:.0}° knee bend of a {:.3} m leg) and over the feet's centre, base upright [rad].\n\
          # Joints not listed start at 0. It is also the walking preset's posture.\n[robot.initial_joint_positions]",
         st.com_height(),
         super::crouch::CROUCH_KNEE_ANGLE.to_degrees(),
