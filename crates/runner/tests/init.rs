@@ -40,8 +40,14 @@ fn init_on_the_bundled_humanoid_recovers_its_hand_written_values() {
     let s = derive(&bundled_urdf(), None).unwrap();
     let hand = Scenario::load(&root().join("configs/walk_straight.toml")).unwrap();
     let c = &hand.config;
-    assert_eq!(s.soles[0], Sole::Frame(c.robot.left_sole.name().to_string()));
-    assert_eq!(s.soles[1], Sole::Frame(c.robot.right_sole.name().to_string()));
+    assert_eq!(
+        s.soles[0],
+        Sole::Frame(c.robot.left_sole.name().to_string())
+    );
+    assert_eq!(
+        s.soles[1],
+        Sole::Frame(c.robot.right_sole.name().to_string())
+    );
     assert_eq!(s.torso_frame, c.robot.torso_frame);
     assert_eq!(s.knees[0], ("l_knee".to_string(), 1.0));
     assert_eq!(s.knees[1], ("r_knee".to_string(), 1.0));
@@ -49,8 +55,18 @@ fn init_on_the_bundled_humanoid_recovers_its_hand_written_values() {
     assert!(s.locks.is_empty(), "{:?}", s.locks);
     // Geometry: CoM height within 2 % (stride check warns at 5 %), width within 1 mm, sole exact.
     let p = &c.planner;
-    close("com_height", s.stance.com_height(), p.com_height, 0.02 * p.com_height);
-    close("nominal_width", s.stance.feet_width(), p.nominal_width, 1e-3);
+    close(
+        "com_height",
+        s.stance.com_height(),
+        p.com_height,
+        0.02 * p.com_height,
+    );
+    close(
+        "nominal_width",
+        s.stance.feet_width(),
+        p.nominal_width,
+        1e-3,
+    );
     close("foot_length", s.foot[0], p.foot_length, 1e-9);
     close("foot_width", s.foot[1], p.foot_width, 1e-9);
     let knee = s.posture.iter().find(|(j, _)| j == "l_knee").unwrap().1;
@@ -62,7 +78,12 @@ fn init_on_the_bundled_humanoid_recovers_its_hand_written_values() {
     close("servo kp", sc.servo_kp, servos.kp, 0.05 * servos.kp);
     close("servo kd", sc.servo_kd, servos.kd, 0.05 * servos.kd);
     close("min_width", sc.min_width, p.min_width, 2e-3);
-    close("feet_distance_max", sc.feet_distance_max, p.feet_distance_max, 5e-3);
+    close(
+        "feet_distance_max",
+        sc.feet_distance_max,
+        p.feet_distance_max,
+        5e-3,
+    );
     close("swing_height", sc.swing_height, p.swing_height, 2e-3);
     let hand_durations = [
         p.step_duration_min,
@@ -327,8 +348,18 @@ fn init_on_icub_finds_its_negative_knees_and_walks_in_torque_control() {
     let hand = Scenario::load(&root().join("configs/walk_straight_icub.toml")).unwrap();
     let p = &hand.config.planner;
     // Within stride check's tolerances (5 % on the CoM height, 10 % on the width).
-    close("com_height", s.stance.com_height(), p.com_height, 0.05 * p.com_height);
-    close("nominal_width", s.stance.feet_width(), p.nominal_width, 0.1 * p.nominal_width);
+    close(
+        "com_height",
+        s.stance.com_height(),
+        p.com_height,
+        0.05 * p.com_height,
+    );
+    close(
+        "nominal_width",
+        s.stance.feet_width(),
+        p.nominal_width,
+        0.1 * p.nominal_width,
+    );
     let dir = Scratch::new("init-icub");
     let files = write(&s, urdf.to_str().unwrap(), "icub", &dir.0, false).unwrap();
     let end = outcome(&Scenario::load(&files[2]).unwrap());

@@ -91,7 +91,9 @@ fn joint_frame(model: &Model, kd: &KinDyn, j: usize) -> Option<(Vector3<f64>, Ve
 /// sole frame's x axis, where the toes point), probed at the zero posture.
 pub fn find_leg(model: &Arc<Model>, sole: FrameId, side: &'static str) -> Result<Leg, LimbError> {
     let joints = chain_to(model, sole);
-    let link = model.bodies()[model.frames()[sole.index()].link].name.clone();
+    let link = model.bodies()[model.frames()[sole.index()].link]
+        .name
+        .clone();
     if joints.len() < MIN_LEG_JOINTS {
         return Err(LimbError::ShortLeg {
             side,

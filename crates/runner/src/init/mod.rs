@@ -145,12 +145,13 @@ pub const UPRIGHT_TOLERANCE_DEG: f64 = 1.0;
 
 /// Expands `${VAR}` in `written` and checks that the file exists.
 pub fn resolve_urdf(written: &str) -> Result<PathBuf, InitError> {
-    let expanded = crate::config::expand_env_vars(written, |n| std::env::var(n).ok()).map_err(
-        |message| InitError::Path {
-            written: written.into(),
-            message,
-        },
-    )?;
+    let expanded =
+        crate::config::expand_env_vars(written, |n| std::env::var(n).ok()).map_err(|message| {
+            InitError::Path {
+                written: written.into(),
+                message,
+            }
+        })?;
     let path = PathBuf::from(expanded);
     if !path.is_file() {
         return Err(InitError::Path {
@@ -191,8 +192,8 @@ pub fn derive(urdf: &Path, target_height: Option<f64>) -> Result<RobotSetup, Ini
     let zero = Stance::new(&model, &start_zero_legs(&model, &start, &legs), sole_ids)
         .map_err(|e| model_err(e.to_string()))?;
     let leg_length = 0.5 * (legs[0].length + legs[1].length);
-    let target =
-        target_height.unwrap_or_else(|| crouch::default_target_height(zero.com_height(), leg_length));
+    let target = target_height
+        .unwrap_or_else(|| crouch::default_target_height(zero.com_height(), leg_length));
     let torso_frame = arms
         .iter()
         .find_map(|a| a.first())
@@ -262,13 +263,13 @@ pub fn derive(urdf: &Path, target_height: Option<f64>) -> Result<RobotSetup, Ini
     })
 }
 
+/// A model with its sole frames, the soles as the robot file writes them, and their frame ids.
+type WithSoles = (Arc<Model>, [Sole; 2], [FrameId; 2]);
+
 /// `model` with the proposed sole frames: the URDF's own frame where one lies on the proposal (within
 /// [`SAME_FRAME_DISTANCE`], [`SAME_FRAME_ANGLE`]), else a frame `left_sole` / `right_sole` attached to
 /// the foot link.
-fn with_soles(
-    mut model: Model,
-    feet: &[FootProposal; 2],
-) -> Result<(Arc<Model>, [Sole; 2], [FrameId; 2]), String> {
+fn with_soles(mut model: Model, feet: &[FootProposal; 2]) -> Result<WithSoles, String> {
     let mut soles = Vec::new();
     for foot in feet {
         let parent = model
@@ -364,7 +365,10 @@ fn find_arms(model: &Arc<Model>, legs: &[Leg; 2]) -> [Vec<usize>; 2] {
             continue;
         };
         let chain = limbs::chain_to(model, frame);
-        if chain.iter().any(|j| legs.iter().any(|l| l.joints.contains(j))) {
+        if chain
+            .iter()
+            .any(|j| legs.iter().any(|l| l.joints.contains(j)))
+        {
             continue;
         }
         let side = usize::from(kd.frame_pose(frame).translation.y < 0.0);

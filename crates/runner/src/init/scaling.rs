@@ -74,6 +74,9 @@ pub fn scale(mass: f64, height: f64, g: f64, width: f64, foot: [f64; 2]) -> Scal
         min_width: MIN_WIDTH_RATIO * width,
         swing_height: REFERENCE_SWING_HEIGHT * lambda,
         step_durations: REFERENCE_STEP_DURATIONS.map(|t| t * time),
-        cop_half: [0.5 * COP_FRACTION[0] * foot[0], 0.5 * COP_FRACTION[1] * foot[1]],
+        cop_half: [
+            0.5 * COP_FRACTION[0] * foot[0],
+            0.5 * COP_FRACTION[1] * foot[1],
+        ],
     }
 }

@@ -65,10 +65,8 @@ fn urdf_entry(written: &str, from_dir: &Path) -> String {
         return written.to_string();
     }
     let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    relative(&abs(p), &abs(from_dir)).map_or_else(
-        || abs(p).display().to_string(),
-        |r| r.display().to_string(),
-    )
+    relative(&abs(p), &abs(from_dir))
+        .map_or_else(|| abs(p).display().to_string(), |r| r.display().to_string())
 }
 
 /// `to` relative to the directory `from` (both absolute, `.`/`..` resolved lexically).
@@ -203,7 +201,11 @@ pub fn robot_file(s: &RobotSetup, urdf: &str, name: &str) -> String {
     let _ = writeln!(w, "nominal_width = {:.4}", st.feet_width());
     let _ = writeln!(w, "min_width = {:.4}", sc.min_width);
     let _ = writeln!(w, "feet_distance_max = {:.4}", sc.feet_distance_max);
-    let _ = writeln!(w, "foot_length = {:.4}\nfoot_width = {:.4}", s.foot[0], s.foot[1]);
+    let _ = writeln!(
+        w,
+        "foot_length = {:.4}\nfoot_width = {:.4}",
+        s.foot[0], s.foot[1]
+    );
     let _ = writeln!(w, "swing_height = {:.4}", sc.swing_height);
     let [dmin, dnom, dmax] = sc.step_durations;
     let _ = writeln!(
