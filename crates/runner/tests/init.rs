@@ -216,15 +216,7 @@ fn bare_robot() -> String {
 /// `Some(URDF path as written, with ${STRIDE_EXAMPLE_ROBOT_DATA_DIR})` when the variable is set; else says
 /// so on stderr (the marker CI greps for) and returns `None`.
 fn example_robot(test: &str, rel: &str) -> Option<String> {
-    if std::env::var_os("STRIDE_EXAMPLE_ROBOT_DATA_DIR").is_none() {
-        eprintln!(
-            "STRIDE-ERD-TEST-SKIPPED {test}: STRIDE_EXAMPLE_ROBOT_DATA_DIR is not set \
-             (export STRIDE_EXAMPLE_ROBOT_DATA_DIR=$(bash tools/reference/example-robot-data-dir.sh))"
-        );
-        return None;
-    }
-    eprintln!("STRIDE-ERD-TEST-RAN {test}");
-    Some(format!("${{STRIDE_EXAMPLE_ROBOT_DATA_DIR}}/{rel}"))
+    common::example_robot_data(test).then(|| format!("${{STRIDE_EXAMPLE_ROBOT_DATA_DIR}}/{rel}"))
 }
 
 /// `stride init` into a scratch directory; the two generated walks, loaded with `edits` (TOML text
@@ -246,6 +238,17 @@ fn init_and_load(
     (s, scenarios)
 }
 
+fn assert_both_reach_the_goal(scenarios: &[Scenario; 2]) {
+    for s in scenarios {
+        let end = outcome(s);
+        assert!(
+            matches!(end, Outcome::GoalReached),
+            "{}: {end:?}",
+            s.config.scenario.name
+        );
+    }
+}
+
 /// Keys edited by hand after `stride init` on the G1 and TALOS: none.
 const NO_EDITS: &str = "";
 
@@ -262,14 +265,7 @@ fn the_g1_walks_two_metres_from_stride_init_in_both_modes() {
     assert_eq!(setup.contact_grid, Some([2, 2]));
     assert!(matches!(setup.soles[0], Sole::Attached { .. }));
     assert_eq!(setup.knees[0], ("left_knee_joint".to_string(), 1.0));
-    for s in scenarios {
-        let end = outcome(&s);
-        assert!(
-            matches!(end, Outcome::GoalReached),
-            "{}: {end:?}",
-            s.config.scenario.name
-        );
-    }
+    assert_both_reach_the_goal(&scenarios);
 }
 
 /// The G1's feet touch the URDF's collision geometry with four corner spheres; `stride init` puts one
@@ -321,14 +317,7 @@ fn talos_walks_two_metres_from_stride_init_in_both_modes() {
     assert_eq!(parent, "leg_left_6_link");
     close("sole x", xyz[0], -0.0056, 1e-4);
     close("sole z", xyz[2], -0.107, 1e-4);
-    for s in scenarios {
-        let end = outcome(&s);
-        assert!(
-            matches!(end, Outcome::GoalReached),
-            "{}: {end:?}",
-            s.config.scenario.name
-        );
-    }
+    assert_both_reach_the_goal(&scenarios);
 }
 
 /// iCub: knees flexed by negative positions, a root link and chest that are not x forward (the preset

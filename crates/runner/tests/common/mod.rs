@@ -82,3 +82,17 @@ pub fn adjusted_footsteps(path: &Path) -> Vec<serde_json::Value> {
         .map(|m| serde_json::from_slice(&m.data).unwrap())
         .collect()
 }
+
+/// Whether `example-robot-data` is available (STRIDE_EXAMPLE_ROBOT_DATA_DIR set), saying so on stderr
+/// past the harness's capture: `STRIDE-ERD-TEST-RAN <test>` or `STRIDE-ERD-TEST-SKIPPED <test>: <why>`.
+pub fn example_robot_data(test: &str) -> bool {
+    if std::env::var_os("STRIDE_EXAMPLE_ROBOT_DATA_DIR").is_none() {
+        eprintln!(
+            "STRIDE-ERD-TEST-SKIPPED {test}: STRIDE_EXAMPLE_ROBOT_DATA_DIR is not set \
+             (export STRIDE_EXAMPLE_ROBOT_DATA_DIR=$(bash tools/reference/example-robot-data-dir.sh))"
+        );
+        return false;
+    }
+    eprintln!("STRIDE-ERD-TEST-RAN {test}");
+    true
+}
