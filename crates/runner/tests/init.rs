@@ -138,13 +138,18 @@ fn the_scaling_law_has_its_exponents() {
     close("step ratio", s_b / s_a, 4.0, 1e-9);
 }
 
-/// The generated files of the bundled humanoid load, check without a warning and walk 2 m.
+/// The generated files of the bundled humanoid load, check without a warning and walk 2 m. The URDF is
+/// given relative to the working directory (the crate's, under `cargo test`): the robot file holds it
+/// relative to itself, which the scenario's loading resolves.
 #[test]
 fn the_bundled_humanoids_generated_files_check_and_walk() {
     let dir = Scratch::new("init-bundled");
-    let urdf = bundled_urdf();
+    let written = "../../models/stride_humanoid.urdf";
+    let urdf = resolve_urdf(written).unwrap();
     let s = derive(&urdf, None).unwrap();
-    let files = write(&s, urdf.to_str().unwrap(), "bundled", &dir.0, false).unwrap();
+    let files = write(&s, written, "bundled", &dir.0, false).unwrap();
+    let robot = std::fs::read_to_string(&files[0]).unwrap();
+    assert!(!robot.contains(&format!("urdf = \"{written}\"")), "{robot}");
     assert!(files.iter().all(|f| f.is_file()));
     for f in &files[1..] {
         let scenario = Scenario::load(f).unwrap();
@@ -155,7 +160,7 @@ fn the_bundled_humanoids_generated_files_check_and_walk() {
     let end = outcome(&position);
     assert!(matches!(end, Outcome::GoalReached), "{end:?}");
     // A second write without --force refuses, naming the file.
-    let again = write(&s, urdf.to_str().unwrap(), "bundled", &dir.0, false).unwrap_err();
+    let again = write(&s, written, "bundled", &dir.0, false).unwrap_err();
     assert!(again.to_string().contains("bundled.toml"), "{again}");
 }
 
