@@ -1,12 +1,12 @@
 //! `stride init <URDF> --name NAME`: a robot file and two walking scenarios for a robot nobody has
 //! configured, derived from its URDF.
 //!
-//! [`derive`] reads the model and finds, in order: the soles ([`crate::feet::propose_feet`], or the
+//! [`derive()`] reads the model and finds, in order: the soles ([`crate::feet::propose_feet`], or the
 //! URDF's own frame where one lies on the proposed sole), the legs, their knees and flexion sign
 //! ([`limbs::find_leg`]), the arms (the longest other chains on each side), the light hand chains to lock
 //! ([`limbs::proposed_locks`]), the flat-footed crouch at a target CoM height ([`crouch::crouch`]) and the
 //! geometry of the robot standing in it ([`crate::check::posture::Stance`]), and the robot-scaled planner
-//! limits and servo gains ([`scaling::scale`]). [`write`] turns the result into
+//! limits and servo gains ([`scaling::scale`]). [`write::write()`] turns the result into
 //! `<dir>/robots/NAME.toml`, `<dir>/walk_NAME.toml` (position control) and `<dir>/walk_NAME_torque.toml`.
 
 pub mod crouch;
