@@ -80,6 +80,25 @@ pub enum Command {
         #[command(subcommand)]
         command: ModelCommand,
     },
+    /// Derive a robot file and two walking scenarios (position and torque control, 2 m straight) from a
+    /// URDF: soles, legs, knees, arms, locked hand joints, a flat-footed crouch, robot-scaled planner
+    /// limits and servo gains (docs/new-robot.md).
+    Init {
+        /// URDF file; may hold `${VAR}` (kept as written in the robot file).
+        urdf: String,
+        /// Robot name: writes `DIR/robots/NAME.toml`, `DIR/walk_NAME.toml`, `DIR/walk_NAME_torque.toml`.
+        #[arg(long)]
+        name: String,
+        /// Output directory.
+        #[arg(long, default_value = "configs")]
+        dir: PathBuf,
+        /// CoM height of the crouch above the soles \[m\] (default: from the leg length).
+        #[arg(long)]
+        com_height: Option<f64>,
+        /// Overwrite existing files.
+        #[arg(long)]
+        force: bool,
+    },
     /// Validate a scenario file and its names against the model (with warnings about the posture and
     /// the ground) without running it.
     Check {

@@ -80,6 +80,77 @@ pub fn check(path: &Path) -> Result<ExitCode, CliError> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `stride init <URDF> --name NAME`: derives the robot's configuration ([`crate::init::derive`]), writes
+/// the three files and prints what it found.
+pub fn init(
+    urdf: &str,
+    name: &str,
+    dir: &Path,
+    com_height: Option<f64>,
+    force: bool,
+) -> Result<ExitCode, CliError> {
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        return Err(CliError::msg(format!(
+            "--name `{name}`: expected letters, digits, `_` or `-` (it names the files)"
+        )));
+    }
+    if let Some(h) = com_height {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(CliError::msg(format!(
+                "--com-height {h}: expected a positive height in metres"
+            )));
+        }
+    }
+    let run = || -> Result<_, crate::init::InitError> {
+        let path = crate::init::resolve_urdf(urdf)?;
+        let setup = crate::init::derive(&path, com_height)?;
+        let files = crate::init::write::write(&setup, urdf, name, dir, force)?;
+        Ok((setup, files))
+    };
+    let (s, files) = run().map_err(|e| CliError::msg(e.to_string()))?;
+    crate::outln!(
+        "{}: model `{}`, {:.2} kg, {} legs of {:.3} m",
+        s.urdf.display(),
+        s.model_name,
+        s.mass,
+        s.legs[0].len() + s.legs[1].len(),
+        s.leg_length
+    );
+    crate::outln!(
+        "  knees {} and {} (flexion {}), torso frame {}, {} arm joints, {} locked joint(s)",
+        s.knees[0].0,
+        s.knees[1].0,
+        if s.knees[0].1 > 0.0 { "+" } else { "-" },
+        s.torso_frame,
+        s.arms[0].len() + s.arms[1].len(),
+        s.locks.len()
+    );
+    crate::outln!(
+        "  crouch: CoM {:.3} m above the soles (target {:.3}), soles {:.3} m apart, sole {:.3} m × {:.3} m",
+        s.stance.com_height(),
+        s.target_height,
+        s.stance.feet_width(),
+        s.foot[0],
+        s.foot[1]
+    );
+    crate::outln!(
+        "  servos kp {:.0} N·m/rad, kd {:.0} N·m·s/rad; feet_distance_max {:.3} m, steps {:.2}–{:.2} s",
+        s.scaled.servo_kp,
+        s.scaled.servo_kd,
+        s.scaled.feet_distance_max,
+        s.scaled.step_durations[0],
+        s.scaled.step_durations[2]
+    );
+    for f in &files {
+        crate::outln!("wrote {}", f.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 /// `stride model info|eval`.
 pub fn model(command: ModelCommand) -> Result<ExitCode, CliError> {
     crate::model_cmd::model(command)
@@ -377,6 +448,13 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
     match cli.command {
         Command::Model { command } => model(command),
         Command::Check { config } => check(&config),
+        Command::Init {
+            urdf,
+            name,
+            dir,
+            com_height,
+            force,
+        } => init(&urdf, &name, &dir, com_height, force),
         Command::Plan { config, json, dt } => plan(&config, json, dt),
         Command::Run {
             config,

@@ -26,6 +26,7 @@ pub mod feet;
 pub mod flexible;
 pub mod gait;
 pub mod identify;
+pub mod init;
 pub mod joint_trajectory;
 pub mod log;
 pub mod model_cmd;

@@ -86,6 +86,11 @@ fn box_foot_and_corner_sphere_foot_give_their_sole_rectangles() {
         "{:?}",
         r.warnings
     );
+    // Point contacts: the four corner spheres form a 2 × 2 grid; the box sole has none.
+    assert_eq!(r.point_contacts.len(), 4);
+    assert_eq!(r.point_contact_grid(), Some([2, 2]));
+    assert!(l.point_contacts.is_empty());
+    assert_eq!(l.point_contact_grid(), None);
 }
 
 #[test]
@@ -207,21 +212,11 @@ fn icub_feet_are_near_its_urdf_sole_frames() {
 /// `$STRIDE_EXAMPLE_ROBOT_DATA_DIR/<rel>`, or `None` (said loudly on stderr) when the variable is unset
 /// (`tools/reference/example-robot-data-dir.sh` installs the package and prints the folder).
 fn example_robot(test: &str, rel: &str) -> Option<std::path::PathBuf> {
-    match std::env::var_os("STRIDE_EXAMPLE_ROBOT_DATA_DIR") {
-        Some(dir) => {
-            let path = std::path::PathBuf::from(dir).join(rel);
-            assert!(path.is_file(), "{} is missing", path.display());
-            eprintln!("STRIDE-ERD-TEST-RAN {test}");
-            Some(path)
-        }
-        None => {
-            eprintln!(
-                "STRIDE-ERD-TEST-SKIPPED {test}: STRIDE_EXAMPLE_ROBOT_DATA_DIR is not set \
-                 (export STRIDE_EXAMPLE_ROBOT_DATA_DIR=$(bash tools/reference/example-robot-data-dir.sh))"
-            );
-            None
-        }
-    }
+    let dir = std::env::var_os("STRIDE_EXAMPLE_ROBOT_DATA_DIR")
+        .filter(|_| common::example_robot_data(test))?;
+    let path = std::path::PathBuf::from(dir).join(rel);
+    assert!(path.is_file(), "{} is missing", path.display());
+    Some(path)
 }
 
 #[test]

@@ -9,14 +9,9 @@ use stride_runner::config::Scenario;
 use stride_runner::run::{run_scenario, Outcome, RunOptions};
 
 fn docs_scenario(test: &str, name: &str) -> Option<Scenario> {
-    if std::env::var_os("STRIDE_EXAMPLE_ROBOT_DATA_DIR").is_none() {
-        eprintln!(
-            "STRIDE-ERD-TEST-SKIPPED {test}: STRIDE_EXAMPLE_ROBOT_DATA_DIR is not set \
-             (export STRIDE_EXAMPLE_ROBOT_DATA_DIR=$(bash tools/reference/example-robot-data-dir.sh))"
-        );
+    if !common::example_robot_data(test) {
         return None;
     }
-    eprintln!("STRIDE-ERD-TEST-RAN {test}");
     Some(Scenario::load(&root().join(format!("docs/new-robot/{name}.toml"))).unwrap())
 }
 

@@ -60,6 +60,28 @@ pub struct FootProposal {
     pub source: String,
     /// Disagreements with the visual geometry, or why it was not compared.
     pub warnings: Vec<String>,
+    /// When the foot touches the ground only through spheres (point contacts, e.g. the G1's four corner
+    /// spheres): the spheres' lowest points on the patch (world, zero posture); empty for a flat sole.
+    pub point_contacts: Vec<nalgebra::Point3<f64>>,
+}
+
+impl FootProposal {
+    /// The contact grid (`sim.contact.surfaces[].grid`, points along x and y, corners included) that puts
+    /// one simulated contact point on each of [`FootProposal::point_contacts`] when they form a grid
+    /// (distinct x's times distinct y's, each within 10 % of the patch's size: the G1's toe spheres are
+    /// 5 mm wider apart than its heel spheres); `None` for a flat sole or another arrangement.
+    pub fn point_contact_grid(&self) -> Option<[usize; 2]> {
+        let distinct = |v: Vec<f64>, size: f64| {
+            let mut v = v;
+            v.sort_by(f64::total_cmp);
+            v.dedup_by(|a, b| (*a - *b).abs() < 0.1 * size);
+            v.len()
+        };
+        let p = &self.point_contacts;
+        let nx = distinct(p.iter().map(|c| c.x).collect(), self.patch.length);
+        let ny = distinct(p.iter().map(|c| c.y).collect(), self.patch.width);
+        (nx >= 2 && ny >= 2 && nx * ny == p.len()).then_some([nx, ny])
+    }
 }
 
 /// The geometry of one link, world coordinates, with notes on what could not be read.
@@ -112,6 +134,7 @@ pub fn propose_feet(path: &Path) -> Result<[FootProposal; 2], FeetError> {
                 pose: *pose,
                 source: s.kinds.join(", "),
                 patch,
+                point_contacts: sphere_contacts(&s.shapes, patch.centre.z),
             })
         })
         .collect();
@@ -160,6 +183,7 @@ pub fn propose_feet(path: &Path) -> Result<[FootProposal; 2], FeetError> {
             sole_in_link: c.pose.inverse() * world_sole,
             source: c.source.clone(),
             warnings,
+            point_contacts: c.point_contacts.clone(),
         }
     };
     Ok([propose("left", left), propose("right", right)])
@@ -218,6 +242,21 @@ struct Candidate<'a> {
     pose: Isometry3<f64>,
     source: String,
     patch: Patch,
+    point_contacts: Vec<nalgebra::Point3<f64>>,
+}
+
+/// The lowest points of the spheres on a patch at height `z` when the shapes are spheres only (point
+/// contacts); empty otherwise.
+fn sphere_contacts(shapes: &Shapes, z: f64) -> Vec<nalgebra::Point3<f64>> {
+    if !shapes.triangles.is_empty() {
+        return Vec::new();
+    }
+    shapes
+        .spheres
+        .iter()
+        .map(|(c, r)| c - Vector3::z() * *r)
+        .filter(|p| (p.z - z).abs() <= patch::PATCH_HEIGHT_TOLERANCE)
+        .collect()
 }
 
 /// The shapes of one link's collision or visual elements, placed at `pose`.

@@ -82,3 +82,21 @@ pub fn adjusted_footsteps(path: &Path) -> Vec<serde_json::Value> {
         .map(|m| serde_json::from_slice(&m.data).unwrap())
         .collect()
 }
+
+/// Whether `example-robot-data` is available (STRIDE_EXAMPLE_ROBOT_DATA_DIR set), saying so straight to
+/// the process's stderr, past the harness's capture (`.ci/run` counts the names that ran):
+/// `STRIDE-ERD-TEST-RAN <test>` or `STRIDE-ERD-TEST-SKIPPED <test>: <why>`.
+pub fn example_robot_data(test: &str) -> bool {
+    use std::io::Write;
+    let set = std::env::var_os("STRIDE_EXAMPLE_ROBOT_DATA_DIR").is_some();
+    let line = if set {
+        format!("STRIDE-ERD-TEST-RAN {test}\n")
+    } else {
+        format!(
+            "STRIDE-ERD-TEST-SKIPPED {test}: STRIDE_EXAMPLE_ROBOT_DATA_DIR is not set \
+             (export STRIDE_EXAMPLE_ROBOT_DATA_DIR=$(bash tools/reference/example-robot-data-dir.sh))\n"
+        )
+    };
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
+    set
+}
