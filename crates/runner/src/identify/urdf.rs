@@ -11,7 +11,7 @@ use nalgebra::{DVector, Matrix3, Vector3};
 use stride_model::inertial::{mass_com_inertia, transform_parameters, InertialParameters};
 use stride_model::{FrameKind, Model};
 
-use super::report::block;
+use super::report::{block, inertia_entries};
 use super::IdentifyError;
 
 /// The prior URDF `urdf` with the inertial parameters `split` (FT-split layout of `model`, the model
@@ -69,23 +69,14 @@ fn inertial_element(pi: &InertialParameters) -> String {
     } else {
         (0.0, Vector3::zeros(), Matrix3::zeros())
     };
+    let [ixx, ixy, ixz, iyy, iyz, izz] = inertia_entries(&i);
     format!(
         "<inertial>\n      <origin xyz=\"{:?} {:?} {:?}\" rpy=\"0 0 0\"/>\n      <mass value=\"{m:?}\"/>\n      \
-         <inertia ixx=\"{:?}\" ixy=\"{:?}\" ixz=\"{:?}\" iyy=\"{:?}\" iyz=\"{:?}\" izz=\"{:?}\"/>\n    </inertial>",
-        c.x,
-        c.y,
-        c.z,
-        i[(0, 0)],
-        i[(0, 1)],
-        i[(0, 2)],
-        i[(1, 1)],
-        i[(1, 2)],
-        i[(2, 2)]
+         <inertia ixx=\"{ixx:?}\" ixy=\"{ixy:?}\" ixz=\"{ixz:?}\" iyy=\"{iyy:?}\" iyz=\"{iyz:?}\" izz=\"{izz:?}\"/>\n    </inertial>",
+        c.x, c.y, c.z,
     )
 }
 
-/// The text with link `name`'s `<inertial>…</inertial>` replaced by `inertial` (inserted when the link has
-/// none; a self-closing `<link name="…"/>` is opened).
 fn replace_inertial(text: &str, name: &str, inertial: &str) -> Result<String, IdentifyError> {
     let missing = || IdentifyError::Content(format!("link `{name}` not found in the URDF text"));
     let start = [format!("<link name=\"{name}\""), format!("<link name='{name}'")]
