@@ -27,7 +27,8 @@ pub struct FlexibleJoint {
     pub damping: f64,
 }
 
-/// Deflection and rate of each flexible joint from its estimated torque ([module docs](self)).
+/// Deflection and rate of each flexible joint from its estimated torque: the backward-Euler law above
+/// [Romualdi 2022, §9.3, eq. (9.1.2)].
 /// Allocation-free after [`FlexibleJointObserver::new`].
 #[derive(Debug, Clone)]
 pub struct FlexibleJointObserver {
