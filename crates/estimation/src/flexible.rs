@@ -27,7 +27,7 @@ pub struct FlexibleJoint {
     pub damping: f64,
 }
 
-/// Deflection and rate of each flexible joint from its estimated torque: the backward-Euler law above
+/// Deflection and rate of each flexible joint from its estimated torque, by the backward-Euler law
 /// [Romualdi 2022, §9.3, eq. (9.1.2)].
 /// Allocation-free after [`FlexibleJointObserver::new`].
 #[derive(Debug, Clone)]
