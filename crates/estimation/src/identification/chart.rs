@@ -4,22 +4,10 @@
 //! physical body (Theorem 6.1); the Jacobian of `π_p` in that chart drives the Gauss–Newton steps.
 
 use nalgebra::{Matrix3, Rotation3, SMatrix, SymmetricEigen, Vector3};
-use stride_model::inertial::{mass_com_inertia, InertialParameters, PhysicalParameters};
+use stride_model::inertial::{mass_com_inertia, vech, InertialParameters, PhysicalParameters};
 
 /// `∂π_p / ∂z` at `z = 0`: 10 × 10, columns `(δm, δc_x, δc_y, δc_z, δQ_x, δQ_y, δQ_z, δL_x, δL_y, δL_z)`.
 pub type ChartJacobian = SMatrix<f64, 10, 10>;
-
-/// `vech` in the order of [Traversaro 2017, eq. (6.5)]: `[I_xx, I_xy, I_xz, I_yy, I_yz, I_zz]`.
-fn vech(m: &Matrix3<f64>) -> [f64; 6] {
-    [
-        m[(0, 0)],
-        m[(0, 1)],
-        m[(0, 2)],
-        m[(1, 1)],
-        m[(1, 2)],
-        m[(2, 2)],
-    ]
-}
 
 fn hat(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)

@@ -35,6 +35,6 @@ pub use consistency::{
 pub use parametrisation::PhysicalParameters;
 pub use rigid_body::{
     inertia_about_origin, inertial_parameters, momentum_regressor, rigid_body_regressor,
-    sensor_regressor, spatial_inertia, transform_parameters, InertialParameters,
+    sensor_regressor, spatial_inertia, transform_parameters, vech, InertialParameters,
     RigidBodyRegressor,
 };

@@ -11,6 +11,19 @@ use crate::spatial::{ang, cross_force, lin, skew, Inertia};
 /// `[I_xx, I_xy, I_xz, I_yy, I_yz, I_zz]`.
 pub type InertialParameters = SVector<f64, 10>;
 
+/// `vech(I)`: the six independent entries of a symmetric 3 × 3 inertia (kg·m²) in the order of
+/// [Traversaro 2017, eq. 6.5], `[I_xx, I_xy, I_xz, I_yy, I_yz, I_zz]` (also the URDF's `<inertia>` order).
+pub fn vech(i: &Matrix3<f64>) -> [f64; 6] {
+    [
+        i[(0, 0)],
+        i[(0, 1)],
+        i[(0, 2)],
+        i[(1, 1)],
+        i[(1, 2)],
+        i[(2, 2)],
+    ]
+}
+
 /// A 6 × 10 rigid-body regressor: `[f; τ] = Y π` (N, N·m, body frame, torque about its origin).
 pub type RigidBodyRegressor = SMatrix<f64, 6, 10>;
 
@@ -25,18 +38,8 @@ pub fn inertial_parameters(
     let s = skew(com);
     let i_b = inertia_at_com - s * s * mass;
     let h = com * mass;
-    InertialParameters::from_column_slice(&[
-        mass,
-        h.x,
-        h.y,
-        h.z,
-        i_b[(0, 0)],
-        i_b[(0, 1)],
-        i_b[(0, 2)],
-        i_b[(1, 1)],
-        i_b[(1, 2)],
-        i_b[(2, 2)],
-    ])
+    let [xx, xy, xz, yy, yz, zz] = vech(&i_b);
+    InertialParameters::from_column_slice(&[mass, h.x, h.y, h.z, xx, xy, xz, yy, yz, zz])
 }
 
 /// `π` of the same body in a frame `A` in which the body frame has orientation `rotation` (`^A R_B`) and

@@ -2,8 +2,8 @@
 
 use std::fmt::Write as _;
 
-use nalgebra::{DVector, Matrix3, Vector3};
-use stride_model::inertial::{check_full_consistency, mass_com_inertia, InertialParameters};
+use nalgebra::{DVector, Vector3};
+use stride_model::inertial::{check_full_consistency, mass_com_inertia, vech, InertialParameters};
 use stride_model::Model;
 
 use super::IdentificationReport;
@@ -17,19 +17,6 @@ pub(super) fn block_name(model: &Model, b: usize) -> String {
         let s = &model.ft_sensors()[b - nb];
         format!("{} (child side of {})", s.child_link, s.name)
     }
-}
-
-/// The six independent entries `[xx, xy, xz, yy, yz, zz]` of a symmetric inertia \[kg·m²\], in the
-/// order of the URDF's `<inertia>` attributes.
-pub(super) fn inertia_entries(i: &Matrix3<f64>) -> [f64; 6] {
-    [
-        i[(0, 0)],
-        i[(0, 1)],
-        i[(0, 2)],
-        i[(1, 1)],
-        i[(1, 2)],
-        i[(2, 2)],
-    ]
 }
 
 /// Block `b` of a ψ.
@@ -190,7 +177,7 @@ impl IdentificationReport {
                     s,
                     "{what} = {{ mass = {m:?}, com = {}, inertia = {} }}",
                     vec3(&c),
-                    list(inertia_entries(&i))
+                    list(vech(&i))
                 );
             }
         }

@@ -8,10 +8,10 @@
 //! zero mass (their inertia is in the first two).
 
 use nalgebra::{DVector, Matrix3, Vector3};
-use stride_model::inertial::{mass_com_inertia, transform_parameters, InertialParameters};
+use stride_model::inertial::{mass_com_inertia, transform_parameters, vech, InertialParameters};
 use stride_model::{FrameKind, Model};
 
-use super::report::{block, inertia_entries};
+use super::report::block;
 use super::IdentifyError;
 
 /// The prior URDF `urdf` with the inertial parameters `split` (FT-split layout of `model`, the model
@@ -69,7 +69,7 @@ fn inertial_element(pi: &InertialParameters) -> String {
     } else {
         (0.0, Vector3::zeros(), Matrix3::zeros())
     };
-    let [ixx, ixy, ixz, iyy, iyz, izz] = inertia_entries(&i);
+    let [ixx, ixy, ixz, iyy, iyz, izz] = vech(&i);
     format!(
         "<inertial>\n      <origin xyz=\"{:?} {:?} {:?}\" rpy=\"0 0 0\"/>\n      <mass value=\"{m:?}\"/>\n      \
          <inertia ixx=\"{ixx:?}\" ixy=\"{ixy:?}\" ixz=\"{ixz:?}\" iyy=\"{iyy:?}\" iyz=\"{iyz:?}\" izz=\"{izz:?}\"/>\n    </inertial>",
