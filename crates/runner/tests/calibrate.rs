@@ -3,29 +3,16 @@
 
 mod common;
 
-use common::{root, Scratch};
+use common::{root, run_to_the_end, Scratch};
 use stride_runner::calibrate::calibrate_log;
 use stride_runner::config::Scenario;
-use stride_runner::run::{run_scenario, RunOptions};
-use stride_runner::summary::Outcome;
 
 #[test]
 fn calibrated_offsets_match_the_simulator_and_load_as_an_overlay() {
     let s = Scratch::new("calibrate");
     let scenario = Scenario::load(&root().join("configs/identify_ft_legs.toml")).unwrap();
     let duration = 30.0;
-    let log = s.path("legs.mcap");
-    let options = RunOptions {
-        duration: Some(duration),
-        output: Some(log.clone()),
-        ..RunOptions::default()
-    };
-    let summary = run_scenario(&scenario, &options).unwrap();
-    assert!(
-        matches!(summary.outcome, Outcome::DurationReached),
-        "{:?}",
-        summary.outcome
-    );
+    let log = run_to_the_end(&s, &scenario, "legs", duration);
 
     let report = calibrate_log(&log, None).unwrap();
     assert_eq!(report.sensors.len(), 4);
@@ -87,13 +74,7 @@ fn calibrated_offsets_match_the_simulator_and_load_as_an_overlay() {
 fn an_unknown_sensor_is_named_in_the_error() {
     let s = Scratch::new("calibrate_unknown");
     let scenario = Scenario::load(&root().join("configs/identify_ft_legs.toml")).unwrap();
-    let log = s.path("short.mcap");
-    let options = RunOptions {
-        duration: Some(0.1),
-        output: Some(log.clone()),
-        ..RunOptions::default()
-    };
-    run_scenario(&scenario, &options).unwrap();
+    let log = run_to_the_end(&s, &scenario, "short", 0.1);
     let err = calibrate_log(&log, Some("no_such_sensor"))
         .unwrap_err()
         .to_string();
@@ -115,13 +96,7 @@ fn a_log_of_legs_that_barely_turn_leaves_the_offset_undetermined() {
     );
     let path = s.write("still.toml", &text);
     let scenario = Scenario::load(&path).unwrap();
-    let log = s.path("still.mcap");
-    let options = RunOptions {
-        duration: Some(1.0),
-        output: Some(log.clone()),
-        ..RunOptions::default()
-    };
-    run_scenario(&scenario, &options).unwrap();
+    let log = run_to_the_end(&s, &scenario, "still", 1.0);
     match calibrate_log(&log, Some("l_foot_ft_sensor")) {
         Ok(r) => {
             let s = r.sensors[0].offset_std;

@@ -4,13 +4,11 @@
 
 mod common;
 
-use common::{root, Scratch};
+use common::{root, run_to_the_end, Scratch};
 use stride_model::inertial::{check_full_consistency, InertialParameters};
 use stride_model::Model;
 use stride_runner::config::Scenario;
 use stride_runner::identify::{identified_urdf, identify_logs, IdentifyOptions};
-use stride_runner::run::{run_scenario, RunOptions};
-use stride_runner::summary::Outcome;
 
 #[test]
 fn identified_parameters_match_a_heavier_plant_and_are_physical() {
@@ -23,18 +21,7 @@ fn identified_parameters_match_a_heavier_plant_and_are_physical() {
         ),
     );
     let scenario = Scenario::load(&overlay).unwrap();
-    let log = s.path("identify.mcap");
-    let options = RunOptions {
-        duration: Some(20.0),
-        output: Some(log.clone()),
-        ..RunOptions::default()
-    };
-    let summary = run_scenario(&scenario, &options).unwrap();
-    assert!(
-        matches!(summary.outcome, Outcome::DurationReached),
-        "{:?}",
-        summary.outcome
-    );
+    let log = run_to_the_end(&s, &scenario, "identify", 20.0);
 
     let report = identify_logs(std::slice::from_ref(&log), &IdentifyOptions::default()).unwrap();
     // The identifiable combinations (numerical rank, σ > 1e-2 σ_max): the URDF is ~10 % off the plant,

@@ -65,19 +65,9 @@ pub(crate) fn inertia_of(pi: &InertialParameters) -> Inertia {
 
 /// `π` of an [`Inertia`] (about a frame origin).
 pub(crate) fn parameters_of(inertia: &Inertia) -> InertialParameters {
-    let i = &inertia.i;
-    InertialParameters::from_column_slice(&[
-        inertia.m,
-        inertia.h.x,
-        inertia.h.y,
-        inertia.h.z,
-        i[(0, 0)],
-        i[(0, 1)],
-        i[(0, 2)],
-        i[(1, 1)],
-        i[(1, 2)],
-        i[(2, 2)],
-    ])
+    let h = &inertia.h;
+    let [xx, xy, xz, yy, yz, zz] = vech(&inertia.i);
+    InertialParameters::from_column_slice(&[inertia.m, h.x, h.y, h.z, xx, xy, xz, yy, yz, zz])
 }
 
 /// The 3D inertia `I_B` about the body origin (kg·m²) held in `π` (the inverse of `vech`).

@@ -72,6 +72,30 @@ pub fn log_options(s: &Scratch, name: &str) -> stride_runner::run::RunOptions {
     }
 }
 
+/// Runs `scenario` for `duration` s with its log at `<scratch>/<name>.mcap`, asserts that it ran to the
+/// end (a robot on a pole neither falls nor reaches a goal), and returns the log's path.
+pub fn run_to_the_end(
+    s: &Scratch,
+    scenario: &stride_runner::config::Scenario,
+    name: &str,
+    duration: f64,
+) -> PathBuf {
+    let options = stride_runner::run::RunOptions {
+        duration: Some(duration),
+        ..log_options(s, name)
+    };
+    let summary = stride_runner::run::run_scenario(scenario, &options).unwrap();
+    assert!(
+        matches!(
+            summary.outcome,
+            stride_runner::summary::Outcome::DurationReached
+        ),
+        "{:?}",
+        summary.outcome
+    );
+    s.path(&format!("{name}.mcap"))
+}
+
 /// The `/planner/adjusted_footsteps` records of a log, as JSON.
 pub fn adjusted_footsteps(path: &Path) -> Vec<serde_json::Value> {
     stride_runner::log::read_log(path)
