@@ -339,6 +339,14 @@ fn init_on_icub_finds_its_negative_knees_and_walks_in_torque_control() {
     assert_eq!(s.knees[0], ("l_knee".to_string(), -1.0));
     assert_eq!(s.knees[1], ("r_knee".to_string(), -1.0));
     assert!(s.upright_initial);
+    // iCub's root link has y to the robot's right: the arms' sides come from the soles, not that axis.
+    for (arm, prefix) in s.arms.iter().zip(["l_", "r_"]) {
+        assert!(
+            !arm.is_empty() && arm.iter().all(|j| j.starts_with(prefix)),
+            "{:?}",
+            s.arms
+        );
+    }
     let hand = Scenario::load(&root().join("configs/walk_straight_icub.toml")).unwrap();
     let p = &hand.config.planner;
     // Within stride check's tolerances (5 % on the CoM height, 10 % on the width).

@@ -187,7 +187,7 @@ pub fn derive(urdf: &Path, target_height: Option<f64>) -> Result<RobotSetup, Ini
         .map_err(|e| model_err(e.to_string()))?;
     let (model, _, sole_ids) = with_soles(reduced, &feet).map_err(model_err)?;
     let legs = find_legs(&model, sole_ids).map_err(|e| no_legs(e.to_string()))?;
-    let arms = find_arms(&model, &legs);
+    let arms = find_arms(&model, &legs, sole_ids);
     let start = start_posture(&model, &legs);
     let zero = Stance::new(&model, &start_zero_legs(&model, &start, &legs), sole_ids)
         .map_err(|e| model_err(e.to_string()))?;
@@ -346,14 +346,18 @@ fn find_legs(model: &Arc<Model>, soles: [FrameId; 2]) -> Result<[Leg; 2], limbs:
     ])
 }
 
-/// The arms: on each side (the leaf's y at the zero posture), the longest chain from the root to a leaf
-/// body that shares no joint with the legs, counting only its joints after the last one it shares with
-/// the other side (the torso), with at least [`MIN_ARM_JOINTS`] joints.
-fn find_arms(model: &Arc<Model>, legs: &[Leg; 2]) -> [Vec<usize>; 2] {
+/// The arms: on each side (the leaf's side of the sagittal plane at the zero posture, along the line from
+/// the right sole to the left one: the root frame's axes are the URDF's, e.g. iCub's `root_link` has x
+/// backwards and y to the right), the longest chain from the root to a leaf body that shares no joint with
+/// the legs, counting only its joints after the last one it shares with the other side (the torso), with
+/// at least [`MIN_ARM_JOINTS`] joints.
+fn find_arms(model: &Arc<Model>, legs: &[Leg; 2], soles: [FrameId; 2]) -> [Vec<usize>; 2] {
     let mut kd = KinDyn::new(Arc::clone(model));
     if kd.set_state(&RobotState::zero(model)).is_err() {
         return [Vec::new(), Vec::new()];
     }
+    let [left, right] = soles.map(|s| kd.frame_pose(s).translation.vector);
+    let (middle, leftwards) = (0.5 * (left + right), left - right);
     let bodies = model.bodies();
     let is_leaf = |b: usize| !bodies.iter().any(|c| c.parent == Some(b));
     let mut best: [Vec<usize>; 2] = [Vec::new(), Vec::new()];
@@ -371,7 +375,8 @@ fn find_arms(model: &Arc<Model>, legs: &[Leg; 2]) -> [Vec<usize>; 2] {
         {
             continue;
         }
-        let side = usize::from(kd.frame_pose(frame).translation.y < 0.0);
+        let side =
+            usize::from((kd.frame_pose(frame).translation.vector - middle).dot(&leftwards) < 0.0);
         if chain.len() > best[side].len() {
             best[side] = chain;
         }

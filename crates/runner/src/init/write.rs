@@ -239,8 +239,14 @@ pub fn robot_file(s: &RobotSetup, urdf: &str, name: &str) -> String {
     let _ = writeln!(
         w,
         "\n# The controllers read the simulator's state: the estimation layer needs foot force/torque sensors and\n\
-         # an IMU (this URDF has {} force/torque sensor(s); docs/estimation.md).\n[estimation]\nkind = \"ground_truth\"",
-        s.ft_sensors
+         # an IMU (this URDF has {} force/torque sensor(s); docs/estimation.md).{}\n[estimation]\nkind = \"ground_truth\"",
+        s.ft_sensors,
+        if s.ft_sensors > 0 {
+            "\n# If some are on the feet, `kind = \"ekf\"` runs the estimation layer on them: the generated\n\
+             # gains are not tuned for its noise (docs/new-robot.md, \"The estimation layer\")."
+        } else {
+            ""
+        }
     );
     let _ = writeln!(
         w,
