@@ -151,10 +151,11 @@ fn reflect_tile<const W: usize>(h: &Reflectors<'_>, nt: &mut [f64], nz: usize, e
     let nx = h.nx;
     for k in (0..h.tau.len()).rev() {
         let vk = &h.v[k * nx + k..(k + 1) * nx];
+        // rows k.. of N, each as its tile
+        let rows = || nt[k * nz..].chunks_exact(nz).map(|r| &r[e0..e0 + W]);
         let mut dots = [0.0; W];
-        for (jj, &v) in vk.iter().enumerate() {
+        for (row, &v) in rows().zip(vk) {
             if v != 0.0 {
-                let row = &nt[(k + jj) * nz + e0..(k + jj) * nz + e0 + W];
                 for t in 0..W {
                     dots[t] += v * row[t];
                 }
@@ -163,9 +164,9 @@ fn reflect_tile<const W: usize>(h: &Reflectors<'_>, nt: &mut [f64], nz: usize, e
         for d in dots.iter_mut() {
             *d *= h.tau[k];
         }
-        for (jj, &v) in vk.iter().enumerate() {
+        let rows = nt[k * nz..].chunks_exact_mut(nz).map(|r| &mut r[e0..e0 + W]);
+        for (row, &v) in rows.zip(vk) {
             if v != 0.0 {
-                let row = &mut nt[(k + jj) * nz + e0..(k + jj) * nz + e0 + W];
                 for t in 0..W {
                     row[t] -= v * dots[t];
                 }
