@@ -164,7 +164,9 @@ fn reflect_tile<const W: usize>(h: &Reflectors<'_>, nt: &mut [f64], nz: usize, e
         for d in dots.iter_mut() {
             *d *= h.tau[k];
         }
-        let rows = nt[k * nz..].chunks_exact_mut(nz).map(|r| &mut r[e0..e0 + W]);
+        let rows = nt[k * nz..]
+            .chunks_exact_mut(nz)
+            .map(|r| &mut r[e0..e0 + W]);
         for (row, &v) in rows.zip(vk) {
             if v != 0.0 {
                 for t in 0..W {
@@ -334,7 +336,11 @@ mod tests {
             let nz = nx - m;
             let v = random(&mut rng, nx * m);
             let tau: Vec<f64> = (0..m).map(|_| rng.random_range(0.0..2.0)).collect();
-            let h = Reflectors { v: &v, tau: &tau, nx };
+            let h = Reflectors {
+                v: &v,
+                tau: &tau,
+                nx,
+            };
             let mut nt = vec![0.0; nz * nx];
             for r in 0..nz {
                 nt[(m + r) * nz + r] = 1.0;
