@@ -3,7 +3,7 @@
 //! inputs once per tile. Every output entry is accumulated in the same order, from the same starting
 //! value, as the plain rank-one loops they replace (kept in the tests as the reference), so the results
 //! are equal bit for bit: the tiling only removes the loads, stores and bounds checks of the output per
-//! update (docs/performance.md, "Issue 12: the whole-body reduction").
+//! update (docs/performance.md, "Issue 12: the whole-body reduction's kernels").
 
 use std::ops::Range;
 
