@@ -16,7 +16,8 @@
 //! weighted soft rows into one triangle, straight into the backend's dense QP (no per-task Hessian, no
 //! reduced tasks); only the variables with a finite bound get a bound row. nalgebra's `gemm`
 //! (matrixmultiply) was measured faster for the dense products but allocates its packing buffers at every
-//! call, so the loops here are plain contiguous updates (docs/performance.md, "Tried and not kept").
+//! call, so the products here are our own register-tiled loops ([`kernels`]: equal bit for bit to plain
+//! rank-one updates, with a fraction of their instructions; docs/performance.md).
 
 use std::time::Instant;
 
@@ -27,6 +28,9 @@ use crate::problem::{QpProblem, QpSettings};
 use crate::status::QpStatus;
 use crate::task::{Task, TaskKind};
 use crate::variables::VariableSet;
+
+mod kernels;
+use kernels::{add_lower_gram, apply_reflectors, project_row, Reflectors, SparseColumns};
 
 /// Relative pivot threshold of `R` below which `A_e` is treated as rank deficient (full path instead).
 const RANK_TOLERANCE: f64 = 1e-9;
@@ -60,9 +64,9 @@ pub(crate) struct NullSpace {
     r_diag: DVector<f64>,
     /// `Nᵀ` (nz × nx): column `j` is row `j` of `N`, so that `A N` is a sum of contiguous columns.
     nt: DMatrix<f64>,
-    /// Workspace of one Householder application to `N` (nz).
-    dots: DVector<f64>,
     x_p: DVector<f64>,
+    /// Workspace of a projection: the nonzero entries `(j, a_ij)` of one row of a task's `A` (nx).
+    nonzeros: Vec<(usize, f64)>,
     /// Per full task: its projection (`None` for the hard equalities).
     proj: Vec<Option<Projected>>,
     /// Per full task, this solve: the task whose projection it uses (itself or an equal twin).
@@ -137,8 +141,8 @@ impl NullSpace {
             b_e: DVector::zeros(m),
             r_diag: DVector::zeros(m),
             nt: DMatrix::zeros(nz, nx),
-            dots: DVector::zeros(nz),
             x_p: DVector::zeros(nx),
+            nonzeros: vec![(0, 0.0); nx],
             proj,
             source: (0..tasks.len()).collect(),
             soft: DMatrix::zeros(nz, soft_rows),
@@ -204,42 +208,21 @@ impl NullSpace {
         (0..m).all(|k| self.r_diag[k].abs() > RANK_TOLERANCE * max_diag)
     }
 
-    /// `Nᵀ = (H_0 ⋯ H_{m−1} [0; I])ᵀ`: the last `nz` columns of `Q`, one reflector at a time on all of them
-    /// (`N ← N − τ_k v_k (v_kᵀ N)`, `v_k` on rows `k..nx`); `Q₁` is never formed.
+    /// `Nᵀ = (H_0 ⋯ H_{m−1} [0; I])ᵀ`: the last `nz` columns of `Q`, every reflector on them
+    /// (`N ← N − τ_k v_k (v_kᵀ N)`, `v_k` on rows `k..nx`, tile by tile of columns); `Q₁` is never formed.
     fn basis(&mut self) {
         let (nx, m, nz) = (self.nx, self.m, self.nz);
-        let at = self.at.as_slice();
         let nt = self.nt.as_mut_slice();
         nt.fill(0.0);
         for r in 0..nz {
             nt[(m + r) * nz + r] = 1.0;
         }
-        let dots = self.dots.as_mut_slice();
-        for k in (0..m).rev() {
-            let vk = &at[k * nx + k..(k + 1) * nx];
-            // dots = τ_k N[k.., :]ᵀ v_k (rows of N are the contiguous columns of Nᵀ)
-            dots.fill(0.0);
-            for (jj, &v) in vk.iter().enumerate() {
-                if v != 0.0 {
-                    let row = &nt[(k + jj) * nz..(k + jj + 1) * nz];
-                    for (d, n) in dots.iter_mut().zip(row) {
-                        *d += v * n;
-                    }
-                }
-            }
-            let tau = self.tau[k];
-            for d in dots.iter_mut() {
-                *d *= tau;
-            }
-            for (jj, &v) in vk.iter().enumerate() {
-                if v != 0.0 {
-                    let row = &mut nt[(k + jj) * nz..(k + jj + 1) * nz];
-                    for (n, d) in row.iter_mut().zip(dots.iter()) {
-                        *n -= v * d;
-                    }
-                }
-            }
-        }
+        let reflectors = Reflectors {
+            v: self.at.as_slice(),
+            tau: self.tau.as_slice(),
+            nx,
+        };
+        apply_reflectors(&reflectors, nt, nz);
     }
 
     /// `x_p = Q₁ R⁻ᵀ b_e = H_0 ⋯ H_{m−1} [y; 0]` with `Rᵀ y = b_e` (forward substitution; `R`: diagonal in
@@ -268,33 +251,26 @@ impl NullSpace {
         }
     }
 
-    /// `pt = (A N)ᵀ` (nz × rows) and `shift = A x_p` for one task, as a sum over the nonzero entries of `A`
-    /// (rows of `N`, contiguous columns of `Nᵀ`, scaled and added): the task matrices are sparse (posture and
-    /// wrench rows are selections, Jacobians have zero columns off their chains, `M_s` zero blocks between
-    /// branches).
-    fn project(task: &Task, nt: &DMatrix<f64>, x_p: &DVector<f64>, p: &mut Projected) {
+    /// `pt = (A N)ᵀ` (nz × rows) and `shift = A x_p` for one task, row by row of `A`, as sums over the
+    /// nonzero entries of the row (rows of `N`, contiguous columns of `Nᵀ`, scaled and added): the task
+    /// matrices are sparse (posture and wrench rows are selections, Jacobians have zero columns off their
+    /// chains, `M_s` zero blocks between branches).
+    fn project(
+        task: &Task,
+        nt: &DMatrix<f64>,
+        x_p: &DVector<f64>,
+        nonzeros: &mut [(usize, f64)],
+        p: &mut Projected,
+    ) {
         let nz = nt.nrows();
-        let rows = task.a.nrows();
-        let nt = nt.as_slice();
-        let out = p.pt.as_mut_slice();
-        let shift = p.shift.as_mut_slice();
-        out.fill(0.0);
-        shift.fill(0.0);
-        let a_s = task.a.as_slice();
-        for (range, offset) in &task.blocks {
-            for (k, j) in range.clone().enumerate() {
-                let c = offset + k;
-                let ncol = &nt[j * nz..(j + 1) * nz];
-                let acol = &a_s[c * rows..(c + 1) * rows];
-                for (i, &v) in acol.iter().enumerate() {
-                    if v != 0.0 {
-                        shift[i] += v * x_p[j];
-                        for (o, n) in out[i * nz..(i + 1) * nz].iter_mut().zip(ncol.iter()) {
-                            *o += v * n;
-                        }
-                    }
-                }
-            }
+        let a = SparseColumns {
+            a: task.a.as_slice(),
+            rows: task.a.nrows(),
+            blocks: &task.blocks,
+        };
+        let rows = p.pt.as_mut_slice().chunks_exact_mut(nz);
+        for (i, (row, shift)) in rows.zip(p.shift.iter_mut()).enumerate() {
+            *shift = project_row(&a, i, nt.as_slice(), x_p.as_slice(), nonzeros, row);
         }
     }
 
@@ -311,7 +287,7 @@ impl NullSpace {
                 Some(e) => self.source[e],
                 None => {
                     let p = self.proj[k].as_mut().expect("checked above");
-                    Self::project(&tasks[k], &self.nt, &self.x_p, p);
+                    Self::project(&tasks[k], &self.nt, &self.x_p, &mut self.nonzeros, p);
                     k
                 }
             };
@@ -437,26 +413,5 @@ fn set_row(m: &mut DMatrix<f64>, row: usize, values: &[f64]) {
     let ld = m.nrows();
     for (c, v) in values.iter().enumerate() {
         m.as_mut_slice()[c * ld + row] = *v;
-    }
-}
-
-/// `H += Σ_i s_i s_iᵀ` for the columns `s_i` (length `nz`) of `s`, then the upper triangle from the lower
-/// one: `H` column-major `nz × nz`; each update touches `H[c.., c]` (contiguous) only.
-fn add_lower_gram(h: &mut [f64], s: &[f64], nz: usize) {
-    for si in s.chunks_exact(nz) {
-        for c in 0..nz {
-            let f = si[c];
-            if f == 0.0 {
-                continue;
-            }
-            for (hv, sv) in h[c * nz + c..(c + 1) * nz].iter_mut().zip(&si[c..]) {
-                *hv += f * sv;
-            }
-        }
-    }
-    for c in 0..nz {
-        for r in c + 1..nz {
-            h[r * nz + c] = h[c * nz + r];
-        }
     }
 }
