@@ -12,8 +12,8 @@ use crate::dcm_predictive::{
     DcmHorizon, DcmPredictiveConfig, DcmPredictiveController, MpcDiagnostics,
 };
 use crate::error::{check_finite, Result, SimplifiedError};
-use crate::lipm::{check_omega, check_point};
 use crate::foot_admittance::FootAdmittanceConfig;
+use crate::lipm::{check_omega, check_point};
 use crate::step_adjustment::StepAdjustmentConfig;
 use crate::zmp_com::{ZmpComConfig, ZmpComController, ZmpComGains};
 use stride_block::SupportPolygon;

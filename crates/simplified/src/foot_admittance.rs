@@ -226,7 +226,14 @@ impl FootAdmittance {
             for axis in 0..2 {
                 let e = error[axis];
                 let tilt = &mut foot.tilt[axis];
-                *tilt = leaky_admittance(*tilt, c.torque_gain, e, c.torque_leak_time, input.dt, c.max_tilt);
+                *tilt = leaky_admittance(
+                    *tilt,
+                    c.torque_gain,
+                    e,
+                    c.torque_leak_time,
+                    input.dt,
+                    c.max_tilt,
+                );
                 foot.tilt_rate[axis] = c.torque_gain * e - *tilt / c.torque_leak_time;
             }
         }
@@ -257,7 +264,10 @@ impl FootAdmittance {
 
 fn check_input(input: &FootAdmittanceInput) -> Result<()> {
     let finite = input.desired_zmp.iter().all(|v| v.is_finite())
-        && input.wrenches.iter().all(|w| w.iter().all(|v| v.is_finite()))
+        && input
+            .wrenches
+            .iter()
+            .all(|w| w.iter().all(|v| v.is_finite()))
         && input.soles.iter().all(|s| {
             s.translation.vector.iter().all(|v| v.is_finite())
                 && s.rotation.coords.iter().all(|v| v.is_finite())
@@ -370,7 +380,11 @@ mod tests {
         let w = |fz: f64| Vector6::new(0.0, 0.0, fz, 0.0, 0.0, 0.0);
         let wrenches = [w(120.0), w(200.0)];
         let half = Vector2::new(0.1, 0.045);
-        for zmp in [Vector2::new(0.03, 0.0), Vector2::new(0.06, 0.01), Vector2::new(0.01, 0.05)] {
+        for zmp in [
+            Vector2::new(0.03, 0.0),
+            Vector2::new(0.06, 0.01),
+            Vector2::new(0.01, 0.05),
+        ] {
             let (cops, forces) = distribute_zmp(&zmp, &soles, &wrenches, [true, true], &half);
             assert!((forces[0] + forces[1] - 320.0).abs() < 1e-12);
             let net = (cops[0] * forces[0] + cops[1] * forces[1]) / 320.0;
@@ -407,11 +421,15 @@ mod tests {
         let input = FootAdmittanceInput {
             desired_zmp: Vector2::new(0.0, 0.07),
             soles: [sole(0.0, 0.07, 0.0), sole(0.0, -0.07, 0.0)],
-            wrenches: [Vector6::new(0.0, 0.0, 300.0, 0.0, -6.0, 0.0), Vector6::zeros()],
+            wrenches: [
+                Vector6::new(0.0, 0.0, 300.0, 0.0, -6.0, 0.0),
+                Vector6::zeros(),
+            ],
             contacts: [true, true],
             dt: 0.002,
         };
-        let mut off = FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
+        let mut off =
+            FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
         assert_eq!(*off.step(&input).unwrap(), FootAdmittanceOutput::default());
         let config = FootAdmittanceConfig {
             enabled: true,

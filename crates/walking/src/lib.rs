@@ -22,9 +22,9 @@ pub use wbc_input::{
 /// What a controller that chains the layers needs from this crate: `use stride_walking::prelude::*;`.
 pub mod prelude {
     pub use crate::{
-        apply_foot_admittance, fill_wbc_input, is_walking, soles_heading, support_polygon, walking_input, walking_layout,
-        CentroidalMeter, MeasuredCentroidal, SimplifiedInputBuilder, SimplifiedInputError,
-        WalkingHandles, MEASURED_ZMP_CUTOFF,
+        apply_foot_admittance, fill_wbc_input, is_walking, soles_heading, support_polygon,
+        walking_input, walking_layout, CentroidalMeter, MeasuredCentroidal, SimplifiedInputBuilder,
+        SimplifiedInputError, WalkingHandles, MEASURED_ZMP_CUTOFF,
     };
     pub use stride_block::FirstOrderLowPass;
 }

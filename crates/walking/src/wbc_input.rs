@@ -119,7 +119,10 @@ pub fn apply_foot_admittance(
     handles: &WalkingHandles,
     corrections: &FootAdmittanceOutput,
 ) -> Result<(), WbcError> {
-    for (frame, c) in [handles.left, handles.right].into_iter().zip(&corrections.feet) {
+    for (frame, c) in [handles.left, handles.right]
+        .into_iter()
+        .zip(&corrections.feet)
+    {
         if *c != FootCorrection::default() {
             correct_foot(input.frame_mut(frame)?, c);
         }
@@ -210,7 +213,10 @@ mod tests {
         let left = input.frame_reference(walking::LEFT_FOOT).unwrap();
         // the sole's x axis (world +y) now points 0.05 rad up: toe up for a negative pitch
         let toe = left.pose.rotation * Vector3::x();
-        assert!((toe - Vector3::new(0.0, 0.05f64.cos(), 0.05f64.sin())).norm() < 1e-12, "{toe}");
+        assert!(
+            (toe - Vector3::new(0.0, 0.05f64.cos(), 0.05f64.sin())).norm() < 1e-12,
+            "{toe}"
+        );
         assert!((left.pose.translation.z - 0.004).abs() < 1e-15);
         // the pitch rate about the sole's y axis (world −x)
         let w = left.velocity.fixed_rows::<3>(3);
