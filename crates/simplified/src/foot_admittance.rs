@@ -1,6 +1,6 @@
 //! Foot admittance for position control: foot damping control of the ankle torques and foot force
-//! difference control [Kajita 2010, §III-C and §III-D], with the desired wrench distribution from the
-//! desired ZMP [Caron 2019, §III-C].
+//! difference control [Kajita 2010], with the desired wrench distribution from the
+//! desired ZMP [Caron 2019, wrench distribution].
 //!
 //! A position-controlled robot imposes its soles' poses; on a hard floor a stiff ankle servo cannot give
 //! way to the ground, so a small pose error becomes a large torque error (chatter, rocking). The laws here
@@ -10,9 +10,9 @@
 //! * **damping control** (per loaded foot, roll and pitch in the sole frame):
 //!   `θ̇ = K_τ (τ − τ*) − θ / T_τ`, with `τ` the measured ground torque on the foot about its sole origin
 //!   and `τ* = (c* − s) × f_z e_z` the torque that puts the centre of pressure at the desired `c*` under the
-//!   measured normal force `f_z` [Kajita 2010, eq. (8)];
+//!   measured normal force `f_z` [Kajita 2010, foot damping control];
 //! * **force difference control** (both feet loaded): `δ̇ = K_f ((f_L − f_R) − (f_L* − f_R*)) − δ / T_f`,
-//!   the left sole raised by `δ/2` and the right one lowered by `δ/2` [Kajita 2010, eq. (10)] (written with
+//!   the left sole raised by `δ/2` and the right one lowered by `δ/2` [Kajita 2010, foot force difference control] (written with
 //!   `δ = z_L − z_R` and the sign that unloads the foot that carries too much);
 //! * **distribution** of the desired ZMP `p*`: with both feet loaded, `α` is the projection of `p*` on the
 //!   segment between the sole origins (clamped to `[0, 1]`), `f_L* = (1 − α) F`, `f_R* = α F` (`F` the
@@ -38,10 +38,10 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
 /// | `enabled` | – | false | off: the sole references are the plan's, bit for bit |
-/// | `torque_gain` | rad/(N·m·s) | 0.005 | `K_τ`, the inverse of the damping `D` of [Kajita 2010, eq. (8)] |
+/// | `torque_gain` | rad/(N·m·s) | 0.005 | `K_τ`, the inverse of the damping `D` of [Kajita 2010, foot damping control] |
 /// | `torque_leak_time` | s | 0.1 | `T_τ`, time constant of the return of the tilt to the plan |
 /// | `max_tilt` | rad | 0.1 | bound on each tilt angle |
-/// | `force_gain` | m/(N·s) | 1e-4 | `K_f` of the force difference control [Kajita 2010, eq. (10)] |
+/// | `force_gain` | m/(N·s) | 1e-4 | `K_f` of the force difference control [Kajita 2010, foot force difference control] |
 /// | `force_leak_time` | s | 0.2 | `T_f`, time constant of the return of the height difference to the plan |
 /// | `max_height_offset` | m | 0.02 | bound on the height difference `δ` |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -282,7 +282,7 @@ fn check_input(input: &FootAdmittanceInput) -> Result<()> {
 
 /// The measured minus the desired ankle torque, roll and pitch in the sole frame \[N·m\]: the desired torque
 /// puts the centre of pressure at `cop` (world xy) under the measured normal force,
-/// `τ* = (c* − s) × f_z e_z` [Kajita 2010, eq. (8)].
+/// `τ* = (c* − s) × f_z e_z` [Kajita 2010, foot damping control].
 pub fn ankle_torque_error(
     sole: &Isometry3<f64>,
     wrench: &Vector6<f64>,
