@@ -23,7 +23,8 @@ use stride_estimation::{Estimator, EstimatorOutput};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
 use stride_planner::{Goal as PlannerGoal, PlanSample, Planner, PlannerInput, Waypoint};
 use stride_simplified::{
-    DcmControllerKind, SimplifiedController, SimplifiedInput, SimplifiedOutput, StepAdjuster,
+    DcmControllerKind, FootAdmittance, FootAdmittanceInput, SimplifiedController, SimplifiedInput,
+    SimplifiedOutput, StepAdjuster,
 };
 pub use stride_walking::soles_heading;
 use stride_walking::{MeasuredCentroidal, SimplifiedInputBuilder, WalkingHandles};
@@ -295,6 +296,9 @@ pub struct Stack {
     flexible: FlexibleSprings,
     /// The observer of TSID-Flex's unmeasured flexible joints, in the estimation loop.
     flexible_observer: Option<FlexibleObserver>,
+    /// The foot admittance of position control (`simplified.foot_admittance.enabled`, QP-IK only) and
+    /// the whole-body period it runs at \[s\].
+    pub foot_admittance: Option<(FootAdmittance, f64)>,
     /// Fallback/hold counters: simplified errors held, wbc QP fallbacks, wbc holds.
     pub counters: Counters,
 }
@@ -416,6 +420,7 @@ impl Stack {
             angular_momentum_reference: Vector3::zeros(),
             flexible,
             flexible_observer,
+            foot_admittance: foot_admittance(scenario, &model)?,
             counters: Counters::default(),
             kd,
             model,
@@ -696,6 +701,8 @@ impl Stack {
         i.angular_momentum = self.angular_momentum_reference;
         self.flexible
             .fill(&self.estimate.state, &mut i.flexible_torques);
+        self.admit_feet()?;
+        let s = &self.plan_sample;
         let cmd = &mut self.command;
         cmd.contacts = [s.left.in_contact, s.right.in_contact];
         match &mut self.wbc {
@@ -730,6 +737,29 @@ impl Stack {
         Ok(())
     }
 
+    /// The foot admittance of one whole-body tick (when enabled): the sole references of the feet in
+    /// contact (planned and estimated) move with the error between the measured and the desired wrench
+    /// (the desired ZMP of the whole-body input distributed on the feet), see
+    /// [`stride_simplified::FootAdmittance`].
+    fn admit_feet(&mut self) -> Result<(), RunError> {
+        let Some((admittance, dt)) = self.foot_admittance.as_mut() else {
+            return Ok(());
+        };
+        let s = &self.plan_sample;
+        let planned = [s.left.in_contact, s.right.in_contact];
+        let e = &self.estimate;
+        let input = FootAdmittanceInput {
+            desired_zmp: self.wbc_input.desired_zmp.unwrap_or(s.zmp.xy()),
+            soles: self.measured.soles,
+            wrenches: e.foot_wrenches,
+            contacts: [planned[0] && e.contacts[0], planned[1] && e.contacts[1]],
+            dt: *dt,
+        };
+        let out = admittance.step(&input)?;
+        stride_walking::apply_foot_admittance(&mut self.wbc_input, &self.wbc_handles, out)?;
+        Ok(())
+    }
+
     /// Whether the plan has ended (the robot should be standing at the goal).
     pub fn plan_finished(&self, time_ns: u64) -> bool {
         self.planner.plan().is_some_and(|p| {
@@ -737,6 +767,23 @@ impl Stack {
             t >= p.end_time && self.next_event >= self.events.len()
         })
     }
+}
+
+/// The scenario's foot admittance: `Some` in position control with `simplified.foot_admittance.enabled`,
+/// for the planner's sole rectangle and the model's weight, at the whole-body period.
+fn foot_admittance(
+    scenario: &Scenario,
+    model: &Model,
+) -> Result<Option<(FootAdmittance, f64)>, RunError> {
+    let c = &scenario.config;
+    let config = &c.simplified.foot_admittance;
+    if !config.enabled || c.scenario.control_mode != ControlMode::Position {
+        return Ok(None);
+    }
+    let weight = model.total_mass() * model.gravity().norm();
+    let admittance =
+        FootAdmittance::new(config, c.planner.foot_length, c.planner.foot_width, weight)?;
+    Ok(Some((admittance, 1.0 / f64::from(c.rates.wbc_hz))))
 }
 
 /// The frames the measured quantities come from.

@@ -58,5 +58,17 @@ fn steady_state_ticks_do_not_allocate() {
             "{plant:?}, log {log}: {short} allocations in 1.5 s, {long} in {} s ({wbc_ticks} extra whole-body ticks)",
             1.5 + extra_seconds
         );
-    }
+    } // position control with the foot admittance (`simplified.foot_admittance`) in the whole-body tick
+    let admittance = s.write(
+        "a.toml",
+        "include = [\"s.toml\"]\n[simplified.foot_admittance]\nenabled = true\n",
+    );
+    let sc = Scenario::load(&admittance).unwrap();
+    let short = allocations_for(&s, &sc, PlantKind::Simulator, 1.5, false);
+    let long = allocations_for(&s, &sc, PlantKind::Simulator, 1.5 + extra_seconds, false);
+    assert!(
+        long.abs_diff(short) <= 5,
+        "foot admittance: {short} allocations in 1.5 s, {long} in {} s",
+        1.5 + extra_seconds
+    );
 }

@@ -12,6 +12,7 @@ use crate::dcm_predictive::{
     DcmHorizon, DcmPredictiveConfig, DcmPredictiveController, MpcDiagnostics,
 };
 use crate::error::{check_finite, Result, SimplifiedError};
+use crate::foot_admittance::FootAdmittanceConfig;
 use crate::lipm::{check_omega, check_point};
 use crate::step_adjustment::StepAdjustmentConfig;
 use crate::zmp_com::{ZmpComConfig, ZmpComController, ZmpComGains};
@@ -42,6 +43,7 @@ pub enum DcmControllerKind {
 /// | `zmp_com` | see [`ZmpComConfig`] | walking `{k_zmp 1.5, k_com 5}`, standing `{1.0, 4.0}`, `transition_time` 0.05 s |
 /// | `centroidal_mpc` | see [`CentroidalMpcConfig`] | horizon, weights, adjustment box of the centroidal MPC (used by the runner when selected) |
 /// | `step_adjustment` | see [`StepAdjustmentConfig`] | `enabled` false; box, durations and weights of the step-adjustment QP (used by the runner) |
+/// | `foot_admittance` | see [`FootAdmittanceConfig`] | `enabled` false; foot damping and force difference control of position control (used by the runner) |
 ///
 /// ```toml
 /// dcm_controller = "predictive"
@@ -65,6 +67,8 @@ pub struct SimplifiedConfig {
     pub centroidal_mpc: CentroidalMpcConfig,
     /// Step adjustment (the runner runs it during single support when `enabled`).
     pub step_adjustment: StepAdjustmentConfig,
+    /// Foot admittance of position control (the runner moves the sole references when `enabled`).
+    pub foot_admittance: FootAdmittanceConfig,
 }
 
 impl SimplifiedConfig {
@@ -74,7 +78,8 @@ impl SimplifiedConfig {
         self.predictive.validate()?;
         self.zmp_com.validate()?;
         self.centroidal_mpc.validate()?;
-        self.step_adjustment.validate()
+        self.step_adjustment.validate()?;
+        self.foot_admittance.validate()
     }
 }
 

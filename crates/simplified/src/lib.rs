@@ -73,6 +73,7 @@ mod centroidal_mpc;
 mod dcm_instantaneous;
 mod dcm_predictive;
 mod error;
+mod foot_admittance;
 mod lipm;
 mod step_adjustment;
 mod wrench;
@@ -96,6 +97,10 @@ pub use dcm_predictive::{
     MpcDiagnostics, MpcProblemView, MpcSolverKind, MpcStatus, ZmpRateReference,
 };
 pub use error::{Result, SimplifiedError};
+pub use foot_admittance::{
+    ankle_torque_error, distribute_zmp, leaky_admittance, FootAdmittance, FootAdmittanceConfig,
+    FootAdmittanceInput, FootAdmittanceOutput, FootCorrection, MIN_ADMITTANCE_LOAD,
+};
 pub use lipm::{dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization};
 pub use step_adjustment::{
     StepAdjuster, StepAdjustment, StepAdjustmentConfig, StepAdjustmentDiagnostics,

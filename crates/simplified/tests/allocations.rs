@@ -144,3 +144,34 @@ fn step_adjustment_does_not_allocate() {
     assert_eq!(n, 0, "step adjustment allocated");
     assert!(adj.result().diagnostics.bound_active);
 }
+
+#[test]
+fn foot_admittance_does_not_allocate() {
+    use nalgebra::{Isometry3, Vector6};
+    let config = FootAdmittanceConfig {
+        enabled: true,
+        ..Default::default()
+    };
+    let mut admittance = FootAdmittance::new(&config, 0.2, 0.09, 320.0).unwrap();
+    let mut input = FootAdmittanceInput {
+        desired_zmp: Vector2::new(0.02, 0.0),
+        soles: [
+            Isometry3::translation(0.0, 0.07, 0.0),
+            Isometry3::translation(0.0, -0.07, 0.0),
+        ],
+        wrenches: [Vector6::new(0.0, 0.0, 200.0, 1.0, -2.0, 0.0); 2],
+        contacts: [true, true],
+        dt: 0.002,
+    };
+    let (_, n) = ALLOC.allocations_during(|| {
+        for i in 0..200 {
+            // double support, then each foot alone
+            input.contacts = [i % 3 != 1, i % 3 != 2];
+            input.wrenches[0][4] = -0.01 * i as f64;
+            admittance.step(&input).unwrap();
+        }
+    });
+    assert_eq!(n, 0, "foot admittance step allocated");
+    // the left CoP (x ≤ 1 cm) stays behind its desired 2 cm: toe down (positive pitch)
+    assert!(admittance.output().feet[0].tilt.y > 0.0);
+}

@@ -15,14 +15,16 @@ pub use measure::{feet_zmp, CentroidalMeter, MEASURED_ZMP_CUTOFF, MIN_ZMP_LOAD};
 pub use simplified_input::{
     is_walking, support_polygon, MeasuredCentroidal, SimplifiedInputBuilder, SimplifiedInputError,
 };
-pub use wbc_input::{fill_wbc_input, walking_input, walking_layout, WalkingHandles};
+pub use wbc_input::{
+    apply_foot_admittance, fill_wbc_input, walking_input, walking_layout, WalkingHandles,
+};
 
 /// What a controller that chains the layers needs from this crate: `use stride_walking::prelude::*;`.
 pub mod prelude {
     pub use crate::{
-        fill_wbc_input, is_walking, soles_heading, support_polygon, walking_input, walking_layout,
-        CentroidalMeter, MeasuredCentroidal, SimplifiedInputBuilder, SimplifiedInputError,
-        WalkingHandles, MEASURED_ZMP_CUTOFF,
+        apply_foot_admittance, fill_wbc_input, is_walking, soles_heading, support_polygon,
+        walking_input, walking_layout, CentroidalMeter, MeasuredCentroidal, SimplifiedInputBuilder,
+        SimplifiedInputError, WalkingHandles, MEASURED_ZMP_CUTOFF,
     };
     pub use stride_block::FirstOrderLowPass;
 }

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use stride_planner::{FootSample, PlanSample};
-use stride_simplified::SimplifiedOutput;
+use stride_simplified::{FootAdmittanceOutput, FootCorrection, SimplifiedOutput};
 use stride_wbc::{walking, ContactId, FrameRefId, FrameReference, InputLayout, WbcError, WbcInput};
 
 /// The walking names: frame references `left_foot`, `right_foot`, `torso` and contacts `left_foot`,
@@ -106,6 +106,41 @@ pub fn fill_wbc_input(
     Ok(())
 }
 
+/// Moves the `left_foot` / `right_foot` references of `input` (filled by [`fill_wbc_input`]) by the foot
+/// admittance's corrections ([`stride_simplified::FootAdmittance`]): each sole's orientation is turned by
+/// its roll and pitch about the sole's own x and y axes after the planned orientation, `R = R_plan R_y(θ_y)
+/// R_x(θ_x)` (nalgebra's roll-pitch-yaw with zero yaw), its angular velocity gains `R_plan (θ̇_x, θ̇_y, 0)`,
+/// and its height and vertical velocity gain the correction's. A zero correction leaves the reference
+/// bit for bit. Allocation-free.
+///
+/// Errors: `handles` from an input of another layout.
+pub fn apply_foot_admittance(
+    input: &mut WbcInput,
+    handles: &WalkingHandles,
+    corrections: &FootAdmittanceOutput,
+) -> Result<(), WbcError> {
+    for (frame, c) in [handles.left, handles.right]
+        .into_iter()
+        .zip(&corrections.feet)
+    {
+        if *c != FootCorrection::default() {
+            correct_foot(input.frame_mut(frame)?, c);
+        }
+    }
+    Ok(())
+}
+
+fn correct_foot(reference: &mut FrameReference, c: &FootCorrection) {
+    let planned = reference.pose.rotation;
+    reference.pose.rotation = planned * UnitQuaternion::from_euler_angles(c.tilt.x, c.tilt.y, 0.0);
+    reference.pose.translation.z += c.height;
+    let rate = planned * Vector3::new(c.tilt_rate.x, c.tilt_rate.y, 0.0);
+    for axis in 0..3 {
+        reference.velocity[3 + axis] += rate[axis];
+    }
+    reference.velocity[2] += c.height_rate;
+}
+
 fn set_foot(
     input: &mut WbcInput,
     frame: FrameRefId,
@@ -150,5 +185,47 @@ mod tests {
         assert!(input.contact_named(walking::LEFT_FOOT).unwrap().active);
         assert!(!input.contact_named(walking::RIGHT_FOOT).unwrap().active);
         assert_eq!(input.com_position, plan.com_position);
+    }
+
+    #[test]
+    fn foot_admittance_turns_the_sole_about_its_own_axes_and_zero_changes_nothing() {
+        let model = Model::from_urdf_str(bundled::URDF).unwrap();
+        let mut input = walking_input(&RobotState::zero(&model), &InputLayout::default());
+        let handles = WalkingHandles::new(&input).unwrap();
+        let mut plan = PlanSample::default();
+        plan.left.pose = Isometry3::from_parts(
+            Translation3::new(0.1, 0.07, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2),
+        );
+        plan.left.twist[0] = 0.3;
+        fill_wbc_input(&mut input, &handles, &plan, None).unwrap();
+        let before = input.clone();
+        apply_foot_admittance(&mut input, &handles, &FootAdmittanceOutput::default()).unwrap();
+        assert_eq!(input, before, "a zero correction changes nothing");
+        let mut out = FootAdmittanceOutput::default();
+        out.feet[0] = FootCorrection {
+            tilt: nalgebra::Vector2::new(0.0, -0.05),
+            tilt_rate: nalgebra::Vector2::new(0.0, -0.2),
+            height: 0.004,
+            height_rate: 0.01,
+        };
+        apply_foot_admittance(&mut input, &handles, &out).unwrap();
+        let left = input.frame_reference(walking::LEFT_FOOT).unwrap();
+        // the sole's x axis (world +y) now points 0.05 rad up: toe up for a negative pitch
+        let toe = left.pose.rotation * Vector3::x();
+        assert!(
+            (toe - Vector3::new(0.0, 0.05f64.cos(), 0.05f64.sin())).norm() < 1e-12,
+            "{toe}"
+        );
+        assert!((left.pose.translation.z - 0.004).abs() < 1e-15);
+        // the pitch rate about the sole's y axis (world −x)
+        let w = left.velocity.fixed_rows::<3>(3);
+        assert!((w - Vector3::new(0.2, 0.0, 0.0)).norm() < 1e-12, "{w}");
+        assert_eq!(left.velocity[0], 0.3);
+        assert_eq!(left.velocity[2], 0.01);
+        assert_eq!(
+            input.frame_reference(walking::RIGHT_FOOT).unwrap(),
+            before.frame_reference(walking::RIGHT_FOOT).unwrap()
+        );
     }
 }

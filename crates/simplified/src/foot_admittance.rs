@@ -1,0 +1,451 @@
+//! Foot admittance for position control: foot damping control of the ankle torques and foot force
+//! difference control [Kajita 2010], with the desired wrench distribution from the
+//! desired ZMP [Caron 2019, wrench distribution].
+//!
+//! A position-controlled robot imposes its soles' poses; on a hard floor a stiff ankle servo cannot give
+//! way to the ground, so a small pose error becomes a large torque error (chatter, rocking). The laws here
+//! move each loaded sole's reference with the error between the measured and the desired contact wrench,
+//! and leak back to the plan:
+//!
+//! * **damping control** (per loaded foot, roll and pitch in the sole frame):
+//!   `θ̇ = K_τ (τ − τ*) − θ / T_τ`, with `τ` the measured ground torque on the foot about its sole origin
+//!   and `τ* = (c* − s) × f_z e_z` the torque that puts the centre of pressure at the desired `c*` under the
+//!   measured normal force `f_z` [Kajita 2010, foot damping control];
+//! * **force difference control** (both feet loaded): `δ̇ = K_f ((f_L − f_R) − (f_L* − f_R*)) − δ / T_f`,
+//!   the left sole raised by `δ/2` and the right one lowered by `δ/2` [Kajita 2010, foot force difference control] (written with
+//!   `δ = z_L − z_R` and the sign that unloads the foot that carries too much);
+//! * **distribution** of the desired ZMP `p*`: with both feet loaded, `α` is the projection of `p*` on the
+//!   segment between the sole origins (clamped to `[0, 1]`), `f_L* = (1 − α) F`, `f_R* = α F` (`F` the
+//!   measured total normal force) and each desired centre of pressure is its sole origin plus the part of
+//!   `p*` off the segment, `c_i* = s_i + (p* − s_L − α (s_R − s_L))`, clamped to the sole; then
+//!   `Σ f_i* c_i* / F = p*` whenever no clamp is active. With one foot loaded, `c* = p*` clamped to it.
+//!
+//! Both first-order laws are integrated exactly over a tick for a constant error (zero-order hold):
+//! `x⁺ = a x + K e T (1 − a)`, `a = e^{−dt/T}`; the state is then clamped to its bound.
+
+use nalgebra::{Isometry3, Vector2, Vector3, Vector6};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{check_non_negative, check_positive, Result, SimplifiedError};
+
+/// Share of the robot's weight a foot must carry to count as loaded (below it the foot's corrections
+/// leak back to the plan).
+pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
+
+/// Parameters of the foot admittance (`[simplified.foot_admittance]`; the runner uses it in position
+/// control only).
+///
+/// | field | unit | default | meaning |
+/// |---|---|---|---|
+/// | `enabled` | – | false | off: the sole references are the plan's, bit for bit |
+/// | `torque_gain` | rad/(N·m·s) | 0.005 | `K_τ`, the inverse of the damping `D` of [Kajita 2010, foot damping control] |
+/// | `torque_leak_time` | s | 0.1 | `T_τ`, time constant of the return of the tilt to the plan |
+/// | `max_tilt` | rad | 0.1 | bound on each tilt angle |
+/// | `force_gain` | m/(N·s) | 1e-4 | `K_f` of the force difference control [Kajita 2010, foot force difference control] |
+/// | `force_leak_time` | s | 0.2 | `T_f`, time constant of the return of the height difference to the plan |
+/// | `max_height_offset` | m | 0.02 | bound on the height difference `δ` |
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FootAdmittanceConfig {
+    /// Whether the runner moves the sole references (position control only).
+    pub enabled: bool,
+    /// Damping-control gain `K_τ` (the inverse of the damping) \[rad/(N·m·s)\].
+    pub torque_gain: f64,
+    /// Time constant of the sole tilt's return to the plan \[s\].
+    pub torque_leak_time: f64,
+    /// Bound on each sole tilt angle (roll, pitch) \[rad\].
+    pub max_tilt: f64,
+    /// Force-difference gain `K_f` \[m/(N·s)\].
+    pub force_gain: f64,
+    /// Time constant of the soles' height difference's return to the plan \[s\].
+    pub force_leak_time: f64,
+    /// Bound on the soles' height difference \[m\].
+    pub max_height_offset: f64,
+}
+
+impl Default for FootAdmittanceConfig {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            torque_gain: 0.005,
+            torque_leak_time: 0.1,
+            max_tilt: 0.1,
+            force_gain: 1e-4,
+            force_leak_time: 0.2,
+            max_height_offset: 0.02,
+        }
+    }
+}
+
+impl FootAdmittanceConfig {
+    /// Checks the ranges: gains and bounds ≥ 0, leak times > 0, all finite.
+    pub fn validate(&self) -> Result<()> {
+        check_non_negative("foot_admittance.torque_gain", self.torque_gain)?;
+        check_positive("foot_admittance.torque_leak_time", self.torque_leak_time)?;
+        check_non_negative("foot_admittance.max_tilt", self.max_tilt)?;
+        check_non_negative("foot_admittance.force_gain", self.force_gain)?;
+        check_positive("foot_admittance.force_leak_time", self.force_leak_time)?;
+        check_non_negative("foot_admittance.max_height_offset", self.max_height_offset)
+    }
+}
+
+/// One tick of a leaky integrator `ẋ = K e − x / T` over `dt` \[s\] with `e` held constant (exact
+/// zero-order-hold solution), the result clamped to `[−bound, bound]`.
+pub fn leaky_admittance(x: f64, gain: f64, error: f64, leak_time: f64, dt: f64, bound: f64) -> f64 {
+    let a = (-dt / leak_time).exp();
+    (a * x + gain * error * leak_time * (1.0 - a)).clamp(-bound, bound)
+}
+
+/// What one tick of [`FootAdmittance`] reads (plain data, world frame).
+///
+/// | field | unit | meaning |
+/// |---|---|---|
+/// | `desired_zmp` | m | the simplified layer's desired ZMP (world xy) |
+/// | `soles` | m, – | measured `[left, right]` sole poses |
+/// | `wrenches` | N, N·m | measured `[f; τ]` the ground applies on each foot, world orientation, torque about its sole origin |
+/// | `contacts` | – | feet in contact (planned and measured) |
+/// | `dt` | s | time since the last tick (> 0) |
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FootAdmittanceInput {
+    /// Desired ZMP \[m\].
+    pub desired_zmp: Vector2<f64>,
+    /// Measured sole poses `[left, right]`.
+    pub soles: [Isometry3<f64>; 2],
+    /// Measured ground wrenches on the feet `[f; τ]` \[N, N·m\] (world orientation, about the sole).
+    pub wrenches: [Vector6<f64>; 2],
+    /// Feet in contact.
+    pub contacts: [bool; 2],
+    /// Tick period \[s\].
+    pub dt: f64,
+}
+
+/// The correction of one sole's reference.
+///
+/// | field | unit | meaning |
+/// |---|---|---|
+/// | `tilt` | rad | roll and pitch about the sole frame's x and y axes, applied after the planned orientation |
+/// | `tilt_rate` | rad/s | their rates `K_τ (τ − τ*) − θ/T_τ` |
+/// | `height` | m | world z offset (`±δ/2`) |
+/// | `height_rate` | m/s | its rate |
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FootCorrection {
+    /// Roll and pitch in the sole frame \[rad\].
+    pub tilt: Vector2<f64>,
+    /// Their rates \[rad/s\].
+    pub tilt_rate: Vector2<f64>,
+    /// World z offset \[m\].
+    pub height: f64,
+    /// Its rate \[m/s\].
+    pub height_rate: f64,
+}
+
+/// The output of a tick: the sole corrections and the wrench distribution they aimed at.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FootAdmittanceOutput {
+    /// Corrections `[left, right]`.
+    pub feet: [FootCorrection; 2],
+    /// Desired centres of pressure (world xy) \[m\]; the sole origin of an unloaded foot.
+    pub desired_cop: [Vector2<f64>; 2],
+    /// Desired normal forces \[N\] (0 on an unloaded foot).
+    pub desired_force: [f64; 2],
+}
+
+/// Foot damping and force difference control (see the module documentation). Allocation-free.
+#[derive(Debug, Clone)]
+pub struct FootAdmittance {
+    config: FootAdmittanceConfig,
+    half_size: Vector2<f64>,
+    min_force: f64,
+    /// Height difference `δ = z_L − z_R` \[m\].
+    height_difference: f64,
+    output: FootAdmittanceOutput,
+}
+
+impl FootAdmittance {
+    /// A foot admittance for rectangular soles of `foot_length` × `foot_width` \[m\] centred on the sole
+    /// frames, on a robot of weight `weight` \[N\].
+    ///
+    /// # Errors
+    /// An invalid config or a non-positive size or weight.
+    pub fn new(
+        config: &FootAdmittanceConfig,
+        foot_length: f64,
+        foot_width: f64,
+        weight: f64,
+    ) -> Result<Self> {
+        config.validate()?;
+        check_positive("foot_length", foot_length)?;
+        check_positive("foot_width", foot_width)?;
+        check_positive("weight", weight)?;
+        Ok(Self {
+            config: *config,
+            half_size: Vector2::new(foot_length, foot_width) * 0.5,
+            min_force: MIN_ADMITTANCE_LOAD * weight,
+            height_difference: 0.0,
+            output: FootAdmittanceOutput::default(),
+        })
+    }
+
+    /// The last output.
+    pub fn output(&self) -> &FootAdmittanceOutput {
+        &self.output
+    }
+
+    /// Back to the plan (no correction).
+    pub fn reset(&mut self) {
+        self.height_difference = 0.0;
+        self.output = FootAdmittanceOutput::default();
+    }
+
+    /// One tick. With `enabled = false` the output stays zero.
+    ///
+    /// # Errors
+    /// `NonFiniteInput` for a non-finite input, `InvalidParameter` for `dt ≤ 0`; the state is unchanged.
+    pub fn step(&mut self, input: &FootAdmittanceInput) -> Result<&FootAdmittanceOutput> {
+        check_input(input)?;
+        if !self.config.enabled {
+            return Ok(&self.output);
+        }
+        let loaded: [bool; 2] =
+            std::array::from_fn(|k| input.contacts[k] && input.wrenches[k][2] >= self.min_force);
+        let (cops, forces) = distribute_zmp(
+            &input.desired_zmp,
+            &input.soles,
+            &input.wrenches,
+            loaded,
+            &self.half_size,
+        );
+        let c = self.config;
+        for k in 0..2 {
+            let error = if loaded[k] {
+                ankle_torque_error(&input.soles[k], &input.wrenches[k], &cops[k])
+            } else {
+                Vector2::zeros()
+            };
+            let foot = &mut self.output.feet[k];
+            for axis in 0..2 {
+                let e = error[axis];
+                let tilt = &mut foot.tilt[axis];
+                *tilt = leaky_admittance(
+                    *tilt,
+                    c.torque_gain,
+                    e,
+                    c.torque_leak_time,
+                    input.dt,
+                    c.max_tilt,
+                );
+                foot.tilt_rate[axis] = c.torque_gain * e - *tilt / c.torque_leak_time;
+            }
+        }
+        let force_error = if loaded[0] && loaded[1] {
+            (input.wrenches[0][2] - input.wrenches[1][2]) - (forces[0] - forces[1])
+        } else {
+            0.0
+        };
+        let d = leaky_admittance(
+            self.height_difference,
+            c.force_gain,
+            force_error,
+            c.force_leak_time,
+            input.dt,
+            c.max_height_offset,
+        );
+        self.height_difference = d;
+        let rate = c.force_gain * force_error - d / c.force_leak_time;
+        for (foot, sign) in self.output.feet.iter_mut().zip([0.5, -0.5]) {
+            foot.height = sign * d;
+            foot.height_rate = sign * rate;
+        }
+        self.output.desired_cop = cops;
+        self.output.desired_force = forces;
+        Ok(&self.output)
+    }
+}
+
+fn check_input(input: &FootAdmittanceInput) -> Result<()> {
+    let finite = input.desired_zmp.iter().all(|v| v.is_finite())
+        && input
+            .wrenches
+            .iter()
+            .all(|w| w.iter().all(|v| v.is_finite()))
+        && input.soles.iter().all(|s| {
+            s.translation.vector.iter().all(|v| v.is_finite())
+                && s.rotation.coords.iter().all(|v| v.is_finite())
+        });
+    if !finite {
+        return Err(SimplifiedError::NonFiniteInput {
+            name: "foot admittance input",
+        });
+    }
+    check_positive("foot_admittance dt", input.dt)
+}
+
+/// The measured minus the desired ankle torque, roll and pitch in the sole frame \[N·m\]: the desired torque
+/// puts the centre of pressure at `cop` (world xy) under the measured normal force,
+/// `τ* = (c* − s) × f_z e_z` [Kajita 2010, foot damping control].
+pub fn ankle_torque_error(
+    sole: &Isometry3<f64>,
+    wrench: &Vector6<f64>,
+    cop: &Vector2<f64>,
+) -> Vector2<f64> {
+    let fz = wrench[2];
+    let s = sole.translation.vector;
+    let desired = Vector3::new((cop.y - s.y) * fz, -(cop.x - s.x) * fz, 0.0);
+    let measured = Vector3::new(wrench[3], wrench[4], wrench[5]);
+    (sole.rotation.inverse() * (measured - desired)).xy()
+}
+
+/// The desired centres of pressure (world xy) and normal forces \[N\] of the feet flagged `loaded` for the
+/// desired ZMP `zmp` (see the module documentation); the total is the loaded feet's measured normal force.
+/// An unloaded foot gets its sole origin and no force.
+pub fn distribute_zmp(
+    zmp: &Vector2<f64>,
+    soles: &[Isometry3<f64>; 2],
+    wrenches: &[Vector6<f64>; 2],
+    loaded: [bool; 2],
+    half_size: &Vector2<f64>,
+) -> ([Vector2<f64>; 2], [f64; 2]) {
+    let origin = |k: usize| soles[k].translation.vector.xy();
+    let mut cops = [origin(0), origin(1)];
+    let mut forces = [0.0; 2];
+    let total: f64 = (0..2).filter(|&k| loaded[k]).map(|k| wrenches[k][2]).sum();
+    match loaded {
+        [true, true] => {
+            let d = origin(1) - origin(0);
+            let alpha = if d.norm_squared() > 1e-12 {
+                ((zmp - origin(0)).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
+            } else {
+                0.5
+            };
+            let off = zmp - (origin(0) + d * alpha);
+            for (k, share) in [(0, 1.0 - alpha), (1, alpha)] {
+                cops[k] = clamp_to_sole(&(origin(k) + off), &soles[k], half_size);
+                forces[k] = share * total;
+            }
+        }
+        [true, false] | [false, true] => {
+            let k = usize::from(loaded[1]);
+            cops[k] = clamp_to_sole(zmp, &soles[k], half_size);
+            forces[k] = total;
+        }
+        [false, false] => {}
+    }
+    (cops, forces)
+}
+
+/// The point of the sole's rectangle (half-sizes along the sole's x and y) nearest to `p` in the sole frame,
+/// world xy \[m\].
+fn clamp_to_sole(p: &Vector2<f64>, sole: &Isometry3<f64>, half: &Vector2<f64>) -> Vector2<f64> {
+    let s = sole.translation.vector;
+    let local = sole.rotation.inverse() * Vector3::new(p.x - s.x, p.y - s.y, 0.0);
+    let clamped = Vector3::new(
+        local.x.clamp(-half.x, half.x),
+        local.y.clamp(-half.y, half.y),
+        local.z,
+    );
+    (s + sole.rotation * clamped).xy()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Translation3, UnitQuaternion};
+
+    fn sole(x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::new(x, y, 0.0),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+        )
+    }
+
+    #[test]
+    fn leaky_admittance_matches_the_first_order_step_response() {
+        // ẋ = K e − x/T from x = 0 with e constant: x(t) = K e T (1 − e^{−t/T}) at every tick, any dt
+        let (k, e, t_leak, dt) = (0.02, 3.0, 0.2, 0.002);
+        let mut x = 0.0;
+        for n in 1..=500 {
+            x = leaky_admittance(x, k, e, t_leak, dt, 1.0);
+            let t = n as f64 * dt;
+            let exact = k * e * t_leak * (1.0 - (-t / t_leak).exp());
+            assert!((x - exact).abs() < 1e-14, "t {t}: {x} vs {exact}");
+        }
+        // the bound holds
+        assert_eq!(leaky_admittance(0.0, 1.0, 100.0, 1.0, 1.0, 0.05), 0.05);
+        assert_eq!(leaky_admittance(0.0, 1.0, -100.0, 1.0, 1.0, 0.05), -0.05);
+    }
+
+    #[test]
+    fn distribution_reproduces_the_desired_zmp_inside_the_soles() {
+        let soles = [sole(0.0, 0.07, 0.3), sole(0.1, -0.07, 0.3)];
+        let w = |fz: f64| Vector6::new(0.0, 0.0, fz, 0.0, 0.0, 0.0);
+        let wrenches = [w(120.0), w(200.0)];
+        let half = Vector2::new(0.1, 0.045);
+        for zmp in [
+            Vector2::new(0.03, 0.0),
+            Vector2::new(0.06, 0.01),
+            Vector2::new(0.01, 0.05),
+        ] {
+            let (cops, forces) = distribute_zmp(&zmp, &soles, &wrenches, [true, true], &half);
+            assert!((forces[0] + forces[1] - 320.0).abs() < 1e-12);
+            let net = (cops[0] * forces[0] + cops[1] * forces[1]) / 320.0;
+            assert!((net - zmp).norm() < 1e-12, "{net} vs {zmp}");
+        }
+        // on the segment between the soles: the CoPs are the sole origins
+        let segment = Vector2::new(0.1, -0.14);
+        let on = Vector2::new(0.0, 0.07) + segment * 0.25;
+        let (cops_on, forces) = distribute_zmp(&on, &soles, &wrenches, [true, true], &half);
+        assert!((cops_on[0] - Vector2::new(0.0, 0.07)).norm() < 1e-12);
+        assert!((cops_on[1] - Vector2::new(0.1, -0.07)).norm() < 1e-12);
+        assert!((forces[1] / 320.0 - 0.25).abs() < 1e-12);
+        // one foot loaded: its CoP is the ZMP clamped to its rectangle (sole frame)
+        let far = Vector2::new(0.5, 0.07);
+        let (cops, forces) = distribute_zmp(&far, &soles, &wrenches, [true, false], &half);
+        let local = soles[0].rotation.inverse() * Vector3::new(cops[0].x, cops[0].y - 0.07, 0.0);
+        assert!((local.x - 0.1).abs() < 1e-12 && local.y.abs() <= 0.045 + 1e-12);
+        assert_eq!(forces, [120.0, 0.0]);
+    }
+
+    #[test]
+    fn torque_error_is_the_normal_force_times_the_cop_error_in_the_sole_frame() {
+        let s = sole(0.2, -0.1, std::f64::consts::FRAC_PI_2);
+        let fz = 150.0;
+        // measured CoP 1 cm ahead of the sole origin along the sole's x (world +y): τ = (c − s) × f
+        let wrench = Vector6::new(0.0, 0.0, fz, 0.01 * fz, 0.0, 0.0);
+        let e = ankle_torque_error(&s, &wrench, &Vector2::new(0.2, -0.1));
+        // the sole's pitch axis is world −x: the error is −0.01 fz about the sole's y, none about its x
+        assert!((e - Vector2::new(0.0, -0.01 * fz)).norm() < 1e-12, "{e}");
+    }
+
+    #[test]
+    fn disabled_stays_at_zero_and_enabled_tilts_against_the_torque_error() {
+        let input = FootAdmittanceInput {
+            desired_zmp: Vector2::new(0.0, 0.07),
+            soles: [sole(0.0, 0.07, 0.0), sole(0.0, -0.07, 0.0)],
+            wrenches: [
+                Vector6::new(0.0, 0.0, 300.0, 0.0, -6.0, 0.0),
+                Vector6::zeros(),
+            ],
+            contacts: [true, true],
+            dt: 0.002,
+        };
+        let mut off =
+            FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
+        assert_eq!(*off.step(&input).unwrap(), FootAdmittanceOutput::default());
+        let config = FootAdmittanceConfig {
+            enabled: true,
+            ..Default::default()
+        };
+        let mut on = FootAdmittance::new(&config, 0.2, 0.09, 320.0).unwrap();
+        let out = on.step(&input).unwrap();
+        // the CoP is 2 cm ahead of the desired one (the left sole origin): pitch toe up (negative), no roll
+        let expected = leaky_admittance(0.0, 0.005, -6.0, 0.1, 0.002, 0.1);
+        assert_eq!(out.feet[0].tilt, Vector2::new(0.0, expected));
+        assert!(expected < 0.0);
+        assert_eq!(out.feet[1], FootCorrection::default());
+        let bad = FootAdmittanceInput {
+            dt: f64::NAN,
+            ..input
+        };
+        assert!(on.step(&bad).is_err());
+    }
+}
