@@ -184,6 +184,9 @@ pub enum Command {
         /// Use only the force/torque sensors (not the motor torques).
         #[arg(long)]
         ft_only: bool,
+        /// Relative weight of the pull towards the logged URDF (`ManifoldOptions::prior_weight`).
+        #[arg(long, default_value_t = 1e-4)]
+        prior_weight: f64,
     },
     /// SVG figures of a run's log (tracking, feet, forces, torques, solve times) or a sweep's survival map.
     Plot {
