@@ -141,8 +141,8 @@ impl KinDyn {
             out.shape(),
         )?;
         self.model.check_ft_hosts()?;
-        if let Some(&index) = cut.iter().find(|&&k| k >= ns) {
-            return Err(ModelError::FtSensorOutOfRange { index, count: ns });
+        for &k in cut {
+            self.check_ft_sensor(k)?;
         }
         self.proper_accelerations(Some(nu_dot));
         out.fill(0.0);
@@ -176,13 +176,7 @@ impl KinDyn {
         sensor: usize,
         out: &mut Matrix6<f64>,
     ) -> Result<(), ModelError> {
-        let count = self.model.ft_sensors.len();
-        if sensor >= count {
-            return Err(ModelError::FtSensorOutOfRange {
-                index: sensor,
-                count,
-            });
-        }
+        self.check_ft_sensor(sensor)?;
         let (_, r, p) = self.frame_rt(self.model.ft_sensors[sensor].frame);
         let sign = if self.model.ft_sides[sensor].child_to_parent {
             1.0
