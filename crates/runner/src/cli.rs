@@ -162,8 +162,9 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
-    /// Identify the robot's inertial parameters from logs of an identification run (robot on a pole, joints
-    /// moved: `configs/identify_legs.toml`) and write a URDF with them, every body physically consistent.
+    /// Identify the robot's inertial parameters from logs of identification runs (robot on a pole, joints
+    /// moved: `configs/identify_legs.toml`; robot standing on its feet: `configs/identify_standing.toml`)
+    /// and write a URDF with them, every body physically consistent.
     Identify {
         /// MCAP logs written by `stride run` (same robot model).
         #[arg(required = true)]

@@ -1,13 +1,17 @@
 //! `stride identify LOG.mcap...`: physically consistent identification of the robot's inertial parameters
-//! from logs of an identification run [Traversaro 2017, ch. 6–7] (robot on a pole, joints moved through
-//! exciting trajectories: `configs/identify_legs.toml`).
+//! from logs of identification runs [Traversaro 2017, ch. 6–7]: a robot on a pole moving its joints through
+//! exciting trajectories (`configs/identify_legs.toml`) and a robot standing on its feet
+//! (`configs/identify_standing.toml`).
 //!
 //! Measurements, per logged sample (`/sim/state` and `/sensors/ft` at the same time):
 //! * the motor torques `τ = Y_s ψ + τ_c sign(q̇) + d q̇` (joint rows of the inverse-dynamics regressor,
 //!   eqs. 7.1, 7.5; Coulomb friction `τ_c` and viscous damping `d` per joint are extra unknowns; joints
 //!   slower than [`IdentifyOptions::min_joint_speed`] are skipped, where the friction is a stick force);
 //! * the force/torque sensor readings `r = Y_FT ψ + b` (eqs. 7.2–7.3; the offsets `b` are extra
-//!   unknowns), valid as long as nothing touches the robot.
+//!   unknowns, shared by the logs), valid as long as nothing touches the sensor's child side;
+//! * for a robot on its feet, the base rows of the submodel above the feet sensors,
+//!   `Y_sub ψ + Σ_k A_k b_k = Σ_k A_k r_k` (eq. 7.1, Theorem 7.1): the total mass and the CoM. The rows
+//!   whose submodel holds a sole are skipped there (`usable`).
 //!
 //! Joint accelerations are central differences of the logged velocities (the simulator logs the state at
 //! the control rate; the trajectories are smooth). ψ is in the FT-split layout (see
