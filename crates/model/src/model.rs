@@ -316,6 +316,43 @@ impl Model {
         self.ft_sensors.iter().position(|s| s.name == name)
     }
 
+    /// Whether `frame`'s URDF link lies on force/torque sensor `sensor`'s child side (below its fixed joint).
+    ///
+    /// # Errors
+    /// [`ModelError::FtSensorOutOfRange`], [`ModelError::FrameOutOfRange`].
+    pub fn ft_child_side_holds(&self, sensor: usize, frame: FrameId) -> Result<bool, ModelError> {
+        let side = self
+            .ft_sides
+            .get(sensor)
+            .ok_or(ModelError::FtSensorOutOfRange {
+                index: sensor,
+                count: self.ft_sides.len(),
+            })?;
+        side.child_side_frame
+            .get(frame.index())
+            .copied()
+            .ok_or(ModelError::FrameOutOfRange {
+                index: frame.index(),
+                count: self.frames.len(),
+            })
+    }
+
+    /// The force/torque sensor closest to `frame` on its way to the root: among the sensors whose child
+    /// side holds `frame`, the one with the fewest frames on its child side (a foot sensor rather than the
+    /// leg sensor above it). `None` when no sensor's child side holds it, or `frame` is not of this model.
+    pub fn innermost_ft_sensor_holding(&self, frame: FrameId) -> Option<usize> {
+        let side_size = |k: usize| {
+            self.ft_sides[k]
+                .child_side_frame
+                .iter()
+                .filter(|&&held| held)
+                .count()
+        };
+        (0..self.ft_sides.len())
+            .filter(|&k| matches!(self.ft_child_side_holds(k, frame), Ok(true)))
+            .min_by_key(|&k| side_size(k))
+    }
+
     /// Warnings raised while loading (physically inconsistent inertias, missing limits, massless bodies, ...).
     pub fn warnings(&self) -> &[String] {
         &self.warnings

@@ -39,6 +39,8 @@ fn exercise(model: Arc<Model>) {
     let ns = model.ft_sensors().len();
     let mut y_full = DMatrix::zeros(nv, 10 * model.body_count());
     let mut y_ft = DMatrix::zeros(6 * ns, 10 * (model.body_count() + ns));
+    let mut y_sub = DMatrix::zeros(6, 10 * (model.body_count() + ns));
+    let cut: Vec<usize> = (0..ns).collect();
 
     let mut sink = 0.0;
     // only this thread's allocations count (the test harness may allocate on its own threads)
@@ -80,7 +82,13 @@ fn exercise(model: Arc<Model>) {
                 kd.forward_dynamics(&tau, &wrenches, &mut acc).unwrap();
                 kd.inverse_dynamics_regressor(&nu_dot, &mut y_full).unwrap();
                 kd.ft_sensor_regressor(&nu_dot, &mut y_ft).unwrap();
-                sink += y_full[(6, 10)] + y_ft[(0, 0)];
+                kd.ft_submodel_base_regressor(&nu_dot, &cut, &mut y_sub)
+                    .unwrap();
+                for k in 0..ns {
+                    kd.ft_sensor_parent_side_map(k, &mut ft_map).unwrap();
+                    sink += ft_map[(0, 0)];
+                }
+                sink += y_full[(6, 10)] + y_ft[(0, 0)] + y_sub[(2, 0)];
                 kd.state_into(&mut integrated);
                 integrated.integrate(&model, rep, 1e-3).unwrap();
             }

@@ -162,8 +162,9 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
-    /// Identify the robot's inertial parameters from logs of an identification run (robot on a pole, joints
-    /// moved: `configs/identify_legs.toml`) and write a URDF with them, every body physically consistent.
+    /// Identify the robot's inertial parameters from logs of identification runs (robot on a pole, joints
+    /// moved: `configs/identify_legs.toml`; robot standing on its feet: `configs/identify_standing.toml`)
+    /// and write a URDF with them, every body physically consistent.
     Identify {
         /// MCAP logs written by `stride run` (same robot model).
         #[arg(required = true)]
@@ -184,6 +185,9 @@ pub enum Command {
         /// Use only the force/torque sensors (not the motor torques).
         #[arg(long)]
         ft_only: bool,
+        /// Relative weight of the pull towards the logged URDF (`ManifoldOptions::prior_weight`).
+        #[arg(long, default_value_t = 1e-4)]
+        prior_weight: f64,
     },
     /// SVG figures of a run's log (tracking, feet, forces, torques, solve times) or a sweep's survival map.
     Plot {

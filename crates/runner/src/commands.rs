@@ -482,6 +482,7 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             plant_urdf,
             torques_only,
             ft_only,
+            prior_weight,
         } => identify(
             &logs,
             &output,
@@ -490,6 +491,7 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             &crate::identify::IdentifyOptions {
                 use_torques: !ft_only,
                 use_ft: !torques_only,
+                prior_weight,
                 ..Default::default()
             },
         ),

@@ -188,13 +188,7 @@ impl KinDyn {
         frame: FrameId,
         out: &mut Matrix6<f64>,
     ) -> Result<(), ModelError> {
-        let count = self.model.ft_sensors.len();
-        if sensor >= count {
-            return Err(ModelError::FtSensorOutOfRange {
-                index: sensor,
-                count,
-            });
-        }
+        self.check_ft_sensor(sensor)?;
         self.frame_checked(frame)?;
         let side = &self.model.ft_sides[sensor];
         if !side.child_side_frame[frame.0] {
@@ -212,5 +206,18 @@ impl KinDyn {
         out.fixed_view_mut::<3, 3>(3, 0)
             .copy_from(&(rt * skew(&d) * sign));
         Ok(())
+    }
+
+    /// [`ModelError::FtSensorOutOfRange`] unless `sensor` indexes [`crate::Model::ft_sensors`].
+    pub(super) fn check_ft_sensor(&self, sensor: usize) -> Result<(), ModelError> {
+        let count = self.model.ft_sensors.len();
+        if sensor < count {
+            Ok(())
+        } else {
+            Err(ModelError::FtSensorOutOfRange {
+                index: sensor,
+                count,
+            })
+        }
     }
 }

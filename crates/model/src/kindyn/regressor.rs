@@ -1,12 +1,12 @@
 //! Inertial-parameter regressors of the whole robot: inverse dynamics (the floating-base regressor, base and
 //! joint rows) and the force/torque sensor readings, linear in ψ [Traversaro 2017, eqs. 7.1–7.5].
 
-use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, Vector3, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 
 use super::KinDyn;
 use crate::error::{check_len, check_shape, ModelError};
 use crate::inertial::rigid_body_regressor;
-use crate::spatial::{ang, join, lin, shift_motion};
+use crate::spatial::{ang, join, lin, shift_motion, skew};
 
 /// A 6 × 10 regressor expressed in frame A' (world orientation, base origin).
 type WorldRegressor = SMatrix<f64, 6, 10>;
@@ -108,6 +108,86 @@ impl KinDyn {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// The base rows of the submodel above the force/torque sensors `cut` (6 × 10·(N + S), FT-split layout
+    /// of [`crate::inertial`]): `Y ψ` is the sum of the net wrenches `X* Y_L π_L` of every part not on a
+    /// `cut` sensor's child side, about the base origin with world axes (frame A', the base rows of the
+    /// mixed representation whatever the current one; `nu_dot` is in the current representation).
+    ///
+    /// When every external wrench acts on the child sides of the `cut` sensors (a robot standing on the
+    /// soles below its feet sensors), the Newton–Euler equations of that submodel read
+    /// `Y ψ = Σ_{k ∈ cut} A_k y_k`, `y_k` the readings and `A_k` [`KinDyn::ft_sensor_parent_side_map`]:
+    /// the floating-base regressor's base rows with the measured external wrenches [Traversaro 2017,
+    /// eq. 7.1, Theorem 7.1], restricted to the FT submodel (eqs. 7.2–7.4) that the sensors bound. They
+    /// see the total mass and the centre of mass, which no joint-torque or FT row of a robot held by its base
+    /// determines. With `cut` empty they are the whole robot's base rows. Does not allocate.
+    ///
+    /// # Errors
+    /// Those of [`KinDyn::ft_sensor_regressor`], [`ModelError::FtSensorOutOfRange`] for a `cut` index.
+    pub fn ft_submodel_base_regressor(
+        &mut self,
+        nu_dot: &DVector<f64>,
+        cut: &[usize],
+        out: &mut DMatrix<f64>,
+    ) -> Result<(), ModelError> {
+        let nb = self.model.body_count();
+        let ns = self.model.ft_sensors.len();
+        self.check_nu_dot(nu_dot)?;
+        check_shape(
+            "ft_submodel_base_regressor output",
+            (6, 10 * (nb + ns)),
+            out.shape(),
+        )?;
+        self.model.check_ft_hosts()?;
+        for &k in cut {
+            self.check_ft_sensor(k)?;
+        }
+        self.proper_accelerations(Some(nu_dot));
+        out.fill(0.0);
+        for b in 0..nb {
+            if !cut.iter().any(|&k| self.on_child_side(k, b)) {
+                let y = self.world_regressor(b);
+                out.columns_mut(10 * b, 10).copy_from(&y);
+            }
+        }
+        for j in 0..ns {
+            // Sensor j's child-side part is below j and below every sensor whose child side holds its host.
+            let h = self.model.ft_sides[j].host;
+            if !cut.iter().any(|&k| k == j || self.on_child_side(k, h)) {
+                let y = self.world_regressor(h);
+                out.columns_mut(10 * (nb + j), 10).copy_from(&y);
+            }
+        }
+        Ok(())
+    }
+
+    /// The map `A` from force/torque sensor `sensor`'s reading `y` (sensor frame, `[f; τ]`) to the wrench
+    /// its child side applies on its parent side, about the base origin with world axes (frame A'):
+    /// `A = ± [[R, 0], [p^ R, R]]` (`R`, `p` the sensor frame's orientation and origin in A'; `+` for
+    /// `child_to_parent`) [Traversaro 2017, eqs. 2.47, 4.1]. The right-hand side of
+    /// [`KinDyn::ft_submodel_base_regressor`].
+    ///
+    /// # Errors
+    /// [`ModelError::FtSensorOutOfRange`].
+    pub fn ft_sensor_parent_side_map(
+        &self,
+        sensor: usize,
+        out: &mut Matrix6<f64>,
+    ) -> Result<(), ModelError> {
+        self.check_ft_sensor(sensor)?;
+        let (_, r, p) = self.frame_rt(self.model.ft_sensors[sensor].frame);
+        let sign = if self.model.ft_sides[sensor].child_to_parent {
+            1.0
+        } else {
+            -1.0
+        };
+        *out = Matrix6::zeros();
+        out.fixed_view_mut::<3, 3>(0, 0).copy_from(&(r * sign));
+        out.fixed_view_mut::<3, 3>(3, 3).copy_from(&(r * sign));
+        out.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&(skew(&p) * r * sign));
         Ok(())
     }
 

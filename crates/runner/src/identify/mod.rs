@@ -1,13 +1,17 @@
 //! `stride identify LOG.mcap...`: physically consistent identification of the robot's inertial parameters
-//! from logs of an identification run [Traversaro 2017, ch. 6–7] (robot on a pole, joints moved through
-//! exciting trajectories: `configs/identify_legs.toml`).
+//! from logs of identification runs [Traversaro 2017, ch. 6–7]: a robot on a pole moving its joints through
+//! exciting trajectories (`configs/identify_legs.toml`) and a robot standing on its feet
+//! (`configs/identify_standing.toml`).
 //!
 //! Measurements, per logged sample (`/sim/state` and `/sensors/ft` at the same time):
 //! * the motor torques `τ = Y_s ψ + τ_c sign(q̇) + d q̇` (joint rows of the inverse-dynamics regressor,
 //!   eqs. 7.1, 7.5; Coulomb friction `τ_c` and viscous damping `d` per joint are extra unknowns; joints
 //!   slower than [`IdentifyOptions::min_joint_speed`] are skipped, where the friction is a stick force);
 //! * the force/torque sensor readings `r = Y_FT ψ + b` (eqs. 7.2–7.3; the offsets `b` are extra
-//!   unknowns), valid as long as nothing touches the robot.
+//!   unknowns, shared by the logs), valid as long as nothing touches the sensor's child side;
+//! * for a robot on its feet, the base rows of the submodel above the feet sensors,
+//!   `Y_sub ψ + Σ_k A_k b_k = Σ_k A_k r_k` (eq. 7.1, Theorem 7.1): the total mass and the CoM. The rows
+//!   whose submodel holds a sole are skipped there (`usable`).
 //!
 //! Joint accelerations are central differences of the logged velocities (the simulator logs the state at
 //! the control rate; the trajectories are smooth). ψ is in the FT-split layout (see
@@ -17,12 +21,14 @@
 //! `[sim.model]` inertia changes, the plant's true parameters.
 
 mod report;
+mod rows;
 mod urdf;
+mod usable;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use nalgebra::{DMatrix, DVector, Vector3, Vector6};
+use nalgebra::{DVector, Vector3, Vector6};
 use stride_estimation::identification::{
     identify_on_manifold, identify_unconstrained, IdentificationData, IdentificationError,
     ManifoldOptions, Prior,
@@ -30,11 +36,13 @@ use stride_estimation::identification::{
 use stride_model::inertial::{BaseParameters, InertialParameters};
 use stride_model::{KinDyn, Model};
 
-use crate::calibrate::{log_span, paired_samples, CalibrateError, Sample};
+use crate::calibrate::{log_span, paired_samples, CalibrateError};
 use crate::log::read_log;
 use crate::replay::{logged_model, logged_scenario, ReplayError};
 
+use rows::Rows;
 pub use urdf::identified_urdf;
+use usable::UsableRows;
 
 /// Why an identification failed.
 #[derive(Debug, thiserror::Error)]
@@ -114,6 +122,8 @@ pub struct IdentificationReport {
     pub samples: usize,
     /// Measurement rows.
     pub rows: usize,
+    /// Of which base rows of the submodel above the feet sensors (logs of a robot on its feet).
+    pub base_rows: usize,
     /// ψ of the prior, FT-split layout.
     pub prior: DVector<f64>,
     /// ψ identified on the manifold (every body fully consistent).
@@ -164,6 +174,12 @@ pub fn identify_logs(
     let Some(first) = paths.first() else {
         return Err(IdentifyError::Content("no log given".into()));
     };
+    if !(options.prior_weight.is_finite() && options.prior_weight >= 0.0) {
+        return Err(IdentifyError::Content(format!(
+            "the prior weight must be finite and ≥ 0, not {}",
+            options.prior_weight
+        )));
+    }
     let logged = load_model(first)?;
     let model = Arc::clone(&logged.model);
     let ns = model.ft_sensors().len();
@@ -174,7 +190,7 @@ pub fn identify_logs(
     };
     let mut data = IdentificationData::new(model.body_count() + ns, layout.extras());
     let mut kd = KinDyn::new(Arc::clone(&model));
-    let mut samples = 0;
+    let mut used = LogRows::default();
     for path in paths {
         if load_model(path)?.urdf != logged.urdf {
             return Err(IdentifyError::Content(format!(
@@ -183,9 +199,11 @@ pub fn identify_logs(
                 first.display()
             )));
         }
-        samples += add_log(path, &mut kd, &layout, options, &mut data)?;
+        let added = add_log(path, &mut kd, &layout, options, &mut data)?;
+        used.samples += added.samples;
+        used.base_rows += added.base_rows;
     }
-    solve(logged, paths, samples, &layout, &data, options)
+    solve(logged, paths, &used, &layout, &data, options)
 }
 
 /// The model a log holds.
@@ -228,14 +246,21 @@ fn load_model(path: &Path) -> Result<LoggedModel, IdentifyError> {
     })
 }
 
-/// Adds the rows of one log; returns the number of samples used.
+/// What one log added.
+#[derive(Default)]
+struct LogRows {
+    samples: usize,
+    base_rows: usize,
+}
+
+/// Adds the rows of one log; returns the number of samples and of base rows used.
 fn add_log(
     path: &Path,
     kd: &mut KinDyn,
     layout: &Layout,
     options: &IdentifyOptions,
     data: &mut IdentificationData,
-) -> Result<usize, IdentifyError> {
+) -> Result<LogRows, IdentifyError> {
     let log = read_log(path).map_err(ReplayError::from)?;
     let scenario = logged_scenario(&log, path)?;
     let model = Arc::clone(kd.model());
@@ -257,117 +282,32 @@ fn add_log(
             positive(ft.torque_noise, 0.1)
         }
     });
+    let usable = UsableRows::of_log(&scenario, kd, &samples[0].state, path)?;
     let every = samples.len().div_ceil(options.max_samples.max(1));
     let mut rows = Rows::new(&model, layout);
-    let mut used = 0;
+    let mut used = LogRows::default();
     for s in samples.iter().step_by(every) {
         kd.set_state(&s.state)?;
         if options.use_torques {
-            rows.add_torques(kd, s, layout, options, data)?;
+            rows.add_torques(kd, s, layout, options, &usable, data)?;
         }
         if options.use_ft {
-            rows.add_ft(kd, s, layout, &ft_noise, data)?;
+            rows.add_ft(kd, s, layout, &ft_noise, &usable, data)?;
+            if !usable.cut.is_empty() {
+                rows.add_base(kd, s, layout, &ft_noise, &usable.cut, data)?;
+                used.base_rows += 6;
+            }
         }
-        used += 1;
+        used.samples += 1;
     }
     Ok(used)
-}
-
-/// Regressor workspaces and the row being assembled.
-struct Rows {
-    id: DMatrix<f64>,
-    ft: DMatrix<f64>,
-    row: DVector<f64>,
-    hosts: Vec<usize>,
-}
-
-impl Rows {
-    fn new(model: &Model, layout: &Layout) -> Self {
-        let (nb, ns) = (model.body_count(), model.ft_sensors().len());
-        Self {
-            id: DMatrix::zeros(model.nv(), 10 * nb),
-            ft: DMatrix::zeros(6 * ns, 10 * (nb + ns)),
-            row: DVector::zeros(layout.psi + layout.extras()),
-            hosts: model
-                .ft_sensors()
-                .iter()
-                .map(|s| model.frames()[s.frame.index()].link)
-                .collect(),
-        }
-    }
-
-    /// Motor-torque rows: the inverse-dynamics regressor's joint rows in the FT-split layout (a sensor's
-    /// child-side block moves with its host), friction columns `sign(q̇)` and `q̇`.
-    fn add_torques(
-        &mut self,
-        kd: &mut KinDyn,
-        s: &Sample,
-        layout: &Layout,
-        options: &IdentifyOptions,
-        data: &mut IdentificationData,
-    ) -> Result<(), IdentifyError> {
-        let dof = layout.friction;
-        if s.joint_torques.len() != dof {
-            return Err(IdentifyError::Content(format!(
-                "/sim/state has {} joint torques for {dof} joints",
-                s.joint_torques.len()
-            )));
-        }
-        kd.inverse_dynamics_regressor(&s.nu_dot, &mut self.id)?;
-        let nb10 = self.id.ncols();
-        for j in 0..dof {
-            let speed = s.state.joint_velocities[j];
-            if speed.abs() < options.min_joint_speed {
-                continue;
-            }
-            self.row.fill(0.0);
-            let r = 6 + j;
-            for c in 0..nb10 {
-                self.row[c] = self.id[(r, c)];
-            }
-            for (k, &h) in self.hosts.iter().enumerate() {
-                for c in 0..10 {
-                    self.row[nb10 + 10 * k + c] = self.id[(r, 10 * h + c)];
-                }
-            }
-            self.row[layout.psi + j] = speed.signum();
-            self.row[layout.psi + dof + j] = speed;
-            data.add_row(self.row.as_view(), s.joint_torques[j], options.torque_noise)?;
-        }
-        Ok(())
-    }
-
-    /// Force/torque rows: the FT-sensor regressor and the sensor's offset columns.
-    fn add_ft(
-        &mut self,
-        kd: &mut KinDyn,
-        s: &Sample,
-        layout: &Layout,
-        noise: &Vector6<f64>,
-        data: &mut IdentificationData,
-    ) -> Result<(), IdentifyError> {
-        kd.ft_sensor_regressor(&s.nu_dot, &mut self.ft)?;
-        let offsets = layout.psi + 2 * layout.friction;
-        for (k, reading) in s.readings.iter().enumerate() {
-            for a in 0..6 {
-                self.row.fill(0.0);
-                let r = 6 * k + a;
-                for c in 0..layout.psi {
-                    self.row[c] = self.ft[(r, c)];
-                }
-                self.row[offsets + r] = 1.0;
-                data.add_row(self.row.as_view(), reading[a], noise[a])?;
-            }
-        }
-        Ok(())
-    }
 }
 
 /// Solves the manifold and the unconstrained problems and collects the report.
 fn solve(
     logged: LoggedModel,
     paths: &[PathBuf],
-    samples: usize,
+    used: &LogRows,
     layout: &Layout,
     data: &IdentificationData,
     options: &IdentifyOptions,
@@ -410,8 +350,9 @@ fn solve(
     Ok(IdentificationReport {
         prior_urdf,
         logs: paths.to_vec(),
-        samples,
+        samples: used.samples,
         rows: reduced.rows,
+        base_rows: used.base_rows,
         prior: prior_psi,
         identified,
         unconstrained,

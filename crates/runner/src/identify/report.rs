@@ -36,6 +36,11 @@ pub(super) fn violations(model: &Model, psi: &DVector<f64>) -> Vec<String> {
         .collect()
 }
 
+/// The total mass of a ψ (kg): the sum of its blocks' masses.
+pub(super) fn total_mass(psi: &DVector<f64>) -> f64 {
+    psi.iter().step_by(10).sum()
+}
+
 fn vec3(v: &Vector3<f64>) -> String {
     format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z)
 }
@@ -60,10 +65,11 @@ impl IdentificationReport {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "inertial parameters from {} samples ({} rows) of {} log(s); {} identifiable combinations of {} \
-             parameters (σ > {:e} σ_max; condition number over them {:.3e})",
+            "inertial parameters from {} samples ({} rows, {} of them base rows) of {} log(s); {} identifiable \
+             combinations of {} parameters (σ > {:e} σ_max; condition number over them {:.3e})",
             self.samples,
             self.rows,
+            self.base_rows,
             self.logs.len(),
             self.base.rank(),
             self.prior.len(),
@@ -88,6 +94,16 @@ impl IdentificationReport {
                 100.0 * self.identifiable_error(&self.unconstrained).unwrap_or(f64::NAN)
             );
         }
+        let _ = writeln!(
+            s,
+            "total mass [kg]: prior {:.3}, identified {:.3}, plant {}",
+            total_mass(&self.prior),
+            total_mass(&self.identified),
+            self.truth
+                .as_ref()
+                .map(|t| format!("{:.3}", total_mass(t)))
+                .unwrap_or_else(|| "-".into())
+        );
         let _ = writeln!(
             s,
             "unconstrained least squares: {} bodies not fully consistent{}",
@@ -135,12 +151,13 @@ impl IdentificationReport {
             s,
             "# `stride identify` report [Traversaro 2017, ch. 6-7]: masses kg, CoM m (body frame), inertia about\n\
              # the CoM kg m^2 [xx, xy, xz, yy, yz, zz], friction N m and N m s/rad, offsets N and N m.\n\
-             [summary]\nlogs = [{}]\nsamples = {}\nrows = {}\nparameters = {}\nidentifiable = {}\n\
+             [summary]\nlogs = [{}]\nsamples = {}\nrows = {}\nbase_rows = {}\nparameters = {}\nidentifiable = {}\n\
              condition_number = {:?}\nresidual_prior = {:?}\nresidual_identified = {:?}\nresidual_unconstrained = {:?}\n\
              iterations = {}\nconverged = {}\nunconstrained_not_fully_consistent = {}",
             logs.join(", "),
             self.samples,
             self.rows,
+            self.base_rows,
             self.prior.len(),
             self.base.rank(),
             self.condition_number,
