@@ -27,7 +27,7 @@ use stride_simplified::{
 };
 pub use stride_walking::soles_heading;
 use stride_walking::{MeasuredCentroidal, SimplifiedInputBuilder, WalkingHandles};
-use stride_wbc::{QpIk, Tsid, WbcInput};
+use stride_wbc::{ContactId, QpIk, Tsid, WbcInput};
 
 use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
 use crate::config::{ControlMode, EstimationKind, Goal, Scenario};
@@ -263,6 +263,9 @@ pub struct Stack {
     pub wbc_input: WbcInput,
     /// The walking slots of `wbc_input`.
     wbc_handles: WalkingHandles,
+    /// The left and right sole contacts of the whole-body input, which carry the measured foot wrenches
+    /// (read by the compliant TSID).
+    foot_contacts: [ContactId; 2],
     /// The command of the last whole-body tick.
     pub command: JointCommand,
     /// The estimation layer (or the ground-truth bypass).
@@ -358,6 +361,10 @@ impl Stack {
             simplified_glue.new_input(&[kd.frame_pose(soles[0]), kd.frame_pose(soles[1])])?;
         let wbc_input = wbc.input(initial);
         let wbc_handles = WalkingHandles::new(&wbc_input)?;
+        let foot_contacts = [
+            wbc_input.contact_id(stride_wbc::walking::LEFT_FOOT)?,
+            wbc_input.contact_id(stride_wbc::walking::RIGHT_FOOT)?,
+        ];
         let command = JointCommand::hold(c.scenario.control_mode, &initial.joint_positions);
         let estimation = Estimation::new(scenario, &model, initial)?;
         let mut estimate = EstimatorOutput::new(&model);
@@ -389,6 +396,7 @@ impl Stack {
             wbc,
             wbc_input,
             wbc_handles,
+            foot_contacts,
             command,
             estimation,
             estimate,
@@ -692,6 +700,9 @@ impl Stack {
         i.state.copy_from(&self.estimate.state);
         let simplified = self.simplified_valid.then_some(&self.simplified_output);
         stride_walking::fill_wbc_input(i, &self.wbc_handles, s, simplified)?;
+        for (id, wrench) in self.foot_contacts.iter().zip(&self.estimate.foot_wrenches) {
+            i.contact_mut(*id)?.measured_wrench = *wrench;
+        }
         i.posture = None;
         i.angular_momentum = self.angular_momentum_reference;
         self.flexible
