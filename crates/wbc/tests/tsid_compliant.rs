@@ -271,10 +271,18 @@ struct Standing {
     fallbacks: usize,
 }
 
-/// Stands the bundled humanoid in stride-sim (torque mode, ideal actuators and sensors, 2 kHz) on the ground
-/// `(k, b)` for `duration` s under the default TSID with `contact_model` at 500 Hz, on the plant's state
-/// and its contact wrenches (the runner's ground-truth measurement), references holding the initial stance.
-fn stand_on_soft_ground(contact_model: ContactModel, k: f64, b: f64, duration: f64) -> Standing {
+/// Stands the bundled humanoid in stride-sim (torque mode, ideal sensors, 2 kHz; ideal actuators or
+/// stride-sim's default ones: 30 Hz torque lag, 1 ms command delay, 0.1 N·m Coulomb friction) on the
+/// isotropic ground `(k, b)` for `duration` s under the default TSID with `contact_model` (the compliant one
+/// with a hard angular momentum task, [`compliant_config`]) at 500 Hz, on the plant's state and its
+/// contact wrenches (the runner's ground-truth measurement), references holding the initial stance.
+fn stand_on_soft_ground(
+    contact_model: ContactModel,
+    ideal_actuators: bool,
+    k: f64,
+    b: f64,
+    duration: f64,
+) -> Standing {
     use stride_sim::{ActuationConfig, ActuationMode, SensorConfig, SimConfig, SimInput, SimRobot};
     let model = bundled_model();
     let mut config = SimConfig {
@@ -282,6 +290,10 @@ fn stand_on_soft_ground(contact_model: ContactModel, k: f64, b: f64, duration: f
         sensors: SensorConfig::ideal(),
         ..SimConfig::default()
     };
+    if !ideal_actuators {
+        config.actuation = ActuationConfig::default();
+        config.actuation.default.mode = ActuationMode::Torque;
+    }
     config.actuation.default.mode = ActuationMode::Torque;
     // isotropic ground, as Lemma 1's density `ρ = k(x̄ − x) − b ẋ` [Romualdi 2022, eq. 8.1.6]
     config.contact.normal_stiffness = k;
@@ -322,30 +334,6 @@ fn stand_on_soft_ground(contact_model: ContactModel, k: f64, b: f64, duration: f
             }
             let out = tsid.step(&input).unwrap();
             outcome.fallbacks += usize::from(out.report.fallback || out.report.held);
-            if std::env::var("DBG").is_ok() && step % (ratio * 25) == 0 {
-                kd.set_state(sim.state()).unwrap();
-                let chest = kd
-                    .frame_pose(model.frame_id("chest").unwrap())
-                    .rotation
-                    .euler_angles();
-                let lf = kd.frame_pose(model.frame_id("l_sole").unwrap());
-                let lfe = lf.rotation.euler_angles();
-                let res: Vec<String> = out
-                    .residuals
-                    .iter()
-                    .map(|r| format!("{}={:.2e}", r.name, r.residual))
-                    .collect();
-                let meas = input.contact(ids[0]).unwrap().measured_wrench;
-                eprintln!(
-                    "t={:.3} chest_pitch={:.4} lf_z={:.4} lf_pitch={:.4} base_acc={:.2?} |qdd|={:.1} fL={:.1?} fLnext={:.1?}\n   {}",
-                    step as f64 * sim.period(), chest.1, lf.translation.vector.z, lfe.1,
-                    out.accelerations.rows(0, 6).iter().map(|v| (v * 100.0).round() / 100.0).collect::<Vec<_>>(),
-                    out.accelerations.rows(6, model.dof()).amax(),
-                    meas.iter().map(|v| v.round()).collect::<Vec<_>>(),
-                    out.contact_wrenches[0].iter().map(|v| v.round()).collect::<Vec<_>>(),
-                    res.join(" ")
-                );
-            }
             command.joint_torques.copy_from(&out.joint_torques);
         }
         let t = step as f64 * sim.period();
@@ -363,11 +351,20 @@ fn stand_on_soft_ground(contact_model: ContactModel, k: f64, b: f64, duration: f
 
 #[test]
 fn the_compliant_tsid_stands_on_soft_ground_where_the_rigid_one_falls() {
-    let compliant = stand_on_soft_ground(ContactModel::Compliant, 1e6, 1e4, 3.0);
-    eprintln!("compliant: {compliant:?}");
-    let rigid = stand_on_soft_ground(ContactModel::Rigid, 1e6, 1e4, 3.0);
-    eprintln!("rigid: {rigid:?}");
+    let compliant = stand_on_soft_ground(ContactModel::Compliant, true, 1e6, 1e4, 3.0);
+    let rigid = stand_on_soft_ground(ContactModel::Rigid, true, 1e6, 1e4, 3.0);
+    eprintln!("compliant: {compliant:?}\nrigid: {rigid:?}");
     assert!(compliant.fell_at.is_none(), "{compliant:?}");
-    assert!(compliant.worst < 0.01, "{compliant:?}");
+    assert!(compliant.worst < 2e-3, "{compliant:?}");
+    assert_eq!(compliant.fallbacks, 0, "{compliant:?}");
     assert!(rigid.fell_at.is_some(), "{rigid:?}");
+}
+
+/// The limit found: with stride-sim's default actuators (torque lag, delay, joint friction) the compliant
+/// TSID's torso pitch oscillates (about 2 Hz, growing) and the robot falls within 3 s (docs/soft-ground.md).
+#[test]
+fn the_compliant_tsid_falls_with_the_default_actuators() {
+    let real = stand_on_soft_ground(ContactModel::Compliant, false, 1e6, 1e4, 3.0);
+    eprintln!("default actuators: {real:?}");
+    assert!(real.fell_at.is_some(), "{real:?}");
 }
