@@ -81,3 +81,54 @@ fn ground_patches_reach_the_simulator_and_bad_ones_name_their_key() {
         .to_string();
     assert!(error.contains("stiffness"), "{error}");
 }
+
+/// TSID-Compliant [Romualdi 2022, §8.2], stage 1 of docs/soft-ground.md:
+/// `configs/stand_soft_ground_compliant_torque.toml` (k = 1e6 N/m³, b = 1e4 N·s/m³, isotropic, ideal
+/// actuators, the plant's truth) stands 3 s with the CoM within millimetres; the same plant and references
+/// with the walking preset's rigid TSID fall, and so does the compliant TSID with b = 1e3 N·s/m³ (the limit of
+/// docs/soft-ground.md: `b/k` below the 2 ms control period).
+#[test]
+fn the_compliant_tsid_stands_where_the_rigid_preset_falls() {
+    let s = Scratch::new("soft_ground_compliant_stand");
+    let stand = common::root().join("configs/stand_soft_ground_compliant_torque.toml");
+    let scenario = Scenario::load(&stand).unwrap();
+    let summary = run_scenario(&scenario, &options(&s, "compliant")).unwrap();
+    assert_eq!(
+        summary.outcome,
+        Outcome::DurationReached,
+        "{}",
+        summary.render()
+    );
+    assert!(summary.com_error.rms < 3e-3, "{}", summary.render());
+    assert_eq!(summary.wbc_fallbacks, 0, "{}", summary.render());
+    let include = format!("include = [{:?}]\n", stand.display().to_string());
+    // the rigid preset: the scenario's plant, no compliant model, the angular momentum task weighed 0
+    let rigid_text = format!(
+        "{include}[wbc.tsid]\ncontact_model = \"rigid\"\n[[wbc.tsid.tasks]]\ntype = \"angular_momentum\"\n\
+         name = \"angular_momentum\"\nkp = 0.0\npriority = \"soft\"\nweight = 0.0\n"
+    );
+    let rigid = Scenario::load(&s.write("rigid.toml", &rigid_text)).unwrap();
+    let summary = run_scenario(&rigid, &options(&s, "rigid")).unwrap();
+    assert!(
+        matches!(
+            summary.outcome,
+            Outcome::Fell { .. } | Outcome::Error { .. }
+        ),
+        "{}",
+        summary.render()
+    );
+    let soft_damping = format!(
+        "{include}[sim.contact]\nnormal_damping = 1e3\ntangential_damping = 1e3\n\
+         [wbc.tsid.compliant]\nground_damping = 1e3\n"
+    );
+    let low_damping = Scenario::load(&s.write("low_damping.toml", &soft_damping)).unwrap();
+    let summary = run_scenario(&low_damping, &options(&s, "low_damping")).unwrap();
+    assert!(
+        matches!(
+            summary.outcome,
+            Outcome::Fell { .. } | Outcome::Error { .. }
+        ),
+        "{}",
+        summary.render()
+    );
+}

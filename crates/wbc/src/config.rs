@@ -659,6 +659,8 @@ pub enum ContactModel {
 /// | `momentum_rate_gain` | 1/s | 20 | `k_h`: the momentum tasks ask `ḧ = k_h (ḣ* − ḣ)` |
 /// | `wrench_rate_gain` | 1/s | 10 | `k_f`: the wrench regularization asks `ḟ = k_f (f* − f)` [eq. 8.2.9] |
 /// | `feasibility_horizon` | s | 0.02 | `T` of the one-step-ahead feasibility `A (f + ḟ T) ≤ 0` [eq. 8.2.12] |
+/// | `estimate_ground` | – | false | estimate `k`, `b` online (RLS, [eq. 8.2.20–8.2.22]) from the loaded soles, covariance reset at touch-down, prior the two values above with their own size as standard deviation |
+/// | `estimator_wrench_std` | N, N·m | [2, 0.2] | standard deviations of the measured force and torque for that estimate |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CompliantConfig {
@@ -676,6 +678,10 @@ pub struct CompliantConfig {
     pub wrench_rate_gain: f64,
     /// `T`, s.
     pub feasibility_horizon: f64,
+    /// Estimate `k`, `b` online from the measured wrenches of the loaded soles [Romualdi 2022, §8.2.3].
+    pub estimate_ground: bool,
+    /// `[force (N), torque (N·m)]` standard deviations of the measured wrench for the ground estimate.
+    pub estimator_wrench_std: [f64; 2],
 }
 
 impl Default for CompliantConfig {
@@ -688,6 +694,8 @@ impl Default for CompliantConfig {
             momentum_rate_gain: 20.0,
             wrench_rate_gain: 10.0,
             feasibility_horizon: 0.02,
+            estimate_ground: false,
+            estimator_wrench_std: [2.0, 0.2],
         }
     }
 }

@@ -711,6 +711,12 @@ impl Tsid {
         Ok(())
     }
 
+    /// The ground the compliant contact model uses (`contact_model = "compliant"`; the online estimate
+    /// with `compliant.estimate_ground`), `None` for the rigid TSID.
+    pub fn ground(&self) -> Option<crate::soft_contact::GroundParameters> {
+        self.compliant.as_ref().map(|c| c.ground)
+    }
+
     /// The last output.
     pub fn output(&self) -> &TsidOutput {
         &self.output
@@ -1010,6 +1016,7 @@ impl Tsid {
             }
         }
         if let Some(cc) = &mut self.compliant {
+            cc.estimate_ground(&self.contacts);
             cc.update_rates(&self.contacts);
         }
         self.initialized = true;

@@ -25,7 +25,9 @@ use stride_qp::TaskDataMut;
 use super::{Contact, TsidContext};
 use crate::config::CompliantConfig;
 use crate::error::WbcError;
-use crate::soft_contact::{GroundParameters, SoleGeometry, SoleState, WrenchRate};
+use crate::soft_contact::{
+    EstimatorSettings, GroundEstimator, GroundParameters, SoleGeometry, SoleState, WrenchRate,
+};
 
 /// What the compliant TSID keeps per contact and its settings.
 #[derive(Debug, Clone)]
@@ -44,6 +46,8 @@ pub(crate) struct CompliantContacts {
     pub rest: Vec<Isometry3<f64>>,
     /// Per contact: the wrench-rate model of this tick [Romualdi 2022, eq. 8.2.14].
     pub rates: Vec<WrenchRate>,
+    /// The online ground estimate (`estimate_ground`), which then sets `ground` every tick.
+    pub estimator: Option<GroundEstimator>,
 }
 
 fn positive(key: &'static str, value: f64) -> Result<f64, WbcError> {
@@ -61,7 +65,19 @@ fn positive(key: &'static str, value: f64) -> Result<f64, WbcError> {
 impl CompliantContacts {
     /// Checked settings for `contacts` contacts. Errors: a value that is not finite and > 0.
     pub fn new(c: &CompliantConfig, contacts: usize) -> Result<Self, WbcError> {
+        let estimator = match c.estimate_ground {
+            true => Some(GroundEstimator::new(&EstimatorSettings {
+                initial: GroundParameters {
+                    stiffness: c.ground_stiffness,
+                    damping: c.ground_damping,
+                },
+                initial_std: [c.ground_stiffness, c.ground_damping],
+                wrench_std: c.estimator_wrench_std,
+            })?),
+            false => None,
+        };
         Ok(CompliantContacts {
+            estimator,
             sole: SoleGeometry {
                 length: positive("sole_length", c.sole_length)?,
                 width: positive("sole_width", c.sole_width)?,
@@ -88,7 +104,11 @@ impl CompliantContacts {
     /// The rest pose of contact `c` touching down at `pose` with the measured wrench: `pose` raised by the
     /// static sink `f / (k l w |e₃ᵀRe₃|)` of Lemma 1 (eq. 8.1.7a at zero velocity), so that a contact
     /// already loaded (at start-up) starts where the model gives its measured force.
+    /// A touch-down also resets the ground estimate's covariance [Colman 2006].
     pub fn touch_down(&mut self, c: usize, pose: &Isometry3<f64>) {
+        if let Some(e) = &mut self.estimator {
+            e.touch_down();
+        }
         let scale = self.ground.stiffness
             * self.sole.area()
             * pose.rotation.to_rotation_matrix()[(2, 2)].abs();
@@ -108,6 +128,31 @@ impl CompliantContacts {
             angular_velocity: contact.velocity.fixed_rows::<3>(3).into_owned(),
             rest_position: self.rest[c].translation.vector,
             rest_rotation: self.rest[c].rotation.to_rotation_matrix(),
+        }
+    }
+
+    /// Updates the ground estimate (when estimated) with the measured wrench of every loaded contact
+    /// [Romualdi 2022, eq. 8.2.20–8.2.22] and takes its positive components as `ground`.
+    pub fn estimate_ground(&mut self, contacts: &[Contact]) {
+        if self.estimator.is_none() {
+            return;
+        }
+        for (c, contact) in contacts.iter().enumerate() {
+            if contact.load > 0.0 {
+                let regressor = self.sole.regressor(&self.sole_state(c, contact));
+                if let Some(e) = &mut self.estimator {
+                    e.update(&regressor, &self.measured[c]);
+                }
+            }
+        }
+        if let Some(e) = &self.estimator {
+            let estimate = e.estimate();
+            if estimate.stiffness > 0.0 {
+                self.ground.stiffness = estimate.stiffness;
+            }
+            if estimate.damping > 0.0 {
+                self.ground.damping = estimate.damping;
+            }
         }
     }
 
