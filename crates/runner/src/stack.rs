@@ -27,7 +27,7 @@ use stride_simplified::{
 };
 pub use stride_walking::soles_heading;
 use stride_walking::{MeasuredCentroidal, SimplifiedInputBuilder, WalkingHandles};
-use stride_wbc::{ContactId, QpIk, Tsid, WbcInput};
+use stride_wbc::{ContactId, ContactModel, QpIk, Tsid, WbcInput};
 
 use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
 use crate::config::{ControlMode, EstimationKind, Goal, Scenario};
@@ -36,6 +36,7 @@ use crate::flexible::{FlexibleObserver, FlexibleSprings};
 use crate::robot::{JointCommand, Measurement};
 use crate::setup::frame_of;
 use crate::step_adjust::{AdjustedFootstepMsg, StepTracker};
+use crate::wrench_split::planned_foot_wrenches;
 
 /// The whole-body controller of the configured control mode.
 #[allow(clippy::large_enum_variant)]
@@ -702,6 +703,25 @@ impl Stack {
         stride_walking::fill_wbc_input(i, &self.wbc_handles, s, simplified)?;
         for (id, wrench) in self.foot_contacts.iter().zip(&self.estimate.foot_wrenches) {
             i.contact_mut(*id)?.measured_wrench = *wrench;
+        }
+        if let Wbc::Tsid(t) = &self.wbc {
+            if t.config().contact_model == ContactModel::Compliant {
+                let zmp = i.desired_zmp.unwrap_or_else(|| s.zmp.xy());
+                let planned = planned_foot_wrenches(
+                    self.model.total_mass(),
+                    self.gravity,
+                    &i.com_acceleration,
+                    &zmp,
+                    &[
+                        s.left.pose.translation.vector,
+                        s.right.pose.translation.vector,
+                    ],
+                    [s.left.in_contact, s.right.in_contact],
+                );
+                for (id, wrench) in self.foot_contacts.iter().zip(&planned) {
+                    i.contact_mut(*id)?.desired_wrench = *wrench;
+                }
+            }
         }
         i.posture = None;
         i.angular_momentum = self.angular_momentum_reference;

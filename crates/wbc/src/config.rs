@@ -672,11 +672,11 @@ pub struct CompliantConfig {
     pub sole_length: f64,
     /// Sole width along the contact frame's y, m.
     pub sole_width: f64,
-    /// `k_h`, 1/s.
+    /// `k_h`: the CoM and angular momentum tasks ask `ḧ = k_h (ḣ* − ḣ)` [Romualdi 2022, eq. 8.2.4], 1/s.
     pub momentum_rate_gain: f64,
-    /// `k_f`, 1/s.
+    /// `k_f`: the wrench regularization asks `ḟ = k_f (f* − f)` [Romualdi 2022, eq. 8.2.9], 1/s.
     pub wrench_rate_gain: f64,
-    /// `T`, s.
+    /// `T`: the wrench feasibility holds for `f + T ḟ` [Romualdi 2022, eq. 8.2.12], s.
     pub feasibility_horizon: f64,
     /// Estimate `k`, `b` online from the measured wrenches of the loaded soles [Romualdi 2022, §8.2.3].
     pub estimate_ground: bool,
