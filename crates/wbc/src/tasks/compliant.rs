@@ -177,10 +177,10 @@ pub(crate) fn to_rate_rows(
 ) {
     for r in 0..b.a.nrows() {
         let mut shift = 0.0;
-        for (c, off) in offsets.iter().enumerate() {
+        for (off, f) in offsets.iter().zip(measured) {
             if let Some(off) = *off {
-                for k in 0..6 {
-                    shift += b.a[(r, off + k)] * measured[c][k];
+                for (k, fk) in f.iter().enumerate() {
+                    shift += b.a[(r, off + k)] * fk;
                     b.a[(r, off + k)] *= horizon;
                 }
             }
@@ -210,10 +210,7 @@ pub(crate) fn add_unloaded_wrenches(
             continue;
         }
         for r in 0..rows {
-            let mut t = 0.0;
-            for k in 0..6 {
-                t += contact.jacobian[(k, first + r)] * measured[c][k];
-            }
+            let t = contact.jacobian.column(first + r).dot(&measured[c]);
             if equality {
                 b.b[r] += t;
             } else {
@@ -286,10 +283,8 @@ pub(crate) fn measured_joint_torques(
         for j in 0..nv {
             t += s.mass_matrix[(6 + i, j)] * x[j];
         }
-        for (c, contact) in s.contacts.iter().enumerate() {
-            for k in 0..6 {
-                t -= contact.jacobian[(k, 6 + i)] * measured[c][k];
-            }
+        for (contact, f) in s.contacts.iter().zip(measured) {
+            t -= contact.jacobian.column(6 + i).dot(f);
         }
         tau[i] = t;
     }
