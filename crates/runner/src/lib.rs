@@ -46,3 +46,4 @@ pub mod summary;
 pub mod sweep;
 pub mod sweep_cmd;
 mod tracking;
+pub mod wrench_split;

@@ -28,7 +28,7 @@ use stride_simplified::{
 };
 pub use stride_walking::soles_heading;
 use stride_walking::{MeasuredCentroidal, SimplifiedInputBuilder, WalkingHandles};
-use stride_wbc::{QpIk, Tsid, WbcInput};
+use stride_wbc::{ContactId, ContactModel, QpIk, Tsid, WbcInput};
 
 use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
 use crate::config::{ControlMode, EstimationKind, Goal, Scenario};
@@ -37,6 +37,7 @@ use crate::flexible::{FlexibleObserver, FlexibleSprings};
 use crate::robot::{JointCommand, Measurement};
 use crate::setup::frame_of;
 use crate::step_adjust::{AdjustedFootstepMsg, StepTracker};
+use crate::wrench_split::planned_foot_wrenches;
 
 /// The whole-body controller of the configured control mode.
 #[allow(clippy::large_enum_variant)]
@@ -264,6 +265,9 @@ pub struct Stack {
     pub wbc_input: WbcInput,
     /// The walking slots of `wbc_input`.
     wbc_handles: WalkingHandles,
+    /// The left and right sole contacts of the whole-body input, which carry the measured foot wrenches
+    /// (read by the compliant TSID).
+    foot_contacts: [ContactId; 2],
     /// The command of the last whole-body tick.
     pub command: JointCommand,
     /// The estimation layer (or the ground-truth bypass).
@@ -362,6 +366,10 @@ impl Stack {
             simplified_glue.new_input(&[kd.frame_pose(soles[0]), kd.frame_pose(soles[1])])?;
         let wbc_input = wbc.input(initial);
         let wbc_handles = WalkingHandles::new(&wbc_input)?;
+        let foot_contacts = [
+            wbc_input.contact_id(stride_wbc::walking::LEFT_FOOT)?,
+            wbc_input.contact_id(stride_wbc::walking::RIGHT_FOOT)?,
+        ];
         let command = JointCommand::hold(c.scenario.control_mode, &initial.joint_positions);
         let estimation = Estimation::new(scenario, &model, initial)?;
         let mut estimate = EstimatorOutput::new(&model);
@@ -393,6 +401,7 @@ impl Stack {
             wbc,
             wbc_input,
             wbc_handles,
+            foot_contacts,
             command,
             estimation,
             estimate,
@@ -697,6 +706,28 @@ impl Stack {
         i.state.copy_from(&self.estimate.state);
         let simplified = self.simplified_valid.then_some(&self.simplified_output);
         stride_walking::fill_wbc_input(i, &self.wbc_handles, s, simplified)?;
+        for (id, wrench) in self.foot_contacts.iter().zip(&self.estimate.foot_wrenches) {
+            i.contact_mut(*id)?.measured_wrench = *wrench;
+        }
+        if let Wbc::Tsid(t) = &self.wbc {
+            if t.config().contact_model == ContactModel::Compliant {
+                let zmp = i.desired_zmp.unwrap_or_else(|| s.zmp.xy());
+                let planned = planned_foot_wrenches(
+                    self.model.total_mass(),
+                    self.gravity,
+                    &i.com_acceleration,
+                    &zmp,
+                    &[
+                        s.left.pose.translation.vector,
+                        s.right.pose.translation.vector,
+                    ],
+                    [s.left.in_contact, s.right.in_contact],
+                );
+                for (id, wrench) in self.foot_contacts.iter().zip(&planned) {
+                    i.contact_mut(*id)?.desired_wrench = *wrench;
+                }
+            }
+        }
         i.posture = None;
         i.angular_momentum = self.angular_momentum_reference;
         self.flexible

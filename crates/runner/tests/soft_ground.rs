@@ -2,7 +2,8 @@
 //! TSID): on the ground of [Romualdi 2022, Table 8.1] with k = 1e6 N/m³, b = 1e4 N·s/m³
 //! (`configs/walk_soft_ground_torque.toml`) the walk fails within its first second, while the same scenario
 //! on the default floor (30 times stiffer) reaches its goal: the comparison baseline of docs/soft-ground.md,
-//! asserted so that it cannot change silently. Ground patches reach the simulator from a scenario file.
+//! asserted so that it cannot change silently. TSID-Compliant stands where the rigid preset falls (stage 1
+//! of docs/soft-ground.md). Ground patches reach the simulator from a scenario file.
 mod common;
 
 use common::Scratch;
@@ -80,4 +81,52 @@ fn ground_patches_reach_the_simulator_and_bad_ones_name_their_key() {
         .unwrap_err()
         .to_string();
     assert!(error.contains("stiffness"), "{error}");
+}
+
+/// TSID-Compliant [Romualdi 2022, §8.2], stage 1 of docs/soft-ground.md:
+/// `configs/stand_soft_ground_compliant_torque.toml` (k = 1e6 N/m³, b = 1e4 N·s/m³, isotropic, ideal
+/// actuators, the plant's truth) stands 3 s with the CoM within millimetres; the same plant and references
+/// with the walking preset's rigid TSID fall, and so does the compliant TSID with b = 1e3 N·s/m³ (the limit of
+/// docs/soft-ground.md: `b/k` below the 2 ms control period).
+#[test]
+fn the_compliant_tsid_stands_where_the_rigid_preset_falls() {
+    let s = Scratch::new("soft_ground_compliant_stand");
+    let stand = common::root().join("configs/stand_soft_ground_compliant_torque.toml");
+    let scenario = Scenario::load(&stand).unwrap();
+    let summary = run_scenario(&scenario, &options(&s, "compliant")).unwrap();
+    assert_eq!(
+        summary.outcome,
+        Outcome::DurationReached,
+        "{}",
+        summary.render()
+    );
+    assert!(summary.com_error.rms < 3e-3, "{}", summary.render());
+    assert_eq!(summary.wbc_fallbacks, 0, "{}", summary.render());
+    let include = format!("include = [{:?}]\n", stand.display().to_string());
+    // the rigid preset: the scenario's plant, no compliant model, the angular momentum task weighed 0
+    let rigid_text = format!(
+        "{include}[wbc.tsid]\ncontact_model = \"rigid\"\n[[wbc.tsid.tasks]]\ntype = \"angular_momentum\"\n\
+         name = \"angular_momentum\"\nkp = 0.0\npriority = \"soft\"\nweight = 0.0\n"
+    );
+    assert_falls(&s, "rigid", &rigid_text);
+    let soft_damping = format!(
+        "{include}[sim.contact]\nnormal_damping = 1e3\ntangential_damping = 1e3\n\
+         [wbc.tsid.compliant]\nground_damping = 1e3\n"
+    );
+    assert_falls(&s, "low_damping", &soft_damping);
+}
+
+/// Runs the scenario file `text` (written as `name.toml`) and asserts that the robot falls (or the run
+/// diverges).
+fn assert_falls(s: &Scratch, name: &str, text: &str) {
+    let scenario = Scenario::load(&s.write(&format!("{name}.toml"), text)).unwrap();
+    let summary = run_scenario(&scenario, &options(s, name)).unwrap();
+    assert!(
+        matches!(
+            summary.outcome,
+            Outcome::Fell { .. } | Outcome::Error { .. }
+        ),
+        "{name}: {}",
+        summary.render()
+    );
 }

@@ -1,6 +1,7 @@
 //! Full ticks (task update + QP build + solve) of the QP-IK and the TSID, both backends, on the bundled
 //! model and, when `STRIDE_ICUB_MODELS_DIR` points at a directory containing `iCubGazeboV2_7/model.urdf`,
-//! on iCub v2.7; TSID-Flex (`flexible_joints`, the passive hips of `models/stride_humanoid_flex.urdf`).
+//! on iCub v2.7; TSID-Flex (`flexible_joints`, the passive hips of `models/stride_humanoid_flex.urdf`);
+//! TSID-Compliant (`contact_model = "compliant"`).
 //!
 //! `cargo bench -p stride-wbc --bench tick -- --warm-up-time 1 --measurement-time 2`
 
@@ -252,5 +253,43 @@ fn bench_tsid_flex(c: &mut Criterion) {
     );
 }
 
-criterion_group!(benches, bench, bench_tsid_flex);
+/// TSID-Compliant (`contact_model = "compliant"`, the walking preset plus a hard angular momentum task) on
+/// the bundled humanoid standing on `k = 1e6 N/m³` with the soles' measured wrenches at their share of the
+/// weight.
+fn bench_tsid_compliant(c: &mut Criterion) {
+    let robot = bundled();
+    let mut input = input(&robot);
+    let weight = robot.model.total_mass() * 9.81 / 2.0;
+    for name in [walking::LEFT_FOOT, walking::RIGHT_FOOT] {
+        let id = input.contact_id(name).unwrap();
+        input.contact_mut(id).unwrap().measured_wrench[2] = weight;
+    }
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.contact_model = stride_wbc::ContactModel::Compliant;
+    config.tasks.push(TaskConfig::AngularMomentum(
+        stride_wbc::AngularMomentumTaskConfig {
+            name: "angular_momentum".into(),
+            kp: 10.0,
+            priority: stride_wbc::Priority::Hard,
+            weight: None,
+        },
+    ));
+    let mut tsid = Tsid::new(
+        Arc::clone(&robot.model),
+        config,
+        std::time::Duration::from_millis(2),
+    )
+    .expect("TSID-Compliant builds");
+    tsid.step(&input).unwrap();
+    c.bench_function("tsid_compliant/stride_humanoid/active_set", |bench| {
+        bench.iter(|| tsid.step(&input).unwrap().report.iterations)
+    });
+    let report = tsid.step(&input).unwrap().report;
+    assert!(
+        report.status.is_success() && !report.fallback,
+        "the benchmarked TSID-Compliant tick must be a nominal solve: {report:?}"
+    );
+}
+
+criterion_group!(benches, bench, bench_tsid_flex, bench_tsid_compliant);
 criterion_main!(benches);

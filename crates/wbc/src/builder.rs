@@ -16,11 +16,11 @@
 //! ```
 
 use crate::config::{
-    check_unique_names, ComTaskConfig, ContactTaskConfig, FloatingBaseDynamicsTaskConfig,
-    Frame3TaskConfig, IkConfig, IkFeedback, JointPositionLimitsTaskConfig,
-    JointRegularizationTaskConfig, JointTorqueLimitsTaskConfig, JointVelocityLimitsTaskConfig,
-    Priority, QpSettings, ReferenceOffset, Se3TaskConfig, TaskConfig,
-    TorqueRegularizationTaskConfig, TsidConfig, Weight, WrenchRegularizationTaskConfig,
+    check_unique_names, ComTaskConfig, CompliantConfig, ContactModel, ContactTaskConfig,
+    FloatingBaseDynamicsTaskConfig, Frame3TaskConfig, IkConfig, IkFeedback,
+    JointPositionLimitsTaskConfig, JointRegularizationTaskConfig, JointTorqueLimitsTaskConfig,
+    JointVelocityLimitsTaskConfig, Priority, QpSettings, ReferenceOffset, Se3TaskConfig,
+    TaskConfig, TorqueRegularizationTaskConfig, TsidConfig, Weight, WrenchRegularizationTaskConfig,
 };
 use crate::error::WbcError;
 
@@ -111,6 +111,8 @@ impl TsidConfig {
                 qp: QpSettings::default(),
                 eliminate_equalities: true,
                 flexible_joints: Vec::new(),
+                contact_model: ContactModel::Rigid,
+                compliant: CompliantConfig::default(),
                 tasks: vec![TaskConfig::FloatingBaseDynamics(
                     FloatingBaseDynamicsTaskConfig {
                         name: "dynamics".into(),

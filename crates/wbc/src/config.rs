@@ -626,6 +626,78 @@ pub struct TsidConfig {
     /// Empty (default): every joint is actuated (the rigid TSID).
     #[serde(default)]
     pub flexible_joints: Vec<String>,
+    /// `"rigid"` (default): the contacts do not move and their wrenches are decisions
+    /// [Romualdi 2022, eq. 7.2.31]. `"compliant"`: TSID-Compliant [Romualdi 2022, §8.2, eq. 8.2.16], the
+    /// wrench **rates** of the loaded contacts are decisions and the measured wrenches
+    /// (`ContactInput::measured_wrench`) enter the dynamics; its settings are `compliant`.
+    #[serde(default)]
+    pub contact_model: ContactModel,
+    /// Settings of the compliant contact model (read when `contact_model = "compliant"`).
+    #[serde(default)]
+    pub compliant: CompliantConfig,
+}
+
+/// How the TSID models its contacts (`[wbc.tsid] contact_model`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactModel {
+    /// Rigid contacts: the sole does not move, the wrench is a decision.
+    #[default]
+    Rigid,
+    /// Visco-elastic ground [Romualdi 2022, §8.1]: the wrench follows the sole's motion (Lemma 1), its
+    /// rate is a decision.
+    Compliant,
+}
+
+/// TSID-Compliant settings [Romualdi 2022, §8.2] (`[wbc.tsid.compliant]`).
+///
+/// | key | unit | default | meaning |
+/// |---|---|---|---|
+/// | `ground_stiffness` | N/m³ | 1e6 | `k` of the ground's density `ρ = k(x̄ − x) − b ẋ` [eq. 8.1.6] |
+/// | `ground_damping` | N·s/m³ | 1e4 | `b` of the same density |
+/// | `sole_length`, `sole_width` | m | 0.20, 0.09 | the sole rectangle `l × w`, centred on the contact frame |
+/// | `momentum_rate_gain` | 1/s | 20 | `k_h`: the momentum tasks ask `ḧ = k_h (ḣ* − ḣ)` |
+/// | `wrench_rate_gain` | 1/s | 10 | `k_f`: the wrench regularization asks `ḟ = k_f (f* − f)` [eq. 8.2.9] |
+/// | `feasibility_horizon` | s | 0.02 | `T` of the one-step-ahead feasibility `A (f + ḟ T) ≤ 0` [eq. 8.2.12] |
+/// | `estimate_ground` | – | false | estimate `k`, `b` online (RLS, [eq. 8.2.20–8.2.22]) from the loaded soles, covariance reset at touch-down, prior the two values above with their own size as standard deviation |
+/// | `estimator_wrench_std` | N, N·m | [2, 0.2] | standard deviations of the measured force and torque for that estimate |
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CompliantConfig {
+    /// Ground stiffness density `k`, N/m³.
+    pub ground_stiffness: f64,
+    /// Ground damping density `b`, N·s/m³.
+    pub ground_damping: f64,
+    /// Sole length along the contact frame's x, m.
+    pub sole_length: f64,
+    /// Sole width along the contact frame's y, m.
+    pub sole_width: f64,
+    /// `k_h`: the CoM and angular momentum tasks ask `ḧ = k_h (ḣ* − ḣ)` [Romualdi 2022, eq. 8.2.4], 1/s.
+    pub momentum_rate_gain: f64,
+    /// `k_f`: the wrench regularization asks `ḟ = k_f (f* − f)` [Romualdi 2022, eq. 8.2.9], 1/s.
+    pub wrench_rate_gain: f64,
+    /// `T`: the wrench feasibility holds for `f + T ḟ` [Romualdi 2022, eq. 8.2.12], s.
+    pub feasibility_horizon: f64,
+    /// Estimate `k`, `b` online from the measured wrenches of the loaded soles [Romualdi 2022, §8.2.3].
+    pub estimate_ground: bool,
+    /// `[force (N), torque (N·m)]` standard deviations of the measured wrench for the ground estimate.
+    pub estimator_wrench_std: [f64; 2],
+}
+
+impl Default for CompliantConfig {
+    fn default() -> Self {
+        CompliantConfig {
+            ground_stiffness: 1e6,
+            ground_damping: 1e4,
+            sole_length: stride_model::bundled::FOOT_LENGTH,
+            sole_width: stride_model::bundled::FOOT_WIDTH,
+            momentum_rate_gain: 20.0,
+            wrench_rate_gain: 10.0,
+            feasibility_horizon: 0.02,
+            estimate_ground: false,
+            estimator_wrench_std: [2.0, 0.2],
+        }
+    }
 }
 
 /// Default posture of the bundled model (rad), slightly crouched, arms off the torso:

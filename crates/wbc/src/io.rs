@@ -50,6 +50,9 @@ pub struct ContactInput {
     pub active: bool,
     /// Reference of the contact wrench regularization.
     pub desired_wrench: Vector6<f64>,
+    /// The measured (or estimated) wrench of the contact, same convention as `desired_wrench`; read by
+    /// the compliant TSID only ([`crate::ContactModel::Compliant`], [Romualdi 2022, eq. 8.2.1, 8.2.13]).
+    pub measured_wrench: Vector6<f64>,
 }
 
 impl Default for ContactInput {
@@ -57,6 +60,7 @@ impl Default for ContactInput {
         ContactInput {
             active: true,
             desired_wrench: Vector6::zeros(),
+            measured_wrench: Vector6::zeros(),
         }
     }
 }

@@ -262,6 +262,8 @@ pub fn walking_tsid(p: &WalkingPreset) -> TsidConfig {
         qp: QpSettings::default(),
         eliminate_equalities: true,
         flexible_joints: Vec::new(),
+        contact_model: ContactModel::Rigid,
+        compliant: CompliantConfig::default(),
         tasks: vec![
             TaskConfig::FloatingBaseDynamics(FloatingBaseDynamicsTaskConfig {
                 name: "dynamics".into(),

@@ -13,15 +13,19 @@ use std::time::{Duration, Instant};
 use nalgebra::{DMatrix, DVector, Vector3, Vector6};
 use stride_block::Block;
 use stride_model::{KinDyn, Model, RobotState, VelocityRepresentation};
-use stride_qp::{TaskKind, TaskSpec};
+use stride_qp::{TaskDataMut, TaskKind, TaskSpec};
 
 use crate::bridge::{check_weight, priority_weight, QpBridge, VariableLayout};
-use crate::config::{check_unique_names, Priority, TaskConfig, TsidConfig, Weight};
+use crate::config::{check_unique_names, ContactModel, Priority, TaskConfig, TsidConfig, Weight};
 use crate::error::WbcError;
 use crate::ik::{check_references, check_state, find_task};
 use crate::io::{InputLayout, SolveReport, TaskResidual, TsidOutput, WbcInput};
 use crate::names::input_layout;
 use crate::names::Resolver;
+use crate::tasks::compliant::{
+    add_angular_momentum_drift, add_unloaded_wrenches, fill_contact_dynamics,
+    measured_joint_torques, to_rate_rows, CompliantContacts,
+};
 use crate::tasks::contact::fill_wrench_regularization;
 use crate::tasks::dynamics::{
     fill_base_dynamics, fill_flexible_dynamics, fill_torque_limits, fill_torque_regularization,
@@ -348,7 +352,11 @@ impl TaskSet {
             if mask & (1 << c) != 0 {
                 offsets[c] = Some(nx);
                 nx += 6;
-                vars.push((format!("{}_wrench", contact.name), 6));
+                let suffix = match config.contact_model {
+                    ContactModel::Rigid => "wrench",
+                    ContactModel::Compliant => "wrench_rate",
+                };
+                vars.push((format!("{}_{suffix}", contact.name), 6));
             }
         }
         let var_refs: Vec<(&str, usize)> = vars.iter().map(|(s, z)| (s.as_str(), *z)).collect();
@@ -440,6 +448,8 @@ pub struct Tsid {
     /// N·m·s/rad (zero until [`Tsid::set_flexible_springs`]).
     flexible: Vec<(usize, f64, f64)>,
     has_zmp: bool,
+    /// TSID-Compliant's contact model and measured wrenches (`None`: the rigid TSID).
+    compliant: Option<CompliantContacts>,
     mass: f64,
     gravity: Vector3<f64>,
     mass_matrix: DMatrix<f64>,
@@ -472,6 +482,20 @@ impl Tsid {
         let n = model.dof();
         let nv = model.nv();
         let set = TaskSet::parse(&model, &config, period)?;
+        let compliant = match config.contact_model {
+            ContactModel::Rigid => None,
+            ContactModel::Compliant if !set.flexible.is_empty() => {
+                return Err(WbcError::InvalidConfig {
+                    task: "<tsid>".into(),
+                    key: "contact_model",
+                    reason: "the compliant contact model has no flexible joints".into(),
+                })
+            }
+            ContactModel::Compliant => Some(CompliantContacts::new(
+                &config.compliant,
+                set.contacts.len(),
+            )?),
+        };
         let mut variants = Vec::new();
         let zmp_options: &[bool] = if set.has_zmp {
             &[false, true]
@@ -526,6 +550,7 @@ impl Tsid {
             effort,
             flexible: set.flexible.iter().map(|&j| (j, 0.0, 0.0)).collect(),
             has_zmp: set.has_zmp,
+            compliant,
             output,
             last_valid: false,
             last_variant: None,
@@ -686,6 +711,12 @@ impl Tsid {
         Ok(())
     }
 
+    /// The ground the compliant contact model uses (`contact_model = "compliant"`; the online estimate
+    /// with `compliant.estimate_ground`), `None` for the rigid TSID.
+    pub fn ground(&self) -> Option<crate::soft_contact::GroundParameters> {
+        self.compliant.as_ref().map(|c| c.ground)
+    }
+
     /// The last output.
     pub fn output(&self) -> &TsidOutput {
         &self.output
@@ -798,6 +829,19 @@ impl Tsid {
             contacts: &self.contacts,
             offsets: &variant.offsets,
         };
+        let comp = self.compliant.as_ref();
+        let n = self.model.dof();
+        // the rigid rows over wrenches, in rate form (see `tasks::compliant`) for the compliant model
+        let rate_form = |b: &mut TaskDataMut, equality: bool, horizon: f64| {
+            if let Some(cc) = comp {
+                to_rate_rows(b, equality, ctx.offsets, &cc.measured, horizon);
+            }
+        };
+        let unloaded = |b: &mut TaskDataMut, first: usize, rows: usize, equality: bool| {
+            if let Some(cc) = comp {
+                add_unloaded_wrenches(&ctx, &cc.measured, first, rows, b, equality);
+            }
+        };
         for (ti, task) in self.tasks.iter().enumerate() {
             let slots = &variant.slots[ti];
             if slots.is_empty() || !self.enabled[ti] {
@@ -815,12 +859,23 @@ impl Tsid {
                         &input.flexible_torques,
                         b,
                     );
+                    rate_form(b, true, 0.0);
+                    unloaded(b, 0, 6, true);
                 }
                 TsidTask::Frame(f) => {
                     self.frame_tasks[f].update(&self.kd, &self.names, input, b.reborrow())?
                 }
-                TsidTask::Com(t) => t.fill(input, &ctx, b),
-                TsidTask::AngularMomentum(t) => t.fill(input, &ctx, b),
+                TsidTask::Com(t) => {
+                    t.fill(input, &ctx, b);
+                    rate_form(b, true, comp.map_or(0.0, |c| c.momentum_horizon));
+                }
+                TsidTask::AngularMomentum(t) => {
+                    t.fill(input, &ctx, b);
+                    if let Some(cc) = comp {
+                        to_rate_rows(b, true, ctx.offsets, &cc.measured, cc.momentum_horizon);
+                        add_angular_momentum_drift(&ctx, &cc.measured, cc.momentum_horizon, b);
+                    }
+                }
                 TsidTask::Joint(j) => self.joint_tasks[j].update(
                     input,
                     &input.state.joint_positions,
@@ -829,19 +884,34 @@ impl Tsid {
                 ),
                 TsidTask::PositionLimits | TsidTask::VelocityLimits => {}
                 TsidTask::TorqueLimits { scale } => {
-                    fill_torque_limits(&ctx, scale, &self.effort, b)
+                    fill_torque_limits(&ctx, scale, &self.effort, b);
+                    rate_form(b, false, 0.0);
+                    unloaded(b, 6, n, false);
                 }
-                TsidTask::TorqueRegularization => fill_torque_regularization(&ctx, b),
+                TsidTask::TorqueRegularization => {
+                    fill_torque_regularization(&ctx, b);
+                    rate_form(b, true, 0.0);
+                    unloaded(b, 6, n, true);
+                }
                 TsidTask::Contact(c) => {
                     let contact = &self.contacts[c];
-                    contact.fill_constraint(b);
                     let off = variant.offsets[c].unwrap_or(0);
-                    contact.fill_feasibility(off, &mut variant.bridge.rows_mut(slots[1]));
+                    match comp {
+                        Some(cc) => fill_contact_dynamics(contact, &cc.rates[c], off, b),
+                        None => contact.fill_constraint(b),
+                    }
+                    let f = &mut variant.bridge.rows_mut(slots[1]);
+                    contact.fill_feasibility(off, f);
+                    rate_form(f, false, comp.map_or(0.0, |c| c.feasibility_horizon));
                 }
                 TsidTask::WrenchRegularization => {
-                    fill_wrench_regularization(input, &self.names, &ctx, b)
+                    fill_wrench_regularization(input, &self.names, &ctx, b);
+                    rate_form(b, true, comp.map_or(0.0, |c| c.wrench_horizon));
                 }
-                TsidTask::Zmp => fill_zmp(input, &ctx, b),
+                TsidTask::Zmp => {
+                    fill_zmp(input, &ctx, b);
+                    rate_form(b, true, comp.map_or(0.0, |c| c.feasibility_horizon));
+                }
             }
         }
         acceleration_bounds(
@@ -873,11 +943,20 @@ impl Tsid {
             contacts: &self.contacts,
             offsets: &variant.offsets,
         };
-        joint_torques(&ctx, x, &mut self.output.joint_torques);
+        match &self.compliant {
+            Some(cc) => {
+                measured_joint_torques(&ctx, &cc.measured, x, &mut self.output.joint_torques)
+            }
+            None => joint_torques(&ctx, x, &mut self.output.joint_torques),
+        }
         for (c, contact) in self.contacts.iter_mut().enumerate() {
-            let w = match variant.offsets[c] {
-                Some(off) => Vector6::from_iterator((0..6).map(|k| x[off + k])),
-                None => Vector6::zeros(),
+            let column = |off: usize| Vector6::from_iterator((0..6).map(|k| x[off + k]));
+            let w = match (&self.compliant, variant.offsets[c]) {
+                // compliant: the measured wrench advanced by the chosen rate over one period
+                (Some(cc), Some(off)) => cc.measured[c] + column(off) * self.period,
+                (Some(cc), None) => cc.measured[c],
+                (None, Some(off)) => column(off),
+                (None, None) => Vector6::zeros(),
             };
             let rt = contact.pose.rotation.inverse();
             contact.last_fz = (rt * w.fixed_rows::<3>(0).into_owned()).z;
@@ -916,8 +995,12 @@ impl Tsid {
         self.names.resolve(input)?;
         self.compute_dynamics(input)?;
         let period = self.period;
-        for contact in &mut self.contacts {
+        if let Some(cc) = &mut self.compliant {
+            read_measured_wrenches(input, &self.names, &self.contacts, &mut cc.measured)?;
+        }
+        for (c, contact) in self.contacts.iter_mut().enumerate() {
             let flag = self.names.contact(input, contact.flag).active;
+            let was_loaded = self.initialized && contact.load > 0.0;
             if !self.initialized {
                 // start-up: contacts already closed carry load at once
                 contact.reference = contact.pose;
@@ -926,6 +1009,15 @@ impl Tsid {
             } else {
                 contact.advance_load(flag, period);
             }
+            if let Some(cc) = &mut self.compliant {
+                if !was_loaded && contact.load > 0.0 {
+                    cc.touch_down(c, &contact.pose);
+                }
+            }
+        }
+        if let Some(cc) = &mut self.compliant {
+            cc.estimate_ground(&self.contacts);
+            cc.update_rates(&self.contacts);
         }
         self.initialized = true;
         let vi = self.variant_index(input.desired_zmp.is_some());
@@ -951,6 +1043,27 @@ impl Tsid {
         self.output.report.tick_time = start.elapsed().as_secs_f64();
         Ok(&self.output)
     }
+}
+
+/// The measured wrench of every contact (`ContactInput::measured_wrench`) into `measured`. Errors: a
+/// non-finite wrench.
+fn read_measured_wrenches(
+    input: &WbcInput,
+    names: &Resolver,
+    contacts: &[Contact],
+    measured: &mut [Vector6<f64>],
+) -> Result<(), WbcError> {
+    for (m, contact) in measured.iter_mut().zip(contacts) {
+        let w = names.contact(input, contact.flag).measured_wrench;
+        if !w.iter().all(|v| v.is_finite()) {
+            return Err(WbcError::InvalidInput(format!(
+                "contact `{}`: non-finite measured wrench",
+                contact.name
+            )));
+        }
+        *m = w;
+    }
+    Ok(())
 }
 
 impl Block for Tsid {

@@ -152,3 +152,32 @@ fn tsid_flex_ticks_allocate_nothing() {
     });
     assert_eq!(n, 0, "TSID-Flex ticks allocated {n} times");
 }
+
+/// TSID-Compliant (`contact_model = "compliant"`) ticks allocate nothing, with the measured wrenches
+/// changing every tick and a lift-off and touch-down of the right foot.
+#[test]
+fn tsid_compliant_ticks_allocate_nothing() {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut input = references_at(&model, &state);
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.contact_model = stride_wbc::ContactModel::Compliant;
+    let mut tsid = Tsid::new(
+        Arc::clone(&model),
+        config,
+        std::time::Duration::from_millis(2),
+    )
+    .unwrap();
+    let ids = [walking::LEFT_FOOT, walking::RIGHT_FOOT].map(|n| input.contact_id(n).unwrap());
+    tsid.step(&input).unwrap();
+    let (_, n) = ALLOC.allocations_during(|| {
+        for k in 0..40 {
+            for id in ids {
+                input.contact_mut(id).unwrap().measured_wrench[2] = 150.0 + k as f64;
+            }
+            input.set_contact("right_foot", k < 20).unwrap();
+            assert!(!tsid.step(&input).unwrap().report.held);
+        }
+    });
+    assert_eq!(n, 0, "TSID-Compliant ticks allocated {n} times");
+}

@@ -22,6 +22,7 @@ use stride_model::{FrameId, Model};
 use crate::error::WbcError;
 
 pub(crate) mod com;
+pub(crate) mod compliant;
 pub(crate) mod contact;
 pub(crate) mod dynamics;
 pub(crate) mod frame;

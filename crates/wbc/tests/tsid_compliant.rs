@@ -1,0 +1,415 @@
+//! TSID-Compliant [Romualdi 2022, §8.2]: the QP's rows against their definitions (the contact dynamics
+//! against central differences of Lemma 1 along the chosen motion, the base dynamics and torques against
+//! stride-model's RNEA with the measured wrenches, the momentum task, the one-step-ahead feasibility),
+//! the KKT conditions of its solution, and the bundled humanoid standing on a soft ground of Table 8.1 in
+//! stride-sim, where the rigid TSID falls.
+
+mod common;
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use common::soft::{GROUND, SOLE};
+use common::*;
+use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector2, Vector3, Vector6};
+use rand::Rng;
+use stride_model::{ExternalWrench, KinDyn, Model, RobotState, VelocityRepresentation};
+use stride_wbc::GroundParameters;
+use stride_wbc::{
+    walking, AngularMomentumTaskConfig, ContactModel, Priority, SoleState, TaskConfig, Tsid,
+    TsidConfig, WbcInput,
+};
+
+/// The TSID period of these tests (the runner's 500 Hz).
+const PERIOD: Duration = Duration::from_millis(2);
+
+fn compliant_config() -> TsidConfig {
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.contact_model = ContactModel::Compliant;
+    // the angular rows of the centroidal momentum task (eq. 8.2.2), hard like the CoM's
+    config
+        .tasks
+        .push(TaskConfig::AngularMomentum(AngularMomentumTaskConfig {
+            name: "angular_momentum".into(),
+            kp: 10.0,
+            priority: Priority::Hard,
+            weight: None,
+        }));
+    config.compliant.ground_stiffness = GROUND.stiffness;
+    config.compliant.ground_damping = GROUND.damping;
+    config
+}
+
+fn kd_at(model: &Arc<Model>, state: &RobotState) -> KinDyn {
+    let mut kd = KinDyn::new(Arc::clone(model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    kd.set_state(state).unwrap();
+    kd
+}
+
+const SOLES: [&str; 2] = ["l_sole", "r_sole"];
+
+/// The state `ε` s later under constant acceleration `a` (mixed: world-frame base twist), to second order.
+fn advanced(state: &RobotState, a: &DVector<f64>, eps: f64) -> RobotState {
+    let mut s = state.clone();
+    let v = &state.base_velocity;
+    let lin =
+        Vector3::new(v[0], v[1], v[2]) * eps + Vector3::new(a[0], a[1], a[2]) * (0.5 * eps * eps);
+    let ang =
+        Vector3::new(v[3], v[4], v[5]) * eps + Vector3::new(a[3], a[4], a[5]) * (0.5 * eps * eps);
+    let p = state.base_pose.translation.vector + lin;
+    let r = UnitQuaternion::from_scaled_axis(ang) * state.base_pose.rotation;
+    s.base_pose = Isometry3::from_parts(Translation3::from(p), r);
+    for k in 0..6 {
+        s.base_velocity[k] = v[k] + eps * a[k];
+    }
+    for i in 0..state.joint_positions.len() {
+        s.joint_positions[i] =
+            state.joint_positions[i] + eps * state.joint_velocities[i] + 0.5 * eps * eps * a[6 + i];
+        s.joint_velocities[i] = state.joint_velocities[i] + eps * a[6 + i];
+    }
+    s
+}
+
+/// Lemma 1's wrench of sole `frame` at `state` with the rest pose `rest`.
+fn lemma1(
+    model: &Arc<Model>,
+    state: &RobotState,
+    frame: &str,
+    rest: &Isometry3<f64>,
+) -> Vector6<f64> {
+    let kd = kd_at(model, state);
+    let id = model.frame_id(frame).unwrap();
+    let pose = kd.frame_pose(id);
+    let v = kd.frame_velocity(id);
+    let sole = SoleState {
+        position: pose.translation.vector,
+        rotation: pose.rotation.to_rotation_matrix(),
+        linear_velocity: v.fixed_rows::<3>(0).into_owned(),
+        angular_velocity: v.fixed_rows::<3>(3).into_owned(),
+        rest_position: rest.translation.vector,
+        rest_rotation: rest.rotation.to_rotation_matrix(),
+    };
+    SOLE.wrench(&sole, &GROUND)
+}
+
+/// A double-support state on the soft ground: the default posture perturbed, soles sunk, everything moving.
+fn moving_stance(
+    model: &Arc<Model>,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> (RobotState, [Isometry3<f64>; 2]) {
+    let q = random_posture(model, rng, 0.05, 0.1);
+    let mut state = standing_state(model, &q);
+    for k in 0..6 {
+        state.base_velocity[k] = rng.random_range(-0.05..0.05);
+    }
+    for i in 0..model.dof() {
+        state.joint_velocities[i] = rng.random_range(-0.1..0.1);
+    }
+    // rest poses 8 mm above the soles: the soles carry about their share of the weight
+    let kd = kd_at(model, &state);
+    let rest = SOLES.map(|f| {
+        let mut p = kd.frame_pose(model.frame_id(f).unwrap());
+        p.translation.vector.z += 0.008;
+        p
+    });
+    (state, rest)
+}
+
+/// The input holding the robot where it is, with measured wrenches and a CoM reference 1 cm ahead.
+fn input_with_wrenches(
+    model: &Arc<Model>,
+    tsid: &Tsid,
+    state: &RobotState,
+    wrenches: &[Vector6<f64>; 2],
+) -> WbcInput {
+    let reference = references_at(model, state);
+    let mut input = tsid.input(state);
+    input.com_position = reference.com_position + Vector3::new(0.01, 0.0, 0.0);
+    for name in [walking::LEFT_FOOT, walking::RIGHT_FOOT, walking::TORSO] {
+        input
+            .set_frame_reference(name, *reference.frame_reference(name).unwrap())
+            .unwrap();
+    }
+    input.posture = reference.posture.clone();
+    for (name, w) in [walking::LEFT_FOOT, walking::RIGHT_FOOT]
+        .iter()
+        .zip(wrenches)
+    {
+        let id = input.contact_id(name).unwrap();
+        input.contact_mut(id).unwrap().measured_wrench = *w;
+    }
+    input
+}
+
+#[test]
+fn the_rows_of_the_compliant_qp_are_their_definitions() {
+    let model = bundled_model();
+    let mut rng = rng(14);
+    let config = compliant_config();
+    let (kh, horizon) = (
+        config.compliant.momentum_rate_gain,
+        config.compliant.feasibility_horizon,
+    );
+    for trial in 0..6 {
+        let (state, rest) = moving_stance(&model, &mut rng);
+        let measured = [0, 1].map(|k| lemma1(&model, &state, SOLES[k], &rest[k]));
+        let mut tsid = Tsid::new(Arc::clone(&model), config.clone(), PERIOD).unwrap();
+        let input = input_with_wrenches(&model, &tsid, &state, &measured);
+        let out = tsid.step(&input).unwrap().clone();
+        assert!(out.report.is_nominal(), "trial {trial}: {:?}", out.report);
+        let dt = PERIOD.as_secs_f64();
+        let rates: Vec<Vector6<f64>> = (0..2)
+            .map(|k| (out.contact_wrenches[k] - measured[k]) / dt)
+            .collect();
+        // the controller's rest pose is the sole raised by the static sink of its measured force
+        let kd = kd_at(&model, &state);
+        let rest_used = [0, 1].map(|k| {
+            let mut p = kd.frame_pose(model.frame_id(SOLES[k]).unwrap());
+            let c = p.rotation.to_rotation_matrix()[(2, 2)].abs();
+            p.translation.vector +=
+                measured[k].fixed_rows::<3>(0) / (GROUND.stiffness * SOLE.area() * c);
+            p
+        });
+        // contact dynamics (eq. 8.2.15): ḟ = d/dt Lemma 1 along the chosen motion (central differences)
+        let eps = 1e-5;
+        for k in 0..2 {
+            let ahead = lemma1(
+                &model,
+                &advanced(&state, &out.accelerations, eps),
+                SOLES[k],
+                &rest_used[k],
+            );
+            let behind = lemma1(
+                &model,
+                &advanced(&state, &out.accelerations, -eps),
+                SOLES[k],
+                &rest_used[k],
+            );
+            let fd = (ahead - behind) / (2.0 * eps);
+            let err = (rates[k] - fd).norm();
+            assert!(
+                err <= 1e-4 * (1.0 + fd.norm()),
+                "trial {trial}, {}: ḟ {:?} vs finite differences {:?}",
+                SOLES[k],
+                rates[k].transpose(),
+                fd.transpose()
+            );
+        }
+        // base dynamics and torques with the measured wrenches (eq. 8.2.13, 8.2.1): RNEA
+        let mut kd = kd_at(&model, &state);
+        let ext: Vec<ExternalWrench> = (0..2)
+            .map(|k| ExternalWrench {
+                frame: model.frame_id(SOLES[k]).unwrap(),
+                wrench: measured[k],
+            })
+            .collect();
+        let mut gen = DVector::zeros(model.nv());
+        kd.inverse_dynamics(&out.accelerations, &ext, &mut gen)
+            .unwrap();
+        assert!(
+            gen.rows(0, 6).amax() < 1e-6,
+            "base rows: {}",
+            gen.rows(0, 6).amax()
+        );
+        let tau_err = (gen.rows(6, model.dof()) - &out.joint_torques).amax();
+        assert!(
+            tau_err < 1e-6,
+            "torques differ from the RNEA's by {tau_err}"
+        );
+        // CoM (hard): Σ ḟ = k_h (m ẍ* − m g − Σ f) with ẍ* = K_d (0 − ẋ) + K_p (x* − x)
+        let m = model.total_mass();
+        let acc = stride_wbc::BUNDLED_TSID_COM_KD * (-kd.com_velocity())
+            + stride_wbc::BUNDLED_TSID_COM_KP * (input.com_position - kd.com_position());
+        let total: Vector3<f64> = (0..2)
+            .map(|k| measured[k].fixed_rows::<3>(0).into_owned())
+            .sum();
+        let want = (m * acc - m * model.gravity() - total) * kh;
+        let got: Vector3<f64> = rates
+            .iter()
+            .map(|r| r.fixed_rows::<3>(0).into_owned())
+            .sum();
+        assert!(
+            (got - want).norm() < 1e-6 * (1.0 + want.norm()),
+            "Σḟ {got:?} vs {want:?}"
+        );
+        // feasibility one step ahead (eq. 8.2.12): f + T ḟ in the friction pyramid and the CoP region
+        for k in 0..2 {
+            let w = measured[k] + rates[k] * horizon;
+            let rt = kd
+                .frame_pose(model.frame_id(SOLES[k]).unwrap())
+                .rotation
+                .inverse();
+            let f = rt * w.fixed_rows::<3>(0).into_owned();
+            let t = rt * w.fixed_rows::<3>(3).into_owned();
+            assert!(f.z > 0.0, "{}: normal force {}", SOLES[k], f.z);
+            let cop = Vector2::new(-t.y / f.z, t.x / f.z);
+            let [x, y] = [stride_wbc::BUNDLED_COP_X, stride_wbc::BUNDLED_COP_Y];
+            assert!(
+                cop.x >= x[0] - 1e-7 && cop.x <= x[1] + 1e-7,
+                "CoP x {}",
+                cop.x
+            );
+            assert!(
+                cop.y >= y[0] - 1e-7 && cop.y <= y[1] + 1e-7,
+                "CoP y {}",
+                cop.y
+            );
+        }
+        let kkt = tsid.qp_problem().unwrap().check_kkt();
+        assert!(kkt.is_satisfied(1e-7), "trial {trial}: {kkt:?}");
+    }
+}
+
+/// What [`stand_on_soft_ground`] saw.
+#[derive(Debug)]
+struct Standing {
+    /// Time of the fall or of the simulator's divergence (s), `None`: stood for the whole run.
+    fell_at: Option<f64>,
+    /// Largest CoM displacement from the start (m).
+    worst: f64,
+    /// TSID ticks solved by the relaxed fallback or held.
+    fallbacks: usize,
+    /// The compliant model's ground at the end.
+    ground: Option<GroundParameters>,
+}
+
+/// Stands the bundled humanoid in stride-sim (torque mode, ideal sensors, 2 kHz; ideal actuators or
+/// stride-sim's default ones: 30 Hz torque lag, 1 ms command delay, 0.1 N·m Coulomb friction) on the
+/// isotropic ground `(k, b)` for `duration` s under the default TSID with `contact_model` (the compliant one
+/// with a hard angular momentum task, [`compliant_config`]) at 500 Hz, on the plant's state and its
+/// contact wrenches (the runner's ground-truth measurement), references holding the initial stance.
+fn stand_on_soft_ground(
+    contact_model: ContactModel,
+    ideal_actuators: bool,
+    k: f64,
+    b: f64,
+    duration: f64,
+    tweak: impl Fn(&mut TsidConfig),
+) -> Standing {
+    use stride_sim::{ActuationConfig, ActuationMode, SensorConfig, SimConfig, SimInput, SimRobot};
+    let model = bundled_model();
+    let mut config = SimConfig {
+        actuation: ActuationConfig::ideal(),
+        sensors: SensorConfig::ideal(),
+        ..SimConfig::default()
+    };
+    if !ideal_actuators {
+        config.actuation = ActuationConfig::default();
+        config.actuation.default.mode = ActuationMode::Torque;
+    }
+    config.actuation.default.mode = ActuationMode::Torque;
+    // isotropic ground, as Lemma 1's density `ρ = k(x̄ − x) − b ẋ` [Romualdi 2022, eq. 8.1.6]
+    config.contact.normal_stiffness = k;
+    config.contact.normal_damping = b;
+    config.contact.tangential_stiffness = k;
+    config.contact.tangential_damping = b;
+    let mut sim = SimRobot::new(Arc::clone(&model), config, Duration::from_micros(500)).unwrap();
+    let state = sim
+        .set_standing_on_ground(&default_posture(&model))
+        .unwrap();
+    let mut tsid_config = match contact_model {
+        ContactModel::Compliant => compliant_config(),
+        ContactModel::Rigid => TsidConfig::default_for_bundled_model(),
+    };
+    tsid_config.compliant.ground_stiffness = k;
+    tsid_config.compliant.ground_damping = b;
+    tweak(&mut tsid_config);
+    let mut tsid = Tsid::new(Arc::clone(&model), tsid_config, PERIOD).unwrap();
+    let reference = references_at(&model, &state);
+    let mut input = input_with_wrenches(&model, &tsid, &state, &[Vector6::zeros(); 2]);
+    input.com_position = reference.com_position;
+    let ids = [walking::LEFT_FOOT, walking::RIGHT_FOOT].map(|n| input.contact_id(n).unwrap());
+    let mut command = SimInput::zeros(model.dof());
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    kd.set_representation(VelocityRepresentation::Mixed);
+    let mut outcome = Standing {
+        fell_at: None,
+        worst: 0.0,
+        fallbacks: 0,
+        ground: None,
+    };
+    let ratio = (PERIOD.as_secs_f64() / sim.period()).round() as usize;
+    for step in 0..(duration / sim.period()).round() as usize {
+        if step % ratio == 0 {
+            input.state.clone_from(sim.state());
+            for (k, id) in ids.iter().enumerate() {
+                let surface = sim.output().surfaces.get(k);
+                input.contact_mut(*id).unwrap().measured_wrench =
+                    surface.map_or(Vector6::zeros(), |s| s.wrench);
+            }
+            let out = tsid.step(&input).unwrap();
+            outcome.fallbacks += usize::from(out.report.fallback || out.report.held);
+            command.joint_torques.copy_from(&out.joint_torques);
+        }
+        let t = step as f64 * sim.period();
+        if sim.step(&command).is_err() || sim.output().fallen {
+            outcome.fell_at = Some(t);
+            break;
+        }
+        kd.set_state(sim.state()).unwrap();
+        outcome.worst = outcome
+            .worst
+            .max((kd.com_position() - reference.com_position).norm());
+    }
+    outcome.ground = tsid.ground();
+    outcome
+}
+
+#[test]
+fn the_compliant_tsid_stands_on_soft_ground_where_the_rigid_one_falls() {
+    let compliant = stand_on_soft_ground(ContactModel::Compliant, true, 1e6, 1e4, 3.0, |_| {});
+    let rigid = stand_on_soft_ground(ContactModel::Rigid, true, 1e6, 1e4, 3.0, |_| {});
+    eprintln!("compliant: {compliant:?}\nrigid: {rigid:?}");
+    assert!(compliant.fell_at.is_none(), "{compliant:?}");
+    assert!(compliant.worst < 2e-3, "{compliant:?}");
+    assert_eq!(compliant.fallbacks, 0, "{compliant:?}");
+    assert!(rigid.fell_at.is_some(), "{rigid:?}");
+}
+
+/// The limit found: with stride-sim's default actuators (torque lag, delay, joint friction) the compliant
+/// TSID's torso pitch oscillates (about 2 Hz, growing) and the robot falls within 3 s (docs/soft-ground.md).
+#[test]
+fn the_compliant_tsid_falls_with_the_default_actuators() {
+    let real = stand_on_soft_ground(ContactModel::Compliant, false, 1e6, 1e4, 3.0, |_| {});
+    eprintln!("default actuators: {real:?}");
+    assert!(real.fell_at.is_some(), "{real:?}");
+}
+
+/// The ground estimator inside the compliant TSID [Romualdi 2022, §8.2.3] (`estimate_ground`): both soles
+/// touch down with zero force (their rest poses), then the robot sinks and rises by up to 1 cm while the
+/// measured wrenches are Lemma 1's on `k = 1e6, b = 1e4`; from a prior of `k = 2e6, b = 2e4` the ground the
+/// controller uses ends within 1 % of the truth. (Standing from start-up does not identify `k`: a sole
+/// loaded before the first tick has no zero-force pose, so its rest pose comes from the prior.)
+#[test]
+fn the_ground_estimate_inside_the_tsid_finds_k_and_b() {
+    let model = bundled_model();
+    let mut config = compliant_config();
+    config.compliant.ground_stiffness = 2e6;
+    config.compliant.ground_damping = 2e4;
+    config.compliant.estimate_ground = true;
+    let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
+    let start = standing_state(&model, &default_posture(&model));
+    let kd = kd_at(&model, &start);
+    let rest = SOLES.map(|f| kd.frame_pose(model.frame_id(f).unwrap()));
+    let dt = PERIOD.as_secs_f64();
+    for k in 0..300 {
+        let t = k as f64 * dt;
+        let w = 2.0 * std::f64::consts::PI / 0.4;
+        let mut state = start.clone();
+        state.base_pose.translation.vector.z -= 0.005 * (1.0 - (w * t).cos());
+        state.base_velocity[2] = -0.005 * w * (w * t).sin();
+        let measured = [0, 1].map(|c| lemma1(&model, &state, SOLES[c], &rest[c]));
+        let input = input_with_wrenches(&model, &tsid, &state, &measured);
+        tsid.step(&input).unwrap();
+    }
+    let ground = tsid.ground().unwrap();
+    assert!(
+        (ground.stiffness / GROUND.stiffness - 1.0).abs() < 0.01,
+        "{ground:?}"
+    );
+    assert!(
+        (ground.damping / GROUND.damping - 1.0).abs() < 0.01,
+        "{ground:?}"
+    );
+}
