@@ -93,6 +93,7 @@ impl PlanVerification {
 /// | `first_swing_foot` | – | `auto` | `auto`, `left` or `right` |
 /// | `dcm_interpolation` | – | `zmp_first` | `zmp_first` or `dcm_cubic` [Romualdi 2022, eq. 10.1.23] |
 /// | `last_step_dcm_alpha` | – | 0.2 | α_LS of [Romualdi 2022, eq. 10.2.3], in [0, 1] (only for `dcm_cubic`) |
+/// | `stop_deceleration` | m/s² | 0 | deceleration of the reference point F on its way to the goal: it slows down uniformly over the last `v²/(2a)` of the path instead of stopping there at full speed (0: full speed to the goal) |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerConfig {
@@ -168,6 +169,8 @@ pub struct PlannerConfig {
     pub dcm_interpolation: DcmInterpolation,
     /// Last-step DCM weight α_LS [Romualdi 2022, eq. 10.2.3], in [0, 1].
     pub last_step_dcm_alpha: f64,
+    /// Deceleration of the reference point on the last straight line to the goal \[m/s²\] (≥ 0; 0: none).
+    pub stop_deceleration: f64,
 }
 
 /// The defaults fit the bundled humanoid: `com_height`, `nominal_width`, `foot_length` and `foot_width`
@@ -210,6 +213,7 @@ impl Default for PlannerConfig {
             first_swing_foot: FirstSwingFoot::Auto,
             dcm_interpolation: DcmInterpolation::ZmpFirst,
             last_step_dcm_alpha: 0.2,
+            stop_deceleration: 0.0,
         }
     }
 }
@@ -469,6 +473,12 @@ impl PlannerConfig {
             c.last_step_dcm_alpha,
             (0.0..=1.0).contains(&c.last_step_dcm_alpha),
             "must lie in [0, 1]",
+        )?;
+        check(
+            "stop_deceleration",
+            c.stop_deceleration,
+            c.stop_deceleration >= 0.0,
+            "must be >= 0 (0: no deceleration)",
         )?;
         Ok(())
     }

@@ -25,6 +25,10 @@ enum Leg {
         from: Vector2<f64>,
         to: Vector2<f64>,
         duration: f64,
+        /// Uniform deceleration over the end of the line \[m/s²\] (0: constant speed to `to`).
+        deceleration: f64,
+        /// Speed before the braking \[m/s\] (with a deceleration).
+        cruise: f64,
     },
     /// The unicycle turns in place about `center`: F = center + R(θ) d.
     Arc {
@@ -52,11 +56,13 @@ fn rot(yaw: f64, v: Vector2<f64>) -> Vector2<f64> {
 /// previous leg is done (so that turning in place happens about where the unicycle really is).
 #[derive(Clone, Copy, Debug)]
 enum LegSpec {
-    /// Move F to `point + R(travel_yaw) d` on a straight line at `speed`.
+    /// Move F to `point + R(travel_yaw) d` on a straight line at `speed`, slowing down at `deceleration`
+    /// (m/s², 0: none) over its end.
     Line {
         point: Vector2<f64>,
         travel_yaw: f64,
         speed: f64,
+        deceleration: f64,
     },
     /// Turn in place to `yaw` at `rate`.
     Turn { yaw: f64, rate: f64 },
@@ -113,6 +119,7 @@ impl Reference {
                     point: wp,
                     travel_yaw: new_yaw,
                     speed,
+                    deceleration: if is_last { cfg.stop_deceleration } else { 0.0 },
                 });
                 p = wp;
                 yaw = new_yaw;
@@ -141,12 +148,21 @@ impl Reference {
                 point,
                 travel_yaw,
                 speed,
+                deceleration,
             } => {
                 let to = point + rot(travel_yaw, self.offset);
+                let length = (to - f_ref).norm();
+                let cruise = if deceleration > 0.0 {
+                    cruise_speed(length, speed, deceleration)
+                } else {
+                    speed
+                };
                 Leg::Line {
                     from: f_ref,
                     to,
-                    duration: ((to - f_ref).norm() / speed).max(1e-9),
+                    duration: line_duration(length, speed, deceleration).max(1e-9),
+                    deceleration,
+                    cruise,
                 }
             }
             LegSpec::Turn { yaw, rate } => {
@@ -164,9 +180,22 @@ impl Reference {
     /// F*(τ) and its velocity on `leg` at local time τ.
     fn evaluate(&self, leg: &Leg, tau: f64) -> (Vector2<f64>, Vector2<f64>) {
         match *leg {
-            Leg::Line { from, to, duration } => {
+            Leg::Line {
+                from,
+                to,
+                duration,
+                deceleration,
+                cruise,
+            } => {
                 if tau >= duration {
                     return (to, Vector2::zeros());
+                }
+                if deceleration > 0.0 {
+                    let length = (to - from).norm();
+                    let (travelled, speed) =
+                        braked_line(length, cruise, duration, deceleration, tau);
+                    let direction = (to - from) / length.max(1e-12);
+                    return (from + direction * travelled, direction * speed);
                 }
                 let s = (tau / duration).clamp(0.0, 1.0);
                 (from + (to - from) * s, (to - from) / duration)
@@ -188,6 +217,37 @@ impl Reference {
                 (center + r, Vector2::new(-r.y, r.x) * rate)
             }
         }
+    }
+}
+
+/// The speed (m/s) a line of `length` (m) is travelled at before braking uniformly at `deceleration` (m/s²,
+/// > 0) to stop at its end: `speed`, or `√(2aL)` when the braking distance `v²/(2a)` does not fit.
+fn cruise_speed(length: f64, speed: f64, deceleration: f64) -> f64 {
+    speed.min((2.0 * deceleration * length).sqrt())
+}
+
+/// Time (s) to cover `length` (m) at `speed` (m/s), braking at `deceleration` (m/s², 0: none) to stop at the
+/// end: `L/v + v/(2a)` with `v` the [`cruise_speed`].
+fn line_duration(length: f64, speed: f64, deceleration: f64) -> f64 {
+    if deceleration <= 0.0 {
+        return length / speed;
+    }
+    let v = cruise_speed(length, speed, deceleration);
+    length / v + v / (2.0 * deceleration)
+}
+
+/// Distance travelled (m) and speed (m/s) at time `tau` (s) on a line of `length` travelled at `cruise`
+/// (m/s) that ends at rest after `duration` (s, [`line_duration`]) braking at `deceleration` (> 0): the
+/// last `cruise / a` seconds follow `v = a (T − τ)`.
+fn braked_line(length: f64, cruise: f64, duration: f64, deceleration: f64, tau: f64) -> (f64, f64) {
+    let remaining = (duration - tau).max(0.0);
+    if deceleration * remaining >= cruise {
+        (cruise * tau, cruise)
+    } else {
+        (
+            length - 0.5 * deceleration * remaining * remaining,
+            deceleration * remaining,
+        )
     }
 }
 
@@ -669,4 +729,41 @@ pub(crate) fn search_footsteps(
         swing = swing.other();
     }
     Ok(steps)
+}
+
+#[cfg(test)]
+mod braking_tests {
+    use super::{braked_line, cruise_speed, line_duration};
+
+    /// The braked line against its closed form: it starts at 0, ends at rest at `L` after `T`, its speed
+    /// is the derivative of its position (central differences), and the braking phase is `v = a (T − τ)`.
+    #[test]
+    fn the_braked_line_ends_at_rest_and_its_speed_is_its_derivative() {
+        for (length, speed, a) in [(2.0, 0.4, 0.3), (0.1, 0.4, 0.3), (1.0, 0.2, 5.0)] {
+            let cruise = cruise_speed(length, speed, a);
+            let duration = line_duration(length, speed, a);
+            // `L/v + v/(2a)`, and the braking distance v²/(2a) ≤ L
+            assert!((duration - (length / cruise + cruise / (2.0 * a))).abs() < 1e-15);
+            assert!(cruise * cruise / (2.0 * a) <= length * (1.0 + 1e-12));
+            assert_eq!(braked_line(length, cruise, duration, a, 0.0), (0.0, cruise));
+            let (end, v_end) = braked_line(length, cruise, duration, a, duration);
+            assert!(
+                (end - length).abs() < 1e-12 && v_end == 0.0,
+                "{end} {v_end}"
+            );
+            let h = 1e-6;
+            for k in 1..50 {
+                let tau = duration * k as f64 / 50.0;
+                let (p, v) = braked_line(length, cruise, duration, a, tau);
+                let (p1, _) = braked_line(length, cruise, duration, a, tau + h);
+                let (p0, _) = braked_line(length, cruise, duration, a, tau - h);
+                assert!(((p1 - p0) / (2.0 * h) - v).abs() < 1e-6, "τ {tau}");
+                assert!(v <= cruise && p <= length);
+            }
+        }
+        // a short line is braked all the way from √(2aL)
+        assert!((cruise_speed(0.1, 0.4, 0.3) - (2.0f64 * 0.3 * 0.1).sqrt()).abs() < 1e-15);
+        // no deceleration: L / v
+        assert_eq!(line_duration(2.0, 0.4, 0.0), 5.0);
+    }
 }

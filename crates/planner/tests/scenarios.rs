@@ -433,3 +433,64 @@ fn min_width_equal_to_nominal_width_walks_at_full_speed() {
         assert!((tight.end_time - slack.end_time).abs() < 1e-9);
     }
 }
+
+/// `stop_deceleration` slows the reference down over the last `v²/(2a)` of the path: on a fast 4 m walk the
+/// step before the last short one is walked slower (longer and at most as long) instead of at the cruise speed,
+/// the goal is still reached, and the plan is longer.
+#[test]
+fn stop_deceleration_slows_the_last_steps() {
+    let goal = Goal::Pose {
+        x: 4.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    // forward speed of each step (advance over the time since the previous touch-down) [m/s]
+    let plan_with = |deceleration: f64| {
+        let cfg = PlannerConfig {
+            feet_distance_max: 0.2915,
+            step_duration_min: 0.5,
+            step_duration_nominal: 0.6,
+            step_duration_max: 0.8,
+            double_support_fraction: 0.2,
+            stop_deceleration: deceleration,
+            ..PlannerConfig::default()
+        };
+        let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+        let plan = plan_from_standing(&cfg, GRAVITY, 0.0, &l, &r, &goal).expect("plan");
+        check_all(&cfg, &plan, true);
+        let mut steps = plan.footsteps();
+        steps.sort_by(|a, b| a.activation_time.total_cmp(&b.activation_time));
+        let speeds: Vec<f64> = steps
+            .windows(2)
+            .map(|w| {
+                (w[1].pose.translation.x - w[0].pose.translation.x)
+                    / (w[1].activation_time - w[0].activation_time)
+            })
+            .collect();
+        (plan, speeds)
+    };
+    let (abrupt, abrupt_speeds) = plan_with(0.0);
+    let (braked, braked_speeds) = plan_with(0.3);
+    for plan in [&abrupt, &braked] {
+        let (x, y, _) = final_mid(plan);
+        assert!((x - 4.0).abs() < 0.02 && y.abs() < 0.02, "{x} {y}");
+    }
+    let cruise = abrupt_speeds[abrupt_speeds.len() / 2];
+    assert!(cruise > 0.39, "{abrupt_speeds:?}");
+    // the step before the short last one: at cruise speed without braking, clearly slower with it
+    let before_last = |v: &[f64]| v[v.len() - 3];
+    assert!(
+        before_last(&abrupt_speeds) > 0.99 * cruise,
+        "{abrupt_speeds:?}"
+    );
+    assert!(
+        before_last(&braked_speeds) < 0.8 * cruise,
+        "{braked_speeds:?}"
+    );
+    assert!(
+        braked.end_time > abrupt.end_time + 0.2,
+        "{} {}",
+        braked.end_time,
+        abrupt.end_time
+    );
+}
