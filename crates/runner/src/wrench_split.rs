@@ -3,11 +3,12 @@
 //! the plan's ZMP rather than by the rigid TSID's contact ramps.
 
 use nalgebra::{Vector2, Vector3, Vector6};
+use stride_simplified::right_foot_share;
 
 /// The total ground force `m (ẍ* + g ẑ)` (N) split between the feet in contact (`contacts`, soles at
-/// `soles`, world, m): in double support by where the desired ZMP `zmp` (world x-y, m) projects on the
-/// segment between the soles (parameter `t ∈ [0, 1]`: `(1 − t)` on the left, `t` on the right, no torque
-/// about the soles, so that their CoP is the projection), in single support all on the stance foot with
+/// `soles`, world, m): in double support by [`right_foot_share`] of the desired ZMP `zmp` (world x-y, m),
+/// `(1 − t)` on the left, `t` on the right, no torque about the soles (their CoP is the ZMP's projection on
+/// the segment between them), in single support all on the stance foot with
 /// its CoP at `zmp` (torque `(zmp − p) × f` about the sole, N·m). No foot in contact: zero wrenches.
 pub fn planned_foot_wrenches(
     mass: f64,
@@ -23,12 +24,7 @@ pub fn planned_foot_wrenches(
     };
     match contacts {
         [true, true] => {
-            let d = (soles[1] - soles[0]).xy();
-            let t = if d.norm_squared() > 0.0 {
-                ((zmp - soles[0].xy()).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
-            } else {
-                0.5
-            };
+            let t = right_foot_share(zmp, &soles[0].xy(), &soles[1].xy());
             [
                 wrench(force * (1.0 - t), Vector3::zeros()),
                 wrench(force * t, Vector3::zeros()),

@@ -295,6 +295,20 @@ pub fn ankle_torque_error(
     (sole.rotation.inverse() * (measured - desired)).xy()
 }
 
+/// The right foot's share `α ∈ [0, 1]` of a double support's normal force for the desired ZMP `zmp`: where
+/// `zmp` projects on the segment from the `left` to the `right` sole origin (world xy, m), clamped to it
+/// (0.5 when the origins coincide); the left foot carries `1 − α` [Kajita 2010; Caron 2019, wrench
+/// distribution]. With no torque about the sole origins the feet's combined centre of pressure is then the
+/// projection.
+pub fn right_foot_share(zmp: &Vector2<f64>, left: &Vector2<f64>, right: &Vector2<f64>) -> f64 {
+    let d = right - left;
+    if d.norm_squared() > 1e-12 {
+        ((zmp - left).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
+    } else {
+        0.5
+    }
+}
+
 /// The desired centres of pressure (world xy) and normal forces \[N\] of the feet flagged `loaded` for the
 /// desired ZMP `zmp` (see the module documentation); the total is the loaded feet's measured normal force.
 /// An unloaded foot gets its sole origin and no force.
@@ -312,11 +326,7 @@ pub fn distribute_zmp(
     match loaded {
         [true, true] => {
             let d = origin(1) - origin(0);
-            let alpha = if d.norm_squared() > 1e-12 {
-                ((zmp - origin(0)).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
-            } else {
-                0.5
-            };
+            let alpha = right_foot_share(zmp, &origin(0), &origin(1));
             let off = zmp - (origin(0) + d * alpha);
             for (k, share) in [(0, 1.0 - alpha), (1, alpha)] {
                 cops[k] = clamp_to_sole(&(origin(k) + off), &soles[k], half_size);

@@ -98,8 +98,9 @@ pub use dcm_predictive::{
 };
 pub use error::{Result, SimplifiedError};
 pub use foot_admittance::{
-    ankle_torque_error, distribute_zmp, leaky_admittance, FootAdmittance, FootAdmittanceConfig,
-    FootAdmittanceInput, FootAdmittanceOutput, FootCorrection, MIN_ADMITTANCE_LOAD,
+    ankle_torque_error, distribute_zmp, leaky_admittance, right_foot_share, FootAdmittance,
+    FootAdmittanceConfig, FootAdmittanceInput, FootAdmittanceOutput, FootCorrection,
+    MIN_ADMITTANCE_LOAD,
 };
 pub use lipm::{dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization};
 pub use step_adjustment::{
