@@ -160,9 +160,9 @@ fn in_torque_control_a_20_newton_side_push_tips_the_torso_with_the_zmp_at_the_co
     assert_eq!(fall.direction, "left", "{text}");
     assert!(fall.time > 5.9 && fall.dcm_error < 0.05, "{text}");
     assert_eq!(summary.diagnosis.zmp_edge.at_edge, 0.0, "{text}");
-    // measured 2026-12-05: 0.18 s at the left bound, 0.22 s in all (the plant's ZMP 2–4 mm beyond it)
+    // measured 2026-12-05: 0.41 s at the left bound of 6.14 s (the unpushed walk: 0.13 s in 16.5 s)
     let c = summary.diagnosis.cop_bound;
-    assert!(c.by_edge[1] >= 0.1, "{text}");
+    assert!(c.by_edge[1] >= 0.3, "{text}");
     assert!(text.contains("measured ZMP at the CoP bound"), "{text}");
     assert_eq!(
         diagnosis_message(&s)["cop_bound"]["at_edge"].as_f64(),
@@ -170,14 +170,14 @@ fn in_torque_control_a_20_newton_side_push_tips_the_torso_with_the_zmp_at_the_co
     );
 }
 
-/// The other side of the limit: with 10 N the ankle also works at the left CoP bound (measured: 0.5 s of
-/// single support), but what it cannot give is small enough for the torso to hold until the left foot lands,
-/// and the torque walk goes on.
+/// The other side of the limit: with 10 N the ankle also works at the left CoP bound (measured 2026-12-05:
+/// 0.56 s), but what it cannot give is small enough for the torso to hold until the left foot lands, and the
+/// torque walk goes on.
 #[test]
 fn in_torque_control_a_10_newton_side_push_is_walked_through() {
     let s = Scratch::new("diagnosis-torque-10");
     let summary = pushed("walk_straight_torque.toml", &s, 10.0, 8.0);
     let text = summary.render();
     assert_eq!(summary.outcome, Outcome::DurationReached, "{text}");
-    assert!(summary.diagnosis.cop_bound.by_edge[1] > 0.0, "{text}");
+    assert!(summary.diagnosis.cop_bound.by_edge[1] >= 0.3, "{text}");
 }
