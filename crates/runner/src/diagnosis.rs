@@ -1,5 +1,5 @@
-//! Fall diagnosis: which way the robot fell and when, how long the measured ZMP sat at a sole edge, and the
-//! largest DCM error and when (issue 17). Accumulated while the loop runs without allocating; printed by the
+//! Fall diagnosis: which way the robot fell and when, how long the measured ZMP sat at a sole edge and at the
+//! bound of the whole-body layer's CoP region, and the largest DCM error and when (issues 13, 17). Accumulated while the loop runs without allocating; printed by the
 //! summary ([`crate::summary::RunSummary::render`]) and written to `/runner/diagnosis` (docs/logging.md).
 //!
 //! **At a sole edge.** The measured ZMP (the plant's truth, from the wrenches of the feet in contact carrying
@@ -8,6 +8,13 @@
 //! convex hull of the sole rectangles (`planner.foot_length` × `planner.foot_width`, centred on the sole
 //! frames) of those feet, `{p | n_iᵀ p ≤ b_i}`. The ZMP of rigid contacts cannot leave the support polygon
 //! [Vukobratović 2004]; one that reaches its boundary means the foot is about to roll about that edge.
+//!
+//! **At the CoP bound.** The same test against the hull of the *CoP regions* of the loaded feet
+//! (`wbc.walking.cop_x` × `cop_y` in each sole frame, the region the TSID keeps every contact's CoP in) with
+//! the margin [`COP_BOUND_MARGIN`]. In torque control the ankles can give no more than that region: a ZMP
+//! held at its bound while the sole edge is still centimetres away means the ankle strategy is spent, and
+//! whatever the whole-body layer's hard tasks still ask of the contact wrenches comes out of the angular
+//! momentum (docs/push-recovery.md, "Torque control: why the torso tips").
 
 use nalgebra::{Isometry3, Vector2};
 use serde::Serialize;
@@ -19,6 +26,10 @@ use crate::stack::{soles_heading, Measured};
 /// Distance \[m\] from the support polygon's boundary within which the measured ZMP counts as at a sole
 /// edge (5 % of the bundled humanoid's 0.20 m sole, 11 % of its 0.09 m width).
 pub const ZMP_EDGE_MARGIN: f64 = 0.01;
+
+/// Distance \[m\] from the boundary of the CoP regions' hull within which the measured ZMP counts as at the
+/// CoP bound (12 % of the bundled humanoid's 25 mm lateral half-width of the region).
+pub const COP_BOUND_MARGIN: f64 = 0.003;
 
 /// Edge directions in the robot's heading frame, in the order of [`ZmpEdgeTime::by_edge`].
 pub const EDGE_NAMES: [&str; 4] = ["front", "left", "back", "right"];
@@ -36,14 +47,27 @@ pub struct ZmpEdgeTime {
 }
 
 impl ZmpEdgeTime {
-    /// Adds `dt` \[s\] of the ZMP `zmp` \[m\] over `polygon` with the robot heading `heading` \[rad\];
-    /// returns the signed distance `max_i (n_iᵀ p − b_i)` \[m\] (≤ 0 inside).
+    /// Adds `dt` \[s\] of the ZMP `zmp` \[m\] over `polygon` with the robot heading `heading` \[rad\],
+    /// at an edge within [`ZMP_EDGE_MARGIN`]; returns the signed distance `max_i (n_iᵀ p − b_i)` \[m\]
+    /// (≤ 0 inside).
     pub fn add(
         &mut self,
         zmp: Vector2<f64>,
         polygon: &SupportPolygon,
         heading: f64,
         dt: f64,
+    ) -> f64 {
+        self.add_within(zmp, polygon, heading, dt, ZMP_EDGE_MARGIN)
+    }
+
+    /// [`ZmpEdgeTime::add`] with the margin `margin` \[m\] instead of [`ZMP_EDGE_MARGIN`].
+    pub fn add_within(
+        &mut self,
+        zmp: Vector2<f64>,
+        polygon: &SupportPolygon,
+        heading: f64,
+        dt: f64,
+        margin: f64,
     ) -> f64 {
         self.measured += dt;
         let (mut worst, mut normal) = (f64::NEG_INFINITY, Vector2::zeros());
@@ -54,11 +78,28 @@ impl ZmpEdgeTime {
                 (worst, normal) = (v, n);
             }
         }
-        if worst >= -ZMP_EDGE_MARGIN {
+        if worst >= -margin {
             self.at_edge += dt;
             self.by_edge[quadrant(normal.y.atan2(normal.x) - heading)] += dt;
         }
         worst
+    }
+}
+
+impl ZmpEdgeTime {
+    /// ` (left 0.20 s, …)`: the edges with some time, or nothing.
+    fn sides(&self) -> String {
+        let sides: Vec<String> = EDGE_NAMES
+            .iter()
+            .zip(self.by_edge)
+            .filter(|(_, t)| *t > 0.0)
+            .map(|(name, t)| format!("{name} {t:.2} s"))
+            .collect();
+        if sides.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", sides.join(", "))
+        }
     }
 }
 
@@ -76,13 +117,29 @@ pub fn loaded_support(
     half_length: f64,
     half_width: f64,
 ) -> Option<SupportPolygon> {
+    loaded_region(
+        soles,
+        loaded,
+        [-half_length, half_length],
+        [-half_width, half_width],
+    )
+}
+
+/// The hull of the rectangles `x = [min, max]` × `y = [min, max]` \[m\] in the sole frames of the feet in
+/// contact that carry a vertical force (`loaded`); `None` without such a foot.
+pub fn loaded_region(
+    soles: &[Isometry3<f64>; 2],
+    loaded: [bool; 2],
+    x: [f64; 2],
+    y: [f64; 2],
+) -> Option<SupportPolygon> {
     let mut feet = [FootRectangle {
         position: Vector2::zeros(),
         yaw: 0.0,
-        x_min: -half_length,
-        x_max: half_length,
-        y_min: -half_width,
-        y_max: half_width,
+        x_min: x[0],
+        x_max: x[1],
+        y_min: y[0],
+        y_max: y[1],
     }; 2];
     let mut n = 0;
     for (sole, _) in soles.iter().zip(loaded).filter(|(_, l)| *l) {
@@ -182,6 +239,9 @@ pub struct Diagnosis {
     pub fall: Option<FallDiagnosis>,
     /// Time the measured ZMP spent at a sole edge.
     pub zmp_edge: ZmpEdgeTime,
+    /// Time the measured ZMP spent at the bound of the CoP regions (`wbc.walking.cop_x`, `cop_y`) of the
+    /// loaded feet, within [`COP_BOUND_MARGIN`] or outside.
+    pub cop_bound: ZmpEdgeTime,
     /// Largest DCM error (measured vs planned, planar) \[m\] and when.
     pub dcm_error_peak: Peak,
 }
@@ -212,12 +272,6 @@ impl Diagnosis {
             f.lean_deg
         );
         let z = &self.zmp_edge;
-        let sides: Vec<String> = EDGE_NAMES
-            .iter()
-            .zip(z.by_edge)
-            .filter(|(_, t)| *t > 0.0)
-            .map(|(name, t)| format!("{name} {t:.2} s"))
-            .collect();
         let _ = writeln!(
             s,
             "    measured ZMP at a sole edge (within {:.0} mm of the support polygon's boundary or outside): \
@@ -225,11 +279,17 @@ impl Diagnosis {
             ZMP_EDGE_MARGIN * 1e3,
             z.at_edge,
             z.measured,
-            if sides.is_empty() {
-                String::new()
-            } else {
-                format!(" ({})", sides.join(", "))
-            }
+            z.sides()
+        );
+        let c = &self.cop_bound;
+        let _ = writeln!(
+            s,
+            "    measured ZMP at the CoP bound (within {:.0} mm of the hull of the loaded feet's \
+             wbc.walking.cop_x × cop_y or outside): {:.2} s of {:.2} s{}",
+            COP_BOUND_MARGIN * 1e3,
+            c.at_edge,
+            c.measured,
+            c.sides()
         );
         let _ = writeln!(
             s,
@@ -285,6 +345,55 @@ mod tests {
             0.01,
         );
         assert_eq!(turned.by_edge, [0.01, 0.0, 0.0, 0.0]);
+    }
+
+    /// The CoP bound: an asymmetric region (x in [−0.05, 0.07], y in [−0.025, 0.025] m) in the frame of a
+    /// sole at (1, 0.1) turned by 90°, so that the sole's x is world +y and its y world −x. Distances are the
+    /// ones to the rotated rectangle's edges, counted against the 3 mm margin, and the region is not the
+    /// sole's rectangle (a ZMP 20 mm from the sole edge is at the CoP bound).
+    #[test]
+    fn cop_bound_uses_the_cop_region_in_the_sole_frame() {
+        let soles = [
+            sole(1.0, 0.1, std::f64::consts::FRAC_PI_2),
+            sole(1.0, -0.3, 0.0),
+        ];
+        let region = loaded_region(&soles, [true, false], [-0.05, 0.07], [-0.025, 0.025]).unwrap();
+        let mut e = ZmpEdgeTime::default();
+        // sole x = 0.068 (2 mm inside the front bound): world (1, 0.168)
+        let d = e.add_within(
+            Vector2::new(1.0, 0.168),
+            &region,
+            0.0,
+            0.01,
+            COP_BOUND_MARGIN,
+        );
+        assert!((d + 0.002).abs() < 1e-12, "{d}");
+        // sole y = 0.021 (4 mm inside the left bound): world (0.979, 0.1), not at the bound
+        let d = e.add_within(
+            Vector2::new(0.979, 0.1),
+            &region,
+            0.0,
+            0.01,
+            COP_BOUND_MARGIN,
+        );
+        assert!((d + 0.004).abs() < 1e-12, "{d}");
+        // sole x = −0.052 (2 mm behind the back bound): world (1, 0.048)
+        let d = e.add_within(
+            Vector2::new(1.0, 0.048),
+            &region,
+            0.0,
+            0.01,
+            COP_BOUND_MARGIN,
+        );
+        assert!((d - 0.002).abs() < 1e-12, "{d}");
+        assert!((e.measured - 0.03).abs() < 1e-12);
+        assert!((e.at_edge - 0.02).abs() < 1e-12);
+        // outward normals: sole +x = world +y (left of a robot heading +x), sole −x = world −y (right)
+        assert_eq!(e.by_edge, [0.0, 0.01, 0.0, 0.01]);
+        // the symmetric sole rectangle of `loaded_support` is the same function
+        let a = loaded_support(&soles, [true, true], 0.1, 0.045).unwrap();
+        let b = loaded_region(&soles, [true, true], [-0.1, 0.1], [-0.045, 0.045]).unwrap();
+        assert_eq!(a, b);
     }
 
     /// Double support: the hull of both soles; a point between the feet is inside, not at an edge.

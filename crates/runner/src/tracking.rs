@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 
 use crate::config::{EstimationKind, Goal, Scenario};
-use crate::diagnosis::{loaded_support, FallDiagnosis};
+use crate::diagnosis::{loaded_region, loaded_support, FallDiagnosis, COP_BOUND_MARGIN};
 use crate::estimation_summary::EstimationSummary;
 use crate::gait::GaitTracker;
 use crate::records::TrackingMsg;
@@ -28,6 +28,9 @@ pub(crate) struct Tracker {
     simplified_period: f64,
     /// Half length and half width of the sole rectangle \[m\] (`planner.foot_length`, `foot_width`).
     sole_half_size: [f64; 2],
+    /// The walking preset's CoP region in the sole frame, `[x, y]` each `[min, max]` \[m\]
+    /// (`wbc.walking.cop_x`, `cop_y`).
+    cop_region: [[f64; 2]; 2],
     initial_base_height: f64,
     start_mid: [f64; 3],
     standstill_since: Option<u64>,
@@ -62,6 +65,7 @@ impl Tracker {
             gait: GaitTracker::new(&m.truth, mass, duration),
             simplified_period: 1.0 / f64::from(c.rates.simplified_hz),
             sole_half_size: [0.5 * c.planner.foot_length, 0.5 * c.planner.foot_width],
+            cop_region: [c.wbc.walking.cop_x, c.wbc.walking.cop_y],
             initial_base_height: m.truth.state.base_pose.translation.z,
             start_mid,
             standstill_since: None,
@@ -135,8 +139,8 @@ impl Tracker {
     }
 
     /// The measured ZMP against the support polygon of the loaded feet (as [`Stack::measure`] loads them),
-    /// accumulated over a simplified period: its signed distance to the boundary \[m\] (`None` without a
-    /// measurable ZMP).
+    /// accumulated over a simplified period, and against the hull of their CoP regions: its signed distance
+    /// to the support polygon's boundary \[m\] (`None` without a measurable ZMP).
     fn zmp_edge(&mut self, stack: &Stack, plant: &Measurement) -> Option<f64> {
         let m = &stack.truth;
         let truth = &plant.truth;
@@ -145,6 +149,16 @@ impl Tracker {
         let polygon = loaded_support(&m.soles, loaded, hl, hw).filter(|_| m.zmp_from_wrenches)?;
         let heading = crate::stack::soles_heading(&m.soles[0], &m.soles[1]);
         let dt = self.simplified_period;
+        let [x, y] = self.cop_region;
+        if let Some(region) = loaded_region(&m.soles, loaded, x, y) {
+            self.summary.diagnosis.cop_bound.add_within(
+                m.zmp,
+                &region,
+                heading,
+                dt,
+                COP_BOUND_MARGIN,
+            );
+        }
         Some(
             self.summary
                 .diagnosis

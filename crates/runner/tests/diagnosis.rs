@@ -1,7 +1,10 @@
 //! Fall diagnosis on forced falls (issue 17): the default walk pushed at the chest from the side, 60 N for 1 s
 //! (three times the 20 N of walk_push_side.toml, which already falls): the diagnosis names the pushed
 //! direction, the fall time, the ZMP at the sole edge, and the log holds the same figures. Without a push the
-//! same walk does not fall and prints no fall block.
+//! same walk does not fall and prints no fall block. In torque control (issue 13) a 20 N side push makes the
+//! walk fall by torso lean with the ZMP held at the whole-body layer's CoP bound and never at a sole edge;
+//! 10 N, the other side of that limit, is walked through (its ZMP at the bound too, for less than the
+//! torso can take).
 mod common;
 
 use common::Scratch;
@@ -12,7 +15,12 @@ use stride_runner::run::{run_scenario, Outcome, RunOptions, RunSummary};
 /// walk_straight.toml (simulator, position control) for `duration` s, pushed at the chest by `force_y` N
 /// (+y: left) for 1 s from 5.5 s, logged to `run.mcap`.
 fn pushed_walk(s: &Scratch, force_y: f64, duration: f64) -> RunSummary {
-    let walk = common::root().join("configs/walk_straight.toml");
+    pushed("walk_straight.toml", s, force_y, duration)
+}
+
+/// [`pushed_walk`] on `configs/<walk>`.
+fn pushed(walk: &str, s: &Scratch, force_y: f64, duration: f64) -> RunSummary {
+    let walk = common::root().join("configs").join(walk);
     let push = if force_y == 0.0 {
         String::new()
     } else {
@@ -133,4 +141,43 @@ fn the_unpushed_walk_has_no_fall_diagnosis() {
     assert!(!text.contains("fall diagnosis"), "{text}");
     assert!(summary.diagnosis.zmp_edge.measured > 7.0, "{text}");
     assert!(diagnosis_message(&s)["fall"].is_null());
+}
+
+/// Torque control (walk_straight_torque.toml, TSID), 20 N to the left for 1 s from 5.5 s: the push outlasts
+/// the double support and, in the single support on the right foot from 5.9 s, needs more lateral CoP than
+/// the TSID's CoP region gives (±25 mm, `wbc.walking.cop_y`). The ZMP sits at that bound, on the stance
+/// foot's left (inner) side, 20 mm from the sole edge, and the hard CoM task takes the rest from the angular
+/// momentum: the torso tips over legs whose DCM stays within 50 mm of its plan (docs/push-recovery.md,
+/// "Torque control: why the torso tips").
+#[test]
+fn in_torque_control_a_20_newton_side_push_tips_the_torso_with_the_zmp_at_the_cop_bound() {
+    let s = Scratch::new("diagnosis-torque-20");
+    let summary = pushed("walk_straight_torque.toml", &s, 20.0, 7.0);
+    let text = summary.render();
+    assert!(matches!(summary.outcome, Outcome::Fell { .. }), "{text}");
+    let fall = summary.diagnosis.fall.expect("a fall diagnosis");
+    assert_eq!(fall.kind, "torso_lean", "{text}");
+    assert_eq!(fall.direction, "left", "{text}");
+    assert!(fall.time > 5.9 && fall.dcm_error < 0.05, "{text}");
+    assert_eq!(summary.diagnosis.zmp_edge.at_edge, 0.0, "{text}");
+    // measured 2026-12-05: 0.41 s at the left bound of 6.14 s (the unpushed walk: 0.13 s in 16.5 s)
+    let c = summary.diagnosis.cop_bound;
+    assert!(c.by_edge[1] >= 0.3, "{text}");
+    assert!(text.contains("measured ZMP at the CoP bound"), "{text}");
+    assert_eq!(
+        diagnosis_message(&s)["cop_bound"]["at_edge"].as_f64(),
+        Some(c.at_edge)
+    );
+}
+
+/// The other side of the limit: with 10 N the ankle also works at the left CoP bound (measured 2026-12-05:
+/// 0.56 s), but what it cannot give is small enough for the torso to hold until the left foot lands, and the
+/// torque walk goes on.
+#[test]
+fn in_torque_control_a_10_newton_side_push_is_walked_through() {
+    let s = Scratch::new("diagnosis-torque-10");
+    let summary = pushed("walk_straight_torque.toml", &s, 10.0, 8.0);
+    let text = summary.render();
+    assert_eq!(summary.outcome, Outcome::DurationReached, "{text}");
+    assert!(summary.diagnosis.cop_bound.by_edge[1] >= 0.3, "{text}");
 }

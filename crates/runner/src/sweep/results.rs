@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::run::{Outcome, RunSummary};
 
 /// The columns after the axes, in order.
-pub const METRIC_COLUMNS: [&str; 20] = [
+pub const METRIC_COLUMNS: [&str; 21] = [
     "outcome",
     "distance",
     "goal_distance",
@@ -33,6 +33,7 @@ pub const METRIC_COLUMNS: [&str; 20] = [
     "zmp_edge_time",
     "zmp_rms",
     "com_rms",
+    "cop_bound_time",
 ];
 
 /// One cell.
@@ -159,6 +160,7 @@ pub fn metric_cells(summary: Option<&RunSummary>, wall_s: f64) -> Vec<Cell> {
         Cell::Float(s.diagnosis.zmp_edge.at_edge),
         Cell::Float(s.zmp_error.rms),
         Cell::Float(s.com_error.rms),
+        Cell::Float(s.diagnosis.cop_bound.at_edge),
     ]
 }
 
