@@ -285,8 +285,14 @@ impl<'a> Loop<'a> {
         let run_plant = k % s.sim_every == 0;
         if run_plant && k > 0 {
             // A fresh measurement (the plant advanced at the end of the previous tick; the initial one was
-            // sensed when the loop started).
-            self.stack.sense(self.robot.measurement())?;
+            // sensed when the loop started); pre-integrated when nothing reads the estimate at this tick and
+            // `estimation.update = "when_read"`.
+            let read = run_simplified || run_wbc || run_planner || log_state;
+            if read || !self.stack.preintegrate_unread {
+                self.stack.sense(self.robot.measurement())?;
+            } else {
+                self.stack.preintegrate(self.robot.measurement())?;
+            }
         }
         if run_simplified || run_wbc || run_planner || log_state {
             self.stack.measure(self.robot.measurement())?;
