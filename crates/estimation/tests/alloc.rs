@@ -49,8 +49,12 @@ fn preintegrating_allocates_nothing() {
     let inputs: Vec<_> = (1..=40)
         .map(|k| standing_input(&model, &state, &ground, &offsets, k * 500_000))
         .collect();
-    let mut est =
-        Estimator::new(model, &EstimatorConfig::default(), Duration::from_micros(500)).unwrap();
+    let mut est = Estimator::new(
+        model,
+        &EstimatorConfig::default(),
+        Duration::from_micros(500),
+    )
+    .unwrap();
     est.set_initial_state(&state).unwrap();
     est.step(&inputs[0]).unwrap();
     let (_, n) = ALLOC.allocations_during(|| {

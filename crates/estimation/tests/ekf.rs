@@ -44,7 +44,16 @@ fn run(
     observe: impl FnMut(f64, &InvariantEkf, &Truth),
 ) -> InvariantEkf {
     let imu = Imu::EverySample;
-    run_with(walk, config, biases, noise_scale, duration, seed, imu, observe)
+    run_with(
+        walk,
+        config,
+        biases,
+        noise_scale,
+        duration,
+        seed,
+        imu,
+        observe,
+    )
 }
 
 /// How [`run_with`] uses the IMU samples between the filter's full ticks.
@@ -429,12 +438,21 @@ fn walking_errors(imu: Imu) -> (f64, f64) {
     let walk = Walk::walking(0.3);
     let (mut sq_vel_err, mut n) = (0.0, 0);
     let config = EkfConfig::default();
-    let ekf = run_with(&walk, &config, &no_bias(), NOISE, 20.0, 2, imu, |t, ekf, truth| {
-        if t > 1.0 {
-            sq_vel_err += (ekf.state().velocity - truth.vel).norm_squared();
-            n += 1;
-        }
-    });
+    let ekf = run_with(
+        &walk,
+        &config,
+        &no_bias(),
+        NOISE,
+        20.0,
+        2,
+        imu,
+        |t, ekf, truth| {
+            if t > 1.0 {
+                sq_vel_err += (ekf.state().velocity - truth.vel).norm_squared();
+                n += 1;
+            }
+        },
+    );
     let truth = walk.at(20.0);
     let tilt = tilt_between(&ekf.state().rotation, &truth.rot);
     ((sq_vel_err / n as f64).sqrt(), tilt)
