@@ -1,5 +1,6 @@
 //! One `Estimator::step` on the bundled model: kinematics, EKF propagation and update with both feet in
-//! contact (flat ground on), foot wrenches, contact detection, offsets, joint torques.
+//! contact (flat ground on), foot wrenches, contact detection, offsets, joint torques; and one
+//! `Estimator::preintegrate` (a sample between two full ticks: input checks and the EKF's mean).
 //!
 //! `cargo bench -p stride-estimation --bench step -- --warm-up-time 1 --measurement-time 3`
 
@@ -49,6 +50,13 @@ fn bench_step(c: &mut Criterion) {
         b.iter(|| {
             input.time_ns += 2_000_000;
             est.step(std::hint::black_box(&input)).expect("step");
+        })
+    });
+    c.bench_function("estimator_preintegrate_bundled", |b| {
+        b.iter(|| {
+            input.time_ns += 500_000;
+            est.preintegrate(std::hint::black_box(&input))
+                .expect("preintegrate");
         })
     });
 }

@@ -259,7 +259,33 @@ impl InvariantEkf {
         stance: [bool; 2],
         imu_r_sole: &[Matrix3<f64>; 2],
     ) {
-        self.propagate_covariance(dt, stance, imu_r_sole);
+        self.propagate_over(gyro, acc, dt, dt, stance, imu_r_sole);
+    }
+
+    /// [`Self::propagate`] at the end of a pre-integrated interval: the samples before this one moved the
+    /// mean only ([`Self::propagate_mean`]); the covariance is propagated once over the whole `interval`
+    /// \[s\] (this sample's `dt` included), with `Φ` and `G` evaluated at the current estimate, and the mean
+    /// over `dt`. The group part of the right-invariant error dynamics does not depend on the state and is
+    /// nilpotent (`A³ = 0`), so its `Φ = I + A Δt + ½ (A Δt)²` is exact for any interval; the bias columns and
+    /// the noise's adjoint `Ad_X̂` are frozen over the interval [Hartley 2020]. With `interval == dt` this is
+    /// [`Self::propagate`] bit for bit.
+    pub fn propagate_over(
+        &mut self,
+        gyro: &Vector3<f64>,
+        acc: &Vector3<f64>,
+        dt: f64,
+        interval: f64,
+        stance: [bool; 2],
+        imu_r_sole: &[Matrix3<f64>; 2],
+    ) {
+        self.propagate_covariance(interval, stance, imu_r_sole);
+        self.propagate_mean(gyro, acc, dt);
+    }
+
+    /// Moves the mean by one IMU sample (the mean of [`Self::propagate`], bit for bit) and leaves the
+    /// covariance as it is: the pre-integration of the samples between two full ticks, whose covariance
+    /// [`Self::propagate_over`] then propagates at once.
+    pub fn propagate_mean(&mut self, gyro: &Vector3<f64>, acc: &Vector3<f64>, dt: f64) {
         let predicted = self.predicted_state(gyro, acc, dt);
         self.rot = predicted.rotation;
         self.vel = predicted.velocity;
@@ -733,6 +759,52 @@ mod tests {
             &mut rng,
             [[(PHI, 0.3), (PHI + 1, -1.2), (FOOT[0] + 2, 1.0)]],
         );
+    }
+
+    /// Without process noise and bias estimation the error dynamics are the constant, nilpotent group part
+    /// (`A³ = 0`), so `Φ(n dt) = Φ(dt)ⁿ` exactly: one covariance step over a pre-integrated interval equals
+    /// `n` steps, and the mean moved by `n − 1` samples of [`InvariantEkf::propagate_mean`] and one of
+    /// [`InvariantEkf::propagate_over`] is the mean of `n` full propagations bit for bit.
+    #[test]
+    fn one_step_over_a_preintegrated_interval_equals_the_steps_without_noise() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let config = EkfConfig {
+            gyro_noise: [0.0; 3],
+            accelerometer_noise: [0.0; 3],
+            contact_foot_velocity_noise: [0.0; 3],
+            contact_foot_angular_velocity_noise: [0.0; 3],
+            bias_estimation: false,
+            ..EkfConfig::default()
+        };
+        let mut stepped = random_filter(&mut rng);
+        let fresh = InvariantEkf::new(&config, stepped.gravity);
+        stepped.gyro_var = fresh.gyro_var;
+        stepped.acc_var = fresh.acc_var;
+        stepped.foot_var = fresh.foot_var;
+        stepped.foot_rot_var = fresh.foot_rot_var;
+        stepped.bias_estimation = false;
+        let mut preintegrated = stepped.clone();
+        let imu_r_sole = [random_rot(&mut rng), random_rot(&mut rng)];
+        let (dt, n) = (5e-4, 4);
+        let samples: Vec<_> = (0..n)
+            .map(|_| (random_vec(&mut rng, 1.0), random_vec(&mut rng, 10.0)))
+            .collect();
+        for (gyro, acc) in &samples {
+            stepped.propagate(gyro, acc, dt, [true, false], &imu_r_sole);
+        }
+        for (gyro, acc) in &samples[..n - 1] {
+            preintegrated.propagate_mean(gyro, acc, dt);
+        }
+        let (gyro, acc) = &samples[n - 1];
+        let interval = dt * n as f64;
+        preintegrated.propagate_over(gyro, acc, dt, interval, [true, false], &imu_r_sole);
+        assert_eq!(preintegrated.state(), stepped.state());
+        let diff = (preintegrated.cov - stepped.cov).abs().max();
+        assert!(
+            diff <= 1e-13 * stepped.cov.abs().max(),
+            "covariances differ by {diff}"
+        );
+        assert_symmetric(&preintegrated.cov);
     }
 
     #[test]

@@ -72,6 +72,8 @@ pub struct Estimator {
     ground_height: f64,
     thresholds: (f64, f64),
     last_time_ns: Option<u64>,
+    /// Time \[s\] pre-integrated since the last full tick ([`Estimator::preintegrate`]).
+    preintegrated: f64,
     initialized: bool,
     output: EstimatorOutput,
 }
@@ -188,6 +190,7 @@ impl Estimator {
             ground_height: 0.0,
             thresholds,
             last_time_ns: None,
+            preintegrated: 0.0,
             initialized: false,
             output,
             kd,
@@ -249,6 +252,7 @@ impl Estimator {
         }
         self.swing_since_ns = [None; 2];
         self.last_time_ns = None;
+        self.preintegrated = 0.0;
         self.initialized = true;
         let out = &mut self.output;
         out.state.copy_from(&self.scratch);
@@ -374,6 +378,7 @@ impl Estimator {
         &mut self,
         input: &EstimatorInput,
         dt: f64,
+        interval: f64,
     ) -> Result<(RelativeKinematics, [Matrix3<f64>; 2])> {
         let imu = &input.imu;
         let (gyro, acc) = (&imu.angular_velocity, &imu.proper_acceleration);
@@ -395,7 +400,7 @@ impl Estimator {
             .imu_h_sole
             .map(|h| *h.rotation.to_rotation_matrix().matrix());
         self.ekf
-            .propagate(gyro, acc, dt, self.output.contacts, &imu_r_sole);
+            .propagate_over(gyro, acc, dt, interval, self.output.contacts, &imu_r_sole);
         if self.imu_on_base.is_none() {
             self.place_robot(&self.ekf.state(), &kin, input)?;
         }
@@ -546,9 +551,14 @@ fn choose_foot_sensor(
 
 impl Estimator {
     /// One tick (inherent, so a caller need not import [`stride_block::Block`]; the `Block` impl calls it).
+    /// After samples given to [`Self::preintegrate`], the tick covers them too: the covariance is propagated
+    /// over the whole interval since the last tick ([`InvariantEkf::propagate_over`]) and the offset filter
+    /// steps by it.
     pub fn step(&mut self, input: &EstimatorInput) -> Result<&EstimatorOutput> {
         let dt = self.check_input(input)?;
-        let (kin, imu_r_sole) = self.predict(input, dt)?;
+        let interval = self.preintegrated + dt;
+        self.preintegrated = 0.0;
+        let (kin, imu_r_sole) = self.predict(input, dt, interval)?;
         let h = kin.imu_h_sole.map(|h| h.translation.vector);
         let wrenches = self.foot_wrenches(input)?;
         for foot in 0..2 {
@@ -569,7 +579,7 @@ impl Estimator {
             }
             self.output.contacts[foot] = contact;
         }
-        self.update_offsets(input, &wrenches, dt);
+        self.update_offsets(input, &wrenches, interval);
         self.joint_torques(&wrenches)?;
         let (pose, twist, _) = self.base_from_imu(&self.ekf.state(), &kin, input);
         let out = &mut self.output;
@@ -582,6 +592,25 @@ impl Estimator {
         out.foot_wrenches = wrenches;
         self.last_time_ns = Some(input.time_ns);
         Ok(&self.output)
+    }
+
+    /// Pre-integrates one sample between two full ticks ([`Self::step`]): checks it as a tick does, then
+    /// moves the EKF's mean by its gyroscope and accelerometer reading ([`InvariantEkf::propagate_mean`])
+    /// and adds its period to the interval the next tick propagates the covariance over. Kinematics, foot
+    /// wrenches, contacts, updates and offsets wait for that tick, and the output stays the last tick's. This
+    /// is how the layer runs at the rate its estimate is read (the whole-body rate) without losing the IMU
+    /// samples in between: each costs about 2 000 instructions (0.3 µs) instead of a full tick's 95 000.
+    ///
+    /// # Errors
+    /// The input checks of [`Self::step`]; nothing changes then.
+    pub fn preintegrate(&mut self, input: &EstimatorInput) -> Result<()> {
+        let dt = self.check_input(input)?;
+        let imu = &input.imu;
+        self.ekf
+            .propagate_mean(&imu.angular_velocity, &imu.proper_acceleration, dt);
+        self.preintegrated += dt;
+        self.last_time_ns = Some(input.time_ns);
+        Ok(())
     }
 }
 
@@ -597,6 +626,7 @@ impl Block for Estimator {
     fn reset(&mut self) {
         self.initialized = false;
         self.last_time_ns = None;
+        self.preintegrated = 0.0;
         self.swing_since_ns = [None; 2];
         self.output = EstimatorOutput::new(&self.model);
         self.output.ft_offsets.clone_from(&self.initial_offsets);

@@ -6,27 +6,31 @@ use std::time::Duration;
 
 use common::{bundled_model, standing_input, standing_state};
 use nalgebra::Vector6;
-use stride_estimation::{Estimator, EstimatorConfig};
+use stride_estimation::{Estimator, EstimatorConfig, EstimatorInput};
 
 #[global_allocator]
 static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
 
-#[test]
-fn a_step_allocates_nothing() {
+/// An estimator started standing on the bundled robot, stepped once, and `count` more standing samples
+/// `period_ns` apart with the vertical foot forces `forces` (N, left and right).
+fn started(forces: [f64; 2], period_ns: u64, count: u64) -> (Estimator, Vec<EstimatorInput>) {
     let model = bundled_model();
     let state = standing_state(&model);
     let offsets = vec![Vector6::zeros(); model.ft_sensors().len()];
-    let ground = [
-        Vector6::new(0.0, 0.0, 10.0, 0.0, 0.0, 0.0),
-        Vector6::new(0.0, 0.0, 300.0, 0.0, 0.0, 0.0),
-    ];
-    let inputs: Vec<_> = (1..=200)
-        .map(|k| standing_input(&model, &state, &ground, &offsets, k * 2_000_000))
+    let ground = forces.map(|f| Vector6::new(0.0, 0.0, f, 0.0, 0.0, 0.0));
+    let inputs: Vec<_> = (1..=count)
+        .map(|k| standing_input(&model, &state, &ground, &offsets, k * period_ns))
         .collect();
-    let mut est =
-        Estimator::new(model, &EstimatorConfig::default(), Duration::from_millis(2)).unwrap();
+    let period = Duration::from_nanos(period_ns);
+    let mut est = Estimator::new(model, &EstimatorConfig::default(), period).unwrap();
     est.set_initial_state(&state).unwrap();
     est.step(&inputs[0]).unwrap();
+    (est, inputs)
+}
+
+#[test]
+fn a_step_allocates_nothing() {
+    let (mut est, inputs) = started([10.0, 300.0], 2_000_000, 200);
     let (_, n) = ALLOC.allocations_during(|| {
         for input in &inputs[1..] {
             est.step(input).unwrap();
@@ -35,4 +39,19 @@ fn a_step_allocates_nothing() {
     // The left foot breaks contact and goes through swing (offset samples) within these steps.
     assert_eq!(est.output().contacts, [false, true]);
     assert_eq!(n, 0, "a step allocated {n} times");
+}
+
+#[test]
+fn preintegrating_allocates_nothing() {
+    let (mut est, inputs) = started([150.0, 150.0], 500_000, 40);
+    let (_, n) = ALLOC.allocations_during(|| {
+        for (k, input) in inputs.iter().enumerate().skip(1) {
+            if k % 4 == 0 {
+                est.step(input).unwrap();
+            } else {
+                est.preintegrate(input).unwrap();
+            }
+        }
+    });
+    assert_eq!(n, 0, "pre-integrating allocated {n} times");
 }

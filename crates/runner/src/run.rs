@@ -92,6 +92,18 @@ impl Schedule {
             total_ticks: (duration * 1e9 / base_ns as f64).round() as u64,
         }
     }
+
+    /// Whether a layer or the state log reads the estimate at a tick from `k` (a plant tick) up to the next
+    /// plant tick: the sample of tick `k` is then the last one they see, so it gets the estimation layer's
+    /// full tick under `estimation.update = "when_read"`.
+    fn reads_estimate_before_next_sample(&self, k: u64) -> bool {
+        (k..k + self.sim_every).any(|j| {
+            j % self.simplified_every == 0
+                || j % self.wbc_every == 0
+                || j % self.state_every == 0
+                || self.planner_every.is_some_and(|e| j % e == 0)
+        })
+    }
 }
 
 /// Runs a scenario to its end. The log (if any) is finished whatever happens, panics in a layer
@@ -285,8 +297,14 @@ impl<'a> Loop<'a> {
         let run_plant = k % s.sim_every == 0;
         if run_plant && k > 0 {
             // A fresh measurement (the plant advanced at the end of the previous tick; the initial one was
-            // sensed when the loop started).
-            self.stack.sense(self.robot.measurement())?;
+            // sensed when the loop started); pre-integrated when nothing reads the estimate at this tick and
+            // `estimation.update = "when_read"`.
+            let read = run_planner || s.reads_estimate_before_next_sample(k);
+            if read || !self.stack.preintegrate_unread {
+                self.stack.sense(self.robot.measurement())?;
+            } else {
+                self.stack.preintegrate(self.robot.measurement())?;
+            }
         }
         if run_simplified || run_wbc || run_planner || log_state {
             self.stack.measure(self.robot.measurement())?;

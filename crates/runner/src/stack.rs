@@ -31,7 +31,7 @@ use stride_walking::{MeasuredCentroidal, SimplifiedInputBuilder, WalkingHandles}
 use stride_wbc::{ContactId, ContactModel, QpIk, Tsid, WbcInput};
 
 use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
-use crate::config::{ControlMode, EstimationKind, Goal, Scenario};
+use crate::config::{ControlMode, EstimationKind, EstimationUpdate, Goal, Scenario};
 use crate::error::RunError;
 use crate::flexible::{FlexibleObserver, FlexibleSprings};
 use crate::robot::{JointCommand, Measurement};
@@ -300,6 +300,9 @@ pub struct Stack {
     flexible: FlexibleSprings,
     /// The observer of TSID-Flex's unmeasured flexible joints, in the estimation loop.
     flexible_observer: Option<FlexibleObserver>,
+    /// `estimation.update = "when_read"`: the samples of ticks that do not read the estimate are
+    /// pre-integrated ([`Stack::preintegrate`]).
+    pub preintegrate_unread: bool,
     /// The foot admittance of position control (`simplified.foot_admittance.enabled`, QP-IK only) and
     /// the whole-body period it runs at \[s\].
     pub foot_admittance: Option<(FootAdmittance, f64)>,
@@ -360,6 +363,16 @@ impl Stack {
             EstimationKind::Ekf => flexible.observer(&model, scenario.sim_period())?,
             EstimationKind::GroundTruth => None,
         };
+        let preintegrate_unread = c.estimation.update == EstimationUpdate::WhenRead;
+        if preintegrate_unread && flexible_observer.is_some() {
+            return Err(scenario
+                .invalid(
+                    "estimation.update",
+                    "the observer of the flexible joints without encoders (wbc.tsid.flexible_joints) \
+                     steps on every sample; expected `every_sample` with it",
+                )
+                .into());
+        }
         let simplified_glue =
             SimplifiedInputBuilder::new(&simplified, c.planner.foot_length, c.planner.foot_width);
         let simplified_input =
@@ -429,6 +442,7 @@ impl Stack {
             angular_momentum_reference: Vector3::zeros(),
             flexible,
             flexible_observer,
+            preintegrate_unread,
             foot_admittance: foot_admittance(scenario, &model)?,
             counters: Counters::default(),
             kd,
@@ -472,6 +486,17 @@ impl Stack {
             }
         }
         Ok(())
+    }
+
+    /// Pre-integrates a fresh measurement that no layer reads (`estimation.update = "when_read"`): the
+    /// estimation layer moves its EKF's mean by the IMU sample ([`Estimator::preintegrate`]); the estimate
+    /// stays that of the last [`Stack::sense`], which covers the pre-integrated samples. With
+    /// `estimation.kind = "ground_truth"` it is [`Stack::sense`].
+    pub fn preintegrate(&mut self, m: &Measurement) -> Result<(), RunError> {
+        match &mut self.estimation {
+            Estimation::Estimator(estimator) => Ok(estimator.preintegrate(&m.sensors)?),
+            Estimation::GroundTruth => self.sense(m),
+        }
     }
 
     /// Measured CoM, ZMP, soles and tilt, twice: [`Stack::measured`] from the estimate (what the layers

@@ -327,3 +327,70 @@ fn foot_wrenches_and_joint_torques_match_the_simulator_on_a_walk() {
         "joint torque error {je} N m RMS of {jn} N m"
     );
 }
+
+/// The estimation layer's full tick on the ticks that read the estimate only (`estimation.update =
+/// "when_read"`, the samples in between pre-integrated): the commands differ from those of the full tick
+/// on every sample (it is in use), are the same in two runs (deterministic), still never depend on the
+/// plant's truth, and the estimate stays within the every-sample run's error bounds (base velocity error
+/// and tilt error RMS at most 1.5× and 0.1° above them).
+#[test]
+fn the_estimation_layer_can_tick_only_when_read() {
+    let s = Scratch::new("when-read");
+    let every = walk(&s, "");
+    let when_read = walk(&s, "[estimation]\nupdate = \"when_read\"");
+    let first = commands(&s, &when_read, false);
+    assert_eq!(first, commands(&s, &when_read, false), "not deterministic");
+    assert_eq!(
+        first,
+        commands(&s, &when_read, true),
+        "the controllers read the truth"
+    );
+    assert_ne!(first, commands(&s, &every, false), "pre-integration unused");
+    let summary = |sc: &Scenario| {
+        let options = RunOptions {
+            output: Some(s.path("summary.mcap")),
+            ..RunOptions::default()
+        };
+        let summary = stride_runner::run::run_scenario(sc, &options).unwrap();
+        assert_eq!(summary.wbc_holds, 0, "{}", summary.render());
+        summary.estimation
+    };
+    let (a, b) = (summary(&every), summary(&when_read));
+    assert!(
+        b.velocity_error.rms <= 1.5 * a.velocity_error.rms,
+        "velocity error RMS {} against {}",
+        b.velocity_error.rms,
+        a.velocity_error.rms
+    );
+    assert!(
+        b.tilt_error.rms <= a.tilt_error.rms + 0.1f64.to_radians(),
+        "tilt error RMS {} against {}",
+        b.tilt_error.rms,
+        a.tilt_error.rms
+    );
+}
+
+/// The observer of flexible joints without encoders needs every sample: `when_read` is refused with it.
+#[test]
+fn ticking_only_when_read_is_refused_with_the_flexible_joints_observer() {
+    let s = Scratch::new("when-read-flex");
+    let sc = common::scenario_from_configs(
+        &s,
+        "flex",
+        &["walk_flexible_hips_tsid_flex_torque.toml"],
+        "[estimation]\nupdate = \"when_read\"",
+    );
+    let options = RunOptions {
+        output: Some(s.path("flex.mcap")),
+        duration: Some(0.01),
+        ..RunOptions::default()
+    };
+    let e = stride_runner::run::run_scenario(&sc, &options)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(
+        e.contains("estimation.update") && e.contains("every_sample"),
+        "{e}"
+    );
+}

@@ -89,6 +89,9 @@ pub enum PlantKind {
 pub struct EstimationSection {
     /// `ekf` (default): the estimation layer; `ground_truth`: the plant's truth, for debugging only.
     pub kind: EstimationKind,
+    /// `every_sample` (default): a full tick of the estimation layer on every plant sample; `when_read`: a
+    /// full tick only on the ticks that read the estimate, the samples in between pre-integrated.
+    pub update: EstimationUpdate,
     /// Cut-off \[Hz\] of the first-order low-pass filter on the measured ZMP the simplified layer reads (0: unfiltered).
     pub measured_zmp_cutoff: f64,
     /// Force/torque sensor of the left foot (none: the one nearest above the sole).
@@ -111,6 +114,7 @@ impl Default for EstimationSection {
     fn default() -> Self {
         Self {
             kind: EstimationKind::default(),
+            update: EstimationUpdate::default(),
             measured_zmp_cutoff: DEFAULT_MEASURED_ZMP_CUTOFF,
             left_foot_ft_sensor: None,
             right_foot_ft_sensor: None,
@@ -150,6 +154,20 @@ pub enum EstimationKind {
     Ekf,
     /// The plant's truth read directly (a simulator's privilege; debugging only).
     GroundTruth,
+}
+
+/// When the estimation layer runs its full tick (`estimation.update`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum EstimationUpdate {
+    /// On every plant sample (2 kHz with the default rates).
+    #[default]
+    EverySample,
+    /// On the ticks whose layers or log read the estimate (the whole-body, simplified, planner and state-log
+    /// ticks: 500 Hz with the default rates); the IMU samples in between are pre-integrated into the EKF's
+    /// mean (`stride_estimation::Estimator::preintegrate`) and the covariance is propagated over the whole
+    /// interval at the next full tick.
+    WhenRead,
 }
 
 /// `[scenario]`: what this run is.
