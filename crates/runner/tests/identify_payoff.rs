@@ -40,7 +40,7 @@ fn walk_rms(
     name: &str,
     seeds: std::ops::Range<u64>,
 ) -> (f64, f64) {
-    let (mut dcm, mut com, n) = (0.0, 0.0, seeds.len() as f64);
+    let (mut dcm, mut com, n) = (0.0, 0.0, (seeds.end - seeds.start) as f64);
     for seed in seeds {
         let summary = walk(s, config, urdf, &format!("{name}_{seed}"), seed);
         assert_eq!(
