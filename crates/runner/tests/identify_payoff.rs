@@ -101,15 +101,28 @@ fn identified_and_plant(s: &Scratch, options: &IdentifyOptions) -> (PathBuf, Pat
     (id_urdf, plant_urdf)
 }
 
+/// `walk_rms` over seeds 0–2 with the prior (bundled), the identified and the plant's URDF.
+fn prior_identified_plant(
+    s: &Scratch,
+    config: &str,
+    identified: &Path,
+    plant: &Path,
+) -> [(f64, f64); 3] {
+    let bundled = root().join("models/stride_humanoid.urdf");
+    [
+        (bundled.as_path(), "prior"),
+        (identified, "identified"),
+        (plant, "plant"),
+    ]
+    .map(|(urdf, name)| walk_rms(s, config, urdf, name, 0..3))
+}
+
 #[test]
 fn the_identified_urdf_walks_better_than_the_prior_and_within_ten_percent_of_the_plant() {
     let s = Scratch::new("identify_payoff");
     let (id_urdf, plant_urdf) = identified_and_plant(&s, &IdentifyOptions::default());
-    let config = "walk_straight.toml";
-    let bundled = root().join("models/stride_humanoid.urdf");
-    let (prior, _) = walk_rms(&s, config, &bundled, "prior", 0..3);
-    let (identified, _) = walk_rms(&s, config, &id_urdf, "identified", 0..3);
-    let (plant, _) = walk_rms(&s, config, &plant_urdf, "plant", 0..3);
+    let [(prior, _), (identified, _), (plant, _)] =
+        prior_identified_plant(&s, "walk_straight.toml", &id_urdf, &plant_urdf);
     println!(
         "DCM RMS [mm]: prior {:.2}, identified {:.2}, plant {:.2}",
         1e3 * prior,
@@ -138,10 +151,8 @@ fn in_torque_control_the_identified_urdf_walks_like_the_plant() {
     let s = Scratch::new("identify_payoff_torque");
     let (id_urdf, plant_urdf) = identified_and_plant(&s, &IdentifyOptions::default());
     let config = "walk_straight_torque.toml";
-    let bundled = root().join("models/stride_humanoid.urdf");
-    let (prior_dcm, prior_com) = walk_rms(&s, config, &bundled, "prior", 0..3);
-    let (id_dcm, id_com) = walk_rms(&s, config, &id_urdf, "identified", 0..3);
-    let (plant_dcm, plant_com) = walk_rms(&s, config, &plant_urdf, "plant", 0..3);
+    let [(prior_dcm, prior_com), (id_dcm, id_com), (plant_dcm, plant_com)] =
+        prior_identified_plant(&s, config, &id_urdf, &plant_urdf);
     println!(
         "DCM / CoM RMS [mm]: prior {:.2} / {:.2}, identified {:.2} / {:.2}, plant {:.2} / {:.2}",
         1e3 * prior_dcm,
