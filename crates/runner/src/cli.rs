@@ -188,6 +188,13 @@ pub enum Command {
         /// Relative weight of the pull towards the logged URDF (`ManifoldOptions::prior_weight`).
         #[arg(long, default_value_t = 1e-4)]
         prior_weight: f64,
+        /// Relative weight of the pull on the rotational inertias alone; the masses and first moments keep
+        /// `--prior-weight` (`ManifoldOptions::inertia_prior_weight`).
+        #[arg(long, default_value_t = 1.0)]
+        prior_weight_inertia: f64,
+        /// Iterations of the manifold solver (`ManifoldOptions::max_iterations`).
+        #[arg(long, default_value_t = 500)]
+        max_iterations: usize,
     },
     /// SVG figures of a run's log (tracking, feet, forces, torques, solve times) or a sweep's survival map.
     Plot {

@@ -483,6 +483,8 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             torques_only,
             ft_only,
             prior_weight,
+            prior_weight_inertia,
+            max_iterations,
         } => identify(
             &logs,
             &output,
@@ -492,6 +494,8 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
                 use_torques: !ft_only,
                 use_ft: !torques_only,
                 prior_weight,
+                inertia_prior_weight: Some(prior_weight_inertia),
+                max_iterations,
                 ..Default::default()
             },
         ),

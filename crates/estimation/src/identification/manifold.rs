@@ -17,12 +17,15 @@ use super::IdentificationError;
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
 /// | `prior_weight` | – | 1e-4 | `ρ ≥ 0`: parameter `j` is pulled towards the prior with weight `ρ (‖R_j‖² + 10⁻⁶ · mean_k ‖R_k‖²)`, `R_j` the column of the (noise-weighted) regressor: relative to what the data say about it |
+/// | `inertia_prior_weight` | – | `None` | `ρ_I ≥ 0` in place of `ρ` for the six rotational-inertia entries `vech(I_B)` of every body (masses, first moments and extras keep `ρ`): the rotational inertias are the parameters motions excite least, and a stronger pull keeps them near the prior while the masses and CoMs follow the data; `None` = `ρ` |
 /// | `max_iterations` | – | 200 | Levenberg–Marquardt iterations |
 /// | `tolerance` | – | 1e-9 | stop when an accepted step lowers the cost by less than this fraction |
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ManifoldOptions {
     /// Relative weight `ρ` of the prior (see the table).
     pub prior_weight: f64,
+    /// Relative weight `ρ_I` of the prior on the rotational inertias (`None`: `prior_weight`).
+    pub inertia_prior_weight: Option<f64>,
     /// Maximum number of iterations.
     pub max_iterations: usize,
     /// Relative cost decrease that ends the iteration.
@@ -33,6 +36,7 @@ impl Default for ManifoldOptions {
     fn default() -> Self {
         Self {
             prior_weight: 1e-4,
+            inertia_prior_weight: None,
             max_iterations: 200,
             tolerance: 1e-9,
         }
@@ -62,6 +66,8 @@ pub struct ManifoldEstimate {
     pub converged: bool,
     /// `√(data cost / rows)` at the estimate (≈ 1 when the residuals match the noise).
     pub normalised_residual: f64,
+    /// The minimised objective `‖R w − r‖² + ρ² + Σ_j λ_j (w_j − w⁰_j)²` at the estimate.
+    pub objective: f64,
 }
 
 impl Prior {
@@ -160,11 +166,7 @@ pub fn identify_on_manifold(
     options: &ManifoldOptions,
 ) -> Result<ManifoldEstimate, IdentificationError> {
     check(data, prior, options)?;
-    let problem = Problem::new(
-        data,
-        prior.parameters(),
-        prior_weights(data, options.prior_weight),
-    );
+    let problem = Problem::new(data, prior.parameters(), prior_weights(data, options));
     let mut theta: Vec<PhysicalParameters> = prior.bodies.iter().map(nearest_physical).collect();
     let mut extras = prior.extras.clone();
     let mut w = stack(&theta, &extras);
@@ -175,7 +177,8 @@ pub fn identify_on_manifold(
     let n10 = 10 * theta.len();
     while iterations < options.max_iterations && !converged {
         iterations += 1;
-        let (normal, gradient) = problem.normal_equations(&theta, &w);
+        let (mut normal, mut gradient) = problem.normal_equations(&theta, &w);
+        hold_active_bounds(&theta, &mut normal, &mut gradient);
         let scale = normal.diagonal().max().max(f64::MIN_POSITIVE);
         loop {
             let mut damped = normal.clone();
@@ -213,17 +216,56 @@ pub fn identify_on_manifold(
         parameters: w,
         iterations,
         converged,
+        objective: cost,
     })
 }
 
-/// `λ_j = ρ (‖R_j‖² + 10⁻⁶ · mean_k ‖R_k‖²)` (see [`ManifoldOptions`]).
-fn prior_weights(data: &ReducedData, rho: f64) -> DVector<f64> {
+/// Projected Newton [Bertsekas 1982]: a chart coordinate at its bound (`m = 0` or `L_k = 0`) whose
+/// gradient points out of 𝔓 (descent would make it negative) is held for this step: its row and column of
+/// the normal matrix become the unit's and its gradient zero, so the step is the Levenberg–Marquardt step
+/// of the free coordinates. Without it the retraction clamps the unconstrained step, which then is not a
+/// descent step of the free coordinates, and the iteration crawls along the boundary.
+fn hold_active_bounds(
+    theta: &[PhysicalParameters],
+    normal: &mut DMatrix<f64>,
+    gradient: &mut DVector<f64>,
+) {
+    for (b, t) in theta.iter().enumerate() {
+        let bounded = [
+            (0, t.mass),
+            (7, t.second_moments.x),
+            (8, t.second_moments.y),
+            (9, t.second_moments.z),
+        ];
+        for (k, value) in bounded {
+            let i = 10 * b + k;
+            if value <= 0.0 && gradient[i] > 0.0 {
+                normal.row_mut(i).fill(0.0);
+                normal.column_mut(i).fill(0.0);
+                normal[(i, i)] = 1.0;
+                gradient[i] = 0.0;
+            }
+        }
+    }
+}
+
+/// `λ_j = ρ_j (‖R_j‖² + 10⁻⁶ · mean_k ‖R_k‖²)`, `ρ_j` the inertia weight `ρ_I` for the entries
+/// `vech(I_B)` (4–9 of each body's 10) and `ρ` otherwise (see [`ManifoldOptions`]).
+fn prior_weights(data: &ReducedData, options: &ManifoldOptions) -> DVector<f64> {
     let norms = DVector::from_iterator(
         data.r.ncols(),
         data.r.column_iter().map(|c| c.norm_squared()),
     );
     let floor = 1e-6 * norms.mean();
-    norms.map(|v| rho * (v + floor))
+    let rho = options.prior_weight;
+    let rho_inertia = options.inertia_prior_weight.unwrap_or(rho);
+    DVector::from_iterator(
+        norms.len(),
+        norms.iter().enumerate().map(|(j, v)| {
+            let inertia = j < 10 * data.bodies && j % 10 >= 4;
+            (if inertia { rho_inertia } else { rho }) * (v + floor)
+        }),
+    )
 }
 
 fn check(
@@ -254,11 +296,15 @@ fn check(
         });
     }
     let non_negative = |v: f64| v.is_finite() && v >= 0.0;
-    if !non_negative(options.prior_weight) || !non_negative(options.tolerance) {
+    if !non_negative(options.prior_weight)
+        || !non_negative(options.tolerance)
+        || !options.inertia_prior_weight.is_none_or(non_negative)
+    {
         return Err(IdentificationError::Invalid {
             what: "manifold options",
             index: 0,
-            reason: "prior_weight and tolerance must be finite and non-negative",
+            reason:
+                "prior_weight, inertia_prior_weight and tolerance must be finite and non-negative",
         });
     }
     Ok(())

@@ -70,6 +70,8 @@ pub enum IdentifyError {
 /// |---|---|---|---|
 /// | `torque_noise` | N·m | 0.05 | σ of a motor-torque row (the FT rows use the logged scenario's sensor noise) |
 /// | `prior_weight` | – | 1e-4 | pull towards the logged URDF (`ManifoldOptions::prior_weight`) |
+/// | `inertia_prior_weight` | – | 1 | pull on the rotational inertias alone (`ManifoldOptions::inertia_prior_weight`; `None`: `prior_weight`): the inertias of the wrists, forearms, shoulders and torso are poorly excited, and left to the data they land on the bound `L = 0` and make TSID fall (docs/identification.md, "Payoff") |
+/// | `max_iterations` | – | 500 | manifold solver iterations (`ManifoldOptions::max_iterations`) |
 /// | `max_samples` | – | 1500 | samples used per log, evenly spaced |
 /// | `min_joint_speed` | rad/s | 0.05 | torque rows of slower joints are skipped (sticking friction) |
 /// | `use_torques`, `use_ft` | – | true | which measurements to use |
@@ -79,6 +81,10 @@ pub struct IdentifyOptions {
     pub torque_noise: f64,
     /// Relative weight of the prior.
     pub prior_weight: f64,
+    /// Relative weight of the prior on the rotational inertias (`None`: `prior_weight`).
+    pub inertia_prior_weight: Option<f64>,
+    /// Manifold solver iterations.
+    pub max_iterations: usize,
     /// Samples used per log.
     pub max_samples: usize,
     /// Joint speed below which a torque row is skipped (rad/s).
@@ -94,6 +100,8 @@ impl Default for IdentifyOptions {
         Self {
             torque_noise: 0.05,
             prior_weight: 1e-4,
+            inertia_prior_weight: Some(1.0),
+            max_iterations: 500,
             max_samples: 1500,
             min_joint_speed: 0.05,
             use_torques: true,
@@ -144,6 +152,8 @@ pub struct IdentificationReport {
     pub residuals: [f64; 3],
     /// Manifold iterations, and whether they converged.
     pub iterations: (usize, bool),
+    /// The manifold solver's objective (data and prior terms) at the estimate.
+    pub objective: f64,
     /// Bodies (model order; FT child sides as `sensor`) whose unconstrained estimate is not fully consistent.
     pub unconstrained_violations: Vec<String>,
     /// The options used.
@@ -174,10 +184,11 @@ pub fn identify_logs(
     let Some(first) = paths.first() else {
         return Err(IdentifyError::Content("no log given".into()));
     };
-    if !(options.prior_weight.is_finite() && options.prior_weight >= 0.0) {
+    let valid = |w: f64| w.is_finite() && w >= 0.0;
+    if !valid(options.prior_weight) || !options.inertia_prior_weight.is_none_or(valid) {
         return Err(IdentifyError::Content(format!(
-            "the prior weight must be finite and ≥ 0, not {}",
-            options.prior_weight
+            "the prior weights must be finite and ≥ 0, not {} (inertias: {:?})",
+            options.prior_weight, options.inertia_prior_weight
         )));
     }
     let logged = load_model(first)?;
@@ -329,7 +340,8 @@ fn solve(
     };
     let manifold = ManifoldOptions {
         prior_weight: options.prior_weight,
-        max_iterations: 500,
+        inertia_prior_weight: options.inertia_prior_weight,
+        max_iterations: options.max_iterations,
         ..ManifoldOptions::default()
     };
     let est = identify_on_manifold(&reduced, &prior, &manifold)?;
@@ -366,6 +378,7 @@ fn solve(
             ls.normalised_residual,
         ],
         iterations: (est.iterations, est.converged),
+        objective: est.objective,
         unconstrained_violations,
         model,
         options: options.clone(),

@@ -78,11 +78,12 @@ impl IdentificationReport {
         );
         let _ = writeln!(
             s,
-            "normalised residual √(χ²/rows): prior {:.3}, identified {:.3} ({} iterations{}), unconstrained {:.3}",
+            "normalised residual √(χ²/rows): prior {:.3}, identified {:.3} ({} iterations{}, objective {:.6e}), unconstrained {:.3}",
             self.residuals[0],
             self.residuals[1],
             self.iterations.0,
             if self.iterations.1 { "" } else { ", not converged" },
+            self.objective,
             self.residuals[2]
         );
         if let Some(e) = self.identifiable_error(&self.prior) {
@@ -153,7 +154,7 @@ impl IdentificationReport {
              # the CoM kg m^2 [xx, xy, xz, yy, yz, zz], friction N m and N m s/rad, offsets N and N m.\n\
              [summary]\nlogs = [{}]\nsamples = {}\nrows = {}\nbase_rows = {}\nparameters = {}\nidentifiable = {}\n\
              condition_number = {:?}\nresidual_prior = {:?}\nresidual_identified = {:?}\nresidual_unconstrained = {:?}\n\
-             iterations = {}\nconverged = {}\nunconstrained_not_fully_consistent = {}",
+             iterations = {}\nconverged = {}\nobjective = {:?}\nunconstrained_not_fully_consistent = {}",
             logs.join(", "),
             self.samples,
             self.rows,
@@ -166,6 +167,7 @@ impl IdentificationReport {
             self.residuals[2],
             self.iterations.0,
             self.iterations.1,
+            self.objective,
             self.unconstrained_violations.len()
         );
         if let Some(e) = self.identifiable_error(&self.prior) {
