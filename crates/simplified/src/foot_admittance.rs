@@ -38,7 +38,7 @@ use stride_block::low_pass_gain;
 use crate::error::{check_non_negative, check_positive, Result, SimplifiedError};
 
 /// Default cut-off of the error filter \[Hz\] (`error_cutoff`; docs/foot-admittance.md, "MuJoCo").
-pub const DEFAULT_ERROR_CUTOFF: f64 = 5.0;
+pub const DEFAULT_ERROR_CUTOFF: f64 = 20.0;
 
 /// Share of the robot's weight a foot must carry to count as loaded (below it the foot's corrections
 /// leak back to the plan).
@@ -56,7 +56,7 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 /// | `force_gain` | m/(N·s) | 1e-4 | `K_f` of the force difference control [Kajita 2010, foot force difference control] |
 /// | `force_leak_time` | s | 0.2 | `T_f`, time constant of the return of the height difference to the plan |
 /// | `max_height_offset` | m | 0.02 | bound on the height difference `δ` |
-/// | `error_cutoff` | Hz | 5 | cut-off of the low-pass filter on the torque and force errors (0: unfiltered) |
+/// | `error_cutoff` | Hz | 20 | cut-off of the low-pass filter on the torque and force errors (0: unfiltered) |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FootAdmittanceConfig {
