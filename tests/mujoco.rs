@@ -43,15 +43,7 @@ fn the_mujoco_plant_without_the_feature_names_the_build_command() {
 
 #[cfg(feature = "mujoco")]
 fn run_on_mujoco(name: &str) -> stride_runner::run::RunSummary {
-    let scenario = Scenario::load(&config_path(name)).expect("scenario");
-    let options = RunOptions {
-        plant: Some(PlantKind::Mujoco),
-        no_log: true,
-        ..RunOptions::default()
-    };
-    let summary = run_scenario(&scenario, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
-    eprintln!("{}", summary.render());
-    summary
+    run_scenario_on_mujoco(&Scenario::load(&config_path(name)).expect("scenario"))
 }
 
 /// Torque control (TSID) on MuJoCo: the default walk's goal is reached and the robot stands still, with

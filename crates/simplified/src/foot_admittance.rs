@@ -472,18 +472,24 @@ mod tests {
         assert!((e - Vector2::new(0.0, -0.01 * fz)).norm() < 1e-12, "{e}");
     }
 
-    #[test]
-    fn disabled_stays_at_zero_and_enabled_tilts_against_the_torque_error() {
-        let input = FootAdmittanceInput {
+    /// The left foot carries 300 N with its CoP 2 cm ahead of its sole origin (τ_y = −6 N·m), where the
+    /// desired ZMP is; the right foot carries nothing.
+    fn left_cop_ahead(contacts: [bool; 2], dt: f64) -> FootAdmittanceInput {
+        FootAdmittanceInput {
             desired_zmp: Vector2::new(0.0, 0.07),
             soles: [sole(0.0, 0.07, 0.0), sole(0.0, -0.07, 0.0)],
             wrenches: [
                 Vector6::new(0.0, 0.0, 300.0, 0.0, -6.0, 0.0),
                 Vector6::zeros(),
             ],
-            contacts: [true, true],
-            dt: 0.002,
-        };
+            contacts,
+            dt,
+        }
+    }
+
+    #[test]
+    fn disabled_stays_at_zero_and_enabled_tilts_against_the_torque_error() {
+        let input = left_cop_ahead([true, true], 0.002);
         let mut off =
             FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
         assert_eq!(*off.step(&input).unwrap(), FootAdmittanceOutput::default());
@@ -513,16 +519,7 @@ mod tests {
     #[test]
     fn the_error_filter_ramps_a_step_in_and_zero_cutoff_is_the_unfiltered_law() {
         let (k, t_leak, fc, dt) = (0.005, 0.1, 5.0, 1e-4);
-        let input = FootAdmittanceInput {
-            desired_zmp: Vector2::new(0.0, 0.07),
-            soles: [sole(0.0, 0.07, 0.0), sole(0.0, -0.07, 0.0)],
-            wrenches: [
-                Vector6::new(0.0, 0.0, 300.0, 0.0, -6.0, 0.0),
-                Vector6::zeros(),
-            ],
-            contacts: [true, false],
-            dt,
-        };
+        let input = left_cop_ahead([true, false], dt);
         let config = |error_cutoff| FootAdmittanceConfig {
             enabled: true,
             torque_gain: k,
