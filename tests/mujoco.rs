@@ -43,15 +43,7 @@ fn the_mujoco_plant_without_the_feature_names_the_build_command() {
 
 #[cfg(feature = "mujoco")]
 fn run_on_mujoco(name: &str) -> stride_runner::run::RunSummary {
-    let scenario = Scenario::load(&config_path(name)).expect("scenario");
-    let options = RunOptions {
-        plant: Some(PlantKind::Mujoco),
-        no_log: true,
-        ..RunOptions::default()
-    };
-    let summary = run_scenario(&scenario, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
-    eprintln!("{}", summary.render());
-    summary
+    run_scenario_on_mujoco(&Scenario::load(&config_path(name)).expect("scenario"))
 }
 
 /// Torque control (TSID) on MuJoCo: the default walk's goal is reached and the robot stands still, with
@@ -231,4 +223,78 @@ fn the_mujoco_floor_is_the_scenarios_ground() {
     );
     scenario.config.mujoco.solref = Some([0.02, 1.0]);
     assert_eq!(floor_solref(&scenario), [0.02, 1.0]);
+}
+
+/// `scenario` on MuJoCo without a log.
+#[cfg(feature = "mujoco")]
+fn run_scenario_on_mujoco(scenario: &Scenario) -> stride_runner::run::RunSummary {
+    let options = RunOptions {
+        plant: Some(PlantKind::Mujoco),
+        no_log: true,
+        ..RunOptions::default()
+    };
+    let summary = run_scenario(scenario, &options).expect("run");
+    eprintln!("{}", summary.render());
+    summary
+}
+
+/// The foot admittance of position control on MuJoCo (docs/foot-admittance.md, "MuJoCo"): with its error
+/// filter (`simplified.foot_admittance.error_cutoff`, the default) the default walk reaches its goal and
+/// stands still; unfiltered, MuJoCo's sole-torque chatter (50–250 Hz) reaches the ankle servos through the
+/// tilt rates sent as velocity references and the robot rocks at its goal until the run's end.
+#[cfg(feature = "mujoco")]
+#[test]
+fn the_foot_admittance_stands_still_on_mujoco_only_with_its_error_filter() {
+    let s = run_on_mujoco("walk_straight_foot_admittance.toml");
+    assert_eq!(s.outcome, Outcome::GoalReached, "{}", s.outcome);
+    assert!(s.dcm_error.rms < 0.0148, "DCM RMS {} m", s.dcm_error.rms);
+    let mut scenario =
+        Scenario::load(&config_path("walk_straight_foot_admittance.toml")).expect("scenario");
+    let admittance = &mut scenario.config.simplified.foot_admittance;
+    admittance.error_cutoff = 0.0;
+    let unfiltered = run_scenario_on_mujoco(&scenario);
+    assert_eq!(
+        unfiltered.outcome,
+        Outcome::DurationReached,
+        "unfiltered: {}",
+        unfiltered.outcome
+    );
+}
+
+/// The DCM MPC walk in position control on MuJoCo falls at its goal without the foot admittance and
+/// reaches it with the admittance (docs/mujoco.md).
+#[cfg(feature = "mujoco")]
+#[test]
+fn the_mpc_position_walk_reaches_its_goal_on_mujoco_only_with_the_foot_admittance() {
+    let mut scenario = Scenario::load(&config_path("walk_straight_mpc.toml")).expect("scenario");
+    let without = run_scenario_on_mujoco(&scenario);
+    assert!(
+        matches!(without.outcome, Outcome::Fell { .. }),
+        "without: {}",
+        without.outcome
+    );
+    scenario.config.simplified.foot_admittance.enabled = true;
+    let with = run_scenario_on_mujoco(&scenario);
+    assert_eq!(with.outcome, Outcome::GoalReached, "with: {}", with.outcome);
+}
+
+/// The fast torque walk on MuJoCo (docs/mujoco.md, "Torque walks that fell on MuJoCo"): with the soft CoM
+/// task of `walk_fast_torque.toml` it reaches its goal without a relaxed TSID solve; with the walking preset's
+/// hard CoM task (`walk_fast.toml` in torque control) the QP takes the CoM acceleration from the upper body
+/// and the torso topples.
+#[cfg(feature = "mujoco")]
+#[test]
+fn the_fast_torque_walk_reaches_its_goal_on_mujoco_only_with_a_soft_com_task() {
+    let s = run_on_mujoco("walk_fast_torque.toml");
+    assert_eq!(s.outcome, Outcome::GoalReached, "{}", s.outcome);
+    assert_eq!(s.wbc_fallbacks, 0);
+    let mut hard = Scenario::load(&config_path("walk_fast.toml")).expect("scenario");
+    hard.config.scenario.control_mode = stride_runner::config::ControlMode::Torque;
+    let fell = run_scenario_on_mujoco(&hard);
+    assert!(
+        matches!(fell.outcome, Outcome::Fell { .. }),
+        "hard CoM task: {}",
+        fell.outcome
+    );
+    assert!(fell.wbc_fallbacks > 0);
 }

@@ -353,8 +353,8 @@ fn icub_walks_fast_to_its_goal_in_both_modes() {
 
 /// The speed targets of issue 15 as far as they are met (docs/gait.md): the 4 m walk of 0.22 m steps every
 /// 0.5–0.8 s reaches its goal at a steady forward speed ≥ 0.33 m/s in position control (measured 0.334) and
-/// ≥ 0.30 m/s in torque control (the issue's target; measured 0.362). Not asserted: the torque walk's TSID
-/// relaxes its hard tasks on 17 of its 7 800 ticks (`wbc_fallbacks`; docs/gait.md), the position walk on none.
+/// ≥ 0.30 m/s in torque control (the issue's target; measured 0.362 with the scenario's soft CoM task, no
+/// relaxed TSID solve; docs/mujoco.md, "Torque walks that fell on MuJoCo").
 #[test]
 fn the_fast_walks_reach_their_goals_at_speed() {
     for (name, min_speed) in [("walk_fast.toml", 0.33), ("walk_fast_torque.toml", 0.30)] {

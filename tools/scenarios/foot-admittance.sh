@@ -10,6 +10,7 @@
 # b [N·s/m³] (the tangential stick law set to the same k and b, as docs/sim.md's stiff-floor table); default
 # "default 3e8:9.5e5 1e9:1.7e6"; NORMAL_ONLY=1 sets the normal law only (the soft grounds of
 # configs/sweeps/soft_ground_table_8_1_position.toml). PLANT: `simulator` (default) or `mujoco` (a `--features mujoco` build).
+# ADMITTANCE: `off on` (default), `on` or `off`, the rows to run.
 # The iCub scenarios need STRIDE_ICUB_MODELS_DIR. Logs go to a temporary folder (STRIDE_LOG_DIR to keep them).
 # Columns: floor, admittance, outcome, goal distance, DCM RMS / max, ZMP RMS, largest torso tilt.
 set -euo pipefail
@@ -23,7 +24,7 @@ echo "| scenario | floor k:b | admittance | outcome | goal dist. | DCM RMS / max
 echo "|---|---|---|---|---|---|---|---|"
 for s in "$@"; do
     for floor in "${floors[@]}"; do
-        for admittance in off on; do
+        for admittance in ${ADMITTANCE:-off on}; do
             name="$s-${floor/:/-}-$admittance"
             overlay="$out/$name.toml"
             includes="\"$root/configs/$s.toml\""

@@ -74,8 +74,9 @@ fn on_a_hard_floor_the_fast_walk_falls_without_and_walks_with_the_admittance() {
     );
     let with = run(&s, "with", "walk_fast", &format!("{hard}{ON}"), None);
     assert_eq!(with.outcome, Outcome::GoalReached, "{}", with.render());
-    // measured 12.2 / 54.5 mm RMS (docs/foot-admittance.md)
-    assert!(with.dcm_error.rms < 0.02, "{}", with.render());
+    // measured 22.2 / 61.1 mm RMS with the 20 Hz error filter (12.2 / 54.5 unfiltered, which rocks on
+    // MuJoCo; docs/foot-admittance.md, "MuJoCo")
+    assert!(with.dcm_error.rms < 0.025, "{}", with.render());
     assert!(with.zmp_error.rms < 0.07, "{}", with.render());
 }
 
@@ -94,7 +95,7 @@ fn on_a_stiffer_floor_the_default_walk_stands_still_at_its_goal_only_with_the_ad
     assert!(without.zmp_error.rms > 0.06, "{}", without.render());
     let with = run(&s, "with", "walk_straight", &format!("{hard}{ON}"), None);
     assert_eq!(with.outcome, Outcome::GoalReached, "{}", with.render());
-    // measured 10.5 / 30.0 mm RMS (76.0 mm without)
+    // measured 11.4 / 35.4 mm RMS with the 20 Hz error filter (10.5 / 30.0 unfiltered; 76.0 mm without)
     assert!(with.zmp_error.rms < 0.04, "{}", with.render());
     assert!(with.dcm_error.rms < 0.012, "{}", with.render());
 }

@@ -22,11 +22,23 @@
 //!
 //! Both first-order laws are integrated exactly over a tick for a constant error (zero-order hold):
 //! `x⁺ = a x + K e T (1 − a)`, `a = e^{−dt/T}`; the state is then clamped to its bound.
+//!
+//! The errors (`τ − τ*` per foot, the force difference's) reach the laws through a first-order low-pass
+//! filter of cut-off `error_cutoff` (the discretisation of [`stride_block::low_pass_gain`]), run on zero
+//! while a foot (or the pair) is not loaded, so a touch-down ramps the error in rather than stepping it.
+//! The rates the laws send on as velocity references (`θ̇`, `δ̇`) then move smoothly: unfiltered, a
+//! contact whose wrench chatters from tick to tick (MuJoCo's four-corner box contact) steps the
+//! position servos' velocity reference, and the servo damping turns each step into an ankle torque step.
 
 use nalgebra::{Isometry3, Vector2, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
+use stride_block::low_pass_gain;
+
 use crate::error::{check_non_negative, check_positive, Result, SimplifiedError};
+
+/// Default cut-off of the error filter \[Hz\] (`error_cutoff`; docs/foot-admittance.md, "MuJoCo").
+pub const DEFAULT_ERROR_CUTOFF: f64 = 20.0;
 
 /// Share of the robot's weight a foot must carry to count as loaded (below it the foot's corrections
 /// leak back to the plan).
@@ -44,6 +56,7 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 /// | `force_gain` | m/(N·s) | 1e-4 | `K_f` of the force difference control [Kajita 2010, foot force difference control] |
 /// | `force_leak_time` | s | 0.2 | `T_f`, time constant of the return of the height difference to the plan |
 /// | `max_height_offset` | m | 0.02 | bound on the height difference `δ` |
+/// | `error_cutoff` | Hz | 20 | cut-off of the low-pass filter on the torque and force errors (0: unfiltered) |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FootAdmittanceConfig {
@@ -61,6 +74,8 @@ pub struct FootAdmittanceConfig {
     pub force_leak_time: f64,
     /// Bound on the soles' height difference \[m\].
     pub max_height_offset: f64,
+    /// Cut-off of the first-order low-pass filter on the torque and force errors \[Hz\] (0: unfiltered).
+    pub error_cutoff: f64,
 }
 
 impl Default for FootAdmittanceConfig {
@@ -73,6 +88,7 @@ impl Default for FootAdmittanceConfig {
             force_gain: 1e-4,
             force_leak_time: 0.2,
             max_height_offset: 0.02,
+            error_cutoff: DEFAULT_ERROR_CUTOFF,
         }
     }
 }
@@ -85,7 +101,8 @@ impl FootAdmittanceConfig {
         check_non_negative("foot_admittance.max_tilt", self.max_tilt)?;
         check_non_negative("foot_admittance.force_gain", self.force_gain)?;
         check_positive("foot_admittance.force_leak_time", self.force_leak_time)?;
-        check_non_negative("foot_admittance.max_height_offset", self.max_height_offset)
+        check_non_negative("foot_admittance.max_height_offset", self.max_height_offset)?;
+        check_non_negative("foot_admittance.error_cutoff", self.error_cutoff)
     }
 }
 
@@ -158,6 +175,10 @@ pub struct FootAdmittance {
     min_force: f64,
     /// Height difference `δ = z_L − z_R` \[m\].
     height_difference: f64,
+    /// Low-passed torque errors `[left, right]` (roll, pitch in the sole frame) \[N·m\].
+    torque_errors: [Vector2<f64>; 2],
+    /// Low-passed force difference error \[N\].
+    force_error: f64,
     output: FootAdmittanceOutput,
 }
 
@@ -182,6 +203,8 @@ impl FootAdmittance {
             half_size: Vector2::new(foot_length, foot_width) * 0.5,
             min_force: MIN_ADMITTANCE_LOAD * weight,
             height_difference: 0.0,
+            torque_errors: [Vector2::zeros(); 2],
+            force_error: 0.0,
             output: FootAdmittanceOutput::default(),
         })
     }
@@ -194,6 +217,8 @@ impl FootAdmittance {
     /// Back to the plan (no correction).
     pub fn reset(&mut self) {
         self.height_difference = 0.0;
+        self.torque_errors = [Vector2::zeros(); 2];
+        self.force_error = 0.0;
         self.output = FootAdmittanceOutput::default();
     }
 
@@ -216,12 +241,15 @@ impl FootAdmittance {
             &self.half_size,
         );
         let c = self.config;
+        let smoothing = low_pass_gain(input.dt, c.error_cutoff);
         for k in 0..2 {
-            let error = if loaded[k] {
+            let raw = if loaded[k] {
                 ankle_torque_error(&input.soles[k], &input.wrenches[k], &cops[k])
             } else {
                 Vector2::zeros()
             };
+            let error = smooth(self.torque_errors[k], raw, smoothing);
+            self.torque_errors[k] = error;
             let foot = &mut self.output.feet[k];
             for axis in 0..2 {
                 let e = error[axis];
@@ -237,11 +265,13 @@ impl FootAdmittance {
                 foot.tilt_rate[axis] = c.torque_gain * e - *tilt / c.torque_leak_time;
             }
         }
-        let force_error = if loaded[0] && loaded[1] {
+        let raw_force_error = if loaded[0] && loaded[1] {
             (input.wrenches[0][2] - input.wrenches[1][2]) - (forces[0] - forces[1])
         } else {
             0.0
         };
+        let force_error = smooth(self.force_error, raw_force_error, smoothing);
+        self.force_error = force_error;
         let d = leaky_admittance(
             self.height_difference,
             c.force_gain,
@@ -259,6 +289,22 @@ impl FootAdmittance {
         self.output.desired_cop = cops;
         self.output.desired_force = forces;
         Ok(&self.output)
+    }
+}
+
+/// One step `y + α (x − y)` of the first-order low-pass filter of gain `alpha`
+/// ([`stride_block::low_pass_gain`]); `x` itself, bit for bit, when `alpha` is 1 (no filter).
+fn smooth<T>(y: T, x: T, alpha: f64) -> T
+where
+    T: Copy
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<f64, Output = T>,
+{
+    if alpha < 1.0 {
+        y + (x - y) * alpha
+    } else {
+        x
     }
 }
 
@@ -426,18 +472,24 @@ mod tests {
         assert!((e - Vector2::new(0.0, -0.01 * fz)).norm() < 1e-12, "{e}");
     }
 
-    #[test]
-    fn disabled_stays_at_zero_and_enabled_tilts_against_the_torque_error() {
-        let input = FootAdmittanceInput {
+    /// The left foot carries 300 N with its CoP 2 cm ahead of its sole origin (τ_y = −6 N·m), where the
+    /// desired ZMP is; the right foot carries nothing.
+    fn left_cop_ahead(contacts: [bool; 2], dt: f64) -> FootAdmittanceInput {
+        FootAdmittanceInput {
             desired_zmp: Vector2::new(0.0, 0.07),
             soles: [sole(0.0, 0.07, 0.0), sole(0.0, -0.07, 0.0)],
             wrenches: [
                 Vector6::new(0.0, 0.0, 300.0, 0.0, -6.0, 0.0),
                 Vector6::zeros(),
             ],
-            contacts: [true, true],
-            dt: 0.002,
-        };
+            contacts,
+            dt,
+        }
+    }
+
+    #[test]
+    fn disabled_stays_at_zero_and_enabled_tilts_against_the_torque_error() {
+        let input = left_cop_ahead([true, true], 0.002);
         let mut off =
             FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
         assert_eq!(*off.step(&input).unwrap(), FootAdmittanceOutput::default());
@@ -448,7 +500,8 @@ mod tests {
         let mut on = FootAdmittance::new(&config, 0.2, 0.09, 320.0).unwrap();
         let out = on.step(&input).unwrap();
         // the CoP is 2 cm ahead of the desired one (the left sole origin): pitch toe up (negative), no roll
-        let expected = leaky_admittance(0.0, 0.005, -6.0, 0.1, 0.002, 0.1);
+        let filtered = -6.0 * low_pass_gain(0.002, DEFAULT_ERROR_CUTOFF);
+        let expected = leaky_admittance(0.0, 0.005, filtered, 0.1, 0.002, 0.1);
         assert_eq!(out.feet[0].tilt, Vector2::new(0.0, expected));
         assert!(expected < 0.0);
         assert_eq!(out.feet[1], FootCorrection::default());
@@ -457,5 +510,53 @@ mod tests {
             ..input
         };
         assert!(on.step(&bad).is_err());
+    }
+
+    /// The error filter in series with the leaky integrator: for a torque error stepping from 0 to `e` at
+    /// load, the tilt follows the continuous cascade's closed form
+    /// `θ(t) = K e T [1 − (T e^{−t/T} − τ e^{−t/τ}) / (T − τ)]`, `τ = 1/(2π f_c)` (to the discretisation's
+    /// first order in `dt`); with `error_cutoff = 0` the tilt is the unfiltered law's, bit for bit.
+    #[test]
+    fn the_error_filter_ramps_a_step_in_and_zero_cutoff_is_the_unfiltered_law() {
+        let (k, t_leak, fc, dt) = (0.005, 0.1, 5.0, 1e-4);
+        let input = left_cop_ahead([true, false], dt);
+        let config = |error_cutoff| FootAdmittanceConfig {
+            enabled: true,
+            torque_gain: k,
+            torque_leak_time: t_leak,
+            error_cutoff,
+            ..Default::default()
+        };
+        let mut filtered = FootAdmittance::new(&config(fc), 0.2, 0.09, 320.0).unwrap();
+        let mut raw = FootAdmittance::new(&config(0.0), 0.2, 0.09, 320.0).unwrap();
+        let tau = 1.0 / (std::f64::consts::TAU * fc);
+        let (mut unfiltered, e) = (0.0, -6.0);
+        for n in 1..=3000 {
+            let t = n as f64 * dt;
+            let tilt = filtered.step(&input).unwrap().feet[0].tilt.y;
+            let exact = k
+                * e
+                * t_leak
+                * (1.0 - (t_leak * (-t / t_leak).exp() - tau * (-t / tau).exp()) / (t_leak - tau));
+            assert!(
+                (tilt - exact).abs() < 2e-3 * (k * e * t_leak).abs(),
+                "t {t}: {tilt} vs {exact}"
+            );
+            unfiltered = leaky_admittance(unfiltered, k, e, t_leak, dt, 0.1);
+            assert_eq!(raw.step(&input).unwrap().feet[0].tilt.y, unfiltered);
+        }
+        // early on the filtered tilt lags the unfiltered one (the step is ramped in)
+        let mut fresh = FootAdmittance::new(&config(fc), 0.2, 0.09, 320.0).unwrap();
+        let first = fresh.step(&input).unwrap().feet[0].tilt_rate.y;
+        assert!(first.abs() < 0.01 * (k * e).abs(), "first rate {first}");
+        // unloaded, the filtered error decays to zero and the tilt leaks back to the plan
+        let lifted = FootAdmittanceInput {
+            contacts: [false, false],
+            ..input
+        };
+        for _ in 0..20000 {
+            filtered.step(&lifted).unwrap();
+        }
+        assert!(filtered.output().feet[0].tilt.norm() < 1e-6);
     }
 }
