@@ -46,6 +46,15 @@ where
         }
     }
 
+    /// A filter with cut-off `cutoff` Hz whose output starts at `output` (the first sample is filtered
+    /// from it instead of passing through).
+    pub fn starting_at(cutoff: f64, output: T) -> Self {
+        Self {
+            cutoff,
+            output: Some(output),
+        }
+    }
+
     /// The cut-off frequency \[Hz\].
     pub fn cutoff(&self) -> f64 {
         self.cutoff
@@ -71,11 +80,31 @@ where
     pub fn reset(&mut self) {
         self.output = None;
     }
+
+    /// Sets the output to `output`, from which the next sample is filtered.
+    pub fn reset_to(&mut self, output: T) {
+        self.output = Some(output);
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Started at a value, the first sample is filtered from it (`y₁ = y₀ + α (x − y₀)`), and `reset_to`
+    /// restarts from the value given; `reset` lets the next sample through.
+    #[test]
+    fn starting_at_filters_the_first_sample_and_reset_to_restarts() {
+        let (dt, fc) = (0.002, 20.0);
+        let alpha = low_pass_gain(dt, fc);
+        let mut f = FirstOrderLowPass::starting_at(fc, 0.0);
+        assert_eq!(f.update(1.0, dt), alpha);
+        f.reset_to(2.0);
+        assert_eq!(f.output(), Some(2.0));
+        assert_eq!(f.update(1.0, dt), 2.0 + (1.0 - 2.0) * alpha);
+        f.reset();
+        assert_eq!(f.update(1.0, dt), 1.0);
+    }
 
     /// A unit step: after k samples the output is `1 − (1 − α)^k` (the closed form of the recursion), and the
     /// continuous filter's `1 − e^{−t/τ}` is approached as `dt → 0`.

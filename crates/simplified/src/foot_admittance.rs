@@ -24,7 +24,7 @@
 //! `x⁺ = a x + K e T (1 − a)`, `a = e^{−dt/T}`; the state is then clamped to its bound.
 //!
 //! The errors (`τ − τ*` per foot, the force difference's) reach the laws through a first-order low-pass
-//! filter of cut-off `error_cutoff` (the discretisation of [`stride_block::low_pass_gain`]), run on zero
+//! filter of cut-off `error_cutoff` ([`stride_block::FirstOrderLowPass`], starting at zero), run on zero
 //! while a foot (or the pair) is not loaded, so a touch-down ramps the error in rather than stepping it.
 //! The rates the laws send on as velocity references (`θ̇`, `δ̇`) then move smoothly: unfiltered, a
 //! contact whose wrench chatters from tick to tick (MuJoCo's four-corner box contact) steps the
@@ -33,7 +33,7 @@
 use nalgebra::{Isometry3, Vector2, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
-use stride_block::low_pass_gain;
+use stride_block::FirstOrderLowPass;
 
 use crate::error::{check_non_negative, check_positive, Result, SimplifiedError};
 
@@ -175,10 +175,10 @@ pub struct FootAdmittance {
     min_force: f64,
     /// Height difference `δ = z_L − z_R` \[m\].
     height_difference: f64,
-    /// Low-passed torque errors `[left, right]` (roll, pitch in the sole frame) \[N·m\].
-    torque_errors: [Vector2<f64>; 2],
-    /// Low-passed force difference error \[N\].
-    force_error: f64,
+    /// Low-pass filters of the torque errors `[left, right]` (roll, pitch in the sole frame) \[N·m\].
+    torque_errors: [FirstOrderLowPass<Vector2<f64>>; 2],
+    /// Low-pass filter of the force difference error \[N\].
+    force_error: FirstOrderLowPass<f64>,
     output: FootAdmittanceOutput,
 }
 
@@ -203,8 +203,9 @@ impl FootAdmittance {
             half_size: Vector2::new(foot_length, foot_width) * 0.5,
             min_force: MIN_ADMITTANCE_LOAD * weight,
             height_difference: 0.0,
-            torque_errors: [Vector2::zeros(); 2],
-            force_error: 0.0,
+            torque_errors: [FirstOrderLowPass::starting_at(config.error_cutoff, Vector2::zeros());
+                2],
+            force_error: FirstOrderLowPass::starting_at(config.error_cutoff, 0.0),
             output: FootAdmittanceOutput::default(),
         })
     }
@@ -217,8 +218,10 @@ impl FootAdmittance {
     /// Back to the plan (no correction).
     pub fn reset(&mut self) {
         self.height_difference = 0.0;
-        self.torque_errors = [Vector2::zeros(); 2];
-        self.force_error = 0.0;
+        for filter in &mut self.torque_errors {
+            filter.reset_to(Vector2::zeros());
+        }
+        self.force_error.reset_to(0.0);
         self.output = FootAdmittanceOutput::default();
     }
 
@@ -241,15 +244,13 @@ impl FootAdmittance {
             &self.half_size,
         );
         let c = self.config;
-        let smoothing = low_pass_gain(input.dt, c.error_cutoff);
         for k in 0..2 {
             let raw = if loaded[k] {
                 ankle_torque_error(&input.soles[k], &input.wrenches[k], &cops[k])
             } else {
                 Vector2::zeros()
             };
-            let error = smooth(self.torque_errors[k], raw, smoothing);
-            self.torque_errors[k] = error;
+            let error = self.torque_errors[k].update(raw, input.dt);
             let foot = &mut self.output.feet[k];
             for axis in 0..2 {
                 let e = error[axis];
@@ -270,8 +271,7 @@ impl FootAdmittance {
         } else {
             0.0
         };
-        let force_error = smooth(self.force_error, raw_force_error, smoothing);
-        self.force_error = force_error;
+        let force_error = self.force_error.update(raw_force_error, input.dt);
         let d = leaky_admittance(
             self.height_difference,
             c.force_gain,
@@ -289,22 +289,6 @@ impl FootAdmittance {
         self.output.desired_cop = cops;
         self.output.desired_force = forces;
         Ok(&self.output)
-    }
-}
-
-/// One step `y + α (x − y)` of the first-order low-pass filter of gain `alpha`
-/// ([`stride_block::low_pass_gain`]); `x` itself, bit for bit, when `alpha` is 1 (no filter).
-fn smooth<T>(y: T, x: T, alpha: f64) -> T
-where
-    T: Copy
-        + std::ops::Add<Output = T>
-        + std::ops::Sub<Output = T>
-        + std::ops::Mul<f64, Output = T>,
-{
-    if alpha < 1.0 {
-        y + (x - y) * alpha
-    } else {
-        x
     }
 }
 
@@ -406,6 +390,7 @@ fn clamp_to_sole(p: &Vector2<f64>, sole: &Isometry3<f64>, half: &Vector2<f64>) -
 mod tests {
     use super::*;
     use nalgebra::{Translation3, UnitQuaternion};
+    use stride_block::low_pass_gain;
 
     fn sole(x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
         Isometry3::from_parts(
