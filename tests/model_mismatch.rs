@@ -65,8 +65,8 @@ fn ten_percent_heavier_plant_walks_in_both_modes() {
 
 #[test]
 fn position_control_mass_limit() {
-    assert_walks("walk_straight.toml", Mismatch::MassScale(2.0));
-    assert_falls("walk_straight.toml", Mismatch::MassScale(2.1));
+    assert_walks("walk_straight.toml", Mismatch::MassScale(2.1));
+    assert_falls("walk_straight.toml", Mismatch::MassScale(2.2));
 }
 
 #[test]
@@ -77,8 +77,8 @@ fn torque_control_mass_limit() {
 
 #[test]
 fn position_control_torso_com_limit() {
-    assert_walks("walk_straight.toml", Mismatch::ChestComForward(0.20));
-    assert_falls("walk_straight.toml", Mismatch::ChestComForward(0.25));
+    assert_walks("walk_straight.toml", Mismatch::ChestComForward(0.25));
+    assert_falls("walk_straight.toml", Mismatch::ChestComForward(0.26));
 }
 
 #[test]

@@ -267,6 +267,8 @@ fn the_foot_admittance_stands_still_on_mujoco_only_with_its_error_filter() {
 #[test]
 fn the_mpc_position_walk_reaches_its_goal_on_mujoco_only_with_the_foot_admittance() {
     let mut scenario = Scenario::load(&config_path("walk_straight_mpc.toml")).expect("scenario");
+    // on by default in position control since 2026-12-05
+    scenario.config.simplified.foot_admittance.enabled = false;
     let without = run_scenario_on_mujoco(&scenario);
     assert!(
         matches!(without.outcome, Outcome::Fell { .. }),

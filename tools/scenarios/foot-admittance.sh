@@ -32,6 +32,10 @@ for s in "$@"; do
                 includes="$includes, \"$root/configs/layers/foot_admittance.toml\""
             fi
             echo "include = [$includes]" > "$overlay"
+            if [ "$admittance" = off ]; then
+                # On by default in position control since 2026-12-05.
+                printf '[simplified.foot_admittance]\nenabled = false\n' >> "$overlay"
+            fi
             if [ "$floor" != default ]; then
                 k="${floor%%:*}"
                 b="${floor##*:}"

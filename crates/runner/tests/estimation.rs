@@ -282,7 +282,11 @@ fn f(v: &serde_json::Value) -> f64 {
 #[test]
 fn foot_wrenches_and_joint_torques_match_the_simulator_on_a_walk() {
     let s = Scratch::new("wrench-torque");
-    let sc = walk(&s, "");
+    // The foot admittance (on by default since 2026-12-05) is off here: it shrinks the sole torques the
+    // bound below is relative to (2.9 → 2.3 N m RMS) while the estimator's error stays at its noise and
+    // delay floor (0.19 → 0.24 N m, the tilting soles adding accelerations it neglects), so the ratio
+    // would measure the controller, not the sensor models.
+    let sc = walk(&s, "[simplified.foot_admittance]\nenabled = false");
     commands(&s, &sc, false);
     let log = read_log(&s.path("true.mcap")).unwrap();
     let force = |e: &serde_json::Value, t: &serde_json::Value| {
@@ -314,7 +318,7 @@ fn foot_wrenches_and_joint_torques_match_the_simulator_on_a_walk() {
     eprintln!(
         "force {fe:.2} of {fn_:.2} N, torque {te:.3} of {tn:.3} N m, joints {je:.3} of {jn:.3} N m"
     );
-    // Measured (2026-12-02): 3.6 N of 112 N, 0.20 of 2.97 N m, 0.79 of 4.07 N m. The errors come from the
+    // Measured (2026-12-05, when_read): 3.3 N of 111 N, 0.19 of 2.91 N m, 0.70 of 4.06 N m. The errors come from the
     // sensor noise and offsets (learnt in the first swings), the 1 ms sensor delay and the accelerations the
     // estimator neglects (joints, base rotation); a wrong sign, frame or submodel is off by the signal.
     assert!(fe <= 0.05 * fn_, "foot force error {fe} N RMS of {fn_} N");
@@ -336,7 +340,7 @@ fn foot_wrenches_and_joint_torques_match_the_simulator_on_a_walk() {
 #[test]
 fn the_estimation_layer_can_tick_only_when_read() {
     let s = Scratch::new("when-read");
-    let every = walk(&s, "");
+    let every = walk(&s, "[estimation]\nupdate = \"every_sample\"");
     let when_read = walk(&s, "[estimation]\nupdate = \"when_read\"");
     let first = commands(&s, &when_read, false);
     assert_eq!(first, commands(&s, &when_read, false), "not deterministic");

@@ -49,7 +49,7 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
-/// | `enabled` | – | false | off: the sole references are the plan's, bit for bit |
+/// | `enabled` | – | true | on in position control since 2026-12-05; false: the sole references are the plan's, bit for bit |
 /// | `torque_gain` | rad/(N·m·s) | 0.005 | `K_τ`, the inverse of the damping `D` of [Kajita 2010, foot damping control] |
 /// | `torque_leak_time` | s | 0.1 | `T_τ`, time constant of the return of the tilt to the plan |
 /// | `max_tilt` | rad | 0.1 | bound on each tilt angle |
@@ -81,7 +81,7 @@ pub struct FootAdmittanceConfig {
 impl Default for FootAdmittanceConfig {
     fn default() -> Self {
         Self {
-            enabled: false,
+            enabled: true,
             torque_gain: 0.005,
             torque_leak_time: 0.1,
             max_tilt: 0.1,
@@ -475,13 +475,14 @@ mod tests {
     #[test]
     fn disabled_stays_at_zero_and_enabled_tilts_against_the_torque_error() {
         let input = left_cop_ahead([true, true], 0.002);
-        let mut off =
-            FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
-        assert_eq!(*off.step(&input).unwrap(), FootAdmittanceOutput::default());
-        let config = FootAdmittanceConfig {
-            enabled: true,
+        let disabled = FootAdmittanceConfig {
+            enabled: false,
             ..Default::default()
         };
+        let mut off = FootAdmittance::new(&disabled, 0.2, 0.09, 320.0).unwrap();
+        assert_eq!(*off.step(&input).unwrap(), FootAdmittanceOutput::default());
+        let config = FootAdmittanceConfig::default();
+        assert!(config.enabled, "on by default");
         let mut on = FootAdmittance::new(&config, 0.2, 0.09, 320.0).unwrap();
         let out = on.step(&input).unwrap();
         // the CoP is 2 cm ahead of the desired one (the left sole origin): pitch toe up (negative), no roll

@@ -89,8 +89,8 @@ pub enum PlantKind {
 pub struct EstimationSection {
     /// `ekf` (default): the estimation layer; `ground_truth`: the plant's truth, for debugging only.
     pub kind: EstimationKind,
-    /// `every_sample` (default): a full tick of the estimation layer on every plant sample; `when_read`: a
-    /// full tick only on the ticks that read the estimate, the samples in between pre-integrated.
+    /// `when_read` (default): a full tick of the estimation layer only on the ticks that read the estimate,
+    /// the samples in between pre-integrated; `every_sample`: a full tick on every plant sample.
     pub update: EstimationUpdate,
     /// Cut-off \[Hz\] of the first-order low-pass filter on the measured ZMP the simplified layer reads (0: unfiltered).
     pub measured_zmp_cutoff: f64,
@@ -161,12 +161,12 @@ pub enum EstimationKind {
 #[serde(rename_all = "snake_case")]
 pub enum EstimationUpdate {
     /// On every plant sample (2 kHz with the default rates).
-    #[default]
     EverySample,
     /// On the ticks whose layers or log read the estimate (the whole-body, simplified, planner and state-log
     /// ticks: 500 Hz with the default rates); the IMU samples in between are pre-integrated into the EKF's
     /// mean (`stride_estimation::Estimator::preintegrate`) and the covariance is propagated over the whole
     /// interval at the next full tick.
+    #[default]
     WhenRead,
 }
 
