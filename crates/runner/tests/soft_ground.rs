@@ -9,7 +9,7 @@ mod common;
 
 use common::Scratch;
 use stride_runner::config::Scenario;
-use stride_runner::run::{run_scenario, Outcome, RunOptions};
+use stride_runner::run::{run_scenario, Outcome, RunOptions, RunSummary};
 
 /// A scenario file `name.toml` including `configs/walk_soft_ground_torque.toml`, with `extra` appended.
 fn soft_walk_file(s: &Scratch, name: &str, extra: &str) -> std::path::PathBuf {
@@ -145,25 +145,14 @@ fn the_compliant_tsid_walks_its_first_steps_where_the_rigid_one_falls() {
             "[wbc.tsid.compliant]\nplan_on_surface = false\n",
         ),
     ] {
-        let scenario =
-            Scenario::load(&s.write(&format!("{name}.toml"), &format!("{include}{extra}")))
-                .unwrap();
-        let summary = run_scenario(&scenario, &options(&s, name)).unwrap();
-        assert!(
-            matches!(
-                summary.outcome,
-                Outcome::Fell { .. } | Outcome::Error { .. }
-            ),
-            "{name}: {}",
-            summary.render()
-        );
+        let summary = assert_falls(&s, name, &format!("{include}{extra}"));
         assert!(summary.distance < 0.15, "{name}: {}", summary.render());
     }
 }
 
-/// Runs the scenario file `text` (written as `name.toml`) and asserts that the robot falls (or the run
-/// diverges).
-fn assert_falls(s: &Scratch, name: &str, text: &str) {
+/// Runs the scenario file `text` (written as `name.toml`), asserts that the robot falls (or the run
+/// diverges) and returns the run's summary.
+fn assert_falls(s: &Scratch, name: &str, text: &str) -> RunSummary {
     let scenario = Scenario::load(&s.write(&format!("{name}.toml"), text)).unwrap();
     let summary = run_scenario(&scenario, &options(s, name)).unwrap();
     assert!(
@@ -174,4 +163,5 @@ fn assert_falls(s: &Scratch, name: &str, text: &str) {
         "{name}: {}",
         summary.render()
     );
+    summary
 }
