@@ -40,6 +40,7 @@ pub mod run;
 pub mod setup;
 pub mod sim_plant;
 pub mod sink;
+pub mod soft_soles;
 pub mod stack;
 pub mod step_adjust;
 pub mod summary;

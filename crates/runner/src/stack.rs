@@ -17,7 +17,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use nalgebra::{Vector2, Vector3, Vector6};
+use nalgebra::{Isometry3, Vector2, Vector3, Vector6};
 use stride_block::{seconds, FirstOrderLowPass};
 use stride_estimation::{Estimator, EstimatorOutput};
 use stride_model::{FrameId, KinDyn, Model, RobotState, VelocityRepresentation};
@@ -36,6 +36,7 @@ use crate::error::RunError;
 use crate::flexible::{FlexibleObserver, FlexibleSprings};
 use crate::robot::{JointCommand, Measurement};
 use crate::setup::frame_of;
+use crate::soft_soles::zero_force_sole;
 use crate::step_adjust::{AdjustedFootstepMsg, StepTracker};
 use crate::wrench_split::planned_foot_wrenches;
 
@@ -583,15 +584,34 @@ impl Stack {
         if let Some(g) = &goal {
             self.goal = g.clone();
         }
+        let soles = self.planning_soles();
         self.planner_input = PlannerInput {
             time: Duration::from_nanos(time_ns),
             goal,
-            left_sole: self.measured.soles[0],
-            right_sole: self.measured.soles[1],
+            left_sole: soles[0],
+            right_sole: soles[1],
         };
         let sample = self.planner.step(&self.planner_input)?;
         self.plan_sample = *sample;
         Ok(true)
+    }
+
+    /// The soles the planner starts from: the measured ones, or with the compliant TSID's
+    /// `plan_on_surface` their zero-force poses on its ground ([`zero_force_sole`]).
+    fn planning_soles(&self) -> [Isometry3<f64>; 2] {
+        let mut soles = self.measured.soles;
+        if let Wbc::Tsid(t) = &self.wbc {
+            let c = &t.config().compliant;
+            if let (ContactModel::Compliant, true, Some(ground)) =
+                (t.config().contact_model, c.plan_on_surface, t.ground())
+            {
+                let area = c.sole_length * c.sole_width;
+                for (s, w) in soles.iter_mut().zip(&self.estimate.foot_wrenches) {
+                    *s = zero_force_sole(s, w, ground.stiffness, area);
+                }
+            }
+        }
+        soles
     }
 
     /// Samples the plan at `time_ns` into [`Stack::plan_sample`].

@@ -661,6 +661,7 @@ pub enum ContactModel {
 /// | `feasibility_horizon` | s | 0.02 | `T` of the one-step-ahead feasibility `A (f + ḟ T) ≤ 0` [eq. 8.2.12] |
 /// | `estimate_ground` | – | false | estimate `k`, `b` online (RLS, [eq. 8.2.20–8.2.22]) from the loaded soles, covariance reset at touch-down, prior the two values above with their own size as standard deviation |
 /// | `estimator_wrench_std` | N, N·m | [2, 0.2] | standard deviations of the measured force and torque for that estimate |
+/// | `plan_on_surface` | – | false | the runner plans the footholds from the soles' zero-force poses (raised by their static sink `f_z / (k l w)`), so the swing feet land on the ground's surface, not as deep as the standing feet sank |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CompliantConfig {
@@ -682,6 +683,10 @@ pub struct CompliantConfig {
     pub estimate_ground: bool,
     /// `[force (N), torque (N·m)]` standard deviations of the measured wrench for the ground estimate.
     pub estimator_wrench_std: [f64; 2],
+    /// The runner plans the footholds from the soles' zero-force poses, raised by their static sink
+    /// `f_z / (k l w)` of a flat sole [Romualdi 2022, eq. 8.1.7a], so that the swing feet land on the
+    /// ground's surface rather than as deep as the standing feet sank.
+    pub plan_on_surface: bool,
 }
 
 impl Default for CompliantConfig {
@@ -696,6 +701,7 @@ impl Default for CompliantConfig {
             feasibility_horizon: 0.02,
             estimate_ground: false,
             estimator_wrench_std: [2.0, 0.2],
+            plan_on_surface: false,
         }
     }
 }
