@@ -33,6 +33,7 @@ pub mod model_cmd;
 #[cfg(feature = "mujoco")]
 pub mod mujoco_plant;
 pub mod plot;
+pub mod push;
 pub mod records;
 pub mod replay;
 pub mod robot;

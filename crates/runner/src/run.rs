@@ -387,6 +387,15 @@ impl<'a> Loop<'a> {
             );
             self.event(t, "step_adjustment", detail)?;
         }
+        if let Some(f) = self.stack.push_hold_started.take() {
+            let detail = format!(
+                "double support held: push estimate ({:.1}, {:.1}) N, plan {:.2} s behind",
+                f.x,
+                f.y,
+                self.stack.plan_clock.delay()
+            );
+            self.event(t, "push_hold", detail)?;
+        }
         if let Some(message) = held {
             let detail = format!("simplified layer held its references: {message}");
             self.event(t, "hold", detail)?;

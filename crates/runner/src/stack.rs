@@ -27,13 +27,16 @@ use stride_simplified::{
     SimplifiedOutput, StepAdjuster,
 };
 pub use stride_walking::soles_heading;
-use stride_walking::{MeasuredCentroidal, SimplifiedInputBuilder, WalkingHandles};
+use stride_walking::{
+    scale_plan_sample, MeasuredCentroidal, PlanClock, SimplifiedInputBuilder, WalkingHandles,
+};
 use stride_wbc::{ContactId, ContactModel, QpIk, Tsid, WbcInput};
 
 use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
 use crate::config::{ControlMode, EstimationKind, EstimationUpdate, Goal, Scenario};
 use crate::error::RunError;
 use crate::flexible::{FlexibleObserver, FlexibleSprings};
+use crate::push::PushResponse;
 use crate::robot::{JointCommand, Measurement};
 use crate::setup::frame_of;
 use crate::soft_soles::zero_force_sole;
@@ -294,6 +297,16 @@ pub struct Stack {
     pub adjusted_footstep: Option<AdjustedFootstepMsg>,
     /// The centroidal MPC (`simplified.dcm_controller = "centroidal_mpc"`).
     pub centroidal: Option<CentroidalLayer>,
+    /// The plan's clock: plan time, which stops while a push holds the double support (identity
+    /// otherwise).
+    pub plan_clock: PlanClock,
+    /// The push estimate and the double-support hold (`simplified.push.enabled`).
+    pub push: Option<PushResponse>,
+    /// The push estimate \[N\] when a double-support hold started at the last simplified tick, for the
+    /// `push_hold` event (taken by the scheduler).
+    pub push_hold_started: Option<Vector2<f64>>,
+    /// The whole-body period \[s\] (the push observer's step).
+    wbc_period: f64,
     /// Angular momentum reference of the last simplified tick (the centroidal MPC's; zero otherwise)
     /// \[kg m²/s\].
     angular_momentum_reference: Vector3<f64>,
@@ -326,6 +339,21 @@ pub struct Counters {
     pub step_adjustments: u64,
     /// Footstep adjustments the planner refused (the plan was kept).
     pub step_adjustment_failures: u64,
+}
+
+impl Stack {
+    /// The plan time at controller time `time_ns` (advances [`Stack::plan_clock`]).
+    fn plan_time(&mut self, time_ns: u64) -> Duration {
+        self.plan_clock.plan_time(Duration::from_nanos(time_ns))
+    }
+
+    /// Double supports held by a push so far, and the plan's delay behind the controller's time \[s\].
+    pub fn push_holds(&self) -> (u64, f64) {
+        (
+            self.push.as_ref().map_or(0, |p| p.holds),
+            self.plan_clock.delay(),
+        )
+    }
 }
 
 impl Stack {
@@ -441,6 +469,18 @@ impl Stack {
                 _ => None,
             },
             angular_momentum_reference: Vector3::zeros(),
+            plan_clock: PlanClock::new(c.simplified.push.hold_ramp),
+            push: if c.simplified.push.enabled {
+                Some(PushResponse::new(
+                    &c.simplified.push,
+                    kd.total_mass(),
+                    model.gravity(),
+                )?)
+            } else {
+                None
+            },
+            push_hold_started: None,
+            wbc_period: 1.0 / f64::from(c.rates.wbc_hz),
             flexible,
             flexible_observer,
             preintegrate_unread,
@@ -586,7 +626,7 @@ impl Stack {
         }
         let soles = self.planning_soles();
         self.planner_input = PlannerInput {
-            time: Duration::from_nanos(time_ns),
+            time: self.plan_time(time_ns),
             goal,
             left_sole: soles[0],
             right_sole: soles[1],
@@ -614,10 +654,12 @@ impl Stack {
         soles
     }
 
-    /// Samples the plan at `time_ns` into [`Stack::plan_sample`].
+    /// Samples the plan at the plan time of `time_ns` into [`Stack::plan_sample`], its derivatives
+    /// scaled by the plan clock's rate ([`stride_walking::scale_plan_sample`]).
     pub fn sample_plan(&mut self, time_ns: u64) -> Result<(), RunError> {
-        self.planner
-            .sample(Duration::from_nanos(time_ns), &mut self.plan_sample)?;
+        let t = self.plan_time(time_ns);
+        self.planner.sample(t, &mut self.plan_sample)?;
+        scale_plan_sample(&mut self.plan_sample, self.plan_clock.rate());
         Ok(())
     }
 
@@ -626,7 +668,11 @@ impl Stack {
     pub fn simplified_tick(&mut self, time_ns: u64) -> Result<Option<String>, RunError> {
         self.sample_plan(time_ns)?;
         self.measure_dcm(self.plan_sample.omega);
+        self.respond_to_push();
         self.adjust_step(time_ns);
+        if let Some(push) = &self.push {
+            push.lean(&mut self.plan_sample);
+        }
         let centroidal_error = self.centroidal_tick(time_ns)?;
         let plan = self.planner.plan().ok_or(RunError::NoPlan {
             layer: "simplified",
@@ -640,15 +686,11 @@ impl Stack {
             soles: m.soles,
         };
         let i = &mut self.simplified_input;
-        self.simplified_glue.fill(
-            i,
-            Duration::from_nanos(time_ns),
-            plan,
-            &self.plan_sample,
-            &measured,
-        )?;
+        let plan_time = self.plan_clock.plan_time(Duration::from_nanos(time_ns));
+        self.simplified_glue
+            .fill(i, plan_time, plan, &self.plan_sample, &measured)?;
         if let Some(layer) = &self.centroidal {
-            let r = layer.write_references(i, time_ns as f64 * 1e-9);
+            let r = layer.write_references(i, seconds(plan_time));
             self.angular_momentum_reference = r.angular_momentum;
         }
         match self.simplified.step(&self.simplified_input) {
@@ -675,10 +717,20 @@ impl Stack {
         let Some(plan) = self.planner.plan() else {
             return;
         };
-        let time = Duration::from_nanos(time_ns);
-        let Some(request) =
-            tracker.request(plan, adjuster, &self.measured.dcm, &self.plan_sample, time)
-        else {
+        let time = self.plan_clock.plan_time(Duration::from_nanos(time_ns));
+        let cop = self.plan_sample.zmp.xy();
+        let cop = self
+            .push
+            .as_ref()
+            .map_or(cop, |p| p.effective_cop(cop, self.plan_sample.omega));
+        let Some(request) = tracker.request(
+            plan,
+            adjuster,
+            &self.measured.dcm,
+            &self.plan_sample,
+            cop,
+            time,
+        ) else {
             return;
         };
         match self.planner.adjust_step(&request, &self.goal) {
@@ -702,14 +754,8 @@ impl Stack {
         let plan = self.planner.plan().ok_or(RunError::NoPlan {
             layer: "simplified",
         })?;
-        let time = Duration::from_nanos(time_ns);
-        let e = &self.estimate;
-        let mut feet_force = Vector3::zeros();
-        for (w, in_contact) in e.foot_wrenches.iter().zip(e.contacts) {
-            if in_contact {
-                feet_force += w.fixed_rows::<3>(0);
-            }
-        }
+        let time = self.plan_clock.plan_time(Duration::from_nanos(time_ns));
+        let feet_force = feet_force(&self.estimate);
         let measurement = CentroidalMeasurement {
             com: self.measured.com,
             com_velocity: self.measured.com_velocity,
@@ -742,10 +788,41 @@ impl Stack {
         Ok(None)
     }
 
+    /// The push observer's step of one whole-body tick (when enabled, see [`crate::push`]): the
+    /// measured CoM velocity against both feet's estimated forces (whatever the contact flags: the
+    /// estimated wrenches are the ground's on the soles, zero in the air, and the contact detection lags
+    /// a touch-down's first braking force).
+    fn observe_push(&mut self) -> Result<(), RunError> {
+        let w = &self.estimate.foot_wrenches;
+        let feet_force = (w[0] + w[1]).fixed_rows::<3>(0).into_owned();
+        if let Some(push) = self.push.as_mut() {
+            let dt = self.wbc_period;
+            push.observe(dt, &self.measured.com_velocity, &feet_force)?;
+        }
+        Ok(())
+    }
+
+    /// The push response of one simplified tick (when enabled): the plan clock held or run for the
+    /// next ticks.
+    fn respond_to_push(&mut self) {
+        let Some(push) = self.push.as_mut() else {
+            return;
+        };
+        let walking = self
+            .planner
+            .plan()
+            .is_some_and(|p| stride_walking::is_walking(p, self.plan_sample.time));
+        let dt = self.simplified.period();
+        if push.decide(dt, &self.plan_sample, walking, &mut self.plan_clock) {
+            self.push_hold_started = Some(push.estimate());
+        }
+    }
+
     /// One whole-body tick at `time_ns`: references from the plan (feet, CoM height, torso) and the
     /// simplified layer (CoM xy, desired ZMP), measured state in; [`Stack::command`] out.
     pub fn wbc_tick(&mut self, time_ns: u64) -> Result<(), RunError> {
         self.sample_plan(time_ns)?;
+        self.observe_push()?;
         let s = &self.plan_sample;
         let i = &mut self.wbc_input;
         i.state.copy_from(&self.estimate.state);
@@ -839,7 +916,7 @@ impl Stack {
     /// Whether the plan has ended (the robot should be standing at the goal).
     pub fn plan_finished(&self, time_ns: u64) -> bool {
         self.planner.plan().is_some_and(|p| {
-            let t = time_ns as f64 * 1e-9;
+            let t = time_ns as f64 * 1e-9 - self.plan_clock.delay();
             t >= p.end_time && self.next_event >= self.events.len()
         })
     }
@@ -860,6 +937,17 @@ fn foot_admittance(
     let admittance =
         FootAdmittance::new(config, c.planner.foot_length, c.planner.foot_width, weight)?;
     Ok(Some((admittance, 1.0 / f64::from(c.rates.wbc_hz))))
+}
+
+/// The sum of the estimated contact forces of the feet in contact \[N\] (world frame).
+fn feet_force(e: &EstimatorOutput) -> Vector3<f64> {
+    let mut force = Vector3::zeros();
+    for (w, in_contact) in e.foot_wrenches.iter().zip(e.contacts) {
+        if in_contact {
+            force += w.fixed_rows::<3>(0);
+        }
+    }
+    force
 }
 
 /// The frames the measured quantities come from.

@@ -41,13 +41,15 @@ pub struct StepTracker {
 impl StepTracker {
     /// The adjustment to apply at `time`, if any: `None` outside single support, with less than
     /// `min_remaining_time` before the planned touch-down (frozen), when the QP falls back or when its
-    /// answer is within the dead bands of what the plan has.
+    /// answer is within the dead bands of what the plan has. `stance_cop` is the single-support ZMP the
+    /// QP predicts the DCM with (the plan's, or the push-aware one of [`crate::push::PushResponse`]).
     pub fn request(
         &mut self,
         plan: &Plan,
         adjuster: &mut StepAdjuster,
         dcm: &Vector2<f64>,
         sample: &PlanSample,
+        stance_cop: Vector2<f64>,
         time: Duration,
     ) -> Option<StepAdjustmentRequest> {
         let t = seconds(time);
@@ -86,7 +88,7 @@ impl StepTracker {
             stance: step.stance,
             stance_position: step.stance_pose.translation.vector.xy(),
             stance_yaw: step.stance_pose.rotation.euler_angles().2,
-            stance_cop: sample.zmp.xy(),
+            stance_cop,
             nominal_step: tracked.nominal_target,
             nominal_offset: tracked.nominal_offset,
             time_since_touchdown: t - tracked.stance_touchdown,

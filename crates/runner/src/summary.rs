@@ -157,6 +157,9 @@ pub struct RunSummary {
     /// Footsteps moved by the step adjustment (`simplified.step_adjustment`), and the adjustments the planner
     /// refused (the plan kept).
     pub step_adjustments: (u64, u64),
+    /// Double supports held by a push (`simplified.push`), and the plan's delay behind the run's time at
+    /// the end \[s\].
+    pub push_holds: (u64, f64),
     /// Realtime mode: whole-body ticks that started late.
     pub deadline_misses: u64,
     /// Estimation errors (estimate − plant truth).
@@ -196,6 +199,7 @@ impl RunSummary {
             simplified_holds: 0,
             replans: 0,
             step_adjustments: (0, 0),
+            push_holds: (0, 0.0),
             deadline_misses: 0,
             estimation: EstimationSummary::default(),
             log: None,
@@ -320,6 +324,13 @@ impl RunSummary {
             let _ = writeln!(
                 s,
                 "  step adjustments {applied} (refused by the planner {refused})"
+            );
+        }
+        let (holds, delay) = self.push_holds;
+        if holds > 0 {
+            let _ = writeln!(
+                s,
+                "  double supports held by a push {holds} (the plan {delay:.2} s behind)"
             );
         }
         if let Some((p, st)) = &self.log {

@@ -71,4 +71,19 @@ fn steady_state_ticks_do_not_allocate() {
         "foot admittance: {short} allocations in 1.5 s, {long} in {} s",
         1.5 + extra_seconds
     );
+    // torque control with the push response (`simplified.push`: momentum observer, plan clock) under a
+    // push in the measured window
+    let push = s.write(
+        "p.toml",
+        "include = [\"s.toml\"]\n[scenario]\ncontrol_mode = \"torque\"\n[simplified.push]\nenabled = true\n\
+         [[sim.pushes]]\nframe = \"chest\"\nstart = 2.0\nduration = 1.0\nwrench = [0.0, 15.0, 0.0, 0.0, 0.0, 0.0]\n",
+    );
+    let sc = Scenario::load(&push).unwrap();
+    let short = allocations_for(&s, &sc, PlantKind::Simulator, 1.5, false);
+    let long = allocations_for(&s, &sc, PlantKind::Simulator, 1.5 + extra_seconds, false);
+    assert!(
+        long.abs_diff(short) <= 5,
+        "push response: {short} allocations in 1.5 s, {long} in {} s",
+        1.5 + extra_seconds
+    );
 }

@@ -14,6 +14,7 @@ use crate::dcm_predictive::{
 use crate::error::{check_finite, Result, SimplifiedError};
 use crate::foot_admittance::FootAdmittanceConfig;
 use crate::lipm::{check_omega, check_point};
+use crate::push_observer::PushConfig;
 use crate::step_adjustment::StepAdjustmentConfig;
 use crate::zmp_com::{ZmpComConfig, ZmpComController, ZmpComGains};
 use stride_block::SupportPolygon;
@@ -44,6 +45,7 @@ pub enum DcmControllerKind {
 /// | `centroidal_mpc` | see [`CentroidalMpcConfig`] | horizon, weights, adjustment box of the centroidal MPC (used by the runner when selected) |
 /// | `step_adjustment` | see [`StepAdjustmentConfig`] | `enabled` false; box, durations and weights of the step-adjustment QP (used by the runner) |
 /// | `foot_admittance` | see [`FootAdmittanceConfig`] | `enabled` false; foot damping and force difference control of position control (used by the runner) |
+/// | `push` | see [`PushConfig`] | `enabled` false; push estimate (momentum observer), double-support hold, push-aware step adjustment (used by the runner) |
 ///
 /// ```toml
 /// dcm_controller = "predictive"
@@ -69,6 +71,8 @@ pub struct SimplifiedConfig {
     pub step_adjustment: StepAdjustmentConfig,
     /// Foot admittance of position control (the runner moves the sole references when `enabled`).
     pub foot_admittance: FootAdmittanceConfig,
+    /// Push estimate and the stack's response to it (the runner runs it when `enabled`).
+    pub push: PushConfig,
 }
 
 impl SimplifiedConfig {
@@ -79,6 +83,7 @@ impl SimplifiedConfig {
         self.zmp_com.validate()?;
         self.centroidal_mpc.validate()?;
         self.step_adjustment.validate()?;
+        self.push.validate()?;
         self.foot_admittance.validate()
     }
 }

@@ -54,6 +54,13 @@
 //! [Khadiv 2020] solved by stride-qp's active-set solver without allocation. The runner calls it during
 //! single support and retargets the swing foot.
 //!
+//! # Push estimate
+//!
+//! [`PushObserver`] (config [`PushConfig`], section `[push]`, off by default): the horizontal external
+//! force from a linear-momentum observer (measured contact forces against the measured CoM velocity);
+//! [`push_zmp_offset`] is its LIPM ZMP offset `F/(m ω²)`. The runner holds the double support while it is
+//! large and gives it to the step adjustment.
+//!
 //! # Centroidal MPC
 //!
 //! [`CentroidalMpc`] (config [`CentroidalMpcConfig`]): the reduced-model layer of [Romualdi 2022, ch. 11]
@@ -75,6 +82,7 @@ mod dcm_predictive;
 mod error;
 mod foot_admittance;
 mod lipm;
+mod push_observer;
 mod step_adjustment;
 mod wrench;
 mod zmp_com;
@@ -103,6 +111,7 @@ pub use foot_admittance::{
     MIN_ADMITTANCE_LOAD,
 };
 pub use lipm::{dcm_from_com, dcm_velocity, natural_frequency, zmp_from_dcm, LipmDiscretization};
+pub use push_observer::{push_zmp_offset, PushConfig, PushObserver};
 pub use step_adjustment::{
     StepAdjuster, StepAdjustment, StepAdjustmentConfig, StepAdjustmentDiagnostics,
     StepAdjustmentInput, StepAdjustmentStatus, STEP_ADJUSTMENT_VARIABLES,

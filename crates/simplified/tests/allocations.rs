@@ -175,3 +175,19 @@ fn foot_admittance_does_not_allocate() {
     // the left CoP (x ≤ 1 cm) stays behind its desired 2 cm: toe down (positive pitch)
     assert!(admittance.output().feet[0].tilt.y > 0.0);
 }
+
+#[test]
+fn push_observer_does_not_allocate() {
+    use nalgebra::Vector3;
+    let mut observer =
+        PushObserver::new(&PushConfig::default(), 32.8, Vector3::new(0.0, 0.0, -9.81)).unwrap();
+    let weight = Vector3::new(0.0, 0.0, 32.8 * 9.81);
+    let (_, n) = ALLOC.allocations_during(|| {
+        for i in 0..200 {
+            let v = Vector3::new(0.0, 0.02 * i as f64, 0.0);
+            observer.update(0.01, &v, &weight).unwrap();
+        }
+    });
+    assert_eq!(n, 0, "push observer allocated");
+    assert!(observer.horizontal().y > 0.0);
+}

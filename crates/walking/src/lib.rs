@@ -7,11 +7,13 @@
 
 mod heading;
 mod measure;
+mod plan_clock;
 mod simplified_input;
 pub mod wbc_input;
 
 pub use heading::soles_heading;
 pub use measure::{feet_zmp, CentroidalMeter, MEASURED_ZMP_CUTOFF, MIN_ZMP_LOAD};
+pub use plan_clock::{scale_plan_sample, PlanClock};
 pub use simplified_input::{
     is_walking, support_polygon, MeasuredCentroidal, SimplifiedInputBuilder, SimplifiedInputError,
 };

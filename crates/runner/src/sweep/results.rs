@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::run::{Outcome, RunSummary};
 
 /// The columns after the axes, in order.
-pub const METRIC_COLUMNS: [&str; 21] = [
+pub const METRIC_COLUMNS: [&str; 22] = [
     "outcome",
     "distance",
     "goal_distance",
@@ -34,6 +34,7 @@ pub const METRIC_COLUMNS: [&str; 21] = [
     "zmp_rms",
     "com_rms",
     "cop_bound_time",
+    "push_holds",
 ];
 
 /// One cell.
@@ -161,6 +162,7 @@ pub fn metric_cells(summary: Option<&RunSummary>, wall_s: f64) -> Vec<Cell> {
         Cell::Float(s.zmp_error.rms),
         Cell::Float(s.com_error.rms),
         Cell::Float(s.diagnosis.cop_bound.at_edge),
+        Cell::Int(i64::try_from(s.push_holds.0).unwrap_or(i64::MAX)),
     ]
 }
 

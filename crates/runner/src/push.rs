@@ -1,0 +1,243 @@
+//! The runner's response to a push (`[simplified.push] enabled = true`, issue 13): the momentum
+//! observer's estimate of the horizontal external force ([`stride_simplified::PushObserver`]) at every
+//! simplified tick, the double-support hold it drives (the plan's clock, [`stride_walking::PlanClock`],
+//! slows to a stop while the estimate exceeds `hold_force` in a double support of a walk, for at most
+//! `max_hold` per double support) and the push-aware step adjustment (the effective ZMP
+//! `p − F̂/(m ω²)` given to the step-adjustment QP as its stance CoP).
+
+use nalgebra::{Vector2, Vector3};
+use stride_planner::{PhaseKind, PlanSample};
+use stride_simplified::{push_zmp_offset, PushConfig, PushObserver, SimplifiedError};
+use stride_walking::PlanClock;
+
+/// The push estimate and the hold decision; no allocation.
+#[derive(Debug, Clone)]
+pub struct PushResponse {
+    config: PushConfig,
+    observer: PushObserver,
+    mass: f64,
+    /// The horizontal estimate of the last tick \[N\].
+    estimate: Vector2<f64>,
+    /// How long the estimate has been above `hold_force` \[s\].
+    pushed_for: f64,
+    /// The clock's delay when the current double support began (`None` outside double support) \[s\].
+    double_support_start: Option<f64>,
+    /// Double supports held so far.
+    pub holds: u64,
+}
+
+impl PushResponse {
+    /// The response of `config` for a robot of `mass` \[kg\] under `gravity` \[m/s²\].
+    pub fn new(
+        config: &PushConfig,
+        mass: f64,
+        gravity: Vector3<f64>,
+    ) -> Result<Self, SimplifiedError> {
+        Ok(Self {
+            config: *config,
+            observer: PushObserver::new(config, mass, gravity)?,
+            mass,
+            estimate: Vector2::zeros(),
+            pushed_for: 0.0,
+            double_support_start: None,
+            holds: 0,
+        })
+    }
+
+    /// The horizontal push estimate of the last tick \[N\].
+    pub fn estimate(&self) -> Vector2<f64> {
+        self.estimate
+    }
+
+    /// One observer step of `dt` \[s\] (every whole-body tick: the contact forces change within a
+    /// simplified period at a touch-down, and sampling them at 100 Hz aliases the impact into a ±20 N
+    /// false push) from the measured CoM velocity and the contact forces. Errors: non-finite
+    /// measurements (the estimate is kept).
+    pub fn observe(
+        &mut self,
+        dt: f64,
+        com_velocity: &Vector3<f64>,
+        contact_force: &Vector3<f64>,
+    ) -> Result<(), SimplifiedError> {
+        self.estimate = self.observer.update(dt, com_velocity, contact_force)?;
+        Ok(())
+    }
+
+    /// Tells `clock` to hold or run for the plan `sample` (taken at the clock's plan time) while
+    /// `walking` (every simplified tick, `dt` \[s\] apart). A hold starts in a double support once the
+    /// estimate has stayed above `hold_force` for `hold_delay`, and lasts while it stays above, at most
+    /// `max_hold`. Returns whether a hold started.
+    pub fn decide(
+        &mut self,
+        dt: f64,
+        sample: &PlanSample,
+        walking: bool,
+        clock: &mut PlanClock,
+    ) -> bool {
+        let pushed = self.estimate.norm() > self.config.hold_force;
+        self.pushed_for = if pushed { self.pushed_for + dt } else { 0.0 };
+        let double_support = walking && sample.phase == PhaseKind::DoubleSupport;
+        if !double_support {
+            self.double_support_start = None;
+            clock.hold(false);
+            return false;
+        }
+        let start = *self.double_support_start.get_or_insert(clock.delay());
+        let persistent = self.pushed_for >= self.config.hold_delay - 1e-9;
+        let hold = self.config.hold_double_support
+            && pushed
+            && (clock.holding() || persistent)
+            && clock.delay() - start < self.config.max_hold;
+        let started = hold && !clock.holding();
+        if started {
+            self.holds += 1;
+        }
+        clock.hold(hold);
+        started
+    }
+
+    /// Moves the planned CoM and DCM of `sample` against the push by `lean F̂/(m ω²)` (the pushed
+    /// LIPM `ẍ = ω² (x − p) + F/m` then keeps the plan's ZMP at the shifted CoM); the ZMP stays.
+    pub fn lean(&self, sample: &mut PlanSample) {
+        if self.config.lean == 0.0 || sample.omega <= 0.0 {
+            return;
+        }
+        let shift = -push_zmp_offset(&self.estimate, self.mass, sample.omega) * self.config.lean;
+        for p in [&mut sample.com_position, &mut sample.dcm_position] {
+            p.x += shift.x;
+            p.y += shift.y;
+        }
+    }
+
+    /// The stance CoP the step-adjustment QP predicts the DCM with: the planned one moved by the push's
+    /// LIPM offset, `p − F̂/(m ω²)` (unchanged when `step_adjustment` is off).
+    pub fn effective_cop(&self, planned: Vector2<f64>, omega: f64) -> Vector2<f64> {
+        if !self.config.step_adjustment || omega <= 0.0 {
+            return planned;
+        }
+        planned - push_zmp_offset(&self.estimate, self.mass, omega)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    fn response(config: PushConfig) -> PushResponse {
+        PushResponse::new(&config, 30.0, Vector3::new(0.0, 0.0, -9.81)).unwrap()
+    }
+
+    fn sample(phase: PhaseKind) -> PlanSample {
+        PlanSample {
+            phase,
+            ..PlanSample::default()
+        }
+    }
+
+    /// A 30 kg body on a support carrying its weight, pushed by 20 N along y from 0.1 s; its velocity
+    /// is the exact `F (t − 0.1)/m`.
+    fn push_run(
+        r: &mut PushResponse,
+        clock: &mut PlanClock,
+        phase: PhaseKind,
+        walking: bool,
+        seconds: f64,
+    ) {
+        let weight = Vector3::new(0.0, 0.0, 30.0 * 9.81);
+        let s = sample(phase);
+        for k in 0..(seconds / 0.01).round() as u64 {
+            let t = k as f64 * 0.01;
+            let v = Vector3::new(0.0, 20.0 * (t - 0.1).max(0.0) / 30.0, 0.0);
+            clock.plan_time(Duration::from_millis(k * 10));
+            r.observe(0.01, &v, &weight).unwrap();
+            r.decide(0.01, &s, walking, clock);
+        }
+    }
+
+    #[test]
+    fn a_push_in_double_support_holds_the_clock_and_a_push_in_single_support_does_not() {
+        let mut r = response(PushConfig::default());
+        let mut clock = PlanClock::new(0.1);
+        push_run(&mut r, &mut clock, PhaseKind::DoubleSupport, true, 1.0);
+        // 20 N less the 6 N dead zone
+        assert!((r.estimate().y - 14.0).abs() < 0.1, "{}", r.estimate());
+        assert!(clock.holding() && r.holds == 1);
+        let mut r = response(PushConfig::default());
+        let mut clock = PlanClock::new(0.1);
+        let ss = PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Left,
+        };
+        push_run(&mut r, &mut clock, ss, true, 1.0);
+        assert!(!clock.holding() && r.holds == 0);
+        // standing (not walking) is never held
+        let mut r = response(PushConfig::default());
+        push_run(&mut r, &mut clock, PhaseKind::DoubleSupport, false, 1.0);
+        assert!(!clock.holding());
+    }
+
+    #[test]
+    fn the_hold_ends_after_max_hold_and_when_disabled_never_starts() {
+        let config = PushConfig {
+            max_hold: 0.3,
+            ..PushConfig::default()
+        };
+        let mut r = response(config);
+        let mut clock = PlanClock::new(0.1);
+        push_run(&mut r, &mut clock, PhaseKind::DoubleSupport, true, 2.0);
+        assert!(!clock.holding());
+        assert!(
+            clock.delay() >= 0.3 && clock.delay() < 0.3 + 0.1 + 0.01,
+            "{}",
+            clock.delay()
+        );
+        let off = PushConfig {
+            hold_double_support: false,
+            ..PushConfig::default()
+        };
+        let mut r = response(off);
+        let mut clock = PlanClock::new(0.1);
+        push_run(&mut r, &mut clock, PhaseKind::DoubleSupport, true, 1.0);
+        assert_eq!(clock.delay(), 0.0);
+    }
+
+    #[test]
+    fn leaning_moves_the_planned_com_and_dcm_against_the_push_and_keeps_the_zmp() {
+        let mut r = response(PushConfig {
+            lean: 0.5,
+            ..PushConfig::default()
+        });
+        r.estimate = Vector2::new(-20.0, 0.0);
+        let mut s = PlanSample {
+            omega: 4.0,
+            ..PlanSample::default()
+        };
+        let before = s;
+        r.lean(&mut s);
+        // 0.5 · 20 / (30 · 16) = 20.8 mm forward, against a backward push
+        let d = 0.5 * 20.0 / (30.0 * 16.0);
+        assert!((s.com_position.x - d).abs() < 1e-15 && (s.dcm_position.x - d).abs() < 1e-15);
+        assert_eq!(s.zmp, before.zmp);
+        assert_eq!(s.com_position.y, 0.0);
+    }
+
+    #[test]
+    fn the_step_adjustment_sees_the_push_as_a_cop_moved_against_it() {
+        let mut r = response(PushConfig::default());
+        r.estimate = Vector2::new(0.0, 20.0);
+        let omega = (9.81f64 / 0.5).sqrt();
+        let cop = r.effective_cop(Vector2::new(1.0, 0.1), omega);
+        // F/(m ω²) = 20 · 0.5 / (30 · 9.81)
+        assert!((cop.y - (0.1 - 20.0 * 0.5 / (30.0 * 9.81))).abs() < 1e-12);
+        assert_eq!(cop.x, 1.0);
+        let mut off = response(PushConfig {
+            step_adjustment: false,
+            ..PushConfig::default()
+        });
+        off.estimate = r.estimate;
+        assert_eq!(
+            off.effective_cop(Vector2::new(1.0, 0.1), omega),
+            Vector2::new(1.0, 0.1)
+        );
+    }
+}
