@@ -31,11 +31,12 @@ fn pushed(s: &Scratch, name: &str, respond: bool, force: [f64; 2], start: f64) -
 fn without_pushes_the_torque_walk_is_unchanged() {
     let s = Scratch::new("push_response_nominal");
     let sc = |name: &str, layers: &[&str]| common::scenario_from_configs(&s, name, layers, "");
-    let off = run_scenario(
-        &sc("off", &["walk_straight_torque.toml"]),
-        &options(&s, "off"),
-    )
-    .unwrap();
+    // the push response's layer sets `estimation.update = "every_sample"` (configs/layers/push_response.toml):
+    // the reference run ticks the estimation layer the same way
+    let every_sample = "[estimation]\nupdate = \"every_sample\"\n";
+    let reference =
+        common::scenario_from_configs(&s, "off", &["walk_straight_torque.toml"], every_sample);
+    let off = run_scenario(&reference, &options(&s, "off")).unwrap();
     let on = run_scenario(
         &sc(
             "on",
