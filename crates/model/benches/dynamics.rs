@@ -73,6 +73,18 @@ fn bench_model(c: &mut Criterion, label: &str, model: Arc<Model>) {
     group.bench_function("set_state (FK + velocities)", |b| {
         b.iter(|| kd.set_state(black_box(&states[next()])).unwrap())
     });
+    // the joints at the same positions in every state (base pose and velocities change): each joint's
+    // rotation is reused, as for encoder readings that did not change since the last tick
+    let held: Vec<RobotState> = states
+        .iter()
+        .map(|s| RobotState {
+            joint_positions: states[0].joint_positions.clone(),
+            ..s.clone()
+        })
+        .collect();
+    group.bench_function("set_state, joints held", |b| {
+        b.iter(|| kd.set_state(black_box(&held[next()])).unwrap())
+    });
     group.bench_function("forward kinematics, all frames", |b| {
         b.iter(|| {
             kd.set_state(&states[next()]).unwrap();

@@ -100,6 +100,11 @@ pub struct KinDyn {
     /// World inertias (valid when `inertia_ready`).
     inertia: Vec<Inertia>,
     inertia_ready: bool,
+    /// Each revolute body's joint rotation composed with its placement, `placement · R(axis, q)`, and the
+    /// joint position `q` it was computed for (both NaN before the first): a joint that has not moved since the
+    /// last state (a quantized encoder reading, a joint held still) reuses it, bit for bit.
+    local_rot: Vec<Matrix3<f64>>,
+    local_rot_q: Vec<f64>,
     /// `force` holds the subtree wrenches of a [`KinDyn::ft_sensor_wrenches`] pass without external
     /// wrenches at the current state (for [`KinDyn::inverse_dynamics_after_ft_sensors`]).
     sensor_pass_ready: bool,
@@ -142,6 +147,8 @@ impl KinDyn {
             bias: vec![Vector6::zeros(); nb],
             inertia: vec![Inertia::zero(); nb],
             inertia_ready: false,
+            local_rot: vec![Matrix3::from_element(f64::NAN); nb],
+            local_rot_q: vec![f64::NAN; nb],
             sensor_pass_ready: false,
             sensor_subtrees: (0..nb).filter(|&i| in_sensor_subtree[i]).collect(),
             in_sensor_subtree,
@@ -257,11 +264,15 @@ impl KinDyn {
                 self.pos[i] = pj + axis_w * q;
                 self.s[i] = join(&axis_w, &Vector3::zeros());
             } else {
-                // placement · R(axis, q) = P + sin q · P K + (1 − cos q) · P K²  (Rodrigues).
-                let (sin, cos) = q.sin_cos();
-                let local =
-                    m.placement_rot[i] + m.placement_k[i] * sin + m.placement_k2[i] * (1.0 - cos);
-                self.rot[i] = rp * local;
+                if q.to_bits() != self.local_rot_q[i].to_bits() {
+                    // placement · R(axis, q) = P + sin q · P K + (1 − cos q) · P K²  (Rodrigues).
+                    let (sin, cos) = q.sin_cos();
+                    self.local_rot[i] = m.placement_rot[i]
+                        + m.placement_k[i] * sin
+                        + m.placement_k2[i] * (1.0 - cos);
+                    self.local_rot_q[i] = q;
+                }
+                self.rot[i] = rp * self.local_rot[i];
                 self.pos[i] = pj;
                 self.s[i] = join(&pj.cross(&axis_w), &axis_w);
             }
@@ -582,9 +593,20 @@ impl KinDyn {
         if mass <= 0.0 {
             return Vector3::zeros();
         }
+        let m = &*self.model;
         let mut p = Vector3::zeros();
-        for k in 0..self.model.body_count() {
-            p += lin(&self.body_inertia(k).mul_motion(&self.vel[k]));
+        for k in 0..m.body_count() {
+            // The linear momentum of body k, `m v − h × ω` with `h = m c` [Traversaro 2017, eq. 2.67]: the
+            // linear rows of `I v` (`Inertia::mul_motion`) without the world inertia's rotational part,
+            // bit for bit (`h` as `Inertia::from_body_com` forms it when the inertias are not prepared).
+            let (mk, h) = if self.inertia_ready {
+                (self.inertia[k].m, self.inertia[k].h)
+            } else {
+                let mk = m.inertia[k].m;
+                (mk, (self.rot[k] * m.body_com[k] + self.pos[k]) * mk)
+            };
+            let v = &self.vel[k];
+            p += lin(v) * mk - h.cross(&ang(v));
         }
         p / mass
     }

@@ -57,6 +57,10 @@ fn bench_shape(c: &mut Criterion, label: &str, make: Make) {
             black_box(out.x[0])
         })
     });
+    // the data check every backend runs before solving
+    group.bench_function("dense_qp_is_valid", |b| {
+        b.iter(|| black_box(black_box(&qp).is_valid()))
+    });
     group.finish();
 }
 

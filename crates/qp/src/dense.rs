@@ -3,6 +3,7 @@
 use nalgebra::{DMatrix, DMatrixView, DMatrixViewMut, DVector, DVectorView, DVectorViewMut};
 
 use crate::error::QpError;
+use crate::finite::all_finite;
 
 /// A dense convex QP in the standard form shared by all backends:
 ///
@@ -202,18 +203,18 @@ impl DenseQp {
     /// Checks the data: finite `H`, `g`, `E`, `f`, `C`; no NaN in `l`, `u`, `lb`, `ub`; `l ≤ u`, `lb ≤ ub`;
     /// no `+∞` lower side nor `−∞` upper side. Returns `false` on any violation.
     pub fn is_valid(&self) -> bool {
-        fn finite<'a>(mut it: impl Iterator<Item = &'a f64>) -> bool {
-            it.all(|v| v.is_finite())
-        }
         // the rows in use of a column-major matrix: the first `used` entries of each column
         fn finite_rows(m: &DMatrix<f64>, used: usize) -> bool {
             let rows = m.nrows();
-            (0..m.ncols()).all(|c| finite(m.as_slice()[c * rows..c * rows + used].iter()))
+            if used == rows {
+                return all_finite(m.as_slice());
+            }
+            (0..m.ncols()).all(|c| all_finite(&m.as_slice()[c * rows..c * rows + used]))
         }
-        if !finite(self.h.as_slice().iter()) || !finite(self.g.as_slice().iter()) {
+        if !all_finite(self.h.as_slice()) || !all_finite(self.g.as_slice()) {
             return false;
         }
-        if !finite_rows(&self.e, self.n_eq) || !finite(self.eq_rhs().iter()) {
+        if !finite_rows(&self.e, self.n_eq) || !all_finite(&self.f.as_slice()[..self.n_eq]) {
             return false;
         }
         if !finite_rows(&self.c, self.n_ineq) {

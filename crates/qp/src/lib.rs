@@ -24,6 +24,7 @@ mod banded;
 mod clarabel_backend;
 mod dense;
 mod error;
+mod finite;
 mod kkt;
 mod nullspace;
 mod problem;

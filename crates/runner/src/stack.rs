@@ -239,9 +239,13 @@ pub struct Measured {
 /// The three layers and their wiring.
 pub struct Stack {
     model: Arc<Model>,
-    /// The runner's one kinematics workspace, set to the last measured state (the log sink's `/tf`
+    /// The kinematics workspace of the true state, set to the last measured one (the log sink's `/tf`
     /// reads it too).
     pub(crate) kd: KinDyn,
+    /// The kinematics workspace of the estimated state. Apart from `kd` so that each sees one state's
+    /// sequence: the estimate's joint positions are encoder readings, and a joint whose reading did not
+    /// change since the last tick keeps its rotation ([`KinDyn::set_state`] reuses it, bit for bit).
+    kd_estimate: KinDyn,
     frames: MeasureFrames,
     /// Gravity magnitude \[m/s²\] (the model's, along −z).
     gravity: f64,
@@ -486,6 +490,7 @@ impl Stack {
             preintegrate_unread,
             foot_admittance: foot_admittance(scenario, &model)?,
             counters: Counters::default(),
+            kd_estimate: kd.clone(),
             kd,
             model,
         })
@@ -549,7 +554,7 @@ impl Stack {
         let e = &self.estimate;
         let frames = &self.frames;
         let measured = measure_state(
-            &mut self.kd,
+            &mut self.kd_estimate,
             frames,
             weight,
             &e.state,

@@ -382,7 +382,7 @@ impl Default for LogSection {
             path: PathBuf::new(),
             state_hz: 100,
             compression: Compression::Zstd,
-            chunk_size: 1 << 20,
+            chunk_size: crate::log::DEFAULT_CHUNK_BYTES,
             queue_capacity: 1024,
         }
     }
