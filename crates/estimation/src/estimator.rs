@@ -65,7 +65,7 @@ pub struct Estimator {
     wrench_maps: [Matrix6<f64>; 2],
     initial_offsets: Vec<Vector6<f64>>,
     /// Per sensor, its calibration matrix `C` and `C⁻¹` from `ft_calibration` (`None`: identity).
-    calibration: Vec<Option<(Matrix6<f64>, Matrix6<f64>)>>,
+    calibration: Vec<Option<Calibration>>,
     predicted: Vec<Vector6<f64>>,
     nu_dot: DVector<f64>,
     generalized: DVector<f64>,
@@ -516,12 +516,15 @@ impl Estimator {
     }
 }
 
+/// A sensor's calibration matrix `C` and its inverse.
+type Calibration = (Matrix6<f64>, Matrix6<f64>);
+
 /// Each sensor's calibration matrix `C` and its inverse from `config.ft_calibration` (rows), in
 /// [`Model::ft_sensors`] order; `None` for a sensor not named (identity) [Traversaro 2017, eq. (5.1)].
 fn calibration_matrices(
     model: &Model,
     config: &EstimatorConfig,
-) -> Result<Vec<Option<(Matrix6<f64>, Matrix6<f64>)>>> {
+) -> Result<Vec<Option<Calibration>>> {
     let mut out = vec![None; model.ft_sensors().len()];
     for (name, rows) in &config.ft_calibration {
         let s = model

@@ -8,7 +8,6 @@ use std::time::Duration;
 
 use common::{bundled_model, standing_input, standing_state};
 use nalgebra::{Matrix6, Vector6};
-use stride_block::Block;
 use stride_estimation::{Estimator, EstimatorConfig, EstimatorError, EstimatorInput};
 
 const PERIOD_NS: u64 = 2_000_000;

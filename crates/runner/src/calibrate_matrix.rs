@@ -366,13 +366,16 @@ fn fit_sensor(
     })
 }
 
+/// A sensor's readings and load accelerations, sample by sample.
+type SensorData = (Vec<Vector6<f64>>, Vec<Vector3<f64>>);
+
 /// Raw readings of sensor `k`, less the rotational terms of a child side `pi` (sensor frame, about its
 /// origin), and the load accelerations `ĝ_i = ±ʳR_w (g − p̈_s)` at the paired samples.
 fn load_accelerations(
     run: &LoggedRun,
     k: usize,
     pi: &InertialParameters,
-) -> Result<(Vec<Vector6<f64>>, Vec<Vector3<f64>>), CalibrateError> {
+) -> Result<SensorData, CalibrateError> {
     let model = &run.model;
     let sensor = &model.ft_sensors()[k];
     let sign = if sensor.measure_direction == "parent_to_child" {
