@@ -15,6 +15,7 @@ use crate::error::{check_non_negative, check_positive, EstimatorError, Result};
 /// | `ekf` | [`EkfConfig`] | noise densities, priors and options of the invariant EKF [Hartley 2020] |
 /// | `contact` | [`ContactConfig`] | Schmitt-trigger contact detection on each foot's normal force |
 /// | `ft_offsets` | [`FtOffsetConfig`] | model-based offset estimation [Traversaro 2017, §4.7] |
+/// | `ft_calibration` | sensor name → 6 × 6 rows | calibration matrix `C` of each named force/torque sensor: every reading `r` is used as the wrench `C (r − b)` [Traversaro 2017, eq. (5.1)], `b` the offset; sensors not named: identity (`stride calibrate` with added-mass logs writes it) |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct EstimatorConfig {
@@ -34,6 +35,9 @@ pub struct EstimatorConfig {
     pub contact: ContactConfig,
     /// Force/torque offset estimation.
     pub ft_offsets: FtOffsetConfig,
+    /// Calibration matrix `C` (rows) of each named force/torque sensor: the wrench is `C (r − b)`
+    /// [Traversaro 2017, eq. (5.1)]; a sensor not named keeps the identity.
+    pub ft_calibration: std::collections::BTreeMap<String, [[f64; 6]; 6]>,
 }
 
 impl Default for EstimatorConfig {
@@ -47,6 +51,7 @@ impl Default for EstimatorConfig {
             ekf: EkfConfig::default(),
             contact: ContactConfig::default(),
             ft_offsets: FtOffsetConfig::default(),
+            ft_calibration: std::collections::BTreeMap::new(),
         }
     }
 }
@@ -56,7 +61,17 @@ impl EstimatorConfig {
     pub fn validate(&self) -> Result<()> {
         self.ekf.validate()?;
         self.contact.validate()?;
-        self.ft_offsets.validate()
+        self.ft_offsets.validate()?;
+        for rows in self.ft_calibration.values() {
+            if !rows.iter().flatten().all(|v| v.is_finite()) {
+                return Err(EstimatorError::InvalidParameter {
+                    name: "ft_calibration",
+                    value: f64::NAN,
+                    reason: "every entry of a calibration matrix must be finite",
+                });
+            }
+        }
+        Ok(())
     }
 }
 

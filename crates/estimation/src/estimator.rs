@@ -64,6 +64,8 @@ pub struct Estimator {
     sensor_feet: Vec<[bool; 2]>,
     wrench_maps: [Matrix6<f64>; 2],
     initial_offsets: Vec<Vector6<f64>>,
+    /// Per sensor, its calibration matrix `C` and `C⁻¹` from `ft_calibration` (`None`: identity).
+    calibration: Vec<Option<Calibration>>,
     predicted: Vec<Vector6<f64>>,
     nu_dot: DVector<f64>,
     generalized: DVector<f64>,
@@ -158,6 +160,7 @@ impl Estimator {
                 .map(|o| Vector6::from(*o))
                 .collect()
         };
+        let calibration = calibration_matrices(&model, config)?;
         let weight = model.total_mass() * model.gravity().norm();
         let thresholds = config.contact.thresholds_newton(weight);
         let trigger = SchmittTrigger::new(
@@ -182,6 +185,7 @@ impl Estimator {
             sensor_feet,
             wrench_maps: [Matrix6::zeros(); 2],
             initial_offsets,
+            calibration,
             predicted: vec![Vector6::zeros(); n_ft],
             nu_dot: DVector::zeros(model.nv()),
             generalized: DVector::zeros(model.nv()),
@@ -451,7 +455,12 @@ impl Estimator {
             let s = self.foot_sensors[foot];
             self.kd
                 .ft_sensor_wrench_map(s, self.soles[foot], &mut self.wrench_maps[foot])?;
-            let rhs = input.ft_wrenches[s] - self.output.ft_offsets[s] - self.predicted[s];
+            let raw = input.ft_wrenches[s] - self.output.ft_offsets[s];
+            let measured = match &self.calibration[s] {
+                Some((c, _)) => c * raw,
+                None => raw,
+            };
+            let rhs = measured - self.predicted[s];
             *wrench = self.wrench_maps[foot].lu().solve(&rhs).ok_or_else(|| {
                 EstimatorError::SingularWrenchMap {
                     sensor: self.model.ft_sensors()[s].name.clone(),
@@ -479,7 +488,12 @@ impl Estimator {
             if (feet[0] && !free[0]) || (feet[1] && !free[1]) {
                 continue;
             }
-            let sample = input.ft_wrenches[s] - self.predicted[s];
+            // The offset is in raw units: `b = r − C⁻¹ f` with `f` the predicted wrench (5.1).
+            let predicted_raw = match &self.calibration[s] {
+                Some((_, c_inv)) => c_inv * self.predicted[s],
+                None => self.predicted[s],
+            };
+            let sample = input.ft_wrenches[s] - predicted_raw;
             let o = &mut self.output.ft_offsets[s];
             *o += (sample - *o) * alpha;
         }
@@ -500,6 +514,37 @@ impl Estimator {
             .copy_from(&self.generalized.rows(6, n));
         Ok(())
     }
+}
+
+/// A sensor's calibration matrix `C` and its inverse.
+type Calibration = (Matrix6<f64>, Matrix6<f64>);
+
+/// Each sensor's calibration matrix `C` and its inverse from `config.ft_calibration` (rows), in
+/// [`Model::ft_sensors`] order; `None` for a sensor not named (identity) [Traversaro 2017, eq. (5.1)].
+fn calibration_matrices(
+    model: &Model,
+    config: &EstimatorConfig,
+) -> Result<Vec<Option<Calibration>>> {
+    let mut out = vec![None; model.ft_sensors().len()];
+    for (name, rows) in &config.ft_calibration {
+        let s = model
+            .ft_sensor_index(name)
+            .ok_or_else(|| EstimatorError::UnknownFtSensor {
+                key: "ft_calibration",
+                name: name.clone(),
+            })?;
+        let c = Matrix6::from_fn(|i, j| rows[i][j]);
+        let c_inv = c
+            .try_inverse()
+            .filter(|m| m.iter().all(|v| v.is_finite()))
+            .ok_or(EstimatorError::InvalidParameter {
+                name: "ft_calibration",
+                value: c.determinant(),
+                reason: "a calibration matrix must be invertible (the value is its determinant)",
+            })?;
+        out[s] = Some((c, c_inv));
+    }
+    Ok(out)
 }
 
 /// The sensor measuring foot `foot`: the named one (which must have the sole on its child side), or the

@@ -207,6 +207,17 @@ pub(crate) fn paired_samples(
     model: &Model,
     names: &[String],
 ) -> Result<Vec<Sample>, CalibrateError> {
+    paired_samples_with_lag(log, model, names, 0.0)
+}
+
+/// [`paired_samples`] with each state paired with the reading logged `lag` seconds later (the sensors'
+/// latency: a reading describes the robot of `lag` seconds before).
+pub(crate) fn paired_samples_with_lag(
+    log: &crate::log::LogContents,
+    model: &Model,
+    names: &[String],
+    lag: f64,
+) -> Result<Vec<Sample>, CalibrateError> {
     let parse_err = |topic: &str, e: serde_json::Error| {
         CalibrateError::Content(format!("a message on {topic} does not parse: {e}"))
     };
@@ -240,7 +251,7 @@ pub(crate) fn paired_samples(
     let mut out = Vec::new();
     for i in 1..states.len().saturating_sub(1) {
         let (t, s, tau) = &states[i];
-        let Some(r) = readings.get(&time_key(*t)) else {
+        let Some(r) = readings.get(&time_key(*t + lag)) else {
             continue;
         };
         let (t0, s0, _) = &states[i - 1];
@@ -276,7 +287,7 @@ fn time_key(t: f64) -> i64 {
 /// draws do not depend on what the sensors read) and stepped `duration · sim_hz` times on zero wrenches;
 /// the mean reading is the mean offset (the noise averages out, σ/√steps). `None` for the ideal plant (it
 /// has no force/torque sensors).
-fn simulated_offsets(
+pub(crate) fn simulated_offsets(
     scenario: &crate::config::Scenario,
     model: &Model,
     duration: f64,

@@ -151,14 +151,24 @@ pub enum Command {
         output: Option<PathBuf>,
     },
     /// Estimate the force/torque sensors' offsets from a log of a calibration run (robot on a pole, limbs
-    /// swung through rotations: `configs/identify_ft_legs.toml`) and write them as a scenario overlay.
+    /// swung through rotations: `configs/identify_ft_legs.toml`) and write them as a scenario overlay; with
+    /// several logs of the same motion with different known added masses
+    /// (`configs/identify_ft_masses_*.toml`), the calibration matrices of the sensors whose child side is
+    /// one rigid body (at least three logs: Lemma 5.2).
     Calibrate {
-        /// MCAP log written by `stride run`.
-        log: PathBuf,
-        /// Calibrate only this sensor (default: every force/torque sensor of the model).
+        /// MCAP logs written by `stride run`: one for the offsets, three or more for the matrices.
+        #[arg(required = true)]
+        logs: Vec<PathBuf>,
+        /// Calibrate only this sensor (default: every force/torque sensor of the model; with several logs,
+        /// every sensor whose child side is rigid).
         #[arg(long)]
         sensor: Option<String>,
-        /// Write the offsets to this TOML file (`estimation.ft_offsets.initial`).
+        /// With several logs: a TOML file with the masses added in each log (`[[log]] masses = [{ frame,
+        /// mass, com }]`, one entry per log in order); default: each log's `[sim.model]` edits.
+        #[arg(long)]
+        added_masses: Option<PathBuf>,
+        /// Write the result to this TOML file (`estimation.ft_offsets.initial`, and with several logs
+        /// `estimation.ft_calibration`).
         #[arg(short, long)]
         output: Option<PathBuf>,
     },

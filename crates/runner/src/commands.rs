@@ -367,6 +367,35 @@ pub fn calibrate(
     Ok(ExitCode::SUCCESS)
 }
 
+/// `stride calibrate LOG LOG LOG...`: the calibration matrices, and the overlay file with `--output`.
+pub fn calibrate_matrix(
+    logs: &[PathBuf],
+    sensor: Option<&str>,
+    added_masses: Option<&Path>,
+    output: Option<&Path>,
+) -> Result<ExitCode, CliError> {
+    let masses = match added_masses {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| CliError::msg(format!("cannot read {}: {e}", p.display())))?;
+            Some(
+                toml::from_str::<crate::calibrate_matrix::AddedMassFile>(&text)
+                    .map_err(|e| CliError::msg(format!("{}: {e}", p.display())))?,
+            )
+        }
+        None => None,
+    };
+    let report = crate::calibrate_matrix::calibrate_matrix_logs(logs, sensor, masses.as_ref())
+        .map_err(err)?;
+    crate::out!("{}", report.render());
+    if let Some(o) = output {
+        std::fs::write(o, report.to_toml(logs))
+            .map_err(|e| CliError::msg(format!("cannot write {}: {e}", o.display())))?;
+        crate::outln!("calibration written to {}", o.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 /// `stride identify`: the table, the identified URDF and, with `--report`, the TOML report.
 pub fn identify(
     logs: &[PathBuf],
@@ -471,10 +500,19 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             output,
         } => replay(&log, layer, config, output),
         Command::Calibrate {
-            log,
+            logs,
             sensor,
+            added_masses,
             output,
-        } => calibrate(&log, sensor.as_deref(), output.as_deref()),
+        } => match logs.as_slice() {
+            [log] if added_masses.is_none() => calibrate(log, sensor.as_deref(), output.as_deref()),
+            _ => calibrate_matrix(
+                &logs,
+                sensor.as_deref(),
+                added_masses.as_deref(),
+                output.as_deref(),
+            ),
+        },
         Command::Identify {
             logs,
             output,

@@ -28,6 +28,11 @@ pub struct EstimationSummary {
     pub velocity_error: ErrorStats,
     /// Whole-body ticks where a detected contact differs from the plant's, and all ticks compared.
     pub contact_disagreements: (u64, u64),
+    /// Foot force error `‖f_est − f‖` of each foot at each tick (the ground's wrench on the foot, from the
+    /// force/torque sensors) \[N\].
+    pub foot_force_error: ErrorStats,
+    /// Foot torque error `‖τ_est − τ‖` about the sole of each foot at each tick \[N·m\].
+    pub foot_torque_error: ErrorStats,
 }
 
 impl EstimationSummary {
@@ -54,6 +59,12 @@ impl EstimationSummary {
         );
         let dv = e.base_velocity.fixed_rows::<3>(0) - t.base_velocity.fixed_rows::<3>(0);
         self.velocity_error.add(dv.norm());
+        for (e, t) in estimate.foot_wrenches.iter().zip(&truth.foot_wrenches) {
+            self.foot_force_error
+                .add((e.fixed_rows::<3>(0) - t.fixed_rows::<3>(0)).norm());
+            self.foot_torque_error
+                .add((e.fixed_rows::<3>(3) - t.fixed_rows::<3>(3)).norm());
+        }
         let (disagree, all) = &mut self.contact_disagreements;
         *all += 1;
         if estimate.contacts != truth.feet_in_contact {
@@ -105,6 +116,14 @@ impl EstimationSummary {
             self.velocity_error.rms * 1e2,
             self.velocity_error.max * 1e2,
             if all > 0 { 100.0 * disagree as f64 / all as f64 } else { 0.0 }
+        );
+        let _ = writeln!(
+            s,
+            "    foot wrenches: force {:.2} N RMS ({:.1} max), torque {:.3} N m RMS ({:.2} max)",
+            self.foot_force_error.rms,
+            self.foot_force_error.max,
+            self.foot_torque_error.rms,
+            self.foot_torque_error.max
         );
     }
 }

@@ -14,6 +14,7 @@ macro_rules! out {
 }
 
 pub mod calibrate;
+pub mod calibrate_matrix;
 pub mod centroidal;
 pub mod check;
 pub mod cli;

@@ -104,6 +104,10 @@ pub struct EstimationSection {
     pub contact: stride_estimation::ContactConfig,
     /// Force/torque offset estimation (`stride_estimation::FtOffsetConfig`).
     pub ft_offsets: stride_estimation::FtOffsetConfig,
+    /// Calibration matrix `C` (6 rows of 6) of each named force/torque sensor: the estimation layer reads
+    /// the wrench `C (r − b)` [Traversaro 2017, eq. (5.1)]; sensors not named keep the identity
+    /// (`stride calibrate` with added-mass logs writes it).
+    pub ft_calibration: std::collections::BTreeMap<String, [[f64; 6]; 6]>,
 }
 
 /// Default of `estimation.measured_zmp_cutoff` \[Hz\]: the middle of the band that walks on both plants
@@ -121,6 +125,7 @@ impl Default for EstimationSection {
             ekf: Default::default(),
             contact: Default::default(),
             ft_offsets: Default::default(),
+            ft_calibration: Default::default(),
         }
     }
 }
@@ -141,6 +146,7 @@ impl EstimationSection {
             ekf: self.ekf.clone(),
             contact: self.contact.clone(),
             ft_offsets: self.ft_offsets.clone(),
+            ft_calibration: self.ft_calibration.clone(),
         }
     }
 }

@@ -71,6 +71,7 @@ pub const RUNNER_KEYS: &[KeyDoc] = &[
     KeyDoc { key: "scenario.name", unit: "-", meaning: "Short name; the default log file is `<name>.mcap`." },
     KeyDoc { key: "joint_trajectory.enabled", unit: "-", meaning: "Send joint sinusoids to the position servos instead of the whole-body layer's command (the other layers still run and are logged); position control only. For calibration and identification runs, e.g. with `sim.fixed_base = true` (`configs/identify_ft_legs.toml`)." },
     KeyDoc { key: "joint_trajectory.ramp", unit: "s", meaning: "The amplitudes grow linearly from 0 over this time, ≥ 0." },
+    KeyDoc { key: "estimation.ft_calibration", unit: "-", meaning: "Table force/torque sensor name → its calibration matrix `C` (6 rows of 6): the estimation layer reads each raw reading `r` of that sensor as the wrench `C (r − b)`, `b` the offset (`estimation.ft_offsets`, raw units) [Traversaro 2017, eq. (5.1)]; sensors not listed keep the identity. Unknown sensors and singular or non-finite matrices are rejected. `stride calibrate LOG LOG LOG` writes it from pole runs with added masses (docs/identification.md, \"Calibration matrix from logs\")." },
     KeyDoc { key: "joint_trajectory.joints", unit: "rad or m, s, deg", meaning: "Table joint name → `{ amplitude, period, phase_deg }`: `q(t) = q₀ + A sin(2π t / T + φ)` about the initial position (clamped to the joint limits); joints not listed hold `q₀`. Unknown joints are rejected." },
     KeyDoc { key: "scenario.description", unit: "-", meaning: "One line saying what the scenario shows." },
     KeyDoc { key: "scenario.duration", unit: "s", meaning: "Simulated duration, 0 < value ≤ 3600; the run ends here at the latest (`--duration` overrides)." },
@@ -184,6 +185,7 @@ const DATA_TABLES: &[&str] = &[
     "robot.locked_joints",
     "wbc.walking.posture_joint_weights",
     "joint_trajectory.joints",
+    "estimation.ft_calibration",
 ];
 
 fn is_data_table(key: &str) -> bool {
