@@ -107,6 +107,8 @@ pub struct MujocoRobot {
     pub(crate) ground: stride_sim::GroundPlane,
     pub(crate) output: MujocoOutput,
     pub(crate) scratch: Scratch,
+    /// `sim.fixed_base`: the root is a mocap body held at the initial base pose, no free joint.
+    fixed_base: bool,
 }
 
 /// Buffers of one step, allocated at construction.
@@ -136,7 +138,12 @@ impl MujocoRobot {
         }
         setup.mujoco.validate(dt)?;
         let servos = resolve(&model, &setup.sim.actuation)?;
-        let contact_frames = setup.soles.map(String::from);
+        // No contact surface (a robot on a pole): no collision geometry at all, as on stride-sim.
+        let contact_frames: Vec<String> = if setup.sim.contact.surfaces.is_empty() {
+            Vec::new()
+        } else {
+            setup.soles.map(String::from).to_vec()
+        };
         let mut scene = build(
             &model,
             &SceneSpec {
@@ -147,6 +154,7 @@ impl MujocoRobot {
                 config: setup.mujoco,
                 contact_frames: &contact_frames,
                 timestep: dt,
+                fixed_base: setup.sim.fixed_base,
             },
         )?;
         let frame = |name: &str| {
@@ -220,6 +228,7 @@ impl MujocoRobot {
             kd,
             data,
             model,
+            fixed_base: setup.sim.fixed_base,
         })
     }
 }
@@ -267,13 +276,28 @@ impl MujocoRobot {
         state.validate(&self.model)?;
         self.data.reset();
         let s = &mut self.scratch;
-        crate::state::state_to_mujoco(
-            state,
-            &self.joint_qpos,
-            &self.joint_dof,
-            &mut s.qpos,
-            &mut s.qvel,
-        );
+        if self.fixed_base {
+            // held where it starts: the mocap root's pose, zero base velocity (stride-sim's `fixed_base`)
+            crate::state::joints_to_mujoco(
+                state,
+                &self.joint_qpos,
+                &self.joint_dof,
+                &mut s.qpos,
+                &mut s.qvel,
+            );
+            let p = state.base_pose.translation.vector;
+            let r = state.base_pose.rotation;
+            self.data.mocap_pos_mut()[0] = [p.x, p.y, p.z];
+            self.data.mocap_quat_mut()[0] = [r.w, r.i, r.j, r.k];
+        } else {
+            crate::state::state_to_mujoco(
+                state,
+                &self.joint_qpos,
+                &self.joint_dof,
+                &mut s.qpos,
+                &mut s.qvel,
+            );
+        }
         self.data.qpos_mut().copy_from_slice(&s.qpos);
         self.data.qvel_mut().copy_from_slice(&s.qvel);
         let hold = SimInput::hold(&state.joint_positions);
@@ -287,7 +311,10 @@ impl MujocoRobot {
         self.sensors.reset();
         self.output.fallen = false;
         self.output.state.clone_from(state);
-        self.scratch.previous.clone_from(state);
+        if self.fixed_base {
+            self.output.state.base_velocity.fill(0.0);
+        }
+        self.scratch.previous.clone_from(&self.output.state);
         self.kd.set_state(state)?;
         self.scratch.imu_velocity = self.kd.frame_velocity(self.imu_frame).xyz();
         self.measure_at_rest()
@@ -316,7 +343,12 @@ impl MujocoRobot {
         }
         self.time_ns += self.period_ns;
         self.scratch.previous.copy_from(&self.output.state);
-        crate::state::state_from_mujoco(
+        let read = if self.fixed_base {
+            crate::state::joints_from_mujoco
+        } else {
+            crate::state::state_from_mujoco
+        };
+        read(
             self.data.qpos(),
             self.data.qvel(),
             &self.joint_qpos,

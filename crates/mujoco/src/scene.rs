@@ -1,4 +1,5 @@
-//! The MuJoCo model of a scenario: the URDF compiled by MuJoCo, a free joint on the root link, a ground
+//! The MuJoCo model of a scenario: the URDF compiled by MuJoCo, a free joint on the root link (a mocap root
+//! body for a fixed base), a ground
 //! plane, the robot's own collision geometry restricted to the soles, the joint actuators, the solver
 //! options; and the map from stride's joints and bodies to MuJoCo's.
 
@@ -34,6 +35,9 @@ pub struct SceneSpec<'a> {
     pub contact_frames: &'a [String],
     /// Timestep \[s\].
     pub timestep: f64,
+    /// Hold the root link where it is put (`sim.fixed_base`, a robot on a pole): the root body is a mocap
+    /// body (its pose set through `mocap_pos` / `mocap_quat`) instead of carrying a free joint.
+    pub fixed_base: bool,
 }
 
 /// A compiled scene and the index maps into it.
@@ -71,17 +75,23 @@ pub fn build(model: &Model, s: &SceneSpec<'_>) -> Result<Scene, MujocoError> {
     )?;
     let mut spec = MjSpec::from_xml_string(&text).map_err(|e| compile_error(e.to_string()))?;
     let root = model.root_link();
-    spec.body_mut(root)
-        .ok_or_else(|| MujocoError::Mismatch(format!("MuJoCo has no body `{root}`")))?
-        .add_free_joint()
-        .set_name(&format!("{root}_free_joint"))
-        .map_err(|e| compile_error(e.to_string()))?;
+    let root_body = spec
+        .body_mut(root)
+        .ok_or_else(|| MujocoError::Mismatch(format!("MuJoCo has no body `{root}`")))?;
+    if s.fixed_base {
+        root_body.set_mocap(true);
+    } else {
+        root_body
+            .add_free_joint()
+            .set_name(&format!("{root}_free_joint"))
+            .map_err(|e| compile_error(e.to_string()))?;
+    }
     set_joints(model, &mut spec, s.servos, s.config)?;
     add_floor(&mut spec, s);
     add_actuators(model, &mut spec, s.servos);
     set_options(model, &mut spec, s);
     let mj = spec.compile().map_err(|e| compile_error(e.to_string()))?;
-    map(model, mj, &contact_links, s.contact_frames)
+    map(model, mj, &contact_links, s.contact_frames, s.fixed_base)
 }
 
 /// The stride body of each contact frame.
@@ -206,6 +216,7 @@ fn map(
     mut mj: MjModel,
     contact_links: &[usize],
     contact_frames: &[String],
+    fixed_base: bool,
 ) -> Result<Scene, MujocoError> {
     let mut joint_qpos = Vec::with_capacity(model.dof());
     let mut joint_dof = Vec::with_capacity(model.dof());
@@ -216,9 +227,11 @@ fn map(
         joint_qpos.push(mj.jnt_qposadr()[id] as usize);
         joint_dof.push(mj.jnt_dofadr()[id] as usize);
     }
-    if mj.nq() as usize != 7 + model.dof() || mj.nv() as usize != model.nv() {
+    // the free joint's 7 coordinates and 6 velocities, none for a fixed (mocap) base
+    let (base_q, base_v) = if fixed_base { (0, 0) } else { (7, 6) };
+    if mj.nq() as usize != base_q + model.dof() || mj.nv() as usize != base_v + model.dof() {
         return Err(MujocoError::Mismatch(format!(
-            "MuJoCo has nq {} and nv {}, stride {} joints (expected nq = 7 + n, nv = 6 + n)",
+            "MuJoCo has nq {} and nv {}, stride {} joints (expected nq = {base_q} + n, nv = {base_v} + n)",
             mj.nq(),
             mj.nv(),
             model.dof()
@@ -242,7 +255,8 @@ fn map(
         mj.geom_contype_mut()[g] = i32::from(collides);
         mj.geom_conaffinity_mut()[g] = i32::from(collides);
     }
-    if !geom_contact.iter().any(Option::is_some) {
+    // (no contact frame at all is a robot on a pole: nothing should touch the floor)
+    if !contact_frames.is_empty() && !geom_contact.iter().any(Option::is_some) {
         return Err(MujocoError::Mismatch(format!(
             "no collision geometry on the bodies of {contact_frames:?}: the robot could not stand"
         )));

@@ -32,12 +32,19 @@ pub fn has_inertia_edits(m: &stride_sim::PlantModelConfig) -> bool {
     m.mass_scale != 1.0 || !m.links.is_empty()
 }
 
+/// MuJoCo's default `solref` (time constant 20 ms, damping ratio 1), for a floor no geometry touches.
+const NO_CONTACT_SOLREF: [f64; 2] = [0.02, 1.0];
+
 /// The MuJoCo plant's contact and solver parameters of `scenario` for the robot `plant` (the plant model):
 /// the `[mujoco]` section, its `solref` derived from `sim.contact` when not written
 /// ([`crate::config::mujoco::ground_solref`], the soles' area from `sim.contact.surfaces`).
 pub fn mujoco_config(scenario: &Scenario, plant: &Model) -> stride_mujoco::MujocoConfig {
     let contact = &scenario.config.sim.contact;
-    let sole_area = contact.surfaces.iter().map(|s| s.length * s.width).sum();
+    let sole_area: f64 = contact.surfaces.iter().map(|s| s.length * s.width).sum();
+    if sole_area <= 0.0 {
+        // no contact surface (a robot on a pole): nothing touches the floor; MuJoCo's default contact
+        return scenario.config.mujoco.plant_config(NO_CONTACT_SOLREF);
+    }
     let ground = crate::config::mujoco::ground_solref(
         contact.normal_stiffness,
         contact.normal_damping,

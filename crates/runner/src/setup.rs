@@ -258,8 +258,8 @@ fn mujoco_robot(
 
 /// What a scenario asks of the plant that the MuJoCo plant does not model, as the key and the reason:
 /// ground patches of different stiffness along the path (its floor is one plane with one contact law),
-/// passive joints (`--plant mujoco` on a scenario written for stride-sim) and a fixed base (its robot always
-/// floats). A uniform floor, soft or stiff, is modelled: its `sim.contact`
+/// and passive joints (`--plant mujoco` on a scenario written for stride-sim). A fixed base is modelled (the
+/// root a mocap body held at the initial pose), and so is a uniform floor, soft or stiff, is modelled: its `sim.contact`
 /// stiffness and damping set MuJoCo's `solref` ([`crate::config::mujoco::ground_solref`]).
 #[cfg_attr(not(feature = "mujoco"), allow(dead_code))]
 pub(crate) fn unsupported_by_mujoco(scenario: &Scenario) -> Option<(&'static str, &'static str)> {
@@ -275,12 +275,6 @@ pub(crate) fn unsupported_by_mujoco(scenario: &Scenario) -> Option<(&'static str
             "sim.passive_joints",
             "passive visco-elastic joints are modelled by stride-sim only (docs/flexible-joints.md); run it \
              with `--plant simulator`",
-        ))
-    } else if sim.fixed_base {
-        Some((
-            "sim.fixed_base",
-            "a fixed base is modelled by stride-sim only: the MuJoCo plant's robot floats (docs/mujoco.md); \
-             run it with `--plant simulator`",
         ))
     } else {
         None
@@ -340,7 +334,8 @@ mod tests {
     }
 
     #[test]
-    fn mujoco_refuses_ground_patches_and_a_fixed_base_and_accepts_uniform_floors_soft_or_stiff() {
+    fn mujoco_refuses_ground_patches_and_passive_joints_and_accepts_uniform_floors_and_a_fixed_base(
+    ) {
         let soft = scenario("walk_soft_ground_torque.toml");
         assert_eq!(unsupported_by_mujoco(&soft), None);
         let mut stiff = scenario("walk_straight.toml");
@@ -363,8 +358,7 @@ mod tests {
         assert_eq!(key, "sim.ground.patches");
         let on_a_pole = scenario("identify_ft_legs.toml");
         assert!(on_a_pole.config.sim.fixed_base);
-        let (key, _) = unsupported_by_mujoco(&on_a_pole).expect("refused");
-        assert_eq!(key, "sim.fixed_base");
+        assert_eq!(unsupported_by_mujoco(&on_a_pole), None);
         let flexible = scenario("walk_flexible_hips_torque.toml");
         let (key, _) = unsupported_by_mujoco(&flexible).expect("refused");
         assert_eq!(key, "sim.passive_joints");
