@@ -315,7 +315,7 @@ impl MujocoRobot {
             self.output.state.base_velocity.fill(0.0);
         }
         self.scratch.previous.clone_from(&self.output.state);
-        self.kd.set_state(state)?;
+        self.kd.set_state(&self.output.state)?;
         self.scratch.imu_velocity = self.kd.frame_velocity(self.imu_frame).xyz();
         self.measure_at_rest()
     }
