@@ -93,14 +93,14 @@ impl Schedule {
         }
     }
 
-    /// Whether a layer or the state log reads the estimate at a tick from `k` (a plant tick) up to the next
-    /// plant tick: the sample of tick `k` is then the last one they see, so it gets the estimation layer's
-    /// full tick under `estimation.update = "when_read"`.
+    /// Whether a layer reads the estimate at a tick from `k` (a plant tick) up to the next plant tick: the
+    /// sample of tick `k` is then the last one it sees, so it gets the estimation layer's full tick under
+    /// `estimation.update = "when_read"`. The state log is not a reader here: it records the estimate the
+    /// layers last read, so the log's rate (`log.state_hz`) never changes the closed loop.
     fn reads_estimate_before_next_sample(&self, k: u64) -> bool {
         (k..k + self.sim_every).any(|j| {
             j % self.simplified_every == 0
                 || j % self.wbc_every == 0
-                || j % self.state_every == 0
                 || self.planner_every.is_some_and(|e| j % e == 0)
         })
     }

@@ -374,6 +374,35 @@ fn the_estimation_layer_can_tick_only_when_read() {
     );
 }
 
+/// The log's rate never changes the closed loop: under `estimation.update = "when_read"` the state log
+/// records the estimate the layers last read and does not tick the estimation layer itself, so a state
+/// log at 1 kHz or 200 Hz (ticks between the whole-body layer's 500 Hz ones) gives the commands of the
+/// default 100 Hz bit for bit. (Until 2026-12-06 a state-log tick ran the estimation layer's full tick
+/// and changed them.)
+#[test]
+fn the_state_logs_rate_does_not_change_the_commands() {
+    let s = Scratch::new("log-rate");
+    let at = |hz: u32| {
+        let sc = walk(
+            &s,
+            &format!("[estimation]\nupdate = \"when_read\"\n[log]\nstate_hz = {hz}"),
+        );
+        commands(&s, &sc, false)
+    };
+    let default_rate = at(100);
+    assert!(default_rate.len() > 500, "{} commands", default_rate.len());
+    assert_eq!(
+        default_rate,
+        at(1000),
+        "a 1 kHz state log changed the commands"
+    );
+    assert_eq!(
+        default_rate,
+        at(200),
+        "a 200 Hz state log changed the commands"
+    );
+}
+
 /// The observer of flexible joints without encoders needs every sample: `when_read` is refused with it.
 #[test]
 fn ticking_only_when_read_is_refused_with_the_flexible_joints_observer() {

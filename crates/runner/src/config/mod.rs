@@ -168,10 +168,11 @@ pub enum EstimationKind {
 pub enum EstimationUpdate {
     /// On every plant sample (2 kHz with the default rates).
     EverySample,
-    /// On the ticks whose layers or log read the estimate (the whole-body, simplified, planner and state-log
-    /// ticks: 500 Hz with the default rates); the IMU samples in between are pre-integrated into the EKF's
-    /// mean (`stride_estimation::Estimator::preintegrate`) and the covariance is propagated over the whole
-    /// interval at the next full tick.
+    /// On the ticks whose layers read the estimate (the whole-body, simplified and planner ticks: 500 Hz with
+    /// the default rates); the IMU samples in between are pre-integrated into the EKF's mean
+    /// (`stride_estimation::Estimator::preintegrate`) and the covariance is propagated over the whole
+    /// interval at the next full tick. The state log records the estimate the layers last read: its rate
+    /// does not change the closed loop.
     #[default]
     WhenRead,
 }
