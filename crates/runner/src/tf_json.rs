@@ -36,25 +36,26 @@ pub(crate) fn write_frame_transforms(
 }
 
 fn vector3(out: &mut Vec<u8>, v: &FoxgloveVector3) -> Result<(), serde_json::Error> {
-    out.extend_from_slice(b"{\"x\":");
-    value(out, &v.x)?;
-    out.extend_from_slice(b",\"y\":");
-    value(out, &v.y)?;
-    out.extend_from_slice(b",\"z\":");
-    value(out, &v.z)?;
-    out.push(b'}');
-    Ok(())
+    let fields: [(&[u8], f64); 3] = [(b"{\"x\":", v.x), (b",\"y\":", v.y), (b",\"z\":", v.z)];
+    numbers_object(out, &fields)
 }
 
 fn quaternion(out: &mut Vec<u8>, q: &FoxgloveQuaternion) -> Result<(), serde_json::Error> {
-    out.extend_from_slice(b"{\"x\":");
-    value(out, &q.x)?;
-    out.extend_from_slice(b",\"y\":");
-    value(out, &q.y)?;
-    out.extend_from_slice(b",\"z\":");
-    value(out, &q.z)?;
-    out.extend_from_slice(b",\"w\":");
-    value(out, &q.w)?;
+    let fields: [(&[u8], f64); 4] = [
+        (b"{\"x\":", q.x),
+        (b",\"y\":", q.y),
+        (b",\"z\":", q.z),
+        (b",\"w\":", q.w),
+    ];
+    numbers_object(out, &fields)
+}
+
+/// An object of numbers: each field's bytes up to its value (`{"x":`, then `,"y":`, …), its value, then `}`.
+fn numbers_object(out: &mut Vec<u8>, fields: &[(&[u8], f64)]) -> Result<(), serde_json::Error> {
+    for (key, v) in fields {
+        out.extend_from_slice(key);
+        value(out, v)?;
+    }
     out.push(b'}');
     Ok(())
 }
