@@ -590,7 +590,7 @@ mod tests {
         // A floating base (six-DoF chain) with two legs of six, a torso of three carrying two arms of
         // seven and a head of two; and a fixed-base tree (no six-DoF trunk) for the general path.
         let mut parent: Vec<Option<usize>> = (0..6usize).map(|k| k.checked_sub(1)).collect();
-        let mut chain = |parent: &mut Vec<Option<usize>>, from: usize, n: usize| {
+        let chain = |parent: &mut Vec<Option<usize>>, from: usize, n: usize| {
             let mut p = from;
             for _ in 0..n {
                 parent.push(Some(p));

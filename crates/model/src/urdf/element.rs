@@ -58,16 +58,8 @@ fn check_versioned(element: &xml::Element, version: Version) -> Result<(), Model
     let joint = (element.name == "joint").then(|| element.get_attribute("name", None));
     for child in elements(element) {
         match (joint, child.name.as_str()) {
-            (_, "origin") => {
-                if version >= V1_1 && child.get_attribute("quat_xyzw", None).is_some() {
-                    origin_quaternion(child)?;
-                }
-            }
-            (Some(name), "limit") => {
-                if version >= V1_2 {
-                    check_limit(child, name.unwrap_or_default())?;
-                }
-            }
+            (_, "origin") => check_origin(child, version)?,
+            (Some(name), "limit") => check_limit(child, name.unwrap_or_default(), version)?,
             _ if element.name == "geometry" && version >= V1_2 => check_shape(child)?,
             _ => {}
         }
@@ -252,9 +244,20 @@ fn limit_value(limit: &xml::Element, name: &str, joint: &str) -> Result<Option<f
         .transpose()
 }
 
-/// Version 1.2's checks of a `<limit>`: `lower ≤ upper`, no negative effort, velocity, acceleration,
-/// deceleration or jerk.
-fn check_limit(limit: &xml::Element, joint: &str) -> Result<(), ModelError> {
+/// From version 1.1, an `<origin quat_xyzw>` must be four numbers and come without `rpy`.
+fn check_origin(origin: &xml::Element, version: Version) -> Result<(), ModelError> {
+    if version >= V1_1 && origin.get_attribute("quat_xyzw", None).is_some() {
+        origin_quaternion(origin)?;
+    }
+    Ok(())
+}
+
+/// Version 1.2's checks of a `<limit>` (none before): `lower ≤ upper`, no negative effort, velocity,
+/// acceleration, deceleration or jerk.
+fn check_limit(limit: &xml::Element, joint: &str, version: Version) -> Result<(), ModelError> {
+    if version < V1_2 {
+        return Ok(());
+    }
     let lower = limit_value(limit, "lower", joint)?;
     let upper = limit_value(limit, "upper", joint)?;
     if let (Some(lower), Some(upper)) = (lower, upper) {
