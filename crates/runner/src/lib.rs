@@ -48,5 +48,6 @@ pub mod step_adjust;
 pub mod summary;
 pub mod sweep;
 pub mod sweep_cmd;
+mod tf_json;
 mod tracking;
 pub mod wrench_split;

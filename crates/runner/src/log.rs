@@ -253,9 +253,21 @@ impl LogWriter {
         time_ns: u64,
         value: &T,
     ) -> Result<(), LogError> {
+        self.write_encoded(topic, time_ns, |buf| serde_json::to_writer(buf, value))
+    }
+
+    /// Queues on `topic` at simulated time `time_ns` the JSON that `encode` appends to the (empty) message
+    /// buffer: for the messages written without serde's dispatch, byte for byte what [`LogWriter::write`]
+    /// writes for the same value.
+    pub fn write_encoded(
+        &mut self,
+        topic: TopicId,
+        time_ns: u64,
+        encode: impl FnOnce(&mut Vec<u8>) -> Result<(), serde_json::Error>,
+    ) -> Result<(), LogError> {
         let mut buf = self.pool.try_recv().unwrap_or_default();
         buf.clear();
-        if let Err(source) = serde_json::to_writer(&mut buf, value) {
+        if let Err(source) = encode(&mut buf) {
             return Err(LogError::Serialize {
                 topic: self.topics[usize::from(topic.0)].clone(),
                 source,

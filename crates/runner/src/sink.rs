@@ -314,13 +314,18 @@ impl LogSink {
         self.write(|tp| tp.sim_state, t, &state)?;
         self.write(|tp| tp.sensors_feet, t, &feet)?;
         self.write(|tp| tp.sensors_imu, t, &imu)?;
-        self.writer.write(self.topics.tf, t, &self.tf.moving)?;
+        let moving = &self.tf.moving;
+        self.writer.write_encoded(self.topics.tf, t, |buf| {
+            crate::tf_json::write_frame_transforms(buf, moving)
+        })?;
         if self.tf.state_ticks % self.tf.attached_every == 0 {
             for tr in &mut self.tf.attached.transforms {
                 tr.timestamp = stamp;
             }
-            self.writer
-                .write(self.topics.tf_static, t, &self.tf.attached)?;
+            let attached = &self.tf.attached;
+            self.writer.write_encoded(self.topics.tf_static, t, |buf| {
+                crate::tf_json::write_frame_transforms(buf, attached)
+            })?;
         }
         self.tf.state_ticks += 1;
         Ok(())

@@ -7,7 +7,8 @@ use std::time::{Duration, Instant};
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::DVector;
 use stride_model::Model;
-use stride_sim::{IntegratorKind, SimConfig, SimInput, SimRobot};
+use stride_model::{KinDyn, RobotState};
+use stride_sim::{IntegratorKind, SimConfig, SimInput, SimRobot, TreeCholesky};
 
 /// CPU time of the calling thread in seconds (Linux `/proc/thread-self/stat`, 10 ms resolution), so that the
 /// real-time factor can also be reported without the time the thread waits for a core on a loaded machine.
@@ -106,5 +107,41 @@ fn bench_real_time_factor(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_step, bench_real_time_factor);
+/// The implicit step's kernels alone: the tree factorization and solve of the bundled humanoid's mass matrix
+/// (bent knees) plus a positive diagonal, as the step assembles it.
+fn bench_tree_cholesky(c: &mut Criterion) {
+    let model = humanoid();
+    let mut tree = TreeCholesky::floating_base(&model).expect("tree");
+    let mut state = RobotState::zero(&model);
+    state.joint_positions = bent_knees(&model, 0.2);
+    let mut kd = KinDyn::new(Arc::clone(&model));
+    kd.set_state(&state).expect("state");
+    let mut system = tree.matrix();
+    let mut entries = Vec::new();
+    kd.mass_matrix_lower(|row, col, v| entries.push((tree.lower_index(row, col), v)));
+    for (i, v) in entries {
+        system.values_mut()[i] = v;
+    }
+    for k in 0..tree.len() {
+        system.values_mut()[tree.diagonal_index(k)] += 0.01;
+    }
+    c.bench_function("tree_cholesky_factor_humanoid", |b| {
+        b.iter(|| assert!(tree.factor(std::hint::black_box(&system))))
+    });
+    let rhs = DVector::from_fn(tree.len(), |i, _| i as f64 - 10.0);
+    let mut x = rhs.clone();
+    c.bench_function("tree_cholesky_solve_humanoid", |b| {
+        b.iter(|| {
+            x.copy_from(&rhs);
+            tree.solve(std::hint::black_box(&mut x));
+        })
+    });
+}
+
+criterion_group!(
+    benches,
+    bench_step,
+    bench_real_time_factor,
+    bench_tree_cholesky
+);
 criterion_main!(benches);

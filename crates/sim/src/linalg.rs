@@ -297,7 +297,6 @@ impl TreeCholesky {
     /// Eliminates the rows of branch `b` (leaves first) from `h`'s, into the factor and the branch's trunk
     /// update.
     fn factor_branch(&mut self, h: &TreeMatrix, b: usize) -> bool {
-        let trunk_end = self.starts[self.trunk];
         let update = &mut self.trunk_updates[b];
         update.fill(0.0);
         let values = &mut self.factor.values;
@@ -311,17 +310,30 @@ impl TreeCholesky {
             let Some(row_k) = eliminate(&mut tail[..=targets.len()]) else {
                 return false;
             };
-            for (idx, &target) in targets.iter().enumerate() {
+            // Row `i` (diagonal, then its ancestors) is updated by `l_ki` times row k from `l_ki` on. The
+            // ancestors are the branch's (nearest first), then the whole trunk.
+            let in_branch = targets.len() - self.trunk;
+            for (idx, &target) in targets[..in_branch].iter().enumerate() {
                 let lki = row_k[idx];
-                if lki == 0.0 {
-                    continue;
-                }
-                // Row `i` (diagonal, then its ancestors) is updated by `l_ki` times row k from `l_ki` on.
-                let source = &row_k[idx..];
-                if target < trunk_end {
-                    axpy(&mut update[target..target + source.len()], lki, source);
-                } else {
+                if lki != 0.0 {
+                    let source = &row_k[idx..];
                     axpy(&mut head[target..target + source.len()], -lki, source);
+                }
+            }
+            let trunk_part = &row_k[in_branch..];
+            match (
+                <&[f64; 6]>::try_from(trunk_part),
+                <&mut [f64; 21]>::try_from(update.as_mut_slice()),
+            ) {
+                (Ok(l), Ok(u)) => rank_one_six_chain(u, l),
+                _ => {
+                    for (t, &target) in targets[in_branch..].iter().enumerate() {
+                        let lki = trunk_part[t];
+                        if lki != 0.0 {
+                            let source = &trunk_part[t..];
+                            axpy(&mut update[target..target + source.len()], lki, source);
+                        }
+                    }
                 }
             }
         }
@@ -359,21 +371,44 @@ impl TreeCholesky {
         let n = self.len();
         let l = &self.factor.values;
         let x = b.as_mut_slice();
+        // Below a floating base's six-DoF trunk, every row's last six ancestors are the trunk's DoFs
+        // 5, 4, …, 0: those entries are read as an array of known length (loops the compiler unrolls).
+        let first_below_trunk = if self.trunk == 6 { 6 } else { n };
+        let in_branch = |k: usize| {
+            let depth = self.depth(k);
+            if k >= first_below_trunk {
+                depth - 6
+            } else {
+                depth
+            }
+        };
         // Lᵀ y = b.
         for k in (0..n).rev() {
             let row = &l[self.starts[k]..self.starts[k + 1]];
             x[k] /= row[0];
             let xk = x[k];
-            for (&i, v) in self.ancestors_of(k).iter().zip(&row[1..]) {
+            let (values, nb) = (&row[1..], in_branch(k));
+            for (&i, v) in self.ancestors_of(k)[..nb].iter().zip(&values[..nb]) {
                 x[i] -= v * xk;
+            }
+            if let Ok(trunk) = <&[f64; 6]>::try_from(&values[nb..]) {
+                for (t, v) in trunk.iter().enumerate() {
+                    x[5 - t] -= v * xk;
+                }
             }
         }
         // L x = y.
         for k in 0..n {
             let row = &l[self.starts[k]..self.starts[k + 1]];
             let mut s = x[k];
-            for (&i, v) in self.ancestors_of(k).iter().zip(&row[1..]) {
+            let (values, nb) = (&row[1..], in_branch(k));
+            for (&i, v) in self.ancestors_of(k)[..nb].iter().zip(&values[..nb]) {
                 s -= v * x[i];
+            }
+            if let Ok(trunk) = <&[f64; 6]>::try_from(&values[nb..]) {
+                for (t, v) in trunk.iter().enumerate() {
+                    s -= v * x[5 - t];
+                }
             }
             x[k] = s / row[0];
         }
@@ -412,10 +447,40 @@ fn eliminate(row: &mut [f64]) -> Option<&[f64]> {
     Some(rest)
 }
 
-/// `y += a x` (same lengths).
+/// `y += a x` (same lengths), entry by entry. Written as a loop over pairs: the tree's rows are short
+/// (most under a dozen entries), and the compiler's vectorized loop for a plain `zip` spends more on its
+/// set-up and scalar remainder than on these few products (measured: docs/performance.md, "Issue 12: the
+/// start-up, the simulator's factorization and `/tf`").
 fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
-    for (y, x) in y.iter_mut().zip(x) {
-        *y += a * x;
+    debug_assert_eq!(y.len(), x.len());
+    let n = y.len().min(x.len());
+    let (y, x) = (&mut y[..n], &x[..n]);
+    let mut i = 0;
+    while i + 2 <= n {
+        y[i] += a * x[i];
+        y[i + 1] += a * x[i + 1];
+        i += 2;
+    }
+    if i < n {
+        y[i] += a * x[i];
+    }
+}
+
+/// `u += l lᵀ` on the packed rows of a six-DoF chain (a floating base's trunk: row `a` is
+/// `[u_aa, u_a,a-1, …, u_a0]` at `a (a + 1) / 2`), row `a = 5 − t` updated by `l_t` times `l[t..]` for
+/// `t = 0, …, 5`, a zero `l_t` skipped: the products and sums of [`axpy`] on each row, in the same order, with
+/// every length known to the compiler (unrolled; the general loop's overhead per row is larger than its six
+/// or fewer products).
+fn rank_one_six_chain(u: &mut [f64; 21], l: &[f64; 6]) {
+    for t in 0..6 {
+        let a = 5 - t;
+        let start = a * (a + 1) / 2;
+        let lt = l[t];
+        if lt != 0.0 {
+            for j in 0..=a {
+                u[start + j] += lt * l[t + j];
+            }
+        }
     }
 }
 
@@ -437,6 +502,143 @@ pub(crate) fn join(a: &Vector3<f64>, b: &Vector3<f64>) -> Vector6<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `y += a x`, the plain loop.
+    fn plain_axpy(y: &mut [f64], a: f64, x: &[f64]) {
+        for (y, x) in y.iter_mut().zip(x) {
+            *y += a * x;
+        }
+    }
+
+    #[test]
+    fn the_pairwise_axpy_is_the_plain_loop_bit_for_bit() {
+        for n in 0..14 {
+            let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
+            let y0: Vec<f64> = (0..n).map(|i| (i as f64 * 1.3).cos() / 7.0).collect();
+            for a in [-0.123_456_789, 3.0e-9, 1.0] {
+                let (mut y, mut plain) = (y0.clone(), y0.clone());
+                axpy(&mut y, a, &x);
+                plain_axpy(&mut plain, a, &x);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&y), bits(&plain), "n = {n}, a = {a}");
+            }
+        }
+    }
+
+    /// The factorization and solve as written before the six-DoF trunk kernels (every update a plain
+    /// `y += a x` loop, every solve entry through the ancestor list): the reference they match bit for bit.
+    fn reference_factor_solve(tree: &TreeCholesky, h: &TreeMatrix, b: &mut [f64]) -> Vec<f64> {
+        let mut values = h.values.clone();
+        let trunk_end = tree.starts[tree.trunk];
+        let mut updates = vec![vec![0.0; trunk_end]; tree.branch_count()];
+        fn eliminate_rows(
+            tree: &TreeCholesky,
+            values: &mut [f64],
+            rows: &[usize],
+            mut update: Option<&mut Vec<f64>>,
+        ) {
+            let trunk_end = tree.starts[tree.trunk];
+            for &k in rows.iter().rev() {
+                let targets = &tree.ancestor_starts[tree.offsets[k]..tree.offsets[k + 1]];
+                let (head, tail) = values.split_at_mut(tree.starts[k]);
+                let row_k = eliminate(&mut tail[..=targets.len()]).expect("positive pivot");
+                for (idx, &target) in targets.iter().enumerate() {
+                    let lki = row_k[idx];
+                    if lki == 0.0 {
+                        continue;
+                    }
+                    let source = &row_k[idx..];
+                    match update.as_deref_mut() {
+                        Some(u) if target < trunk_end => {
+                            plain_axpy(&mut u[target..target + source.len()], lki, source)
+                        }
+                        _ => plain_axpy(&mut head[target..target + source.len()], -lki, source),
+                    }
+                }
+            }
+        }
+        for (rows, update) in tree.branch_rows.iter().zip(&mut updates) {
+            eliminate_rows(tree, &mut values, rows, Some(update));
+        }
+        for update in &updates {
+            plain_axpy(&mut values[..trunk_end], -1.0, update);
+        }
+        let trunk_rows: Vec<usize> = (0..tree.trunk).collect();
+        eliminate_rows(tree, &mut values, &trunk_rows, None);
+        let n = tree.len();
+        for k in (0..n).rev() {
+            let row = &values[tree.starts[k]..tree.starts[k + 1]];
+            b[k] /= row[0];
+            let xk = b[k];
+            for (&i, v) in tree.ancestors_of(k).iter().zip(&row[1..]) {
+                b[i] -= v * xk;
+            }
+        }
+        for k in 0..n {
+            let row = &values[tree.starts[k]..tree.starts[k + 1]];
+            let mut s = b[k];
+            for (&i, v) in tree.ancestors_of(k).iter().zip(&row[1..]) {
+                s -= v * b[i];
+            }
+            b[k] = s / row[0];
+        }
+        values
+    }
+
+    #[test]
+    fn floating_base_kernels_match_the_general_loops_bit_for_bit() {
+        // A floating base (six-DoF chain) with two legs of six, a torso of three carrying two arms of
+        // seven and a head of two; and a fixed-base tree (no six-DoF trunk) for the general path.
+        let mut parent: Vec<Option<usize>> = (0..6usize).map(|k| k.checked_sub(1)).collect();
+        let chain = |parent: &mut Vec<Option<usize>>, from: usize, n: usize| {
+            let mut p = from;
+            for _ in 0..n {
+                parent.push(Some(p));
+                p = parent.len() - 1;
+            }
+            p
+        };
+        chain(&mut parent, 5, 6);
+        chain(&mut parent, 5, 6);
+        let torso = chain(&mut parent, 5, 3);
+        chain(&mut parent, torso, 7);
+        chain(&mut parent, torso, 7);
+        chain(&mut parent, torso, 2);
+        let fixed_base = vec![None, Some(0), Some(1), Some(1), Some(3), Some(0), Some(5)];
+        for parent in [parent, fixed_base] {
+            let mut tree = TreeCholesky::new(parent).unwrap();
+            let mut h = tree.matrix();
+            let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+            let mut next = || {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            };
+            for k in 0..tree.len() {
+                let row = tree.starts[k]..tree.starts[k + 1];
+                for (j, v) in h.values[row].iter_mut().enumerate() {
+                    // Some exact zeros: their updates are skipped.
+                    *v = if j == 0 {
+                        10.0 + next()
+                    } else if j % 5 == 3 {
+                        0.0
+                    } else {
+                        next() * 0.2
+                    };
+                }
+            }
+            assert!(tree.factor(&h));
+            let rhs: Vec<f64> = (0..tree.len()).map(|i| i as f64 * 0.3 - 2.0).collect();
+            let mut x = DVector::from_column_slice(&rhs);
+            tree.solve(&mut x);
+            let mut reference = rhs.clone();
+            let factor = reference_factor_solve(&tree, &h, &mut reference);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&tree.factor.values), bits(&factor));
+            assert_eq!(bits(x.as_slice()), bits(&reference));
+        }
+    }
 
     #[test]
     fn cholesky_matches_nalgebra() {

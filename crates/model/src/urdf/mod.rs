@@ -1,10 +1,12 @@
-//! URDF → [`Model`]: urdf-rs for the standard elements, a small XML pass for what urdf-rs ignores (presence of
-//! `<limit>`, force/torque `<sensor>` elements).
+//! URDF → [`Model`]: the file parsed once into an XML tree, read into urdf-rs's types for the standard
+//! elements and by a small pass for what urdf-rs ignores (presence of `<limit>`, force/torque `<sensor>`
+//! elements).
 //!
 //! The loading steps, one file each, in the order [`load_str`] runs them (errors and warnings come in this
 //! order too):
-//! 1. [`texture`]: drop the `<texture/>` elements urdf-rs rejects; urdf-rs parses the text;
-//! 2. [`raw`]: the XML pass (`<limit>` presence, force/torque sensors);
+//! 1. [`texture`]: drop the `<texture/>` elements urdf-rs rejects; the text is parsed into an XML tree;
+//!    [`element`]: the standard elements, as urdf-rs reads them;
+//! 2. [`raw`]: the pass over the same tree for `<limit>` presence and force/torque sensors;
 //! 3. [`links`]: validate every link (and the inertia edits, applied here) and build its spatial inertia;
 //! 4. [`graph`]: validate every joint, find each link's parent joint and the one root;
 //! 5. [`tree`]: depth-first from the root: one body per movable joint, fixed joints merged (inertias lumped,
@@ -14,6 +16,7 @@
 //! 7. [`assemble`]: lumped body inertias, massless-body warnings and the flat data of the algorithms.
 
 mod assemble;
+mod element;
 mod frames;
 mod ft;
 mod graph;
@@ -76,8 +79,11 @@ pub(crate) fn load_str_reduced(
     locks: &[JointLock],
 ) -> Result<Model, ModelError> {
     let text = texture::strip_textures_without_filename(text);
-    let robot = urdf_rs::read_from_string(&text).map_err(|e| ModelError::Urdf(e.to_string()))?;
-    let raw = raw::read_raw(&text)?;
+    let root: xml::Element = text
+        .parse()
+        .map_err(|e| ModelError::Urdf(format!("XML error: {e:?}")))?;
+    let robot = element::read_robot(&root)?;
+    let raw = raw::read_raw(&root)?;
     let version_ge_1_2 = version_at_least_1_2(robot.version.as_deref());
     let mut warnings: Vec<String> = Vec::new();
     if robot.links.is_empty() {

@@ -29,11 +29,8 @@ pub(super) struct RawInfo {
     pub(super) sensors: Vec<RawSensor>,
 }
 
-/// Reads the presence of `<limit>` per joint and the force/torque sensors.
-pub(super) fn read_raw(text: &str) -> Result<RawInfo, ModelError> {
-    let root: xml::Element = text
-        .parse()
-        .map_err(|e| ModelError::Urdf(format!("XML error: {e:?}")))?;
+/// Reads the presence of `<limit>` per joint and the force/torque sensors from the parsed `<robot>`.
+pub(super) fn read_raw(root: &xml::Element) -> Result<RawInfo, ModelError> {
     let mut joints_with_limit = HashMap::new();
     for joint in root.get_children("joint", None) {
         if let Some(name) = joint.get_attribute("name", None) {
