@@ -509,7 +509,10 @@ fn the_fast_curve_keeps_a_quarter_metre_per_second_only_with_a_larger_yaw_per_st
 /// Issue 15's curve in torque control: the 1 m radius half circle at ≥ 0.25 m/s steady forward speed, goal
 /// pose reached, with the TSID's CoM task soft at twice the upright tasks' weight (measured 0.270 m/s,
 /// goal 7 mm away, no relaxed QP solve; docs/gait.md, "Curves"). The other side: with the walking preset's
-/// hard CoM task the same curve falls (measured at 12.2 s, torso roll, 97 relaxed solves).
+/// hard CoM task and the encoders' joint velocities (as the scenario was measured) the same curve falls
+/// (measured at 12.2 s, torso roll, 97 relaxed solves); with the scenario's joint velocity filter the hard
+/// task reaches the goal too, but only through relaxed solves (measured 20; docs/wbc.md, "Joint
+/// velocities").
 #[test]
 fn the_fast_curve_in_torque_control_needs_a_soft_com_task() {
     let name = "walk_curve_fast_torque.toml";
@@ -519,13 +522,57 @@ fn the_fast_curve_in_torque_control_needs_a_soft_com_task() {
     let speed = s.gait.steady_speed.expect("enough touch-downs");
     assert!(speed >= 0.25, "{name}: steady speed {speed} m/s");
     assert_eq!(s.wbc_fallbacks, 0, "{name}: relaxed QP solves");
-    let hard = run_edited(name, |c| c.wbc.tsid.tasks.retain(|t| t.name() != "com"));
+    let hard_com = |c: &mut ScenarioConfig| c.wbc.tsid.tasks.retain(|t| t.name() != "com");
+    let hard = run_edited(name, |c| {
+        hard_com(c);
+        c.estimation.joint_velocity_bandwidth = 0.0;
+    });
     assert!(
         matches!(hard.outcome, Outcome::Fell { .. }),
         "hard CoM task: {}",
         hard.outcome
     );
     assert!(hard.wbc_fallbacks > 0, "hard CoM task: no relaxed solve");
+    let filtered = run_edited(name, hard_com);
+    assert!(
+        filtered.wbc_fallbacks > 0,
+        "hard CoM task, filtered velocities: no relaxed solve"
+    );
+}
+
+/// Issues 16 and 17: the fast torque curve on a hard floor (k 3·10⁸ and 10⁹ N/m³, b scaled as √k, normal
+/// and tangential; docs/sim.md). With the estimation layer's joint velocity filter (150 Hz, set by the
+/// scenario) it reaches its goal at the speed of the default floor and without a relaxed solve;
+/// with the encoders' low-passed velocities (`joint_velocity_bandwidth = 0`, the previous behaviour) the
+/// swing feet strike the ground before touch-down and the walk falls or the simulator diverges on both
+/// floors (docs/wbc.md, "Joint velocities").
+#[test]
+fn the_fast_torque_curve_walks_on_a_hard_floor_with_filtered_joint_velocities() {
+    let name = "walk_curve_fast_torque.toml";
+    for (k, b) in [(3e8, 9.5e5), (1e9, 1.7e6)] {
+        let floor = |c: &mut ScenarioConfig| {
+            let g = &mut c.sim.contact;
+            (g.normal_stiffness, g.tangential_stiffness) = (k, k);
+            (g.normal_damping, g.tangential_damping) = (b, b);
+        };
+        let s = run_edited(name, floor);
+        assert_stayed_up(name, &s);
+        assert_eq!(s.outcome, Outcome::GoalReached, "k {k}: {}", s.render());
+        let speed = s.gait.steady_speed.expect("enough touch-downs");
+        assert!(speed >= 0.25, "k {k}: steady speed {speed} m/s");
+        let unfiltered = run_edited(name, |c| {
+            floor(c);
+            c.estimation.joint_velocity_bandwidth = 0.0;
+        });
+        assert!(
+            matches!(
+                unfiltered.outcome,
+                Outcome::Fell { .. } | Outcome::Error { .. }
+            ),
+            "k {k}, encoders' velocities: {}",
+            unfiltered.render()
+        );
+    }
 }
 
 /// Sets the stiffness `k` (N·m/rad, b = 2√k) of the flexible hips of `c`.

@@ -15,6 +15,7 @@ use crate::error::{check_non_negative, check_positive, EstimatorError, Result};
 /// | `ekf` | [`EkfConfig`] | noise densities, priors and options of the invariant EKF [Hartley 2020] |
 /// | `contact` | [`ContactConfig`] | Schmitt-trigger contact detection on each foot's normal force |
 /// | `ft_offsets` | [`FtOffsetConfig`] | model-based offset estimation [Traversaro 2017, §4.7] |
+/// | `joint_velocity_bandwidth` | 0 | \[Hz\] 0: the joint velocities as the encoders report them; > 0: the velocities of a critically damped α–β filter of that bandwidth on the encoder positions ([`crate::JointVelocityFilter`]) |
 /// | `ft_calibration` | sensor name → 6 × 6 rows | calibration matrix `C` of each named force/torque sensor: every reading `r` is used as the wrench `C (r − b)` [Traversaro 2017, eq. (5.1)], `b` the offset; sensors not named: identity (`stride calibrate` with added-mass logs writes it) |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -38,6 +39,9 @@ pub struct EstimatorConfig {
     /// Calibration matrix `C` (rows) of each named force/torque sensor: the wrench is `C (r − b)`
     /// [Traversaro 2017, eq. (5.1)]; a sensor not named keeps the identity.
     pub ft_calibration: std::collections::BTreeMap<String, [[f64; 6]; 6]>,
+    /// Bandwidth \[Hz\] of the joint velocity filter on the encoder positions
+    /// ([`crate::JointVelocityFilter`]); 0: the encoders' velocities as read.
+    pub joint_velocity_bandwidth: f64,
 }
 
 impl Default for EstimatorConfig {
@@ -52,6 +56,7 @@ impl Default for EstimatorConfig {
             contact: ContactConfig::default(),
             ft_offsets: FtOffsetConfig::default(),
             ft_calibration: std::collections::BTreeMap::new(),
+            joint_velocity_bandwidth: 0.0,
         }
     }
 }
@@ -62,6 +67,7 @@ impl EstimatorConfig {
         self.ekf.validate()?;
         self.contact.validate()?;
         self.ft_offsets.validate()?;
+        check_non_negative("joint_velocity_bandwidth", self.joint_velocity_bandwidth)?;
         for rows in self.ft_calibration.values() {
             if !rows.iter().flatten().all(|v| v.is_finite()) {
                 return Err(EstimatorError::InvalidParameter {

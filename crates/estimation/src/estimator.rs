@@ -13,11 +13,13 @@ use crate::config::EstimatorConfig;
 use crate::ekf::{EkfState, InvariantEkf};
 use crate::error::{check_positive, EstimatorError, Result};
 use crate::io::{EstimatorInput, EstimatorOutput};
+use crate::joint_velocity::JointVelocityFilter;
 use crate::schmitt::SchmittTrigger;
 
 /// The estimation layer.
 ///
-/// One tick ([`Block::step`]):
+/// One tick ([`Block::step`]; every sample, also a pre-integrated one, first steps the joint velocity
+/// filter when `joint_velocity_bandwidth` > 0, whose velocities then replace the encoders' below):
 /// 1. forward kinematics from the encoders: each sole's position and orientation in the IMU frame, `imu_H_base`
 ///    (one pass per step when the IMU frame is on the base link, the robot placed at the predicted mean;
 ///    two otherwise: relative to the base, then at the predicted state);
@@ -77,6 +79,8 @@ pub struct Estimator {
     /// Time \[s\] pre-integrated since the last full tick ([`Estimator::preintegrate`]).
     preintegrated: f64,
     initialized: bool,
+    /// The joint velocity filter (`joint_velocity_bandwidth` > 0), stepped on every sample.
+    joint_velocity: Option<JointVelocityFilter>,
     output: EstimatorOutput,
 }
 
@@ -196,6 +200,10 @@ impl Estimator {
             last_time_ns: None,
             preintegrated: 0.0,
             initialized: false,
+            joint_velocity: match config.joint_velocity_bandwidth {
+                b if b > 0.0 => Some(JointVelocityFilter::new(model.dof(), b)?),
+                _ => None,
+            },
             output,
             kd,
             model,
@@ -440,7 +448,7 @@ impl Estimator {
             .copy_from(&input.joint_positions);
         self.scratch
             .joint_velocities
-            .copy_from(&input.joint_velocities);
+            .copy_from(joint_velocities(&self.joint_velocity, input));
         self.kd.set_state(&self.scratch)?;
         Ok(())
     }
@@ -601,6 +609,7 @@ impl Estimator {
     /// steps by it.
     pub fn step(&mut self, input: &EstimatorInput) -> Result<&EstimatorOutput> {
         let dt = self.check_input(input)?;
+        self.filter_joint_velocities(input, dt);
         let interval = self.preintegrated + dt;
         self.preintegrated = 0.0;
         let (kin, imu_r_sole) = self.predict(input, dt, interval)?;
@@ -633,7 +642,7 @@ impl Estimator {
         out.state.joint_positions.copy_from(&input.joint_positions);
         out.state
             .joint_velocities
-            .copy_from(&input.joint_velocities);
+            .copy_from(joint_velocities(&self.joint_velocity, input));
         out.foot_wrenches = wrenches;
         self.last_time_ns = Some(input.time_ns);
         Ok(&self.output)
@@ -650,6 +659,7 @@ impl Estimator {
     /// The input checks of [`Self::step`]; nothing changes then.
     pub fn preintegrate(&mut self, input: &EstimatorInput) -> Result<()> {
         let dt = self.check_input(input)?;
+        self.filter_joint_velocities(input, dt);
         let imu = &input.imu;
         self.ekf
             .propagate_mean(&imu.angular_velocity, &imu.proper_acceleration, dt);
@@ -657,6 +667,25 @@ impl Estimator {
         self.last_time_ns = Some(input.time_ns);
         Ok(())
     }
+}
+
+impl Estimator {
+    /// Steps the joint velocity filter (when configured) on the sample's encoder positions.
+    fn filter_joint_velocities(&mut self, input: &EstimatorInput, dt: f64) {
+        if let Some(f) = &mut self.joint_velocity {
+            f.step(&input.joint_positions, &input.joint_velocities, dt);
+        }
+    }
+}
+
+/// The joint velocities the estimator uses: the filter's when there is one, else the encoders'.
+fn joint_velocities<'a>(
+    filter: &'a Option<JointVelocityFilter>,
+    input: &'a EstimatorInput,
+) -> &'a DVector<f64> {
+    filter
+        .as_ref()
+        .map_or(&input.joint_velocities, JointVelocityFilter::velocities)
 }
 
 impl Block for Estimator {
@@ -673,6 +702,9 @@ impl Block for Estimator {
         self.last_time_ns = None;
         self.preintegrated = 0.0;
         self.swing_since_ns = [None; 2];
+        if let Some(f) = &mut self.joint_velocity {
+            f.reset();
+        }
         self.output = EstimatorOutput::new(&self.model);
         self.output.ft_offsets.clone_from(&self.initial_offsets);
     }

@@ -16,6 +16,7 @@ mod estimator;
 mod flexible;
 pub mod identification;
 mod io;
+mod joint_velocity;
 mod schmitt;
 
 pub use config::{ContactConfig, EkfConfig, EkfPrior, EstimatorConfig, FtOffsetConfig};
@@ -24,6 +25,7 @@ pub use error::{EstimatorError, Result};
 pub use estimator::Estimator;
 pub use flexible::{FlexibleJoint, FlexibleJointObserver};
 pub use io::{EstimatorInput, EstimatorOutput, ImuReading};
+pub use joint_velocity::JointVelocityFilter;
 pub use schmitt::SchmittTrigger;
 
 /// What a user of the estimation layer needs in scope: `use stride_estimation::prelude::*;`.

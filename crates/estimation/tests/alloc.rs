@@ -14,6 +14,16 @@ static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAlloca
 /// An estimator started standing on the bundled robot, stepped once, and `count` more standing samples
 /// `period_ns` apart with the vertical foot forces `forces` (N, left and right).
 fn started(forces: [f64; 2], period_ns: u64, count: u64) -> (Estimator, Vec<EstimatorInput>) {
+    started_with(&EstimatorConfig::default(), forces, period_ns, count)
+}
+
+/// [`started`] with `config`.
+fn started_with(
+    config: &EstimatorConfig,
+    forces: [f64; 2],
+    period_ns: u64,
+    count: u64,
+) -> (Estimator, Vec<EstimatorInput>) {
     let model = bundled_model();
     let state = standing_state(&model);
     let offsets = vec![Vector6::zeros(); model.ft_sensors().len()];
@@ -22,7 +32,7 @@ fn started(forces: [f64; 2], period_ns: u64, count: u64) -> (Estimator, Vec<Esti
         .map(|k| standing_input(&model, &state, &ground, &offsets, k * period_ns))
         .collect();
     let period = Duration::from_nanos(period_ns);
-    let mut est = Estimator::new(model, &EstimatorConfig::default(), period).unwrap();
+    let mut est = Estimator::new(model, config, period).unwrap();
     est.set_initial_state(&state).unwrap();
     est.step(&inputs[0]).unwrap();
     (est, inputs)
@@ -41,9 +51,8 @@ fn a_step_allocates_nothing() {
     assert_eq!(n, 0, "a step allocated {n} times");
 }
 
-#[test]
-fn preintegrating_allocates_nothing() {
-    let (mut est, inputs) = started([150.0, 150.0], 500_000, 40);
+/// Allocations while `est` pre-integrates three samples of four and runs a full tick on the fourth.
+fn allocations_preintegrating(est: &mut Estimator, inputs: &[EstimatorInput]) -> usize {
     let (_, n) = ALLOC.allocations_during(|| {
         for (k, input) in inputs.iter().enumerate().skip(1) {
             if k % 4 == 0 {
@@ -53,5 +62,23 @@ fn preintegrating_allocates_nothing() {
             }
         }
     });
+    n
+}
+
+#[test]
+fn preintegrating_allocates_nothing() {
+    let (mut est, inputs) = started([150.0, 150.0], 500_000, 40);
+    let n = allocations_preintegrating(&mut est, &inputs);
     assert_eq!(n, 0, "pre-integrating allocated {n} times");
+}
+
+#[test]
+fn the_joint_velocity_filter_allocates_nothing() {
+    let config = EstimatorConfig {
+        joint_velocity_bandwidth: 80.0,
+        ..EstimatorConfig::default()
+    };
+    let (mut est, inputs) = started_with(&config, [150.0, 150.0], 500_000, 40);
+    let n = allocations_preintegrating(&mut est, &inputs);
+    assert_eq!(n, 0, "the filter allocated {n} times");
 }

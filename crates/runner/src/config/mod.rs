@@ -108,6 +108,9 @@ pub struct EstimationSection {
     /// the wrench `C (r − b)` [Traversaro 2017, eq. (5.1)]; sensors not named keep the identity
     /// (`stride calibrate` with added-mass logs writes it).
     pub ft_calibration: std::collections::BTreeMap<String, [[f64; 6]; 6]>,
+    /// Bandwidth \[Hz\] of the estimation layer's joint velocity filter on the encoder positions
+    /// (`stride_estimation::JointVelocityFilter`); 0 (default): the encoders' velocities as read.
+    pub joint_velocity_bandwidth: f64,
 }
 
 /// Default of `estimation.measured_zmp_cutoff` \[Hz\]: the middle of the band that walks on both plants
@@ -126,6 +129,7 @@ impl Default for EstimationSection {
             contact: Default::default(),
             ft_offsets: Default::default(),
             ft_calibration: Default::default(),
+            joint_velocity_bandwidth: 0.0,
         }
     }
 }
@@ -147,6 +151,7 @@ impl EstimationSection {
             contact: self.contact.clone(),
             ft_offsets: self.ft_offsets.clone(),
             ft_calibration: self.ft_calibration.clone(),
+            joint_velocity_bandwidth: self.joint_velocity_bandwidth,
         }
     }
 }
