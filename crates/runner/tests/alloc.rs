@@ -71,6 +71,19 @@ fn steady_state_ticks_do_not_allocate() {
         "foot admittance: {short} allocations in 1.5 s, {long} in {} s",
         1.5 + extra_seconds
     );
+    // position control with the interpolated command (`wbc.position_command`) at every plant step
+    let interpolated = s.write(
+        "i.toml",
+        "include = [\"s.toml\"]\n[wbc]\nposition_command = \"interpolate\"\n",
+    );
+    let sc = Scenario::load(&interpolated).unwrap();
+    let short = allocations_for(&s, &sc, PlantKind::Simulator, 1.5, false);
+    let long = allocations_for(&s, &sc, PlantKind::Simulator, 1.5 + extra_seconds, false);
+    assert!(
+        long.abs_diff(short) <= 5,
+        "interpolated command: {short} allocations in 1.5 s, {long} in {} s",
+        1.5 + extra_seconds
+    );
     // torque control with the push response (`simplified.push`: momentum observer, plan clock) under a
     // push in the measured window
     let push = s.write(
