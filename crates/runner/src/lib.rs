@@ -34,6 +34,7 @@ pub mod model_cmd;
 #[cfg(feature = "mujoco")]
 pub mod mujoco_plant;
 pub mod plot;
+pub mod position_command;
 pub mod push;
 pub mod records;
 pub mod replay;

@@ -30,9 +30,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::config::{EstimationKind, PlannerMode, PlantKind, Scenario, ScenarioConfig};
+use crate::config::{
+    ControlMode, EstimationKind, PlannerMode, PlantKind, Scenario, ScenarioConfig,
+};
+use crate::position_command::{interpolate, PositionCommand};
 use crate::records::{RunnerTimingMsg, TimingRecord};
-use crate::robot::Robot;
+use crate::robot::{JointCommand, Robot};
 use crate::setup::{check_same_joints, frame_of};
 use crate::sink::LogSink;
 use crate::stack::{Stack, Wbc};
@@ -91,6 +94,13 @@ impl Schedule {
             state_every: u64::from(r.base_hz / c.log.state_hz.max(1)).max(sim_every),
             total_ticks: (duration * 1e9 / base_ns as f64).round() as u64,
         }
+    }
+
+    /// Time from the end of the plant step that starts at base tick `k` to the next whole-body tick \[s\]
+    /// (zero when the step ends at or after it).
+    fn after_plant_step_until_wbc(&self, k: u64) -> f64 {
+        let next_wbc = (k / self.wbc_every + 1) * self.wbc_every;
+        next_wbc.saturating_sub(k + self.sim_every) as f64 * self.base_ns as f64 * 1e-9
     }
 
     /// Whether a layer reads the estimate at a tick from `k` (a plant tick) up to the next plant tick: the
@@ -217,6 +227,8 @@ struct Loop<'a> {
     last_phase: &'static str,
     /// `[joint_trajectory]`: replaces the whole-body command when enabled.
     trajectory: Option<crate::joint_trajectory::JointTrajectory>,
+    /// `wbc.position_command = "interpolate"`: the command of each plant step (allocated at start-up).
+    plant_command: Option<JointCommand>,
 }
 
 impl<'a> Loop<'a> {
@@ -241,6 +253,10 @@ impl<'a> Loop<'a> {
         let q0 = crate::setup::initial_joint_positions(scenario, stack.model())?;
         let trajectory =
             crate::joint_trajectory::JointTrajectory::from_scenario(scenario, stack.model(), &q0)?;
+        let c = &scenario.config;
+        let plant_command = (c.scenario.control_mode == ControlMode::Position
+            && c.wbc.position_command == PositionCommand::Interpolate)
+            .then(|| stack.command.clone());
         Ok(Self {
             scenario,
             schedule,
@@ -252,6 +268,7 @@ impl<'a> Loop<'a> {
             wall_start: Instant::now(),
             last_phase: "",
             trajectory,
+            plant_command,
         })
     }
 
@@ -336,6 +353,10 @@ impl<'a> Loop<'a> {
                 // At the plant rate: a staircase at the whole-body rate would shake stiff servos.
                 trajectory.command(t as f64 * 1e-9, &mut self.stack.command);
                 self.robot.command(&self.stack.command)?;
+            } else if let Some(command) = self.plant_command.as_mut() {
+                let remaining = self.schedule.after_plant_step_until_wbc(k);
+                interpolate(&self.stack.command, remaining, command);
+                self.robot.command(command)?;
             }
             self.robot.advance()?;
             self.tracker

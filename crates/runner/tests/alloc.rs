@@ -30,6 +30,19 @@ fn allocations_for(
         .1
 }
 
+/// Asserts that the scenario `top` on the simulator makes the same number of allocations (±5) in 1.5 s and
+/// in 1.5 + `extra_seconds` s.
+fn assert_steady_on_simulator(s: &Scratch, top: &std::path::Path, extra_seconds: f64, what: &str) {
+    let sc = Scenario::load(top).unwrap();
+    let short = allocations_for(s, &sc, PlantKind::Simulator, 1.5, false);
+    let long = allocations_for(s, &sc, PlantKind::Simulator, 1.5 + extra_seconds, false);
+    assert!(
+        long.abs_diff(short) <= 5,
+        "{what}: {short} allocations in 1.5 s, {long} in {} s",
+        1.5 + extra_seconds
+    );
+}
+
 #[test]
 fn steady_state_ticks_do_not_allocate() {
     let s = Scratch::new("alloc");
@@ -63,14 +76,13 @@ fn steady_state_ticks_do_not_allocate() {
         "a.toml",
         "include = [\"s.toml\"]\n[simplified.foot_admittance]\nenabled = true\n",
     );
-    let sc = Scenario::load(&admittance).unwrap();
-    let short = allocations_for(&s, &sc, PlantKind::Simulator, 1.5, false);
-    let long = allocations_for(&s, &sc, PlantKind::Simulator, 1.5 + extra_seconds, false);
-    assert!(
-        long.abs_diff(short) <= 5,
-        "foot admittance: {short} allocations in 1.5 s, {long} in {} s",
-        1.5 + extra_seconds
+    assert_steady_on_simulator(&s, &admittance, extra_seconds, "foot admittance");
+    // position control with the interpolated command (`wbc.position_command`) at every plant step
+    let interpolated = s.write(
+        "i.toml",
+        "include = [\"s.toml\"]\n[wbc]\nposition_command = \"interpolate\"\n",
     );
+    assert_steady_on_simulator(&s, &interpolated, extra_seconds, "interpolated command");
     // torque control with the push response (`simplified.push`: momentum observer, plan clock) under a
     // push in the measured window
     let push = s.write(
@@ -78,12 +90,5 @@ fn steady_state_ticks_do_not_allocate() {
         "include = [\"s.toml\"]\n[scenario]\ncontrol_mode = \"torque\"\n[simplified.push]\nenabled = true\n\
          [[sim.pushes]]\nframe = \"chest\"\nstart = 2.0\nduration = 1.0\nwrench = [0.0, 15.0, 0.0, 0.0, 0.0, 0.0]\n",
     );
-    let sc = Scenario::load(&push).unwrap();
-    let short = allocations_for(&s, &sc, PlantKind::Simulator, 1.5, false);
-    let long = allocations_for(&s, &sc, PlantKind::Simulator, 1.5 + extra_seconds, false);
-    assert!(
-        long.abs_diff(short) <= 5,
-        "push response: {short} allocations in 1.5 s, {long} in {} s",
-        1.5 + extra_seconds
-    );
+    assert_steady_on_simulator(&s, &push, extra_seconds, "push response");
 }

@@ -85,6 +85,9 @@ pub struct WbcSection {
     pub ik: IkConfig,
     /// TSID (`stride_wbc::TsidConfig`); with a preset, `tasks` are overrides.
     pub tsid: TsidConfig,
+    /// The position set-point between two QP-IK ticks: `interpolate` (the IK's joint trajectory at every
+    /// plant step) or `hold` (its command held over the period). See `crate::position_command`.
+    pub position_command: crate::position_command::PositionCommand,
 }
 
 impl Default for WbcSection {
@@ -94,6 +97,7 @@ impl Default for WbcSection {
             walking: WalkingSection::default(),
             ik: empty_ik(),
             tsid: empty_tsid(),
+            position_command: crate::position_command::PositionCommand::default(),
         }
     }
 }
