@@ -41,7 +41,7 @@ fn on_a_3e8_floor_the_default_walk_tracks_the_zmp_within_20_mm_and_the_previous_
     let hard = floor(3e8, 9.5e5);
     let now = walk(&s, "now", &hard);
     assert_eq!(now.outcome, Outcome::GoalReached, "{}", now.render());
-    // measured 15.2 / 8.5 mm RMS (ZMP / DCM)
+    // measured 15.7 / 8.0 mm RMS (ZMP / DCM)
     assert!(now.zmp_error.rms <= 0.020, "{}", now.render());
     assert!(now.dcm_error.rms <= 0.010, "{}", now.render());
     // measured 39.5 / 10.9 mm RMS: the chatter of docs/sim.md
