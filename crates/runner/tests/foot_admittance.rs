@@ -70,7 +70,7 @@ fn on_a_hard_floor_the_fast_walk_stands_still_at_its_goal_only_with_the_admittan
     let hard = floor(1e9, 1.7e6);
     // Without it: with the chest weight 5 and every-sample estimation of the defaults before 2026-12-05 it
     // fell; with the defaults since it rocks on its soles until the duration runs out (measured ZMP 99.1 mm
-    // RMS, DCM 24.3 mm; 80.0 / 9.1 mm with the simplified layer at 500 Hz of 2026-12-06).
+    // RMS, DCM 24.3 mm; 79.4 / 10.7 mm with the hard-floor defaults of 2026-12-06).
     let without = run(&s, "without", "walk_fast", &format!("{hard}{OFF}"), None);
     assert!(
         matches!(
@@ -84,7 +84,7 @@ fn on_a_hard_floor_the_fast_walk_stands_still_at_its_goal_only_with_the_admittan
     let with = run(&s, "with", "walk_fast", &format!("{hard}{ON}"), None);
     assert_eq!(with.outcome, Outcome::GoalReached, "{}", with.render());
     // measured 22.2 / 61.1 mm RMS with the 20 Hz error filter (12.2 / 54.5 unfiltered, which rocks on
-    // MuJoCo; docs/foot-admittance.md, "MuJoCo"); 12.6 / 38.2 (13.0 / 52.7 unfiltered) with the gains and
+    // MuJoCo; docs/foot-admittance.md, "MuJoCo"); 13.4 / 38.0 (13.5 / 54.9 unfiltered) with the gains and
     // the 500 Hz simplified layer of 2026-12-06
     assert!(with.dcm_error.rms < 0.025, "{}", with.render());
     assert!(with.zmp_error.rms < 0.07, "{}", with.render());
