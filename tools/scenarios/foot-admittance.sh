@@ -10,7 +10,8 @@
 # b [N·s/m³] (the tangential stick law set to the same k and b, as docs/sim.md's stiff-floor table); default
 # "default 3e8:9.5e5 1e9:1.7e6"; NORMAL_ONLY=1 sets the normal law only (the soft grounds of
 # configs/sweeps/soft_ground_table_8_1_position.toml). PLANT: `simulator` (default) or `mujoco` (a `--features mujoco` build).
-# ADMITTANCE: `off on` (default), `on` or `off`, the rows to run.
+# ADMITTANCE: `off on` (default), `on` or `off`, the rows to run; `default` runs the scenario as it is (its
+# own admittance settings, on by default), the rows of docs/sim.md's hard-floor table.
 # The iCub scenarios need STRIDE_ICUB_MODELS_DIR. Logs go to a temporary folder (STRIDE_LOG_DIR to keep them).
 # Columns: floor, admittance, outcome, goal distance, DCM RMS / max, ZMP RMS, largest torso tilt.
 set -euo pipefail

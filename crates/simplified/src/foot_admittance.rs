@@ -40,6 +40,22 @@ use crate::error::{check_non_negative, check_positive, Result, SimplifiedError};
 /// Default cut-off of the error filter \[Hz\] (`error_cutoff`; docs/foot-admittance.md, "MuJoCo").
 pub const DEFAULT_ERROR_CUTOFF: f64 = 20.0;
 
+/// Default foot damping gain `K_τ` \[rad/(N·m·s)\] (`torque_gain`). With [`DEFAULT_TORQUE_LEAK_TIME`] the
+/// sole tilts `K_τ T_τ` = 2·10⁻³ rad per N·m of steady torque error (5·10⁻⁴ before 2026-12-06): chosen with
+/// the simplified layer at 500 Hz on `walk_straight` over floors of 3·10⁷, 3·10⁸ and 10⁹ N/m³, where the
+/// faster and stronger tilt brings the measured CoP onto the desired one before the chatter of a hard floor
+/// builds up (docs/foot-admittance.md, "Hard floors").
+pub const DEFAULT_TORQUE_GAIN: f64 = 0.01;
+
+/// Default time constant `T_τ` of the tilt's return to the plan \[s\] (`torque_leak_time`).
+pub const DEFAULT_TORQUE_LEAK_TIME: f64 = 0.2;
+
+/// Default force difference gain `K_f` \[m/(N·s)\] (`force_gain`). Its loop gain is `K_f` times the
+/// vertical stiffness of the two legs and the floor in series, which grows with the floor: at 10⁻⁴ (the
+/// default before 2026-12-06) the double support's load split oscillates at 50–100 Hz on a 10⁹ N/m³ floor
+/// (docs/foot-admittance.md, "Hard floors").
+pub const DEFAULT_FORCE_GAIN: f64 = 3e-5;
+
 /// Share of the robot's weight a foot must carry to count as loaded (below it the foot's corrections
 /// leak back to the plan).
 pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
@@ -50,10 +66,10 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
 /// | `enabled` | – | true | on in position control since 2026-12-05; false: the sole references are the plan's, bit for bit |
-/// | `torque_gain` | rad/(N·m·s) | 0.005 | `K_τ`, the inverse of the damping `D` of [Kajita 2010, foot damping control] |
-/// | `torque_leak_time` | s | 0.1 | `T_τ`, time constant of the return of the tilt to the plan |
+/// | `torque_gain` | rad/(N·m·s) | 0.01 (0.005 before 2026-12-06) | `K_τ`, the inverse of the damping `D` of [Kajita 2010, foot damping control] |
+/// | `torque_leak_time` | s | 0.2 (0.1 before 2026-12-06) | `T_τ`, time constant of the return of the tilt to the plan |
 /// | `max_tilt` | rad | 0.1 | bound on each tilt angle |
-/// | `force_gain` | m/(N·s) | 1e-4 | `K_f` of the force difference control [Kajita 2010, foot force difference control] |
+/// | `force_gain` | m/(N·s) | 3e-5 (1e-4 before 2026-12-06) | `K_f` of the force difference control [Kajita 2010, foot force difference control] |
 /// | `force_leak_time` | s | 0.2 | `T_f`, time constant of the return of the height difference to the plan |
 /// | `max_height_offset` | m | 0.02 | bound on the height difference `δ` |
 /// | `error_cutoff` | Hz | 20 | cut-off of the low-pass filter on the torque and force errors (0: unfiltered) |
@@ -82,10 +98,10 @@ impl Default for FootAdmittanceConfig {
     fn default() -> Self {
         Self {
             enabled: true,
-            torque_gain: 0.005,
-            torque_leak_time: 0.1,
+            torque_gain: DEFAULT_TORQUE_GAIN,
+            torque_leak_time: DEFAULT_TORQUE_LEAK_TIME,
             max_tilt: 0.1,
-            force_gain: 1e-4,
+            force_gain: DEFAULT_FORCE_GAIN,
             force_leak_time: 0.2,
             max_height_offset: 0.02,
             error_cutoff: DEFAULT_ERROR_CUTOFF,
@@ -487,7 +503,14 @@ mod tests {
         let out = on.step(&input).unwrap();
         // the CoP is 2 cm ahead of the desired one (the left sole origin): pitch toe up (negative), no roll
         let filtered = -6.0 * low_pass_gain(0.002, DEFAULT_ERROR_CUTOFF);
-        let expected = leaky_admittance(0.0, 0.005, filtered, 0.1, 0.002, 0.1);
+        let expected = leaky_admittance(
+            0.0,
+            DEFAULT_TORQUE_GAIN,
+            filtered,
+            DEFAULT_TORQUE_LEAK_TIME,
+            0.002,
+            0.1,
+        );
         assert_eq!(out.feet[0].tilt, Vector2::new(0.0, expected));
         assert!(expected < 0.0);
         assert_eq!(out.feet[1], FootCorrection::default());
