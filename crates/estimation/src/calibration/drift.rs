@@ -17,11 +17,8 @@
 use nalgebra::{Matrix3, Matrix4, Matrix6x3, Vector3, Vector4, Vector6};
 
 use super::check::check_pairs;
+use super::lsq::RANK_TOLERANCE;
 use super::CalibrationError;
-
-/// Prior standard deviation of the initial state `(d_a, b_a)` (raw units per m/s², raw units): so wide
-/// that the data alone determine the estimate.
-pub const DIFFUSE_STD: f64 = 1e4;
 
 /// The sensor's noise model, per raw axis `[f; τ]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,7 +41,8 @@ pub struct DriftFit {
     /// Its standard deviation, raw units.
     pub final_offset_std: Vector6<f64>,
     /// `√(Σ ν²/S / samples)` per axis over the innovations `ν` and their predicted variances `S` (the first
-    /// four, which the diffuse prior dominates, left out): about 1 when the noise model fits the data.
+    /// 50 samples, which do not determine the state yet, left out): about 1 when the noise model fits the
+    /// data.
     pub normalised_innovation: Vector6<f64>,
 }
 
@@ -92,18 +90,26 @@ pub fn gravity_response_with_drift(
     };
     for a in 0..6 {
         let axis = filter_axis(times, raw, gravity, a, noise.white[a], noise.walk[a]);
-        let (x, p) = (axis.state, axis.covariance);
-        let p_dd = p.fixed_view::<3, 3>(0, 0).into_owned();
-        // The gravity determines d_a when its covariance shrank from the diffuse prior in every direction.
-        let worst = p_dd.symmetric_eigenvalues().max();
-        if !(worst < 1e-6 * DIFFUSE_STD * DIFFUSE_STD) {
+        // The gravity determines (d_a, b_a) when the information matrix is well conditioned.
+        let eig = axis.information.symmetric_eigenvalues();
+        let p = if eig.min() > RANK_TOLERANCE * eig.max() {
+            axis.information.try_inverse()
+        } else {
+            None
+        };
+        let Some(p) = p else {
             return Err(CalibrationError::NotIdentifiable {
                 what: "a dataset's gravity response (with a drifting offset)",
-                rank: 0,
+                rank: eig
+                    .iter()
+                    .filter(|e| **e > RANK_TOLERANCE * eig.max())
+                    .count(),
                 unknowns: 4,
                 hint: "rotate the sensor so that gravity takes directions off one plane (two axes)",
             });
-        }
+        };
+        let x = p * axis.vector;
+        let p_dd = p.fixed_view::<3, 3>(0, 0).into_owned();
         fit.response
             .set_row(a, &Vector3::new(x[0], x[1], x[2]).transpose());
         fit.row_covariance[a] = p_dd;
@@ -116,13 +122,16 @@ pub fn gravity_response_with_drift(
 
 /// One axis's filter after the last sample.
 struct AxisFilter {
-    state: Vector4<f64>,
-    covariance: Matrix4<f64>,
+    /// Information matrix `P⁻¹` of `(d_a, b_a)` and information vector `P⁻¹ x`.
+    information: Matrix4<f64>,
+    vector: Vector4<f64>,
     normalised_innovation: f64,
 }
 
-/// The Kalman filter of raw axis `a`: state `(d_a, b_a)`, measurement `r_a = (g, 1) · x + n`, the offset's
-/// variance growing by `walk² Δt` between samples (the update in Joseph form).
+/// The filter of raw axis `a` in information form (exactly diffuse at the start: zero information), state
+/// `(d_a, b_a)`, measurement `r_a = (g, 1) · x + n`: the update adds `h hᵀ / σ²`; the prediction adds the
+/// walk's variance `walk² Δt` to `b_a`'s, `Y ← L Y Lᵀ + c cᵀ / (walk² Δt)` with `c = Y e_b / (Y_bb +
+/// 1/(walk² Δt))`, `L = 1 − c e_bᵀ` (the information filter's prediction with `F = 1`, `G = e_b`).
 fn filter_axis(
     times: &[f64],
     raw: &[Vector6<f64>],
@@ -133,32 +142,43 @@ fn filter_axis(
 ) -> AxisFilter {
     let r = white * white;
     let q = walk * walk;
-    let mut x = Vector4::zeros();
-    let mut p = Matrix4::identity() * (DIFFUSE_STD * DIFFUSE_STD);
+    let mut y = Matrix4::zeros();
+    let mut v = Vector4::zeros();
     let mut chi2 = 0.0;
     let mut counted = 0usize;
     for i in 0..raw.len() {
-        if i > 0 {
-            p[(3, 3)] += q * (times[i] - times[i - 1]);
+        let dt = if i > 0 { times[i] - times[i - 1] } else { 0.0 };
+        if q * dt > 0.0 {
+            let yb: Vector4<f64> = y.column(3).into_owned();
+            let c = yb / (y[(3, 3)] + 1.0 / (q * dt));
+            let mut l = Matrix4::identity();
+            for row in 0..4 {
+                l[(row, 3)] -= c[row];
+            }
+            y = l * y * l.transpose() + c * c.transpose() / (q * dt);
+            v = l * v;
         }
         let g = &gravity[i];
         let h = Vector4::new(g.x, g.y, g.z, 1.0);
-        let ph = p * h;
-        let s = h.dot(&ph) + r;
-        let nu = raw[i][a] - h.dot(&x);
-        let k = ph / s;
-        x += k * nu;
-        // Joseph form: stays symmetric positive semi-definite as the diffuse prior collapses.
-        let i_kh = Matrix4::identity() - k * h.transpose();
-        p = i_kh * p * i_kh.transpose() + k * (r * k.transpose());
-        if i >= 4 {
-            chi2 += nu * nu / s;
-            counted += 1;
+        // The innovation against the prediction, once the samples so far determine the state.
+        if i >= INNOVATION_WARM_UP {
+            if let Some(chol) = y.cholesky() {
+                let x = chol.solve(&v);
+                let s = h.dot(&chol.solve(&h)) + r;
+                let nu = raw[i][a] - h.dot(&x);
+                chi2 += nu * nu / s;
+                counted += 1;
+            }
         }
+        y += h * h.transpose() / r;
+        v += h * (raw[i][a] / r);
     }
     AxisFilter {
-        state: x,
-        covariance: p,
+        information: y,
+        vector: v,
         normalised_innovation: (chi2 / counted.max(1) as f64).sqrt(),
     }
 }
+
+/// Samples before the innovations are counted (the state is not determined by the first few).
+const INNOVATION_WARM_UP: usize = 50;

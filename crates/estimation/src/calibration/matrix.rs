@@ -120,33 +120,22 @@ fn solve_stacked(
     weights_c: Option<&Matrix6<f64>>,
 ) -> Result<LeastSquaresSolution, CalibrationError> {
     let mut ls = StackedLeastSquares::new(MATRIX_UNKNOWNS);
-    let mut block = [[0.0; MATRIX_UNKNOWNS]; 3];
+    let mut rows = [[[0.0; MATRIX_UNKNOWNS]; 3]; 6];
     let mut weighted = [0.0; MATRIX_UNKNOWNS];
     for (d, fit) in datasets.iter().zip(fits) {
-        let dj = &fit.response;
         let ma = gravity_wrench_matrix(d.added_mass, &(d.added_com * d.added_mass));
-        for a in 0..6 {
-            for (c, row) in block.iter_mut().enumerate() {
-                row.fill(0.0);
-                // (C D_j)[a, c] = Σ_k C[a, k] D_j[k, c]; vec(C) is column-major: C[a, k] at 6k + a.
-                for k in 0..6 {
-                    row[6 * k + a] = dj[(k, c)];
-                }
-                // −M_b[a, c]: the mass on the force diagonal, the first moment in its skew block.
-                if a < 3 && a == c {
-                    row[36] = -1.0;
-                }
-                if a >= 3 {
-                    for i in 0..3 {
-                        row[37 + i] = -skew_derivative(i)[(a - 3, c)];
-                    }
+        fill_equations(&fit.response, &mut rows);
+        let Some(p) = &fit.row_covariance else {
+            for c in 0..3 {
+                for (a, block) in rows.iter().enumerate() {
+                    ls.add_row(&block[c], ma[(a, c)]);
                 }
             }
+            continue;
+        };
+        for (a, block) in rows.iter().enumerate() {
             let rhs = Vector3::new(ma[(a, 0)], ma[(a, 1)], ma[(a, 2)]);
-            let whiten = match &fit.row_covariance {
-                Some(p) => whitening(p, a, weights_c)?,
-                None => Matrix3::identity(),
-            };
+            let whiten = whitening(p, a, weights_c)?;
             for w_row in whiten.row_iter() {
                 weighted.fill(0.0);
                 for (c, row) in block.iter().enumerate() {
@@ -167,6 +156,29 @@ fn solve_stacked(
         });
     }
     Ok(sol)
+}
+
+/// The equations `(C D_j − M_b)[a, c]` of one dataset as rows over the unknowns `(vec C, m, m c)`:
+/// `rows[a][c]`.
+fn fill_equations(dj: &Matrix6x3<f64>, rows: &mut [[[f64; MATRIX_UNKNOWNS]; 3]; 6]) {
+    for (a, block) in rows.iter_mut().enumerate() {
+        for (c, row) in block.iter_mut().enumerate() {
+            row.fill(0.0);
+            // (C D_j)[a, c] = Σ_k C[a, k] D_j[k, c]; vec(C) is column-major: C[a, k] at 6k + a.
+            for k in 0..6 {
+                row[6 * k + a] = dj[(k, c)];
+            }
+            // −M_b[a, c]: the mass on the force diagonal, the first moment in its skew block.
+            if a < 3 && a == c {
+                row[36] = -1.0;
+            }
+            if a >= 3 {
+                for i in 0..3 {
+                    row[37 + i] = -skew_derivative(i)[(a - 3, c)];
+                }
+            }
+        }
+    }
 }
 
 /// `W` with `Wᵀ W = Σ⁻¹`, `Σ = Σ_k C[a, k]² P_k` the covariance of equation block `a`'s error.

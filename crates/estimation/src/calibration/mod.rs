@@ -22,7 +22,7 @@ mod matrix;
 mod offset;
 mod regressor;
 
-pub use drift::{gravity_response_with_drift, DriftFit, DriftNoise, DIFFUSE_STD};
+pub use drift::{gravity_response_with_drift, DriftFit, DriftNoise};
 pub use error::CalibrationError;
 pub use lsq::{LeastSquaresSolution, StackedLeastSquares, RANK_TOLERANCE};
 pub use matrix::{
