@@ -73,9 +73,8 @@ pub fn gravity_response_with_drift(
             index: 0,
         });
     }
-    if let Some(i) =
-        (1..times.len()).find(|&i| !(times[i] >= times[i - 1]) || !times[i].is_finite())
-    {
+    let bad_time = |i: usize| !times[i].is_finite() || (i > 0 && times[i] < times[i - 1]);
+    if let Some(i) = (0..times.len()).find(|&i| bad_time(i)) {
         return Err(CalibrationError::NonFinite {
             what: "sample time (finite and increasing)",
             index: i,
