@@ -170,6 +170,7 @@ fn as_datasets(data: &[Dataset]) -> Vec<AddedMassDataset<'_>> {
     data.iter()
         .zip(added_masses())
         .map(|((raw, grav), (ma, ca))| AddedMassDataset {
+            times: &[],
             raw,
             gravity: grav,
             added_mass: ma,
@@ -219,7 +220,8 @@ fn calibration_matrix_is_exact_without_noise_and_equals_the_thesis_system() {
     let mut gauss = Gauss::new(4);
     let cal = true_calibration(&mut gauss, 0.05);
     let data = datasets(&mut gauss, &cal, 30, 0.0);
-    let fit = calibration_matrix(&as_datasets(&data)).expect("three datasets");
+    let fit =
+        calibration_matrix(&as_datasets(&data), &OffsetModel::Constant).expect("three datasets");
     assert!((fit.matrix - cal.0).amax() < 1e-9, "{}", fit.matrix - cal.0);
     let (m, c) = body();
     assert!((fit.mass - m).abs() < 1e-9);
@@ -241,7 +243,8 @@ fn calibration_matrix_at_the_default_noise_is_within_one_percent() {
     // Three datasets of 100 s at 1 kHz (an iCub FT sensor's rate), raw readings at the simulator's
     // default noise. The error falls as 1/√n (docs/identification.md, "FT calibration").
     let data = datasets(&mut gauss, &cal, 100_000, 1.0);
-    let fit = calibration_matrix(&as_datasets(&data)).expect("three datasets");
+    let fit =
+        calibration_matrix(&as_datasets(&data), &OffsetModel::Constant).expect("three datasets");
     let err = (fit.matrix - cal.0).norm() / cal.0.norm();
     eprintln!(
         "calibration matrix, 3 × 100 000 samples at the default noise: Frobenius error {:.2} %",
@@ -259,7 +262,7 @@ fn two_datasets_are_refused_by_the_rank_check() {
     for scale in [0.0, 1.0] {
         let data = datasets(&mut gauss, &cal, 500, scale);
         let all = as_datasets(&data);
-        match calibration_matrix(&all[..2]) {
+        match calibration_matrix(&all[..2], &OffsetModel::Constant) {
             Err(CalibrationError::TooFewDatasets {
                 datasets,
                 rank,
@@ -270,7 +273,7 @@ fn two_datasets_are_refused_by_the_rank_check() {
             }
             other => panic!("two datasets accepted: {other:?}"),
         }
-        assert!(calibration_matrix(&all).is_ok());
+        assert!(calibration_matrix(&all, &OffsetModel::Constant).is_ok());
     }
 }
 

@@ -75,6 +75,8 @@ pub struct CalibrationReport {
 
 /// A paired sample: the state, its acceleration, the motor torques and every sensor's reading.
 pub(crate) struct Sample {
+    /// Time of the state, s.
+    pub(crate) time: f64,
     pub(crate) state: RobotState,
     pub(crate) nu_dot: DVector<f64>,
     /// Motor torques of `/sim/state` (N·m or N; empty in logs without them).
@@ -268,6 +270,7 @@ pub(crate) fn paired_samples_with_lag(
             nu_dot[6 + j] = (s1.joint_velocities[j] - s0.joint_velocities[j]) / dt;
         }
         out.push(Sample {
+            time: *t,
             state: s.clone(),
             nu_dot,
             joint_torques: tau.clone(),

@@ -6,10 +6,10 @@
 //! ±ʳR_w (g − p̈_s)` (the sensor origin's acceleration from the logged state, `±` the measurement
 //! direction): for a rigid child side the reading is `C⁻¹ (M(m, m c) ĝ_i + Δ_i) + b`, `Δ_i` the rotational
 //! terms of the Newton–Euler equations about the sensor origin (`−ω̇ × h − ω × (ω × h)`,
-//! `−I_o ω̇ − ω × I_o ω`). `Δ_i` is subtracted from the reading with the child side's parameters of the
-//! logged URDF plus the added masses' (at most ~1 % of the gravity wrench in the swings of
-//! `configs/identify_ft_masses_*.toml`; `C⁻¹ Δ_i ≈ Δ_i` leaves the product of two small terms), then
-//! `stride_estimation::calibration::calibration_matrix` solves (5.11) in two stages. The added masses
+//! `−I_o ω̇ − ω × I_o ω`), computed with the child side's parameters of the logged URDF plus the added
+//! masses'. `C⁻¹ Δ_i` is subtracted from the reading with the previous pass's `C` (identity first), then
+//! `stride_estimation::calibration::calibration_matrix` solves (5.11) in two stages, the offset a random
+//! walk under the logged sensor noise ([`OffsetChoice`]). The added masses
 //! come from a TOML file ([`AddedMassFile`]) or, for simulated logs, from each log's `[sim.model]` edits
 //! (the plant's child side minus the logged robot model's).
 
@@ -19,7 +19,9 @@ use std::sync::Arc;
 
 use nalgebra::{DMatrix, Isometry3, Matrix3, Matrix6, Vector3, Vector6};
 use serde::Deserialize;
-use stride_estimation::calibration::{calibration_matrix, AddedMassDataset, CalibrationMatrixFit};
+use stride_estimation::calibration::{
+    calibration_matrix, AddedMassDataset, CalibrationMatrixFit, DriftNoise, OffsetModel,
+};
 use stride_model::inertial::{
     inertia_about_origin, inertial_parameters, transform_parameters, InertialParameters,
 };
@@ -67,6 +69,17 @@ pub struct KnownMass {
     pub com: [f64; 3],
 }
 
+/// The first stage's offset model (`stride calibrate --constant-offset` chooses [`Self::Constant`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OffsetChoice {
+    /// A random walk with the logged `[sim.sensors.ft]` noise σ and drift rates (a real robot's log: its
+    /// sensors' datasheet figures written there); constant when those drift rates are zero.
+    #[default]
+    DriftFromLog,
+    /// Constant over each log, as in Traversaro 2017 (5.1), (5.10).
+    Constant,
+}
+
 /// One sensor's calibration matrix.
 #[derive(Debug, Clone)]
 pub struct SensorMatrix {
@@ -98,6 +111,8 @@ pub struct MatrixReport {
     pub all_sensors: Vec<String>,
     /// Paired samples per log.
     pub samples: Vec<usize>,
+    /// The first stage's offset model.
+    pub offsets: OffsetModel,
 }
 
 /// One log read for the calibration.
@@ -139,11 +154,13 @@ fn read_run(path: &Path) -> Result<LoggedRun, CalibrateError> {
 
 /// The calibration matrix of `sensor` (or of every sensor whose child side is one rigid body) from `logs`
 /// taken with different added masses: from `masses` when given, else from each log's `[sim.model]` edits.
-/// Fewer than three logs are refused by the rank check of (5.11) (Lemma 5.2).
+/// Fewer than three logs are refused by the rank check of (5.11) (Lemma 5.2). `offsets` chooses the first
+/// stage's offset model.
 pub fn calibrate_matrix_logs(
     logs: &[PathBuf],
     sensor: Option<&str>,
     masses: Option<&AddedMassFile>,
+    offsets: OffsetChoice,
 ) -> Result<MatrixReport, CalibrateError> {
     if let Some(f) = masses {
         if f.log.len() != logs.len() {
@@ -170,6 +187,7 @@ pub fn calibrate_matrix_logs(
         }
     }
     let chosen = chosen_sensors(&model, sensor)?;
+    let offsets = offset_model(&runs[0].scenario, offsets);
     let mut sensors = Vec::new();
     for k in chosen {
         let mut added = Vec::new();
@@ -179,14 +197,37 @@ pub fn calibrate_matrix_logs(
                 None => edits_on_sensor(run, k, &logs[j])?,
             });
         }
-        sensors.push(fit_sensor(&runs, k, added)?);
+        sensors.push(fit_sensor(&runs, k, added, &offsets)?);
     }
     Ok(MatrixReport {
         sensors,
         all_sensors,
         samples: runs.iter().map(|r| r.samples.len()).collect(),
+        offsets,
     })
 }
+
+/// The offset model of `choice` for the logged sensors: a random walk under the logged `[sim.sensors.ft]`
+/// white noise and drift rates (each σ at least [`MIN_NOISE`]); constant when asked or when the log's
+/// sensors do not drift.
+fn offset_model(scenario: &Scenario, choice: OffsetChoice) -> OffsetModel {
+    let ft = &scenario.config.sim.sensors.ft;
+    if choice == OffsetChoice::Constant || (ft.force_drift <= 0.0 && ft.torque_drift <= 0.0) {
+        return OffsetModel::Constant;
+    }
+    let per_axis = |f: f64, t: f64| nalgebra::Vector6::new(f, f, f, t, t, t);
+    OffsetModel::RandomWalk(DriftNoise {
+        white: per_axis(
+            ft.force_noise.max(MIN_NOISE),
+            ft.torque_noise.max(MIN_NOISE),
+        ),
+        walk: per_axis(ft.force_drift, ft.torque_drift),
+    })
+}
+
+/// Floor of the white-noise σ given to the drift filter, raw units (a noise-free log still has the
+/// pipeline's own errors).
+const MIN_NOISE: f64 = 1e-3;
 
 /// The named sensor (its child side must be rigid), or every sensor whose child side is.
 fn chosen_sensors(model: &Model, sensor: Option<&str>) -> Result<Vec<usize>, CalibrateError> {
@@ -314,11 +355,18 @@ fn edits_on_sensor(
     Ok(child_side_in_sensor_frame(&plant, k)? - child_side_in_sensor_frame(&bare, k)?)
 }
 
-/// Stage (5.11) for sensor `k` over every run.
+/// Passes of (5.11) with the rotational terms read through the previous pass's `C⁻¹`.
+const ROTATIONAL_PASSES: usize = 3;
+
+/// Stage (5.11) for sensor `k` over every run. The reading is `C⁻¹ (M ĝ + Δ) + b`: `Δ` is subtracted
+/// through the current estimate of `C⁻¹` (identity first) and (5.11) solved again, [`ROTATIONAL_PASSES`]
+/// times (ours: the thesis's static poses have no `Δ`; with `Δ` of a few N in fast swings, the `(C⁻¹ − 1) Δ`
+/// left by subtracting `Δ` alone is read as gravity response).
 fn fit_sensor(
     runs: &[LoggedRun],
     k: usize,
     added: Vec<InertialParameters>,
+    offsets: &OffsetModel,
 ) -> Result<SensorMatrix, CalibrateError> {
     let model = &runs[0].model;
     let name = model.ft_sensors()[k].name.clone();
@@ -331,27 +379,44 @@ fn fit_sensor(
     for (run, a) in runs.iter().zip(&added) {
         data.push(load_accelerations(run, k, &(prior + a))?);
     }
-    let mut datasets = Vec::new();
-    for ((raw, g), a) in data.iter().zip(&added) {
-        let (m, h) = (a[0], Vector3::new(a[1], a[2], a[3]));
-        let com = if m > 1e-9 {
-            h / m
-        } else if h.norm() < 1e-12 {
-            Vector3::zeros()
-        } else {
-            return Err(CalibrateError::Content(format!(
-                "sensor `{name}`: a log moves the child side's centre of mass ({h:?} kg·m) without adding mass; \
-                 (5.11) takes added masses"
-            )));
-        };
-        datasets.push(AddedMassDataset {
-            raw,
-            gravity: g,
-            added_mass: m,
-            added_com: com,
-        });
+    let mut coms = Vec::new();
+    for a in &added {
+        coms.push(added_com(&name, a)?);
     }
-    let fit = calibration_matrix(&datasets).map_err(wrap)?;
+    let mut c_inv = Matrix6::identity();
+    let mut fit = None;
+    for _ in 0..ROTATIONAL_PASSES {
+        let corrected: Vec<Vec<Vector6<f64>>> = data
+            .iter()
+            .map(|d| {
+                d.raw
+                    .iter()
+                    .zip(&d.rotational)
+                    .map(|(r, delta)| r - c_inv * delta)
+                    .collect()
+            })
+            .collect();
+        let datasets: Vec<AddedMassDataset<'_>> = data
+            .iter()
+            .zip(&corrected)
+            .zip(added.iter().zip(&coms))
+            .map(|((d, raw), (a, com))| AddedMassDataset {
+                times: &d.times,
+                raw,
+                gravity: &d.load,
+                added_mass: a[0],
+                added_com: *com,
+            })
+            .collect();
+        let f = calibration_matrix(&datasets, offsets).map_err(wrap)?;
+        c_inv = f.matrix.try_inverse().ok_or_else(|| {
+            CalibrateError::Content(format!("sensor `{name}`: the estimated C is singular"))
+        })?;
+        fit = Some(f);
+    }
+    let Some(fit) = fit else {
+        unreachable!("at least one pass");
+    };
     let last = runs.last().map(|r| (r, r.duration));
     let (truth, truth_offset) = match last {
         Some((run, duration)) => simulated_truth(run, k, duration),
@@ -366,11 +431,43 @@ fn fit_sensor(
     })
 }
 
-/// A sensor's readings and load accelerations, sample by sample.
-type SensorData = (Vec<Vector6<f64>>, Vec<Vector3<f64>>);
+/// The added body's centre of mass (sensor frame) from its `π`; an edit that moves the centre without
+/// adding mass is refused.
+fn added_com(name: &str, a: &InertialParameters) -> Result<Vector3<f64>, CalibrateError> {
+    let (m, h) = (a[0], Vector3::new(a[1], a[2], a[3]));
+    if m > 1e-9 {
+        Ok(h / m)
+    } else if h.norm() < 1e-12 {
+        Ok(Vector3::zeros())
+    } else {
+        Err(CalibrateError::Content(format!(
+            "sensor `{name}`: a log moves the child side's centre of mass ({h:?} kg·m) without adding mass; \
+             (5.11) takes added masses"
+        )))
+    }
+}
 
-/// Raw readings of sensor `k`, less the rotational terms of a child side `pi` (sensor frame, about its
-/// origin), and the load accelerations `ĝ_i = ±ʳR_w (g − p̈_s)` at the paired samples.
+/// A sensor's readings, the rotational terms of its child side and the load accelerations, sample by
+/// sample.
+struct SensorData {
+    times: Vec<f64>,
+    raw: Vec<Vector6<f64>>,
+    rotational: Vec<Vector6<f64>>,
+    load: Vec<Vector3<f64>>,
+}
+
+/// Whether a reading is at the sensor's full scale on some axis (`[sim.sensors.ft] force_range`,
+/// `torque_range`; a real robot's log: its sensors' ranges written there): the wrench is then unknown.
+fn saturated(reading: &Vector6<f64>, range: &Vector6<f64>) -> bool {
+    reading
+        .iter()
+        .zip(range.iter())
+        .any(|(r, full)| r.abs() >= full * (1.0 - 1e-9))
+}
+
+/// Raw readings of sensor `k` below its full scale ([`saturated`]), the rotational terms `±Δ_i` of a child side `pi` (sensor frame, about its
+/// origin) in the reading's sign, and the load accelerations `ĝ_i = ±ʳR_w (g − p̈_s)` at the paired
+/// samples.
 fn load_accelerations(
     run: &LoggedRun,
     k: usize,
@@ -386,9 +483,26 @@ fn load_accelerations(
     let mut kd = KinDyn::new(Arc::clone(model));
     let mut jac = DMatrix::zeros(6, model.nv());
     let g = model.gravity();
-    let mut raw = Vec::with_capacity(run.samples.len());
-    let mut load = Vec::with_capacity(run.samples.len());
+    let n = run.samples.len();
+    let ft = &run.scenario.config.sim.sensors.ft;
+    let range = Vector6::new(
+        ft.force_range[0],
+        ft.force_range[1],
+        ft.force_range[2],
+        ft.torque_range[0],
+        ft.torque_range[1],
+        ft.torque_range[2],
+    );
+    let mut out = SensorData {
+        times: Vec::with_capacity(n),
+        raw: Vec::with_capacity(n),
+        rotational: Vec::with_capacity(n),
+        load: Vec::with_capacity(n),
+    };
     for s in &run.samples {
+        if saturated(&s.readings[k], &range) {
+            continue;
+        }
         kd.set_state(&s.state)?;
         kd.frame_jacobian(sensor.frame, &mut jac)?;
         let acc: Vector6<f64> = &jac * &s.nu_dot + kd.frame_bias_acceleration(sensor.frame);
@@ -400,10 +514,13 @@ fn load_accelerations(
                 .into_owned(),
         );
         let omega_dot = to_sensor(acc.fixed_rows::<3>(3).into_owned());
-        load.push(sign * to_sensor(g - acc.fixed_rows::<3>(0)));
-        raw.push(s.readings[k] - sign * rotational_terms(pi, &omega, &omega_dot));
+        out.load.push(sign * to_sensor(g - acc.fixed_rows::<3>(0)));
+        out.times.push(s.time);
+        out.raw.push(s.readings[k]);
+        out.rotational
+            .push(sign * rotational_terms(pi, &omega, &omega_dot));
     }
-    Ok((raw, load))
+    Ok(out)
 }
 
 /// The terms of a rigid body's wrench on its sensor beyond `M(m, h) ĝ` (Newton–Euler about the sensor
@@ -458,6 +575,15 @@ impl MatrixReport {
                 .collect::<Vec<_>>()
                 .join(" + ")
         );
+        let _ = match &self.offsets {
+            OffsetModel::Constant => writeln!(s, "  offsets: constant over each log ((5.10))"),
+            OffsetModel::RandomWalk(n) => writeln!(
+                s,
+                "  offsets: random walks (white noise σ {:.3} N / {:.4} N m, drift {:.4} N/√s / {:.5} N m/√s), \
+                 stage 2 weighted",
+                n.white[0], n.white[3], n.walk[0], n.walk[3]
+            ),
+        };
         for c in &self.sensors {
             let _ = writeln!(s, "  {}", c.name);
             for (j, a) in c.added.iter().enumerate() {
@@ -493,7 +619,7 @@ impl MatrixReport {
     }
 
     /// `[estimation.ft_offsets] initial`: the calibrated sensors' offsets fitted on the last log (the most
-    /// recent session), the others at zero.
+    /// recent session; with the random-walk model, the offset at its end), the others at zero.
     pub fn offsets_toml(&self) -> String {
         let mut s = String::from("[estimation.ft_offsets]\ninitial = [\n");
         for name in &self.all_sensors {

@@ -167,6 +167,10 @@ pub enum Command {
         /// mass, com }]`, one entry per log in order); default: each log's `[sim.model]` edits.
         #[arg(long)]
         added_masses: Option<PathBuf>,
+        /// With several logs: take each sensor's offset constant over a log (Traversaro 2017, (5.10)) instead
+        /// of a random walk under the logged `[sim.sensors.ft]` noise and drift rates.
+        #[arg(long)]
+        constant_offset: bool,
         /// Write the result to this TOML file (`estimation.ft_offsets.initial`, and with several logs
         /// `estimation.ft_calibration`).
         #[arg(short, long)]

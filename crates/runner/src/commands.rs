@@ -372,6 +372,7 @@ pub fn calibrate_matrix(
     logs: &[PathBuf],
     sensor: Option<&str>,
     added_masses: Option<&Path>,
+    offsets: crate::calibrate_matrix::OffsetChoice,
     output: Option<&Path>,
 ) -> Result<ExitCode, CliError> {
     let masses = match added_masses {
@@ -385,8 +386,9 @@ pub fn calibrate_matrix(
         }
         None => None,
     };
-    let report = crate::calibrate_matrix::calibrate_matrix_logs(logs, sensor, masses.as_ref())
-        .map_err(err)?;
+    let report =
+        crate::calibrate_matrix::calibrate_matrix_logs(logs, sensor, masses.as_ref(), offsets)
+            .map_err(err)?;
     crate::out!("{}", report.render());
     if let Some(o) = output {
         std::fs::write(o, report.to_toml(logs))
@@ -503,6 +505,7 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
             logs,
             sensor,
             added_masses,
+            constant_offset,
             output,
         } => match logs.as_slice() {
             [log] if added_masses.is_none() => calibrate(log, sensor.as_deref(), output.as_deref()),
@@ -510,6 +513,11 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, CliError> {
                 &logs,
                 sensor.as_deref(),
                 added_masses.as_deref(),
+                if constant_offset {
+                    crate::calibrate_matrix::OffsetChoice::Constant
+                } else {
+                    crate::calibrate_matrix::OffsetChoice::DriftFromLog
+                },
                 output.as_deref(),
             ),
         },
