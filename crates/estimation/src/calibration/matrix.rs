@@ -35,7 +35,7 @@ pub enum OffsetModel {
     /// Constant over the dataset, as in (5.1) and (5.10): `r_i = D g_i + b`, ordinary least squares, and
     /// stage 2 unweighted.
     Constant,
-    /// A random walk under white noise ([`super::drift`]): `D` by a Kalman filter per axis, and stage 2
+    /// A random walk under white noise ([`super::gravity_response_with_drift`]): `D` by a Kalman filter per axis, and stage 2
     /// weighted by the covariance of `D`.
     RandomWalk(DriftNoise),
 }
