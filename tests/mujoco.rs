@@ -393,17 +393,16 @@ fn on_a_pole_in_mujoco_the_base_stays_and_the_ft_offsets_are_recovered() {
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(report.sensors.len(), 4);
     let ft = &scenario.config.sim.sensors.ft;
-    let walk = |rate: f64| rate * (duration / 3.0).sqrt();
-    let pipeline = [0.02, 0.02, 0.02, 0.03, 0.03, 0.03];
     for c in &report.sensors {
         let truth = c.truth.expect("simulated");
         for i in 0..6 {
-            let drift = walk(if i < 3 {
-                ft.force_drift
-            } else {
-                ft.torque_drift
-            });
-            let bound = 4.0 * c.offset_std[i] + drift + pipeline[i];
+            let bound = stride_testkit::ft_offset_error_bound(
+                i,
+                c.offset_std[i],
+                ft.force_drift,
+                ft.torque_drift,
+                duration,
+            );
             let err = (c.offset[i] - truth[i]).abs();
             assert!(
                 err < bound,

@@ -6,6 +6,7 @@ mod common;
 use common::{root, run_to_the_end, Scratch};
 use stride_runner::calibrate::calibrate_log;
 use stride_runner::config::Scenario;
+use stride_testkit::ft_offset_error_bound;
 
 #[test]
 fn calibrated_offsets_match_the_simulator_and_load_as_an_overlay() {
@@ -18,20 +19,18 @@ fn calibrated_offsets_match_the_simulator_and_load_as_an_overlay() {
     assert_eq!(report.sensors.len(), 4);
     let ft = &scenario.config.sim.sensors.ft;
     // The offset drifts during the run (a random walk): the estimate is a mean over the run, compared with
-    // the simulator's mean; allow for the walk's spread over the run on top of 4 σ of the estimate, and for
-    // the pipeline's own error without noise or drift (accelerations from 100 Hz states: at most 0.014 N and
-    // 0.020 N·m on the leg sensors, 0.006 N and 0.002 N·m on the feet; docs/identification.md).
-    let walk = |rate: f64| rate * (duration / 3.0).sqrt();
-    let pipeline = [0.02, 0.02, 0.02, 0.03, 0.03, 0.03];
+    // the simulator's mean; the bound allows for the walk's spread over the run on top of 4 σ of the
+    // estimate, and for the pipeline's own error without noise or drift (stride_testkit).
     for c in &report.sensors {
         let truth = c.truth.expect("simulated");
         for i in 0..6 {
-            let drift = if i < 3 {
-                walk(ft.force_drift)
-            } else {
-                walk(ft.torque_drift)
-            };
-            let bound = 4.0 * c.offset_std[i] + drift + pipeline[i];
+            let bound = ft_offset_error_bound(
+                i,
+                c.offset_std[i],
+                ft.force_drift,
+                ft.torque_drift,
+                duration,
+            );
             let err = (c.offset[i] - truth[i]).abs();
             assert!(
                 err < bound,

@@ -38,14 +38,19 @@
 //! - [`thread_cpu_time`], the calling thread's CPU time (`CLOCK_THREAD_CPUTIME_ID`), for timings that must
 //!   hold on a loaded machine (`crates/model/examples/cpu_timings.rs`).
 //!
+//! - [`ft_offset_error_bound`], the error bound of an FT offset estimated from a pole log, shared by the
+//!   calibration tests on stride-sim and on MuJoCo.
+//!
 //! This crate is a dev-dependency only; it is never published.
 
 mod counting;
 mod cpu_time;
+mod ft_offsets;
 mod icub;
 
 pub use counting::CountingAllocator;
 pub use cpu_time::thread_cpu_time;
+pub use ft_offsets::{ft_offset_error_bound, FT_OFFSET_PIPELINE_ERROR};
 pub use icub::{
     icub_model_urdf, icub_models_dir, resolve_icub_model_urdf, resolve_icub_models_dir,
     IcubModelsError, ICUB_MODELS_DIR_VAR, ICUB_TEST_RAN_MARKER, ICUB_TEST_SKIPPED_MARKER,
