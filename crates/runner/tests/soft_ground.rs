@@ -119,24 +119,23 @@ fn the_compliant_tsid_stands_where_the_rigid_preset_falls() {
 
 /// TSID-Compliant walking, stage 2 of docs/soft-ground.md, as far as it gets:
 /// `configs/walk_soft_ground_compliant_torque.toml` (k = 1e6 N/m³, b = 1e4 N·s/m³, the plant's truth, ideal
-/// actuators) walks three steps, at least 0.3 m with the DCM within 1.5 cm RMS, and then falls short of its
-/// 1.5 m goal (the limit: the torso leans sideways). The other side, on the same plant and references: the
-/// rigid TSID, and the compliant one planning from the sunk soles (`plan_on_surface = false`), fall in their
-/// first step (< 0.15 m).
+/// actuators, WBC at 1 kHz) walks at least 0.6 m (measured 0.83 m) with the DCM within 1.5 cm RMS, and then
+/// falls short of its 1.5 m goal (the limit: the torso leans). The other side, on the same plant and
+/// references: the rigid TSID, and the compliant one planning from the sunk soles (`plan_on_surface =
+/// false`), fall in their first step (< 0.15 m).
 #[test]
 fn the_compliant_tsid_walks_its_first_steps_where_the_rigid_one_falls() {
     let s = Scratch::new("soft_ground_compliant_walk");
     let walk = common::root().join("configs/walk_soft_ground_compliant_torque.toml");
     let scenario = Scenario::load(&walk).unwrap();
     let summary = run_scenario(&scenario, &options(&s, "compliant")).unwrap();
-    assert!(summary.distance > 0.3, "{}", summary.render());
+    assert!(summary.distance > 0.6, "{}", summary.render());
     assert!(summary.dcm_error.rms < 0.015, "{}", summary.render());
     assert!(
         matches!(summary.outcome, Outcome::Fell { .. }),
         "{}",
         summary.render()
     );
-    assert!(summary.distance < 1.0, "{}", summary.render());
     let include = format!("include = [{:?}]\n", walk.display().to_string());
     for (name, extra) in [
         ("rigid", "[wbc.tsid]\ncontact_model = \"rigid\"\n"),
@@ -148,6 +147,29 @@ fn the_compliant_tsid_walks_its_first_steps_where_the_rigid_one_falls() {
         let summary = assert_falls(&s, name, &format!("{include}{extra}"));
         assert!(summary.distance < 0.15, "{name}: {}", summary.render());
     }
+}
+
+/// The contact dynamics of a held acceleration (`held_acceleration`, the scenario's) on the low-damping
+/// ground of Table 8.1 (k = 1e6 N/m³, b = 1e3 N·s/m³; controller set to the same): the walk outlasts its
+/// first lift-off (past 1.3 s, measured: falls at 1.88 s after one touch-down); with the instantaneous rate
+/// (`held_acceleration = false`) it falls in double support before 0.9 s (measured 0.76 s), as every
+/// `b = 1e3` ground did.
+#[test]
+fn the_held_contact_dynamics_outlast_the_instantaneous_ones_on_low_damping() {
+    let s = Scratch::new("soft_ground_held_rate");
+    let walk = common::root().join("configs/walk_soft_ground_compliant_torque.toml");
+    let low_damping = format!(
+        "include = [{:?}]\n[sim.contact]\nnormal_damping = 1e3\n[wbc.tsid.compliant]\nground_damping = 1e3\n",
+        walk.display().to_string()
+    );
+    let held = assert_falls(&s, "held", &low_damping);
+    let instant = assert_falls(
+        &s,
+        "instantaneous",
+        &format!("{low_damping}held_acceleration = false\n"),
+    );
+    assert!(held.simulated_time > 1.3, "{}", held.render());
+    assert!(instant.simulated_time < 0.9, "{}", instant.render());
 }
 
 /// Runs the scenario file `text` (written as `name.toml`), asserts that the robot falls (or the run

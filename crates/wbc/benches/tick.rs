@@ -270,6 +270,7 @@ fn bench_tsid_compliant(c: &mut Criterion) {
         stride_wbc::AngularMomentumTaskConfig {
             name: "angular_momentum".into(),
             kp: 10.0,
+            reference_joints: Vec::new(),
             priority: stride_wbc::Priority::Hard,
             weight: None,
         },

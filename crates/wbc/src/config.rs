@@ -197,8 +197,16 @@ pub struct ComTaskConfig {
 /// |---|---|---|
 /// | `name` | – | required |
 /// | `kp` | 1/s (TSID) | 0 |
+/// | `reference_joints` | joint names (TSID) | empty: the reference is `input.angular_momentum` |
 /// | `priority` | – | `soft` |
 /// | `weight` | – | 1 (soft only: an error on a hard task) |
+///
+/// `reference_joints` (TSID only; the QP-IK refuses it): the reference is instead the angular momentum of
+/// the listed joints' motion with the base not rotating and the other joints still,
+/// `h* = A_ω(q) [v_B; 0; ṡ_listed]` (`A_ω`: the angular rows of the centroidal momentum matrix [Orin 2013]).
+/// Listing the legs asks the ground to carry the momentum of the legs' motion, where a zero reference makes
+/// the torso, pelvis and arms counter-rotate them (docs/soft-ground.md); it stands in for the momentum of
+/// the planned whole-body motion `h^ref` of [Romualdi 2022, eq. 8.2.4].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AngularMomentumTaskConfig {
@@ -207,6 +215,9 @@ pub struct AngularMomentumTaskConfig {
     /// Proportional gain (TSID).
     #[serde(default)]
     pub kp: f64,
+    /// TSID: the joints whose motion (base not rotating) sets the reference; empty: `input.angular_momentum`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub reference_joints: Vec<String>,
     /// Hard or soft.
     #[serde(default)]
     pub priority: Priority,
@@ -662,6 +673,7 @@ pub enum ContactModel {
 /// | `estimate_ground` | – | false | estimate `k`, `b` online (RLS, [eq. 8.2.20–8.2.22]) from the loaded soles, covariance reset at touch-down, prior the two values above with their own size as standard deviation |
 /// | `estimator_wrench_std` | N, N·m | [2, 0.2] | standard deviations of the measured force and torque for that estimate |
 /// | `plan_on_surface` | – | false | the runner plans the footholds from the soles' zero-force poses (raised by their static sink `f_z / (k l w)`), so the swing feet land on the ground's surface, not as deep as the standing feet sank |
+/// | `held_acceleration` | – | false | the contact dynamics give the wrench rate averaged over one control period of a held acceleration: the acceleration gain of eq. 8.2.14 uses the damping `b + k·period/2` (see [`crate::soft_contact::WrenchRate::held_over`]) |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CompliantConfig {
@@ -687,6 +699,10 @@ pub struct CompliantConfig {
     /// `f_z / (k l w)` of a flat sole [Romualdi 2022, eq. 8.1.7a], so that the swing feet land on the
     /// ground's surface rather than as deep as the standing feet sank.
     pub plan_on_surface: bool,
+    /// The contact dynamics give the wrench rate averaged over one control period of a held acceleration
+    /// (the acceleration gain of [Romualdi 2022, eq. 8.2.14] with the damping `b + k·period/2`); `false`:
+    /// the instantaneous rate, whose sampled loop diverges for `period > 2b/k`.
+    pub held_acceleration: bool,
 }
 
 impl Default for CompliantConfig {
@@ -702,6 +718,7 @@ impl Default for CompliantConfig {
             estimate_ground: false,
             estimator_wrench_std: [2.0, 0.2],
             plan_on_surface: false,
+            held_acceleration: false,
         }
     }
 }

@@ -157,6 +157,14 @@ impl QpIk {
                     com_tasks.push(t);
                 }
                 TaskConfig::AngularMomentum(c) => {
+                    if !c.reference_joints.is_empty() {
+                        return Err(WbcError::InvalidConfig {
+                            task: c.name.clone(),
+                            key: "reference_joints",
+                            reason: "the QP-IK's angular momentum task takes its reference from the input"
+                                .into(),
+                        });
+                    }
                     let mut t = AngularMomentumVelocityTask::new(&model);
                     t.block = blocks.len();
                     slots.push(Slot::Block(blocks.len()));

@@ -35,7 +35,7 @@ use crate::tasks::joint::acceleration_bounds;
 use crate::tasks::zmp::fill_zmp;
 use crate::tasks::{
     check_gain, joint_limits, position_limit_bounds, AngularMomentumRateTask, ComMomentumTask,
-    Contact, FrameTask, JointRegularizationTask, Level, TsidContext,
+    Contact, FrameTask, JointMomentumReference, JointRegularizationTask, Level, TsidContext,
 };
 
 /// Model indices of the flexible joints named in `names`: each a joint of the model, none twice.
@@ -100,6 +100,8 @@ struct TaskSet {
     has_dynamics: bool,
     /// Model indices of the passive flexible joints (`TsidConfig::flexible_joints`).
     flexible: Vec<usize>,
+    /// Angular momentum tasks with `reference_joints`: config task index and its reference.
+    momentum_references: Vec<(usize, JointMomentumReference)>,
 }
 
 impl TaskSet {
@@ -120,6 +122,7 @@ impl TaskSet {
             has_zmp: false,
             has_dynamics: false,
             flexible: flexible_joints(model, &config.flexible_joints)?,
+            momentum_references: Vec::new(),
         };
         check_unique_names(&config.tasks)?;
         for task in &config.tasks {
@@ -182,6 +185,9 @@ impl TaskSet {
             }
             TaskConfig::AngularMomentum(c) => {
                 let t = AngularMomentumRateTask::new(c)?;
+                if let Some(r) = JointMomentumReference::new(model, c)? {
+                    self.momentum_references.push((self.tasks.len(), r));
+                }
                 (
                     TsidTask::AngularMomentum(t),
                     weights(3, c.priority, &c.weight)?,
@@ -450,6 +456,8 @@ pub struct Tsid {
     has_zmp: bool,
     /// TSID-Compliant's contact model and measured wrenches (`None`: the rigid TSID).
     compliant: Option<CompliantContacts>,
+    /// Angular momentum tasks with `reference_joints`: config task index and its reference.
+    momentum_references: Vec<(usize, JointMomentumReference)>,
     mass: f64,
     gravity: Vector3<f64>,
     mass_matrix: DMatrix<f64>,
@@ -494,6 +502,7 @@ impl Tsid {
             ContactModel::Compliant => Some(CompliantContacts::new(
                 &config.compliant,
                 set.contacts.len(),
+                period,
             )?),
         };
         let mut variants = Vec::new();
@@ -551,6 +560,7 @@ impl Tsid {
             flexible: set.flexible.iter().map(|&j| (j, 0.0, 0.0)).collect(),
             has_zmp: set.has_zmp,
             compliant,
+            momentum_references: set.momentum_references,
             output,
             last_valid: false,
             last_variant: None,
@@ -799,6 +809,17 @@ impl Tsid {
         Ok(())
     }
 
+    /// Sets the reference of every angular momentum task with `reference_joints` at this tick's state.
+    fn update_momentum_references(&mut self, input: &WbcInput) -> Result<(), WbcError> {
+        for (ti, r) in &mut self.momentum_references {
+            let reference = r.update(&mut self.kd, &input.state)?;
+            if let TsidTask::AngularMomentum(t) = &mut self.tasks[*ti] {
+                t.reference = Some(reference);
+            }
+        }
+        Ok(())
+    }
+
     fn compute_dynamics(&mut self, input: &WbcInput) -> Result<(), WbcError> {
         self.kd.set_state(&input.state)?;
         self.kd.mass_matrix(&mut self.mass_matrix)?;
@@ -1019,6 +1040,7 @@ impl Tsid {
             cc.estimate_ground(&self.contacts);
             cc.update_rates(&self.contacts);
         }
+        self.update_momentum_references(input)?;
         self.initialized = true;
         let vi = self.variant_index(input.desired_zmp.is_some());
         self.fill(vi, input)?;

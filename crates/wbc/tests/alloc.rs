@@ -154,7 +154,9 @@ fn tsid_flex_ticks_allocate_nothing() {
 }
 
 /// TSID-Compliant (`contact_model = "compliant"`) ticks allocate nothing, with the measured wrenches
-/// changing every tick and a lift-off and touch-down of the right foot.
+/// changing every tick and a lift-off and touch-down of the right foot; with the held-period rate
+/// (`held_acceleration`) and an angular momentum task whose reference is the legs' momentum
+/// (`reference_joints`).
 #[test]
 fn tsid_compliant_ticks_allocate_nothing() {
     let model = bundled_model();
@@ -162,6 +164,16 @@ fn tsid_compliant_ticks_allocate_nothing() {
     let mut input = references_at(&model, &state);
     let mut config = TsidConfig::default_for_bundled_model();
     config.contact_model = stride_wbc::ContactModel::Compliant;
+    config.compliant.held_acceleration = true;
+    config.tasks.push(stride_wbc::TaskConfig::AngularMomentum(
+        stride_wbc::AngularMomentumTaskConfig {
+            name: "angular_momentum".into(),
+            kp: 10.0,
+            reference_joints: vec!["l_knee".into(), "r_hip_roll".into()],
+            priority: stride_wbc::Priority::Hard,
+            weight: None,
+        },
+    ));
     let mut tsid = Tsid::new(
         Arc::clone(&model),
         config,

@@ -145,6 +145,58 @@ fn the_wrench_rate_is_the_time_derivative_of_the_wrench() {
     }
 }
 
+/// The wrench rate of a held acceleration ([`stride_wbc::WrenchRate::held_over`]) against Lemma 1's change over
+/// the period along that motion, on the stiffest, least damped ground of Table 8.1 (`k dt / 2b = 2` at
+/// 500 Hz): the instantaneous rate misses the stiffness's share of the acceleration, the held one does not.
+#[test]
+fn the_held_wrench_rate_is_the_wrench_change_over_the_period() {
+    let ground = GroundParameters {
+        stiffness: 2e6,
+        damping: 1e3,
+    };
+    let dt = 0.002;
+    let mut rng = common::rng(83);
+    for _ in 0..20 {
+        let mut s = random_state(&mut rng);
+        s.rest_rotation = s.rotation;
+        s.rest_position = s.position + Vector3::new(0.0, 0.0, rng.random_range(0.0..0.02));
+        s.angular_velocity *= 0.1;
+        let acc = SoleAcceleration {
+            linear: Vector3::new(
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-3.0..3.0),
+            ),
+            angular: Vector3::new(
+                rng.random_range(-9.0..9.0),
+                rng.random_range(-9.0..9.0),
+                rng.random_range(-9.0..9.0),
+            ),
+        };
+        let end = SoleState {
+            position: s.position + s.linear_velocity * dt + acc.linear * (0.5 * dt * dt),
+            rotation: Rotation3::new(s.angular_velocity * dt + acc.angular * (0.5 * dt * dt))
+                * s.rotation,
+            linear_velocity: s.linear_velocity + acc.linear * dt,
+            angular_velocity: s.angular_velocity + acc.angular * dt,
+            ..s
+        };
+        let change = (SOLE.wrench(&end, &ground) - SOLE.wrench(&s, &ground)) / dt;
+        let rate = SOLE.wrench_rate(&s, &ground);
+        let held = rate.held_over(dt, &ground).at(&acc);
+        let instant = rate.at(&acc);
+        let (e_held, e_instant) = ((held - change).norm(), (instant - change).norm());
+        assert!(
+            e_held < 0.05 * e_instant,
+            "held {held} instantaneous {instant} change {change}"
+        );
+        // the gain scales by 1 + k dt / 2b = 3
+        assert!(
+            (rate.held_over(dt, &ground).gain - rate.gain * 3.0).norm() < 1e-12 * rate.gain.norm()
+        );
+    }
+}
+
 #[test]
 fn corollary_1_is_the_first_order_expansion_of_lemma_1_at_rest() {
     let base = at_rest(Vector3::new(0.3, -0.1, 0.0));

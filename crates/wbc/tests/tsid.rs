@@ -182,6 +182,7 @@ fn standing_still_needs_no_acceleration_and_carries_the_weight() {
         stride_wbc::AngularMomentumTaskConfig {
             name: "angular_momentum".into(),
             kp: 0.0,
+            reference_joints: Vec::new(),
             priority: Priority::Hard,
             weight: None,
         },
@@ -217,6 +218,83 @@ fn standing_still_needs_no_acceleration_and_carries_the_weight() {
         "ν̇ = {}",
         out.accelerations.amax()
     );
+}
+
+/// The angular momentum task with `reference_joints`: the contact wrenches' moment about the CoM is
+/// `K_p (h* − h)` with `h*` the centroidal angular momentum (stride-model's, not the task's product of the
+/// momentum matrix) of the same state with the base not rotating and only the listed joints moving.
+#[test]
+fn the_angular_momentum_reference_of_listed_joints_is_their_momentum() {
+    let model = bundled_model();
+    let mut state = standing_state(&model, &default_posture(&model));
+    state.base_velocity = Vector6::new(0.05, -0.02, 0.01, 0.2, -0.1, 0.05);
+    let mut rng = common::rng(91);
+    for v in state.joint_velocities.iter_mut() {
+        *v = rng.random_range(-0.5..0.5);
+    }
+    let legs: Vec<String> = ["l_hip_roll", "l_knee", "r_hip_pitch", "r_ankle_roll"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let momentum = |s: &RobotState| {
+        let mut kd = KinDyn::new(Arc::clone(&model));
+        kd.set_representation(VelocityRepresentation::Mixed);
+        kd.set_state(s).unwrap();
+        (kd.centroidal_momentum().fixed_rows::<3>(3).into_owned(), kd)
+    };
+    let mut listed_only = state.clone();
+    for k in 3..6 {
+        listed_only.base_velocity[k] = 0.0;
+    }
+    for (j, v) in listed_only.joint_velocities.iter_mut().enumerate() {
+        if !legs.contains(&model.joints()[j].name) {
+            *v = 0.0;
+        }
+    }
+    let (reference, _) = momentum(&listed_only);
+    let (h, kd) = momentum(&state);
+    let kp = 4.0;
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.tasks.push(TaskConfig::AngularMomentum(
+        stride_wbc::AngularMomentumTaskConfig {
+            name: "angular_momentum".into(),
+            kp,
+            reference_joints: legs.clone(),
+            priority: Priority::Hard,
+            weight: None,
+        },
+    ));
+    let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
+    let out = tsid.step(&references_at(&model, &state)).unwrap().clone();
+    assert_eq!(out.report.status, QpStatus::Solved);
+    let com = kd.com_position();
+    let mut moment = Vector3::zeros();
+    for (w, sole) in out.contact_wrenches.iter().zip(["l_sole", "r_sole"]) {
+        let p = kd
+            .frame_pose(model.frame_id(sole).unwrap())
+            .translation
+            .vector;
+        moment += (p - com).cross(&w.fixed_rows::<3>(0)) + w.fixed_rows::<3>(3);
+    }
+    let expected = (reference - h) * kp;
+    assert!(
+        (moment - expected).norm() < 1e-6 * (1.0 + expected.norm()),
+        "{moment} vs {expected}"
+    );
+    assert!((reference - h).norm() > 1e-3, "the test needs h* ≠ h");
+    // an unknown joint is refused by name
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.tasks.push(TaskConfig::AngularMomentum(
+        stride_wbc::AngularMomentumTaskConfig {
+            name: "angular_momentum".into(),
+            kp,
+            reference_joints: vec!["no_such_joint".into()],
+            priority: Priority::Hard,
+            weight: None,
+        },
+    ));
+    let err = Tsid::new(Arc::clone(&model), config, PERIOD).err().unwrap();
+    assert!(err.to_string().contains("no_such_joint"), "{err}");
 }
 
 /// Integrates the closed loop TSID → forward dynamics with the planned wrenches as the contact

@@ -32,6 +32,7 @@ fn compliant_config() -> TsidConfig {
         .push(TaskConfig::AngularMomentum(AngularMomentumTaskConfig {
             name: "angular_momentum".into(),
             kp: 10.0,
+            reference_joints: Vec::new(),
             priority: Priority::Hard,
             weight: None,
         }));

@@ -82,6 +82,25 @@ impl WrenchRate {
                     a.angular.z,
                 )
     }
+
+    /// This rate averaged over a period `dt` (s) during which the sole's acceleration `a` is held (the
+    /// zero-order hold of a sampled controller): within the period `a` also moves the sole by `a dt²/2`,
+    /// against the ground's stiffness, so `(f(t + dt) − f(t)) / dt = h + (g + (dt/2) ∂f/∂x) a + O(dt)`
+    /// with the stiffness Jacobian `∂f/∂x = (k/b) g` where the sole is at its rest orientation
+    /// [Romualdi 2022, Corollary 1: `𝒦 = (k/b) ℬ`]: the gain becomes `g (1 + k dt / (2b))`, the drift is
+    /// kept. The sampled loop of the sole's velocity in the ground then contracts by
+    /// `(b − k dt/2) / (b + k dt/2)` per period, for every `dt`; with the instantaneous gain it is
+    /// `1 − k dt / b`, unstable for `dt > 2b/k`. `b ≤ 0` or `dt ≤ 0`: unchanged.
+    pub fn held_over(&self, dt: f64, ground: &GroundParameters) -> WrenchRate {
+        let scale = match ground.damping > 0.0 && dt > 0.0 {
+            true => 1.0 + ground.stiffness * dt / (2.0 * ground.damping),
+            false => 1.0,
+        };
+        WrenchRate {
+            drift: self.drift,
+            gain: self.gain * scale,
+        }
+    }
 }
 
 /// Second moments of the sole per unit area along its x and y axes: `l²/12`, `w²/12`, m².

@@ -48,6 +48,8 @@ pub(crate) struct CompliantContacts {
     pub rates: Vec<WrenchRate>,
     /// The online ground estimate (`estimate_ground`), which then sets `ground` every tick.
     pub estimator: Option<GroundEstimator>,
+    /// `held_acceleration`: the period over which the rates are averaged (s); `None`: instantaneous.
+    pub held_period: Option<f64>,
 }
 
 fn positive(key: &'static str, value: f64) -> Result<f64, WbcError> {
@@ -63,8 +65,9 @@ fn positive(key: &'static str, value: f64) -> Result<f64, WbcError> {
 }
 
 impl CompliantContacts {
-    /// Checked settings for `contacts` contacts. Errors: a value that is not finite and > 0.
-    pub fn new(c: &CompliantConfig, contacts: usize) -> Result<Self, WbcError> {
+    /// Checked settings for `contacts` contacts of a controller running every `period` (s). Errors: a
+    /// value that is not finite and > 0.
+    pub fn new(c: &CompliantConfig, contacts: usize, period: f64) -> Result<Self, WbcError> {
         let estimator = match c.estimate_ground {
             true => Some(GroundEstimator::new(&EstimatorSettings {
                 initial: GroundParameters {
@@ -78,6 +81,7 @@ impl CompliantContacts {
         };
         Ok(CompliantContacts {
             estimator,
+            held_period: c.held_acceleration.then_some(period),
             sole: SoleGeometry {
                 length: positive("sole_length", c.sole_length)?,
                 width: positive("sole_width", c.sole_width)?,
@@ -156,11 +160,16 @@ impl CompliantContacts {
         }
     }
 
-    /// Updates the wrench-rate model of every contact at its current state.
+    /// Updates the wrench-rate model of every contact at its current state (averaged over the held
+    /// period with `held_acceleration`, [`WrenchRate::held_over`]).
     pub fn update_rates(&mut self, contacts: &[Contact]) {
         for (c, contact) in contacts.iter().enumerate() {
             let state = self.sole_state(c, contact);
-            self.rates[c] = self.sole.wrench_rate(&state, &self.ground);
+            let rate = self.sole.wrench_rate(&state, &self.ground);
+            self.rates[c] = match self.held_period {
+                Some(dt) => rate.held_over(dt, &self.ground),
+                None => rate,
+            };
         }
     }
 }

@@ -34,7 +34,9 @@ pub(crate) use com::{ComMomentumTask, ComVelocityTask};
 pub(crate) use contact::Contact;
 pub(crate) use frame::FrameTask;
 pub(crate) use joint::{joint_limits, position_limit_bounds, JointRegularizationTask};
-pub(crate) use momentum::{AngularMomentumRateTask, AngularMomentumVelocityTask};
+pub(crate) use momentum::{
+    AngularMomentumRateTask, AngularMomentumVelocityTask, JointMomentumReference,
+};
 
 /// Whether a task constrains velocities (QP-IK) or accelerations (TSID).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

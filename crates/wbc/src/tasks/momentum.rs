@@ -1,10 +1,11 @@
 //! The centroidal angular momentum about the CoM. QP-IK: `J_CMM,ω ν = h*` [Romualdi 2022, eq. 7.1.5]
 //! (rows in kg m²/s). TSID: its rate through the contact wrenches,
 //! `Σ_c (p_c − x_com) × f_c + μ_c = ḣ* + K_p (h* − h)` with `ḣ* = 0` [Romualdi 2022, eq. 7.2.5, 7.2.8]
-//! (rows in N m, `K_p` in 1/s). The reference `h*` is `input.angular_momentum`.
+//! (rows in N m, `K_p` in 1/s). The reference `h*` is `input.angular_momentum`, or with `reference_joints`
+//! the momentum of those joints' motion ([`JointMomentumReference`]).
 
-use nalgebra::{DMatrix, Matrix3};
-use stride_model::{KinDyn, Model};
+use nalgebra::{DMatrix, Matrix3, Vector3};
+use stride_model::{KinDyn, Model, RobotState};
 use stride_qp::TaskDataMut;
 
 use super::{check_gain, TsidContext};
@@ -51,6 +52,9 @@ impl AngularMomentumVelocityTask {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct AngularMomentumRateTask {
     kp: f64,
+    /// `h*` (kg m²/s) of this tick when set by a [`JointMomentumReference`]; `None`:
+    /// `input.angular_momentum`.
+    pub reference: Option<Vector3<f64>>,
 }
 
 impl AngularMomentumRateTask {
@@ -61,13 +65,17 @@ impl AngularMomentumRateTask {
 
     pub fn new(c: &AngularMomentumTaskConfig) -> Result<Self, WbcError> {
         check_gain(&c.name, "kp", c.kp)?;
-        Ok(AngularMomentumRateTask { kp: c.kp })
+        Ok(AngularMomentumRateTask {
+            kp: c.kp,
+            reference: None,
+        })
     }
 
     /// Fills the 3 rows over the wrench columns of the loaded contacts.
     pub fn fill(&self, input: &WbcInput, s: &TsidContext, b: &mut TaskDataMut) {
         let h = s.momentum.fixed_rows::<3>(3).into_owned();
-        let rhs = self.kp * (input.angular_momentum - h);
+        let target = self.reference.unwrap_or(input.angular_momentum);
+        let rhs = self.kp * (target - h);
         for (c, contact) in s.contacts.iter().enumerate() {
             if let Some(off) = s.offsets[c] {
                 let arm: Matrix3<f64> = skew(&(contact.pose.translation.vector - s.com_position));
@@ -79,5 +87,64 @@ impl AngularMomentumRateTask {
         for r in 0..3 {
             b.b[r] = rhs[r];
         }
+    }
+}
+
+/// The reference of a TSID angular momentum task with `reference_joints`: the centroidal angular momentum
+/// of the listed joints' motion with the base translating but not rotating,
+/// `h* = A_ω(q) [v_B; 0; ṡ_listed]` (`A_ω`: the angular rows of the centroidal momentum matrix, mixed
+/// velocity [Orin 2013]), with `ḣ* = 0`: its change over the control period as `ḣ*` made the hard rows
+/// infeasible within 0.02 s on the soft-ground walk (a 500 Hz difference of measured velocities).
+#[derive(Debug, Clone)]
+pub(crate) struct JointMomentumReference {
+    /// Velocity indices `6 + j` of the listed joints.
+    columns: Vec<usize>,
+    cmm: DMatrix<f64>,
+}
+
+impl JointMomentumReference {
+    /// The reference of `c` (`None` when it lists no joints). Errors: an unknown joint name.
+    pub fn new(model: &Model, c: &AngularMomentumTaskConfig) -> Result<Option<Self>, WbcError> {
+        if c.reference_joints.is_empty() {
+            return Ok(None);
+        }
+        let columns = c
+            .reference_joints
+            .iter()
+            .map(|name| {
+                model
+                    .joint_index(name)
+                    .map(|j| 6 + j)
+                    .ok_or_else(|| WbcError::UnknownJoint {
+                        task: c.name.clone(),
+                        joint: name.clone(),
+                    })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Some(JointMomentumReference {
+            columns,
+            cmm: DMatrix::zeros(6, model.nv()),
+        }))
+    }
+
+    /// `h*` (kg m²/s) at the state `kd` holds (`state`: its velocities, mixed representation).
+    pub fn update(
+        &mut self,
+        kd: &mut KinDyn,
+        state: &RobotState,
+    ) -> Result<Vector3<f64>, WbcError> {
+        kd.centroidal_momentum_matrix(&mut self.cmm)?;
+        let mut h = Vector3::zeros();
+        for k in 0..3 {
+            let mut v = 0.0;
+            for c in 0..3 {
+                v += self.cmm[(3 + k, c)] * state.base_velocity[c];
+            }
+            for &c in &self.columns {
+                v += self.cmm[(3 + k, c)] * state.joint_velocities[c - 6];
+            }
+            h[k] = v;
+        }
+        Ok(h)
     }
 }
