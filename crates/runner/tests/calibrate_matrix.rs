@@ -182,6 +182,9 @@ fn feet_calibration_matrices_from_three_logs_and_the_walk_they_improve() {
 /// default-noise test.
 const SEEDS: [u64; 5] = [0, 1, 2, 3, 4];
 
+/// Held while a thread reads its logs.
+static READING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Both feet's `‖Ĉ − C‖_F / ‖C‖_F` on one seed's three 40 s logs: with the offset as a random walk (and
 /// [`check_matrices`] within 1 %), then constant over each log on the same logs (seed 0: two logs refused,
 /// Lemma 5.2). The logs are deleted.
@@ -191,7 +194,11 @@ fn seed_errors(s: &Scratch, seed: u64) -> ([f64; 2], [f64; 2]) {
         &format!("seed{seed}_"),
         &format!("[sim.sensors]\nseed = {seed}\n"),
     );
-    let read = MatrixLogs::read(&logs).unwrap();
+    // One thread reads at a time: `read_log` holds a whole 40 s log in memory.
+    let read = {
+        let _one_at_a_time = READING.lock().unwrap_or_else(|e| e.into_inner());
+        MatrixLogs::read(&logs).unwrap()
+    };
     let drift = read
         .calibrate(None, None, OffsetChoice::DriftFromLog)
         .unwrap();
@@ -243,15 +250,15 @@ fn at_the_default_noise_and_drift_every_seed_is_within_one_percent_with_the_drif
         out.extend(other.join().unwrap());
         out
     });
-    let worst = |pick: fn(&([f64; 2], [f64; 2])) -> [f64; 2]| {
-        results.iter().flat_map(pick).fold(0.0, f64::max)
-    };
-    let rms = |pick: fn(&([f64; 2], [f64; 2])) -> [f64; 2]| {
-        let all: Vec<f64> = results.iter().flat_map(pick).collect();
-        (all.iter().map(|e| e * e).sum::<f64>() / all.len() as f64).sqrt()
-    };
-    let (drift_worst, constant_worst) = (worst(|r| r.0), worst(|r| r.1));
-    let ratio = rms(|r| r.1) / rms(|r| r.0);
+    // Every foot's error with each offset model: (random walk, constant).
+    let (drift, constant): (Vec<f64>, Vec<f64>) = results
+        .iter()
+        .flat_map(|(d, c)| d.iter().copied().zip(c.iter().copied()))
+        .unzip();
+    let worst = |e: &[f64]| e.iter().copied().fold(0.0, f64::max);
+    let rms = |e: &[f64]| (e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64).sqrt();
+    let (drift_worst, constant_worst) = (worst(&drift), worst(&constant));
+    let ratio = rms(&constant) / rms(&drift);
     eprintln!("worst: random walk {drift_worst}, constant {constant_worst}; RMS ratio {ratio}");
     assert!(drift_worst < 0.01, "random walk: worst {drift_worst}");
     assert!(
