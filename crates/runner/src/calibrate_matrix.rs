@@ -155,56 +155,91 @@ fn read_run(path: &Path) -> Result<LoggedRun, CalibrateError> {
 /// The calibration matrix of `sensor` (or of every sensor whose child side is one rigid body) from `logs`
 /// taken with different added masses: from `masses` when given, else from each log's `[sim.model]` edits.
 /// Fewer than three logs are refused by the rank check of (5.11) (Lemma 5.2). `offsets` chooses the first
-/// stage's offset model.
+/// stage's offset model. ([`MatrixLogs`] reads the logs once for several calibrations.)
 pub fn calibrate_matrix_logs(
     logs: &[PathBuf],
     sensor: Option<&str>,
     masses: Option<&AddedMassFile>,
     offsets: OffsetChoice,
 ) -> Result<MatrixReport, CalibrateError> {
-    if let Some(f) = masses {
-        if f.log.len() != logs.len() {
-            return Err(CalibrateError::Content(format!(
-                "the added-mass file has {} [[log]] entries for {} logs; give one per log, in order",
-                f.log.len(),
-                logs.len()
-            )));
+    MatrixLogs::read(logs)?.calibrate(sensor, masses, offsets)
+}
+
+/// The logs of [`calibrate_matrix_logs`], read once (e.g. to compare offset models on the same logs).
+pub struct MatrixLogs {
+    paths: Vec<PathBuf>,
+    runs: Vec<LoggedRun>,
+}
+
+impl MatrixLogs {
+    /// Reads `logs` (at least one) and checks that they hold one robot model.
+    pub fn read(logs: &[PathBuf]) -> Result<Self, CalibrateError> {
+        let runs = logs
+            .iter()
+            .map(|p| read_run(p))
+            .collect::<Result<Vec<_>, _>>()?;
+        let Some(first) = runs.first() else {
+            return Err(CalibrateError::Content(
+                "no log given: the calibration matrix needs at least three (Lemma 5.2)".into(),
+            ));
+        };
+        let model = &first.model;
+        for (run, path) in runs.iter().zip(logs) {
+            if run.model.ft_sensors().len() != model.ft_sensors().len()
+                || run.model.dof() != model.dof()
+            {
+                return Err(CalibrateError::Content(format!(
+                    "{} holds another robot model than {}",
+                    path.display(),
+                    logs[0].display()
+                )));
+            }
         }
+        Ok(Self {
+            paths: logs.to_vec(),
+            runs,
+        })
     }
-    let runs = logs
-        .iter()
-        .map(|p| read_run(p))
-        .collect::<Result<Vec<_>, _>>()?;
-    let model = Arc::clone(&runs[0].model);
-    let all_sensors: Vec<String> = model.ft_sensors().iter().map(|s| s.name.clone()).collect();
-    for (run, path) in runs.iter().zip(logs) {
-        if run.model.ft_sensors().len() != all_sensors.len() || run.model.dof() != model.dof() {
-            return Err(CalibrateError::Content(format!(
-                "{} holds another robot model than {}",
-                path.display(),
-                logs[0].display()
-            )));
+
+    /// [`calibrate_matrix_logs`] on the logs read.
+    pub fn calibrate(
+        &self,
+        sensor: Option<&str>,
+        masses: Option<&AddedMassFile>,
+        offsets: OffsetChoice,
+    ) -> Result<MatrixReport, CalibrateError> {
+        let (runs, logs) = (&self.runs, &self.paths);
+        if let Some(f) = masses {
+            if f.log.len() != logs.len() {
+                return Err(CalibrateError::Content(format!(
+                    "the added-mass file has {} [[log]] entries for {} logs; give one per log, in order",
+                    f.log.len(),
+                    logs.len()
+                )));
+            }
         }
-    }
-    let chosen = chosen_sensors(&model, sensor)?;
-    let offsets = offset_model(&runs[0].scenario, offsets);
-    let mut sensors = Vec::new();
-    for k in chosen {
-        let mut added = Vec::new();
-        for (j, run) in runs.iter().enumerate() {
-            added.push(match masses {
-                Some(f) => masses_on_sensor(&model, k, &f.log[j].masses)?,
-                None => edits_on_sensor(run, k, &logs[j])?,
-            });
+        let model = Arc::clone(&runs[0].model);
+        let all_sensors: Vec<String> = model.ft_sensors().iter().map(|s| s.name.clone()).collect();
+        let chosen = chosen_sensors(&model, sensor)?;
+        let offsets = offset_model(&runs[0].scenario, offsets);
+        let mut sensors = Vec::new();
+        for k in chosen {
+            let mut added = Vec::new();
+            for (j, run) in runs.iter().enumerate() {
+                added.push(match masses {
+                    Some(f) => masses_on_sensor(&model, k, &f.log[j].masses)?,
+                    None => edits_on_sensor(run, k, &logs[j])?,
+                });
+            }
+            sensors.push(fit_sensor(runs, k, added, &offsets)?);
         }
-        sensors.push(fit_sensor(&runs, k, added, &offsets)?);
+        Ok(MatrixReport {
+            sensors,
+            all_sensors,
+            samples: runs.iter().map(|r| r.samples.len()).collect(),
+            offsets,
+        })
     }
-    Ok(MatrixReport {
-        sensors,
-        all_sensors,
-        samples: runs.iter().map(|r| r.samples.len()).collect(),
-        offsets,
-    })
 }
 
 /// The offset model of `choice` for the logged sensors: a random walk under the logged `[sim.sensors.ft]`

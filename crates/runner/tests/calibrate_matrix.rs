@@ -2,8 +2,9 @@
 //! three simulated pole runs (`configs/identify_ft_masses_{0,1,2}.toml`: bare, then 2.1 kg added to each foot
 //! at two places; sensors with a calibration error `E` within ±5 %), compared with the simulator's `C`:
 //! with the noise and drift off (the pipeline's own error: central-difference accelerations, the rotational
-//! terms from the URDF's foot); at the default noise and drift, within 1 % with the offset as a random walk
-//! and beyond 1 % with it constant over each log (5.10); two logs refused (Lemma 5.2); the added masses read
+//! terms from the URDF's foot); at the default noise and drift, on every sensor seed of [`SEEDS`], within 1 %
+//! with the offset as a random walk and not with it constant over each log (5.10); two logs refused
+//! (Lemma 5.2); the added masses read
 //! from the logs' `[sim.model]` edits equal the explicit form's; the written overlay, included in a walk on
 //! the same sensors, brings the estimated foot wrenches closer to the truth.
 
@@ -13,7 +14,8 @@ use std::path::PathBuf;
 
 use common::{root, run_to_the_end, Scratch};
 use stride_runner::calibrate_matrix::{
-    calibrate_matrix_logs, AddedMassFile, KnownMass, LogMasses, MatrixReport, OffsetChoice,
+    calibrate_matrix_logs, AddedMassFile, KnownMass, LogMasses, MatrixLogs, MatrixReport,
+    OffsetChoice,
 };
 use stride_runner::config::Scenario;
 use stride_runner::run::{run_scenario, RunOptions};
@@ -36,9 +38,11 @@ fn pole_logs(s: &Scratch, tag: &str, sensors: &str) -> Vec<PathBuf> {
         .collect()
 }
 
-/// The sensors' noise and drift off (their offsets and calibration error kept).
+/// The sensors' noise and drift off (their offsets and calibration error kept), 20 s runs (the pipeline's
+/// own error needs no more).
 const QUIET: &str =
-    "[sim.sensors.ft]\nforce_noise = 0.0\ntorque_noise = 0.0\nforce_drift = 0.0\ntorque_drift = 0.0\n";
+    "[scenario]\nduration = 20.0\n[sim.sensors.ft]\nforce_noise = 0.0\ntorque_noise = 0.0\n\
+                     force_drift = 0.0\ntorque_drift = 0.0\n";
 
 /// The masses of `configs/identify_ft_masses_{1,2}.toml` worked out by hand in the foot frames (the feet
 /// sensors' frames): the foot's 0.7 kg at (0.03, 0, −0.03) m scaled by 4 and its centre moved by `d`, so
@@ -174,34 +178,92 @@ fn feet_calibration_matrices_from_three_logs_and_the_walk_they_improve() {
     );
 }
 
-/// Issue 19: at the default sensor noise and drift, the three logs give both feet's `C` within 1 % with the
-/// offset as a random walk (the logged `[sim.sensors.ft]` figures), and beyond 1 % with the offset constant
-/// over each log, as in (5.10), on the same logs.
-#[test]
-fn at_the_default_noise_and_drift_the_matrices_are_within_one_percent_with_the_drift_model() {
-    let s = Scratch::new("calibrate_matrix_drift");
-    let logs = pole_logs(&s, "default", "");
-    let report = calibrate_matrix_logs(&logs, None, None, OffsetChoice::DriftFromLog).unwrap();
+/// The sensor seeds (`[sim.sensors] seed`: each draws its own `C`, offsets, noise and drift) of the
+/// default-noise test.
+const SEEDS: [u64; 5] = [0, 1, 2, 3, 4];
+
+/// Held while a thread reads its logs.
+static READING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Both feet's `‖Ĉ − C‖_F / ‖C‖_F` on one seed's three 40 s logs: with the offset as a random walk (and
+/// [`check_matrices`] within 1 %), then constant over each log on the same logs (seed 0: two logs refused,
+/// Lemma 5.2). The logs are deleted.
+fn seed_errors(s: &Scratch, seed: u64) -> ([f64; 2], [f64; 2]) {
+    let logs = pole_logs(
+        s,
+        &format!("seed{seed}_"),
+        &format!("[sim.sensors]\nseed = {seed}\n"),
+    );
+    // One thread reads at a time: `read_log` holds a whole 40 s log in memory.
+    let read = {
+        let _one_at_a_time = READING.lock().unwrap_or_else(|e| e.into_inner());
+        MatrixLogs::read(&logs).unwrap()
+    };
+    let drift = read
+        .calibrate(None, None, OffsetChoice::DriftFromLog)
+        .unwrap();
     assert!(matches!(
-        report.offsets,
+        drift.offsets,
         stride_estimation::calibration::OffsetModel::RandomWalk(_)
     ));
-    check_matrices(&report, 0.01);
-    let constant = calibrate_matrix_logs(&logs, None, None, OffsetChoice::Constant).unwrap();
-    for c in &constant.sensors {
-        let error = c.relative_error().expect("simulated");
+    let constant = read.calibrate(None, None, OffsetChoice::Constant).unwrap();
+    if seed == 0 {
+        // Two logs are still refused (Lemma 5.2).
+        let err = calibrate_matrix_logs(&logs[..2], None, None, OffsetChoice::DriftFromLog)
+            .unwrap_err()
+            .to_string();
         assert!(
-            error > 0.01,
-            "{}: the constant offset gives {error} too",
-            c.name
+            err.contains("Lemma 5.2") && err.contains("rank 36"),
+            "{err}"
         );
     }
-    // Two logs are still refused (Lemma 5.2).
-    let err = calibrate_matrix_logs(&logs[..2], None, None, OffsetChoice::DriftFromLog)
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains("Lemma 5.2") && err.contains("rank 36"),
-        "{err}"
+    for log in &logs {
+        std::fs::remove_file(log).unwrap();
+    }
+    let errors = |r: &MatrixReport| -> [f64; 2] {
+        std::array::from_fn(|i| r.sensors[i].relative_error().expect("simulated"))
+    };
+    eprintln!(
+        "seed {seed}: random walk {:?}, constant {:?}",
+        errors(&drift),
+        errors(&constant)
     );
+    check_matrices(&drift, 0.01);
+    (errors(&drift), errors(&constant))
+}
+
+/// Issue 19: at the default sensor noise and drift, on every seed of [`SEEDS`], the three 40 s logs give
+/// both feet's `C` within 1 % with the offset as a random walk (the logged `[sim.sensors.ft]` figures;
+/// measured: worst 0.904 %, seed 2's right foot). The other side, on the same logs: with the offset
+/// constant over each log, as in (5.10), the worst matrix is beyond 1.2 % (measured 1.454 %, seed 0's right
+/// foot) and the root mean square of the ten errors is above 1.2× the random walk's (measured 1.33×);
+/// without the drift model both would be the random walk's own. docs/identification.md, "Calibration
+/// matrix from logs", has the table. The seeds run on two threads.
+#[test]
+fn at_the_default_noise_and_drift_every_seed_is_within_one_percent_with_the_drift_model() {
+    let s = Scratch::new("calibrate_matrix_drift");
+    let (even, odd): (Vec<u64>, Vec<u64>) = SEEDS.iter().partition(|k| *k % 2 == 0);
+    let results: Vec<([f64; 2], [f64; 2])> = std::thread::scope(|scope| {
+        let s = &s;
+        let other = scope.spawn(move || odd.iter().map(|k| seed_errors(s, *k)).collect::<Vec<_>>());
+        let mut out: Vec<_> = even.iter().map(|k| seed_errors(s, *k)).collect();
+        out.extend(other.join().unwrap());
+        out
+    });
+    // Every foot's error with each offset model: (random walk, constant).
+    let (drift, constant): (Vec<f64>, Vec<f64>) = results
+        .iter()
+        .flat_map(|(d, c)| d.iter().copied().zip(c.iter().copied()))
+        .unzip();
+    let worst = |e: &[f64]| e.iter().copied().fold(0.0, f64::max);
+    let rms = |e: &[f64]| (e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64).sqrt();
+    let (drift_worst, constant_worst) = (worst(&drift), worst(&constant));
+    let ratio = rms(&constant) / rms(&drift);
+    eprintln!("worst: random walk {drift_worst}, constant {constant_worst}; RMS ratio {ratio}");
+    assert!(drift_worst < 0.01, "random walk: worst {drift_worst}");
+    assert!(
+        constant_worst > 0.012,
+        "constant offset: worst {constant_worst} (the drift model is not needed?)"
+    );
+    assert!(ratio > 1.2, "constant / random walk RMS {ratio}");
 }
