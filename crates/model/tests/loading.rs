@@ -212,6 +212,32 @@ fn inconsistent_inertias_and_point_masses_load_with_warnings() {
 }
 
 #[test]
+fn the_loaders_triangle_warning_is_full_consistency_on_both_sides_of_the_boundary() {
+    // Principal moments (1, 1, 2 + δ): the triangle inequality J₃ ≤ J₁ + J₂ (Traversaro 2017, eq. 6.18)
+    // fails for δ > 0 beyond the relative tolerance, holds for δ ≤ 0.
+    for (delta, violated) in [(1e-6, true), (0.0, false), (-1e-6, false)] {
+        let izz = 2.0 + delta;
+        let m = Model::from_urdf_str(&two_links(
+            "revolute",
+            &format!(
+                r#"<inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="{izz}"/></inertial>"#
+            ),
+        ))
+        .unwrap();
+        let warned = m
+            .warnings()
+            .iter()
+            .any(|w| w.contains("`b`") && w.contains("triangle"));
+        let body_b = m
+            .inertia_violations(true)
+            .into_iter()
+            .any(|v| v.name == "b");
+        assert_eq!(warned, violated, "δ = {delta}: loader warning");
+        assert_eq!(body_b, violated, "δ = {delta}: check_full_consistency");
+    }
+}
+
+#[test]
 fn texture_without_filename_is_accepted() {
     // The test model has `<texture/>` in a material.
     assert!(TEST_URDF.contains("<texture/>"));

@@ -107,19 +107,27 @@ pub fn check_consistency(pi: &InertialParameters) -> Result<(), InertiaViolation
 pub fn check_full_consistency(pi: &InertialParameters) -> Result<(), InertiaViolation> {
     check_consistency(pi)?;
     let moments = principal_moments(pi);
-    let l = second_moments(&moments);
+    match triangle_inequality_violation(&moments) {
+        Some((axis, second_moment)) => Err(InertiaViolation::TriangleInequality {
+            moments,
+            axis,
+            second_moment,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The triangle inequalities (6.18) on principal moments `J` (kg·m², increasing): the principal axis with
+/// the most negative central second moment `L_i` ((6.15)–(6.17)) and that moment, when it is below the
+/// relative tolerance of 1e-9; `None` when every inequality holds. The one rule of the URDF loader's
+/// warning and of [`check_full_consistency`].
+pub fn triangle_inequality_violation(moments: &[f64; 3]) -> Option<(usize, f64)> {
+    let l = second_moments(moments);
     let (axis, second_moment) = (0..3)
         .map(|k| (k, l[k]))
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .unwrap_or((0, 0.0));
-    if second_moment < -tolerance(moments[2]) {
-        return Err(InertiaViolation::TriangleInequality {
-            moments,
-            axis,
-            second_moment,
-        });
-    }
-    Ok(())
+    (second_moment < -tolerance(moments[2])).then_some((axis, second_moment))
 }
 
 /// Central second moments `L = P⁻¹ J`, `L_i = (J_j + J_k − J_i)/2` [Traversaro 2017, eqs. 6.15–6.17].

@@ -30,7 +30,7 @@ pub use base_parameters::{
 };
 pub use consistency::{
     check_consistency, check_full_consistency, mass_com_inertia, principal_moments, second_moments,
-    BodyInertiaViolation, InertiaViolation,
+    triangle_inequality_violation, BodyInertiaViolation, InertiaViolation,
 };
 pub use parametrisation::PhysicalParameters;
 pub use rigid_body::{

@@ -7,6 +7,7 @@ use nalgebra::{Matrix3, SymmetricEigen};
 use super::{check_finite, pose};
 use crate::edits::InertiaEdits;
 use crate::error::ModelError;
+use crate::inertial::triangle_inequality_violation;
 use crate::spatial::Inertia;
 
 /// The links of the URDF, in file order.
@@ -75,7 +76,7 @@ fn link_inertia(link: &urdf_rs::Link, warnings: &mut Vec<String>) -> Result<Iner
 
 /// Checks the principal moments of a rotational inertia (kg·m²): a negative eigenvalue (below
 /// `−(1e-9 |λ_max| + 1e-12)`) is an error; moments violating the triangle inequality
-/// `λ₁ + λ₂ ≥ λ₃`, a zero mass with a non-zero inertia, or a positive mass with a zero inertia are warnings.
+/// `λ₁ + λ₂ ≥ λ₃` ([`triangle_inequality_violation`], Traversaro 2017, eq. 6.18), a zero mass with a non-zero inertia, or a positive mass with a zero inertia are warnings.
 fn check_principal_moments(
     name: &str,
     m: f64,
@@ -98,7 +99,7 @@ fn check_principal_moments(
     if hi > 0.0 {
         let mut sorted = [eig[0], eig[1], eig[2]];
         sorted.sort_by(f64::total_cmp);
-        if sorted[0] + sorted[1] < sorted[2] - tol {
+        if triangle_inequality_violation(&sorted).is_some() {
             warnings.push(format!(
                 "link `{}`: inertia is not physically consistent (principal moments {:.6e}, {:.6e}, {:.6e} violate the triangle inequality)",
                 name, sorted[0], sorted[1], sorted[2]
