@@ -4,9 +4,9 @@
 //! `implicitfast` leaves a clamped actuator's velocity derivative out of its implicit damping (measured:
 //! `tests/mujoco.rs`, a clamped servo on a light link): the damping `−kd q̇` of a clamped position servo
 //! becomes explicit. A clamped torque of ±L changes the joint velocity by about
-//! `L dt / I` per step, the damping term by `kd L dt / I`; on a light link with `kd dt / I > 1` (kd
-//! 200 N·m·s/rad, dt 0.5 ms, the iCub shank and foot's ≈ 0.06 kg·m² about the knee: 1.6) that is more than
-//! the `2 L` between the limits, and the clamped torque flips between +L and −L at every step for as long as
+//! `L dt / I` per step, the damping term by `kd L dt / I`; on a light link with `kd dt / I > 2` (kd
+//! 200 N·m·s/rad, dt 0.5 ms, the iCub knee's ≈ 0.03 kg·m² effective inertia with its armature: ≈ 3) that is
+//! more than the `2 L` between the limits, and the clamped torque flips between +L and −L at every step for as long as
 //! the servo is saturated. Nothing physical does that: it is the start-of-step clamp of an explicit step.
 //!
 //! stride-sim decides a saturation on the end-of-step servo torque and solves the step again with that
