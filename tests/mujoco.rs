@@ -367,6 +367,35 @@ fn the_fast_upright_walk_reaches_its_goal_on_mujoco_with_its_admittance_gains() 
     );
 }
 
+/// A servo at its effort limit on MuJoCo (`mujoco.servo_saturation`, docs/mujoco.md, "Servos at their
+/// limits"): `walk_fast` with sensor seed 3 reaches its goal with the limit applied on the force the step
+/// applies (measured 2026-12-06: 14 mm from it, the ankles 0.3 s at their limits, c_et 6.6 J/kg/m); with
+/// MuJoCo's own clamp of the start-of-step force the clamped servos' damping is explicit, their torque
+/// flips between the limits at the plant rate (ankles 1.7 s at their limits, c_et 14.0 J/kg/m) and the walk
+/// stands 0.11 m beside its goal at 45 s.
+#[cfg(feature = "mujoco")]
+#[test]
+fn the_fast_walk_reaches_its_goal_on_mujoco_only_with_the_servo_limit_on_the_applied_force() {
+    use stride_runner::config::mujoco::MujocoServoSaturation;
+    let mut scenario = Scenario::load(&config_path("walk_fast.toml")).expect("scenario");
+    scenario.config.sim.sensors.seed = 3;
+    assert_eq!(
+        scenario.config.mujoco.servo_saturation,
+        MujocoServoSaturation::AppliedForce
+    );
+    let s = run_scenario_on_mujoco(&scenario);
+    assert_eq!(s.outcome, Outcome::GoalReached, "{}", s.outcome);
+    assert!(s.max_tilt_deg < 10.0, "tilt {}°", s.max_tilt_deg);
+    scenario.config.mujoco.servo_saturation = MujocoServoSaturation::StartOfStep;
+    let clamped = run_scenario_on_mujoco(&scenario);
+    assert_ne!(
+        clamped.outcome,
+        Outcome::GoalReached,
+        "MuJoCo's clamp: {}",
+        clamped.outcome
+    );
+}
+
 /// The fixed base on MuJoCo (`sim.fixed_base`: the root a mocap body held at the initial pose, no collision
 /// geometry without contact surfaces): `configs/identify_ft_legs.toml` swings the legs of the robot on its
 /// pole for 30 s, the base does not move, and `stride calibrate` recovers the FT offsets from the log within

@@ -33,8 +33,9 @@ impl Servo {
     /// MuJoCo's position actuator applies `kp (u − q) − kv q̇` (`kv = kd`), its velocity actuator
     /// `kv (u − q̇)`, its motor `u`, each clamped at `forcerange` [MuJoCo 3.17 XML reference, "actuator"].
     /// With `u = q_ref + (kd q̇_ref + τ_ff)/kp` (position) or `u = q̇_ref + τ_ff/kd` (velocity) the force is
-    /// stride-sim's `kp (q_ref − q) + kd (q̇_ref − q̇) + τ_ff`, clamped as a whole at the effort limit, with
-    /// the damping evaluated implicitly by `implicitfast`.
+    /// stride-sim's `kp (q_ref − q) + kd (q̇_ref − q̇) + τ_ff`, with the damping evaluated implicitly by
+    /// `implicitfast`, and saturated as a whole at the effort limit on the force the step applies
+    /// (`crate::limits`).
     pub fn control(&self, q_ref: f64, qd_ref: f64, tau_ff: f64) -> f64 {
         match self.mode {
             ActuationMode::Position => q_ref + (self.kd * qd_ref + tau_ff) / self.kp,

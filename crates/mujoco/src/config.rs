@@ -10,6 +10,16 @@ pub enum Cone {
     Elliptic,
 }
 
+/// How a position or velocity servo's effort limit is applied (`crate::limits`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ServoSaturation {
+    /// On the force the step applies, the servo's damping implicit, as stride-sim decides it (default).
+    AppliedForce,
+    /// MuJoCo's own `forcerange` clamp of the start-of-step force: a clamped servo's damping is explicit
+    /// and flips the torque between its limits at every step on a light link (kept to show that).
+    StartOfStep,
+}
+
 /// Contact and solver parameters of the floor–sole contacts. The floor geom carries them with a higher
 /// `priority` than the robot's geoms, so MuJoCo uses them as written for every contact (no mixing)
 /// [MuJoCo 3.17 documentation, "Contact parameters"].
@@ -24,6 +34,7 @@ pub enum Cone {
 /// | `torsional_friction`, `rolling_friction` | m | 0.005, 0.0001 | MuJoCo's defaults (used with `condim` 4 and 6) |
 /// | `min_armature` | kg·m² | 0.01 | lower bound of every joint's armature (reflected rotor inertia); see below |
 /// | `joint_limits` | – | true | MuJoCo enforces the URDF's joint position limits (stride-sim does not) |
+/// | `servo_saturation` | – | `applied_force` | [`ServoSaturation`]: where a servo's effort limit is applied |
 ///
 /// **Why a minimum armature.** MuJoCo integrates the servos' velocity gain implicitly (`implicitfast`) but
 /// its constraint solver computes the contact forces with the plain mass matrix, so a damping `kd dt` much
@@ -56,6 +67,8 @@ pub struct MujocoConfig {
     pub min_armature: f64,
     /// Enforce the URDF's joint position limits.
     pub joint_limits: bool,
+    /// Where a position or velocity servo's effort limit is applied.
+    pub servo_saturation: ServoSaturation,
 }
 
 impl Default for MujocoConfig {
@@ -70,6 +83,7 @@ impl Default for MujocoConfig {
             rolling_friction: 0.0001,
             min_armature: 0.01,
             joint_limits: true,
+            servo_saturation: ServoSaturation::AppliedForce,
         }
     }
 }

@@ -22,6 +22,8 @@ mod error;
 #[cfg(feature = "mujoco")]
 mod inertia;
 #[cfg(feature = "mujoco")]
+mod limits;
+#[cfg(feature = "mujoco")]
 mod measure;
 #[cfg(feature = "mujoco")]
 mod robot;
@@ -35,7 +37,7 @@ mod urdf;
 #[cfg(feature = "mujoco")]
 pub use actuators::{resolve as resolve_servos, Servo};
 #[cfg(feature = "mujoco")]
-pub use config::{Cone, MujocoConfig};
+pub use config::{Cone, MujocoConfig, ServoSaturation};
 #[cfg(feature = "mujoco")]
 pub use error::MujocoError;
 #[cfg(feature = "mujoco")]

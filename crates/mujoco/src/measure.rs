@@ -127,13 +127,14 @@ impl MujocoRobot {
         self.output.sole_contact = normal.map(|n| n > 0.0);
     }
 
-    /// Actuator forces (actuator `i` drives joint `i` with gear 1) and the saturation flags.
+    /// The forces the step applied (actuator `i` drives joint `i` with gear 1; `crate::limits`) and the
+    /// saturation flags: a servo pinned at its limit, a torque motor clamped at it.
     fn actuator_torques(&mut self) {
-        let forces = self.data.actuator_force();
         for (j, s) in self.servos.iter().enumerate() {
-            let tau = forces[j];
+            let tau = self.limits.applied[j];
             self.output.joint_torques[j] = tau;
-            self.output.saturated[j] = s.limit.is_finite() && tau.abs() >= s.limit * (1.0 - 1e-12);
+            self.output.saturated[j] = self.limits.is_pinned(j)
+                || (s.limit.is_finite() && tau.abs() >= s.limit * (1.0 - 1e-12));
         }
     }
 

@@ -12,6 +12,7 @@ use stride_sim::{EffortLimitPolicy, ImuMeasurement, SensorModels, SimConfig, Sim
 use crate::actuators::{resolve, Servo};
 use crate::config::MujocoConfig;
 use crate::inertia::write_model_inertias;
+use crate::limits::Limits;
 use crate::scene::{build, SceneSpec};
 use crate::MujocoError;
 
@@ -94,6 +95,8 @@ pub struct MujocoRobot {
     pub(crate) body: Vec<usize>,
     pub(crate) geom_contact: Vec<Option<usize>>,
     pub(crate) servos: Vec<Servo>,
+    pub(crate) limits: Limits,
+    pub(crate) servo_saturation: crate::ServoSaturation,
     policy: EffortLimitPolicy,
     pub(crate) soles: [FrameId; 2],
     pub(crate) imu_frame: FrameId,
@@ -117,9 +120,11 @@ pub(crate) struct Scratch {
     pub(crate) nu_dot: DVector<f64>,
     pub(crate) external: Vec<ExternalWrench>,
     pub(crate) imu_velocity: Vector3<f64>,
-    qpos: Vec<f64>,
-    qvel: Vec<f64>,
+    /// The start-of-step state (`save`).
+    pub(crate) qpos: Vec<f64>,
+    pub(crate) qvel: Vec<f64>,
     act: Vec<f64>,
+    qacc_warmstart: Vec<f64>,
     warnings: [i32; 7],
 }
 
@@ -210,12 +215,15 @@ impl MujocoRobot {
                 qpos: vec![0.0; nq],
                 qvel: vec![0.0; nv],
                 act: vec![0.0; na],
+                qacc_warmstart: vec![0.0; nv],
                 warnings: [0; 7],
             },
             joint_qpos: scene.joint_qpos,
             joint_dof: scene.joint_dof,
             body: scene.body,
             geom_contact: scene.geom_contact,
+            limits: Limits::new(n),
+            servo_saturation: setup.mujoco.servo_saturation,
             servos,
             policy: setup.sim.actuation.effort_limit_policy,
             soles,
@@ -334,8 +342,7 @@ impl MujocoRobot {
         // ago (the one just written when there is no delay).
         self.apply_command_and_pushes(self.head);
         self.save();
-        self.data.step();
-        if let Err(e) = self.check_step() {
+        if let Err(e) = self.step_with_limits() {
             self.restore();
             // The slot just written held a command already applied: stepping the head back is enough.
             self.head = (self.head + len - 1) % len;
@@ -448,22 +455,32 @@ impl MujocoRobot {
         s.qpos.copy_from_slice(self.data.qpos());
         s.qvel.copy_from_slice(self.data.qvel());
         s.act.copy_from_slice(self.data.act());
+        s.qacc_warmstart.copy_from_slice(self.data.qacc_warmstart());
         for (n, w) in s.warnings.iter_mut().zip(self.data.warning().iter()) {
             *n = w.number;
         }
     }
 
     fn restore(&mut self) {
+        self.rewind();
+        self.data.forward();
+    }
+
+    /// The state saved at the start of the step (`save`), MuJoCo's solver warm start included, without
+    /// recomputing what depends on it (the next `mj_step` does).
+    pub(crate) fn rewind(&mut self) {
         let s = &self.scratch;
         self.data.qpos_mut().copy_from_slice(&s.qpos);
         self.data.qvel_mut().copy_from_slice(&s.qvel);
         self.data.act_mut().copy_from_slice(&s.act);
+        self.data
+            .qacc_warmstart_mut()
+            .copy_from_slice(&s.qacc_warmstart);
         self.data.set_time(self.time_ns as f64 * 1e-9);
-        self.data.forward();
     }
 
     /// A new MuJoCo warning or a non-finite state fails the step.
-    fn check_step(&self) -> Result<(), MujocoError> {
+    pub(crate) fn check_step(&self) -> Result<(), MujocoError> {
         let time = self.time_ns as f64 * 1e-9;
         for (k, w) in self.data.warning().iter().enumerate().take(WARNINGS.len()) {
             if w.number > self.scratch.warnings[k] {

@@ -18,6 +18,17 @@ pub enum MujocoCone {
     Elliptic,
 }
 
+/// Where a position or velocity servo's effort limit is applied on the MuJoCo plant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum MujocoServoSaturation {
+    /// On the force the step applies, the damping implicit (stride-sim's rule).
+    #[default]
+    AppliedForce,
+    /// MuJoCo's own clamp of the start-of-step force.
+    StartOfStep,
+}
+
 /// `[mujoco]`: the fields of `stride_mujoco::MujocoConfig`, with its defaults (MuJoCo's own, a minimum
 /// joint armature of 0.01 kg·m², and `solref` derived from the scenario's ground when not written).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -43,6 +54,8 @@ pub struct MujocoSection {
     pub min_armature: f64,
     /// Enforce the URDF's joint position limits.
     pub joint_limits: bool,
+    /// Where a position or velocity servo's effort limit is applied.
+    pub servo_saturation: MujocoServoSaturation,
 }
 
 impl Default for MujocoSection {
@@ -58,6 +71,7 @@ impl Default for MujocoSection {
             rolling_friction: 0.0001,
             min_armature: 0.01,
             joint_limits: true,
+            servo_saturation: MujocoServoSaturation::AppliedForce,
         }
     }
 }
@@ -111,6 +125,10 @@ impl MujocoSection {
             rolling_friction: self.rolling_friction,
             min_armature: self.min_armature,
             joint_limits: self.joint_limits,
+            servo_saturation: match self.servo_saturation {
+                MujocoServoSaturation::AppliedForce => stride_mujoco::ServoSaturation::AppliedForce,
+                MujocoServoSaturation::StartOfStep => stride_mujoco::ServoSaturation::StartOfStep,
+            },
         }
     }
 }
@@ -140,6 +158,7 @@ mod tests {
             rolling_friction: 0.001,
             min_armature: 0.1,
             joint_limits: false,
+            servo_saturation: MujocoServoSaturation::StartOfStep,
         };
         let c = s.plant_config([0.02, 1.0]);
         assert_eq!(
@@ -160,6 +179,10 @@ mod tests {
                 c.joint_limits
             ),
             (0.01, 0.001, 0.1, false)
+        );
+        assert_eq!(
+            c.servo_saturation,
+            stride_mujoco::ServoSaturation::StartOfStep
         );
     }
 }
