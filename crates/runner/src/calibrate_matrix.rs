@@ -29,7 +29,6 @@ use stride_model::{InertiaEdits, KinDyn, Model};
 
 use crate::calibrate::{paired_samples_with_lag, simulated_offsets, CalibrateError};
 use crate::config::Scenario;
-use crate::log::read_log;
 use crate::replay::{logged_model, logged_scenario, ReplayError};
 
 /// `--added-masses FILE`: the masses added in each log, one `[[log]]` per log of the command line, in the
@@ -125,7 +124,7 @@ struct LoggedRun {
 }
 
 fn read_run(path: &Path) -> Result<LoggedRun, CalibrateError> {
-    let log = read_log(path).map_err(ReplayError::from)?;
+    let log = crate::calibrate::read_calibration_log(path).map_err(ReplayError::from)?;
     let scenario = logged_scenario(&log, path)?;
     let mut model = (*logged_model(&log, path, &scenario)?).clone();
     model.set_gravity(Vector3::new(0.0, 0.0, -scenario.config.scenario.gravity))?;

@@ -648,6 +648,12 @@ impl LogContents {
 /// Reads a whole MCAP file: messages (through the summary-less linear reader, so files of interrupted
 /// runs that still have their footer read the same way), attachments and metadata.
 pub fn read_log(path: &Path) -> Result<LogContents, LogError> {
+    read_log_topics(path, |_| true)
+}
+
+/// [`read_log`] keeping only the messages (and schemas) of the topics `keep` accepts; attachments and
+/// metadata are read whole. A tool that needs two topics of a long log holds those alone in memory.
+pub fn read_log_topics(path: &Path, keep: impl Fn(&str) -> bool) -> Result<LogContents, LogError> {
     let bytes = std::fs::read(path).map_err(|e| LogError::Io {
         path: path.to_path_buf(),
         source: e,
@@ -655,6 +661,9 @@ pub fn read_log(path: &Path) -> Result<LogContents, LogError> {
     let mut out = LogContents::default();
     for m in mcap::MessageStream::new(&bytes)? {
         let m = m?;
+        if !keep(&m.channel.topic) {
+            continue;
+        }
         let topic = m.channel.topic.clone();
         if !out.schemas.contains_key(&topic) {
             if let Some(s) = &m.channel.schema {

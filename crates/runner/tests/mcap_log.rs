@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use common::Scratch;
 use stride_runner::log::{
-    read_log, FrameTransforms, LogOptions, LogWriter, FRAME_TRANSFORMS_SCHEMA,
+    read_log, read_log_topics, FrameTransforms, LogOptions, LogWriter, FRAME_TRANSFORMS_SCHEMA,
 };
 
 #[derive(serde::Serialize)]
@@ -94,6 +94,15 @@ fn written_log_reads_back_completely() {
     let schema: serde_json::Value = serde_json::from_str(&log.schemas["/a"].2).unwrap();
     assert_eq!(schema["type"], "object");
     assert_eq!(schema["properties"]["values"]["type"], "array");
+
+    // Reading one topic keeps its messages and schema alone, and every attachment and metadata record.
+    let tf_only = read_log_topics(&path, |topic| topic == "/tf").unwrap();
+    assert_eq!(tf_only.messages.len(), 1);
+    assert_eq!(tf_only.messages[0].topic, "/tf");
+    assert_eq!(tf_only.messages[0].data, log.messages[n as usize].data);
+    assert_eq!(tf_only.schemas.keys().collect::<Vec<_>>(), ["/tf"]);
+    assert_eq!(tf_only.attachments, log.attachments);
+    assert_eq!(tf_only.metadata, log.metadata);
 }
 
 #[test]
