@@ -214,6 +214,10 @@ fn records(file: &[u8], compression: Compression) -> Vec<String> {
             }
             Record::SummaryOffset(mut s) => {
                 s.group_start = 0;
+                if s.group_opcode == 0x08 {
+                    // chunk indexes name their compression
+                    s.group_length = 0;
+                }
                 out.push(format!("{s:?}"));
             }
             other => out.push(format!("{other:?}")),
@@ -231,7 +235,11 @@ fn compressed_chunks_hold_the_uncompressed_files_records() {
     for compression in [Compression::Zstd, Compression::Lz4] {
         let file = ours(&ops, compression);
         assert!(file.len() < plain.len(), "{compression:?} compresses");
-        assert_eq!(records(&file, compression), expected, "{compression:?}");
+        let got = records(&file, compression);
+        assert_eq!(got.len(), expected.len(), "{compression:?}");
+        for (i, (a, b)) in got.iter().zip(&expected).enumerate() {
+            assert!(a == b, "{compression:?}, record {i}: {a:.300} against {b:.300}");
+        }
         // The indexed reader (summary, chunk indexes) and the message stream read the same messages.
         let summary = mcap::Summary::read(&file).unwrap().expect("a summary");
         let plain_summary = mcap::Summary::read(&plain).unwrap().expect("a summary");
