@@ -226,6 +226,22 @@ fn records(file: &[u8], compression: Compression) -> Vec<String> {
     out
 }
 
+/// (topic, sequence, log time, payload) of every message, in file order.
+fn messages(file: &[u8]) -> Vec<(String, u32, u64, Vec<u8>)> {
+    mcap::MessageStream::new(file)
+        .unwrap()
+        .map(|m| {
+            let m = m.unwrap();
+            (
+                m.channel.topic.clone(),
+                m.sequence,
+                m.log_time,
+                m.data.into_owned(),
+            )
+        })
+        .collect()
+}
+
 #[test]
 fn compressed_chunks_hold_the_uncompressed_files_records() {
     let ops = operations();
@@ -238,36 +254,17 @@ fn compressed_chunks_hold_the_uncompressed_files_records() {
         let got = records(&file, compression);
         assert_eq!(got.len(), expected.len(), "{compression:?}");
         for (i, (a, b)) in got.iter().zip(&expected).enumerate() {
-            assert!(a == b, "{compression:?}, record {i}: {a:.300} against {b:.300}");
+            assert!(
+                a == b,
+                "{compression:?}, record {i}: {a:.300} against {b:.300}"
+            );
         }
         // The indexed reader (summary, chunk indexes) and the message stream read the same messages.
         let summary = mcap::Summary::read(&file).unwrap().expect("a summary");
         let plain_summary = mcap::Summary::read(&plain).unwrap().expect("a summary");
         assert_eq!(summary.stats, plain_summary.stats);
-        let stream: Vec<_> = mcap::MessageStream::new(&file)
-            .unwrap()
-            .map(|m| {
-                let m = m.unwrap();
-                (
-                    m.channel.topic.clone(),
-                    m.sequence,
-                    m.log_time,
-                    m.data.into_owned(),
-                )
-            })
-            .collect();
-        let plain_stream: Vec<_> = mcap::MessageStream::new(&plain)
-            .unwrap()
-            .map(|m| {
-                let m = m.unwrap();
-                (
-                    m.channel.topic.clone(),
-                    m.sequence,
-                    m.log_time,
-                    m.data.into_owned(),
-                )
-            })
-            .collect();
+        let stream = messages(&file);
+        let plain_stream = messages(&plain);
         assert_eq!(stream.len(), 400 + 2 * 83);
         assert!(stream == plain_stream, "{compression:?}: the messages");
         let mut indexed = 0;
