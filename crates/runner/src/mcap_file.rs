@@ -41,7 +41,7 @@ const MESSAGE_HEADER_BYTES: usize = 1 + 8 + 2 + 4 + 8 + 8;
 /// The defaults are zstd's fast strategy at acceleration 7 (level −7) with its literals still Huffman
 /// coded (zstd turns that off at negative levels), a 1 MiB window, a 2¹⁷-entry hash table and matches of
 /// at least 7 bytes. On the position walk's log (JSON, mostly decimal digits) that takes 31 % fewer
-/// instructions than level 1 for chunks 7.7 % larger (docs/performance.md, "The log's compression": the
+/// instructions than level 1 for chunks 7.9 % larger (docs/performance.md, "The log's compression": the
 /// table of parameters, `tools/bench/log-zstd/run.sh`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ZstdParameters {
