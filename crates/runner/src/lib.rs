@@ -30,6 +30,7 @@ pub mod identify;
 pub mod init;
 pub mod joint_trajectory;
 pub mod log;
+pub mod mcap_file;
 pub mod model_cmd;
 #[cfg(feature = "mujoco")]
 pub mod mujoco_plant;

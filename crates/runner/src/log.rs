@@ -2,7 +2,7 @@
 //!
 //! The control loop serializes each message to JSON into a buffer taken from a pool of preallocated
 //! buffers and hands it to a bounded channel; a dedicated thread writes it into a chunked, compressed
-//! MCAP file and returns the buffer to the pool. Every message that can be in flight owns a buffer from
+//! MCAP file ([`crate::mcap_file`]) and returns the buffer to the pool. Every message that can be in flight owns a buffer from
 //! the start, sized above the largest per-tick message, so nothing allocates on the loop side. If the writer ever falls behind by `queue_capacity` messages the loop
 //! waits for it (logs stay complete and deterministic) and the wait is counted in [`LogStats::stalls`].
 //!
@@ -13,7 +13,6 @@
 //! [`LogWriter`] finishes the file when dropped, so a run that ends by an error or a panic (the loop runs
 //! inside `catch_unwind`, the writer outside it) still leaves a valid file.
 
-use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -24,6 +23,7 @@ use std::thread::JoinHandle;
 use serde::Serialize;
 
 use crate::config::Compression;
+use crate::mcap_file::{McapFile, ZstdParameters};
 
 /// Why the log could not be written or read.
 #[derive(Debug, thiserror::Error)]
@@ -77,17 +77,10 @@ impl Default for LogOptions {
     }
 }
 
-/// Default target size of a chunk before compression \[bytes\]: 512 KiB, zstd's window at level 1 (2¹⁹
-/// bytes). A chunk that fits in the window with its last message is compressed from one contiguous
-/// buffer; a larger one (1 MiB before) wraps zstd's streaming buffer, and every block after the wrap goes
-/// through the slower external-dictionary match finder: the writer thread took 10 % more instructions for
-/// a log 0.7 % smaller (docs/performance.md).
-pub const DEFAULT_CHUNK_BYTES: u64 = 1 << 19;
-
-/// zstd level of the chunks. Level 1 compresses a walk's log about as well as the library's default
-/// (level 3) for much less CPU time: the figures are in docs/performance.md. Compression runs on the
-/// writer thread itself (no zstd worker threads): the loop already has the writer thread beside it.
-const ZSTD_LEVEL: u32 = 1;
+/// Default target size of a chunk before compression \[bytes\]: 1 MiB, the window of the chunks' zstd
+/// parameters ([`ZstdParameters`]); each chunk is compressed in one call once complete, so a chunk that
+/// fits in the window is matched against all of itself (docs/performance.md, "The log's compression").
+pub const DEFAULT_CHUNK_BYTES: u64 = 1 << 20;
 
 /// Handle of a registered topic.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -156,19 +149,17 @@ impl LogWriter {
             path: path.to_path_buf(),
             source: e,
         })?;
-        let compression = match options.compression {
-            Compression::Zstd => Some(mcap::Compression::Zstd),
-            Compression::Lz4 => Some(mcap::Compression::Lz4),
-            Compression::None => None,
-        };
-        let writer = mcap::WriteOptions::new()
-            .compression(compression)
-            .compression_level(ZSTD_LEVEL)
-            .compression_threads(0)
-            .chunk_size(Some(options.chunk_size))
-            .profile("")
-            .library(concat!("stride-", env!("CARGO_PKG_VERSION")))
-            .create(BufWriter::with_capacity(1 << 16, file))?;
+        let writer = McapFile::create(
+            BufWriter::with_capacity(1 << 16, file),
+            options.compression,
+            &ZstdParameters::default(),
+            options.chunk_size,
+            concat!("stride-", env!("CARGO_PKG_VERSION")),
+        )
+        .map_err(|e| LogError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
         let capacity = options.queue_capacity.max(1);
         let (tx, rx) = mpsc::sync_channel::<Msg>(capacity);
         // (queued messages + the one the writer holds + the one the loop is serializing)
@@ -340,11 +331,15 @@ impl Drop for LogWriter {
 }
 
 fn writer_thread(
-    mut w: mcap::Writer<BufWriter<File>>,
+    mut w: McapFile<BufWriter<File>>,
     rx: Receiver<Msg>,
     pool: SyncSender<Vec<u8>>,
     path: PathBuf,
 ) -> Result<u64, LogError> {
+    let io = |source: std::io::Error| LogError::Io {
+        path: path.clone(),
+        source,
+    };
     // Topic id → (mcap channel id, pending registration when the schema is derived from data).
     let mut channels: Vec<Option<u16>> = Vec::new();
     let mut pending: BTreeMap<u16, (String, String)> = BTreeMap::new();
@@ -364,9 +359,10 @@ fn writer_thread(
                     }
                     match schema {
                         Some(s) => {
-                            let sid = w.add_schema(&schema_name, "jsonschema", s.as_bytes())?;
-                            channels[idx] =
-                                Some(w.add_channel(sid, &topic, "json", &BTreeMap::new())?);
+                            let sid = w
+                                .add_schema(&schema_name, "jsonschema", s.as_bytes())
+                                .map_err(io)?;
+                            channels[idx] = Some(w.add_channel(sid, &topic, "json").map_err(io)?);
                         }
                         None => {
                             pending.insert(id, (topic, schema_name));
@@ -388,30 +384,24 @@ fn writer_thread(
                                     source: e,
                                 })?;
                             let schema = schema_from_example(&value, &schema_name);
-                            let sid = w.add_schema(
-                                &schema_name,
-                                "jsonschema",
-                                schema.to_string().as_bytes(),
-                            )?;
+                            let sid = w
+                                .add_schema(
+                                    &schema_name,
+                                    "jsonschema",
+                                    schema.to_string().as_bytes(),
+                                )
+                                .map_err(io)?;
                             if channels.len() <= idx {
                                 channels.resize(idx + 1, None);
                             }
-                            channels[idx] =
-                                Some(w.add_channel(sid, &topic, "json", &BTreeMap::new())?);
+                            channels[idx] = Some(w.add_channel(sid, &topic, "json").map_err(io)?);
                         }
                     }
                     let channel_id = channels.get(idx).copied().flatten().ok_or_else(|| {
                         LogError::Content(format!("message for unregistered topic {id}"))
                     })?;
-                    w.write_to_known_channel(
-                        &mcap::records::MessageHeader {
-                            channel_id,
-                            sequence,
-                            log_time: time_ns,
-                            publish_time: time_ns,
-                        },
-                        &buf,
-                    )?;
+                    w.write_message(channel_id, sequence, time_ns, time_ns, &buf)
+                        .map_err(io)?;
                     let _ = pool.try_send(buf);
                 }
                 Msg::Attachment {
@@ -419,19 +409,10 @@ fn writer_thread(
                     media_type,
                     data,
                 } => {
-                    w.attach(&mcap::Attachment {
-                        log_time: 0,
-                        create_time: 0,
-                        name,
-                        media_type,
-                        data: Cow::Owned(data),
-                    })?;
+                    w.attach(0, 0, &name, &media_type, &data).map_err(io)?;
                 }
                 Msg::Metadata { name, entries } => {
-                    w.write_metadata(&mcap::records::Metadata {
-                        name,
-                        metadata: entries,
-                    })?;
+                    w.write_metadata(&name, &entries).map_err(io)?;
                 }
             }
             Ok(())
@@ -443,12 +424,8 @@ fn writer_thread(
             }
         }
     }
-    w.finish()?;
-    let mut inner = w.into_inner();
-    inner.flush().map_err(|e| LogError::Io {
-        path: path.clone(),
-        source: e,
-    })?;
+    let mut inner = w.finish().map_err(io)?;
+    inner.flush().map_err(io)?;
     drop(inner);
     if let Some(e) = first_error {
         return Err(e);
