@@ -54,8 +54,12 @@ fn the_rigid_tsid_fails_on_soft_ground_and_walks_on_the_default_floor() {
         &s,
         "floor",
         &format!(
-            "[sim.contact]\nnormal_stiffness = {:e}\nnormal_damping = {:e}\n",
-            hard.normal_stiffness, hard.normal_damping
+            "[sim.contact]\nnormal_stiffness = {:e}\nnormal_damping = {:e}\n\
+             tangential_stiffness = {:e}\ntangential_damping = {:e}\n",
+            hard.normal_stiffness,
+            hard.normal_damping,
+            hard.tangential_stiffness,
+            hard.tangential_damping
         ),
     );
     let summary = run_scenario(&floor, &options(&s, "floor")).unwrap();
