@@ -382,12 +382,15 @@ fn the_fast_walks_reach_their_goals_at_speed() {
 }
 
 /// Issue 15's energy targets at the thesis's 0.212 m/s (Romualdi 2022, Table 7.2: 4.82 J/kg/m in position,
-/// 2.55 in torque control): c_et ≤ 4.0 J/kg/m in position and ≤ 2.0 in torque control (measured 2.48 / 1.90;
-/// docs/gait.md, "Energy at the thesis's speed"). The other side: the same speed walked with 0.131 m steps every
-/// 0.5 s costs more than 2.0 J/kg/m in torque control (measured 2.11): the step timing, not the speed alone,
-/// sets the cost.
+/// 2.55 in torque control): c_et ≤ 4.0 J/kg/m in position and ≤ 2.0 in torque control (measured 2.46 / 1.82 on
+/// the hard default floor, k 3·10⁸ N/m³; 2.48 / 1.90 on the former 3·10⁷; docs/gait.md, "Energy at the
+/// thesis's speed"). The other side: the same speed walked with 0.131 m steps every 0.5 s costs more in torque
+/// control (measured 1.98 against 1.82 J/kg/m): the step timing, not the speed alone, sets the cost. On the
+/// former 3·10⁷ floor the quicker steps also missed the 2.0 target (2.11); on the hard floor they meet it, so
+/// the test compares the two walks.
 #[test]
 fn energy_at_the_thesis_speed_meets_the_targets_with_0_6_s_steps() {
+    let mut torque_cost = f64::NAN;
     for (name, max_cost) in [
         ("walk_thesis_speed.toml", 4.0),
         ("walk_thesis_speed_torque.toml", 2.0),
@@ -401,6 +404,7 @@ fn energy_at_the_thesis_speed_meets_the_targets_with_0_6_s_steps() {
         );
         let cost = s.gait.energy_cost.expect("a walked distance");
         assert!(cost <= max_cost, "{name}: c_et {cost} J/kg/m");
+        torque_cost = cost;
     }
     let quick = run_edited("walk_thesis_speed_torque.toml", |c| {
         c.planner.feet_distance_max = 0.1992;
@@ -414,7 +418,10 @@ fn energy_at_the_thesis_speed_meets_the_targets_with_0_6_s_steps() {
         "0.5 s steps: steady speed {speed} m/s"
     );
     let cost = quick.gait.energy_cost.expect("a walked distance");
-    assert!(cost > 2.0, "0.5 s steps: c_et {cost} J/kg/m");
+    assert!(
+        cost > torque_cost,
+        "0.5 s steps: c_et {cost} J/kg/m, 0.6 s steps: {torque_cost}"
+    );
 }
 
 /// The position-control speed limit of the walking defaults (docs/gait.md, "Walking at 0.40 m/s"): with
