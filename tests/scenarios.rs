@@ -446,9 +446,11 @@ fn position_control_speed_limit_lies_between_0_30_and_0_35_m_steps() {
 
 /// Issue 15's position-control speed (≥ 0.40 m/s steady to the goal; docs/gait.md, "Walking at 0.40 m/s"):
 /// `walk_fast_upright` (0.25 m steps every 0.46 s, the QP-IK's chest upright at weight 50) reaches its goal at
-/// 0.436 m/s measured, the chest tilting 5.4°. Both sides: the same steps with the chest at weight 5 (the
-/// walking preset's before 2026-12-05) hold the speed but fall backwards 0.24 m before the goal, the torso over the legs (measured at
-/// 3.81 m). The scenario keeps the foot admittance's gains of before 2026-12-06 and interpolates the QP-IK's
+/// 0.437 m/s measured, the chest tilting 4.7° (on the hard default floor; 0.436 m/s and 5.4° on the former
+/// 3·10⁷). Both sides: the same steps with the chest at weight 5 (the walking preset's before 2026-12-05) hold
+/// the speed but do not reach the goal: on the hard floor the walk ends 0.30 m from it, 10.9° off its heading
+/// (duration reached; measured); on the former 3·10⁷ floor it fell backwards 0.24 m before the goal, the
+/// torso over the legs (at 3.81 m). The scenario keeps the foot admittance's gains of before 2026-12-06 and interpolates the QP-IK's
 /// command to every plant step (`wbc.position_command = "interpolate"`), which make it reach its goal on
 /// MuJoCo (docs/mujoco.md). The speed limit, on the hard default floor (k 3·10⁸ N/m³, since 2026-12-06;
 /// re-measured then): with the file's settings 0.30 m steps (0.53 m/s commanded) reach the goal (measured
@@ -478,11 +480,14 @@ fn position_control_walks_at_0_4_m_per_s_with_the_chest_upright() {
             }
         }
     });
-    assert!(
-        matches!(chest_at_5.outcome, Outcome::Fell { .. }),
+    assert_ne!(
+        chest_at_5.outcome,
+        Outcome::GoalReached,
         "chest at weight 5: {}",
         chest_at_5.render()
     );
+    let missed = chest_at_5.goal_distance.expect("a pose goal");
+    assert!(missed > 0.2, "chest at weight 5: {}", chest_at_5.render());
     // The hard-floor defaults of the foot admittance (2026-12-06) with the held command, which this file
     // replaces by the earlier gains and the interpolated command for MuJoCo's sake (its comments).
     let hard_floor_defaults = |c: &mut ScenarioConfig| {
@@ -679,10 +684,15 @@ fn tsid_flex_observer_falls_on_uncalibrated_ft_offsets_and_walks_calibrated() {
 
 /// Table 9.1 scaled (docs/flexible-joints.md), both sides of the comparison: with unmeasured flexible hips
 /// the rigid TSID falls at the stiffest and the softest hips of the table (measured: at 2.6 s and 1.5 s),
-/// where TSID-Flex (its observer supplying the deflection) walks the metre (CoM error 6.8 and 13.4 mm RMS
-/// at k = 2085 and 417 N·m/rad; it falls at 209). The bounds sit above the spread measured under
-/// rounding-level changes of the estimator's joint torques (the same RNEA reused from the FT pass instead of
-/// recomputed: 5.7 → 6.8 and 14.3 → 13.4 mm): the observer's loop amplifies rounding to about a millimetre.
+/// where TSID-Flex (its observer supplying the deflection) walks the metre. On the hard default floor (k
+/// 3·10⁸ N/m³, since 2026-12-06; re-measured then) it does so at k = 2085 and 1043 N·m/rad (CoM error 2.9 and
+/// 3.8 mm RMS) and no longer at 626 (the simulator stops on a hip joint velocity at 4.27 s) or 417 (falls
+/// after 0.37 m). On the former 3·10⁷ floor it walked down to 417 (CoM 6.8 and 13.4 mm RMS at 2085 and 417;
+/// it fell at 209): the hard floor costs TSID-Flex the two softer hips it walked on, an open point of
+/// docs/flexible-joints.md. The bounds sit about a millimetre above the measured errors, the spread measured
+/// under rounding-level changes of the estimator's joint torques (the same RNEA reused from the FT pass
+/// instead of recomputed: 5.7 → 6.8 and 14.3 → 13.4 mm on 3·10⁷): the observer's loop amplifies rounding to
+/// about a millimetre.
 #[test]
 fn tsid_flex_walks_on_flexible_hips_where_the_rigid_tsid_falls() {
     for k in [2085.0, 209.0] {
@@ -695,8 +705,8 @@ fn tsid_flex_walks_on_flexible_hips_where_the_rigid_tsid_falls() {
             s.render()
         );
     }
-    for (k, com_rms) in [(2085.0, 0.0075), (417.0, 0.016)] {
-        let name = "walk_flexible_hips_tsid_flex_torque.toml";
+    let name = "walk_flexible_hips_tsid_flex_torque.toml";
+    for (k, com_rms) in [(2085.0, 0.004), (1043.0, 0.005)] {
         let s = run_edited(name, |c| set_hip_stiffness(c, k));
         assert_reached_goal(name, &s, 0.95, 0.05);
         assert!(
@@ -705,4 +715,10 @@ fn tsid_flex_walks_on_flexible_hips_where_the_rigid_tsid_falls() {
             s.render()
         );
     }
+    let softer = run_edited(name, |c| set_hip_stiffness(c, 626.0));
+    assert!(
+        matches!(softer.outcome, Outcome::Fell { .. } | Outcome::Error { .. }),
+        "TSID-Flex, k = 626: {}",
+        softer.render()
+    );
 }
