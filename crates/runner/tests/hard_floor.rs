@@ -1,8 +1,9 @@
-//! Position control on a hard floor (a rubber sole on concrete, k = 3·10⁸ and 10⁹ N/m³; docs/sim.md, "Is the
-//! default floor a hard floor"): with the defaults of 2026-12-06 (the simplified layer at the whole-body rate,
-//! 500 Hz, K_ZMP 2.0, the foot admittance's K_τ 0.01 rad/(N·m·s), T_τ 0.2 s, K_f 3·10⁻⁵ m/(N·s)) the default
-//! walk tracks the raw measured ZMP within issue 15's 20 mm RMS and the DCM within 10 mm on both floors; the
-//! law before (100 Hz, K_ZMP 2.5, K_τ 0.005, T_τ 0.1 s, K_f 10⁻⁴) chatters at 10–50 Hz (39.5 mm RMS at 3·10⁸).
+//! Position control on a hard floor (a rubber sole on concrete, k = 3·10⁸ — the default floor since
+//! 2026-12-06 — and 10⁹ N/m³; docs/sim.md, "Is the default floor a hard floor"): with the defaults of
+//! 2026-12-06 (the simplified layer at the whole-body rate, 500 Hz, K_ZMP 2.0, the foot admittance's K_τ
+//! 0.01 rad/(N·m·s), T_τ 0.2 s, K_f 3·10⁻⁵ m/(N·s)) the default walk tracks the raw measured ZMP within issue
+//! 15's 20 mm RMS and the DCM within 10 mm on both floors; the law before (100 Hz, K_ZMP 2.5, K_τ 0.005,
+//! T_τ 0.1 s, K_f 10⁻⁴) chatters at 10–50 Hz (39.5 mm RMS at 3·10⁸).
 mod common;
 
 use common::Scratch;

@@ -275,8 +275,10 @@ fn the_g1_walks_two_metres_from_stride_init_in_both_modes() {
 
 /// The G1's feet touch the URDF's collision geometry with four corner spheres; `stride init` puts one
 /// simulated contact point on each (grid 2 × 2). With the simulator's default 3 × 3 grid on the same
-/// rectangle the ground's roll stiffness under the sole halves (k L W³/8 against k L W³/4: 138 against
-/// 275 N·m/rad, below the G1's m g h = 220 N·m/rad) and the position walk falls.
+/// rectangle the ground's roll stiffness under the sole halves (k L W³/8 against k L W³/4). The claim is
+/// about the former default ground, k 3·10⁷ N/m³ (an explicit overlay here): there that is 138 against
+/// 275 N·m/rad, below the G1's m g h = 220 N·m/rad, and the position walk falls (measured at 4.90 s). On the
+/// default hard floor (k 3·10⁸, since 2026-12-06: 1 377 N·m/rad) the default grid walks to the goal too.
 #[test]
 fn the_g1_position_walk_needs_the_point_contact_grid() {
     let test = "the_g1_position_walk_needs_the_point_contact_grid";
@@ -298,6 +300,13 @@ length = 0.17
 width = 0.06
 "#;
     let (_, [position, _]) = init_and_load(&dir, &urdf, "g1", default_grid);
+    let end = outcome(&position);
+    assert!(matches!(end, Outcome::GoalReached), "{end:?}");
+    let former_floor = "[sim.contact]\nnormal_stiffness = 3.0e7\nnormal_damping = 3.0e5\n\
+                        tangential_stiffness = 3.0e7\ntangential_damping = 3.0e5\n";
+    let dir = Scratch::new("init-g1-grid-3e7");
+    let (_, [position, _]) =
+        init_and_load(&dir, &urdf, "g1", &format!("{default_grid}{former_floor}"));
     let end = outcome(&position);
     assert!(matches!(end, Outcome::Fell { .. }), "{end:?}");
 }

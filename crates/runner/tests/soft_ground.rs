@@ -1,10 +1,10 @@
 //! Soft ground in closed loop on stride-sim (the bundled humanoid, torque control, today's rigid-contact
 //! TSID): on the ground of [Romualdi 2022, Table 8.1] with k = 1e6 N/m³, b = 1e4 N·s/m³
 //! (`configs/walk_soft_ground_torque.toml`) the walk fails within its first second, while the same scenario
-//! on the default floor (30 times stiffer) reaches its goal: the comparison baseline of docs/soft-ground.md,
-//! asserted so that it cannot change silently. TSID-Compliant stands where the rigid preset falls (stage 1
-//! of docs/soft-ground.md) and walks the first steps (stage 2, its limit asserted). Ground patches reach the
-//! simulator from a scenario file.
+//! on the default floor (a hard floor, 300 times stiffer) reaches its goal: the comparison baseline of
+//! docs/soft-ground.md, asserted so that it cannot change silently. TSID-Compliant stands where the rigid
+//! preset falls (stage 1 of docs/soft-ground.md) and walks the first steps (stage 2, its limit asserted).
+//! Ground patches reach the simulator from a scenario file.
 mod common;
 
 use common::Scratch;
@@ -47,11 +47,20 @@ fn the_rigid_tsid_fails_on_soft_ground_and_walks_on_the_default_floor() {
     );
     assert!(summary.simulated_time < 1.0, "{}", summary.render());
     assert!(summary.distance < 0.1, "{}", summary.render());
-    // The other side: the default floor (3e7 N/m³, 3e5 N·s/m³).
+    // The other side: the default floor (3e8 N/m³, 9.5e5 N·s/m³ since 2026-12-06; it reached its goal on
+    // the former 3e7 / 3e5 too).
+    let hard = stride_sim::ContactConfig::default();
     let floor = soft_walk(
         &s,
         "floor",
-        "[sim.contact]\nnormal_stiffness = 3.0e7\nnormal_damping = 3.0e5\n",
+        &format!(
+            "[sim.contact]\nnormal_stiffness = {:e}\nnormal_damping = {:e}\n\
+             tangential_stiffness = {:e}\ntangential_damping = {:e}\n",
+            hard.normal_stiffness,
+            hard.normal_damping,
+            hard.tangential_stiffness,
+            hard.tangential_damping
+        ),
     );
     let summary = run_scenario(&floor, &options(&s, "floor")).unwrap();
     assert_eq!(

@@ -209,10 +209,10 @@ pub struct GroundPatchConfig {
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
-/// | `normal_stiffness` | N/m³ | 3e7 | `k` (rigid floor: 0.3 mm static sink for the 32.8 kg humanoid on both feet; each 0.20 × 0.09 m sole resists pitching with 2.7 kN·m/rad) |
-/// | `normal_damping` | N·s/m³ | 3e5 | `b` (about critical for the humanoid bouncing on both feet) |
-/// | `tangential_stiffness` | N/m³ | 3e7 | stiffness density of the stick spring |
-/// | `tangential_damping` | N·s/m³ | 3e5 | damping density of the stick spring |
+/// | `normal_stiffness` | N/m³ | 3e8 | `k` (a hard floor under a rubber sole, `k ≈ E/h`: 0.03 mm static sink for the 32.8 kg humanoid on both feet; each 0.20 × 0.09 m sole resists pitching with 27 kN·m/rad; docs/sim.md) |
+/// | `normal_damping` | N·s/m³ | 9.5e5 | `b` (about critical for the humanoid bouncing on both feet) |
+/// | `tangential_stiffness` | N/m³ | 3e8 | stiffness density of the stick spring |
+/// | `tangential_damping` | N·s/m³ | 9.5e5 | damping density of the stick spring |
 /// | `friction_coefficient` | – | 0.8 | Coulomb μ (static = kinetic) |
 /// | `surfaces` | – | `l_sole`, `r_sole` | [`ContactSurfaceConfig`] list |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -235,10 +235,10 @@ pub struct ContactConfig {
 impl Default for ContactConfig {
     fn default() -> Self {
         Self {
-            normal_stiffness: 3.0e7,
-            normal_damping: 3.0e5,
-            tangential_stiffness: 3.0e7,
-            tangential_damping: 3.0e5,
+            normal_stiffness: 3.0e8,
+            normal_damping: 9.5e5,
+            tangential_stiffness: 3.0e8,
+            tangential_damping: 9.5e5,
             friction_coefficient: 0.8,
             surfaces: vec![
                 ContactSurfaceConfig::foot("left", "l_sole", "l_foot_ft_sensor"),

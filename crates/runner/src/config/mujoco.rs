@@ -90,9 +90,9 @@ pub const MIN_GROUND_DAMPING_RATIO: f64 = 0.01;
 /// at its plateau) [MuJoCo 3.17 documentation, "Solver parameters"]: frequency `1/(τ ζ)` and damping
 /// ratio `ζ`. Equal modes: `τ = 1/(ω ζ)`. The time constant is raised to two plant periods (`period` \[s\]),
 /// the floor MuJoCo itself clamps to, and `ζ` to [`MIN_GROUND_DAMPING_RATIO`]. The static sink is set by
-/// `solimp`, not by this. The default floor under the 32.8 kg humanoid (k 3·10⁷, b 3·10⁵, two 0.20 × 0.09 m
-/// soles): ω 181 rad/s, ζ 0.91, τ 6.1 ms, where MuJoCo's own default (τ 20 ms, ζ 1) is a floor 13× less
-/// stiff.
+/// `solimp`, not by this. The default floor under the 32.8 kg humanoid (k 3·10⁸, b 9.5·10⁵, two 0.20 × 0.09 m
+/// soles): ω 574 rad/s, ζ 0.91, τ 1.9 ms, where MuJoCo's own default (τ 20 ms, ζ 1) is a floor 132× less
+/// stiff (the former default, k 3·10⁷, b 3·10⁵: ω 181 rad/s, τ 6.1 ms).
 pub fn ground_solref(
     normal_stiffness: f64,
     normal_damping: f64,
@@ -220,7 +220,18 @@ mod ground_tests {
     }
 
     #[test]
-    fn the_default_floor_under_the_bundled_humanoid_is_a_six_millisecond_contact() {
+    fn the_default_floor_under_the_bundled_humanoid_is_a_two_millisecond_contact() {
+        let ground = stride_sim::ContactConfig::default();
+        let [tau, zeta] = ground_solref(
+            ground.normal_stiffness,
+            ground.normal_damping,
+            2.0 * 0.20 * 0.09,
+            32.8,
+            5e-4,
+        );
+        assert!((tau - 1.918e-3).abs() < 0.001e-3, "{tau}");
+        assert!((zeta - 0.9085).abs() < 1e-4, "{zeta}");
+        // The former default floor (k 3·10⁷, b 3·10⁵): 6.1 ms.
         let [tau, zeta] = ground_solref(3e7, 3e5, 2.0 * 0.20 * 0.09, 32.8, 5e-4);
         assert!((tau - 6.07e-3).abs() < 0.01e-3, "{tau}");
         assert!((zeta - 0.907).abs() < 1e-3, "{zeta}");
