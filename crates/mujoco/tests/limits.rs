@@ -6,6 +6,7 @@
 mod common;
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -34,8 +35,13 @@ fn hinge_urdf() -> PathBuf {
   <link name="r_sole"/><joint name="r_fixed" type="fixed"><parent link="base"/><child link="r_sole"/></joint>
 </robot>"#
     );
-    let path =
-        std::env::temp_dir().join(format!("stride_mujoco_hinge_{}.urdf", std::process::id()));
+    // One file per call: the tests run in parallel threads of one process.
+    static CALLS: AtomicUsize = AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, Ordering::Relaxed);
+    let path = std::env::temp_dir().join(format!(
+        "stride_mujoco_hinge_{}_{call}.urdf",
+        std::process::id()
+    ));
     std::fs::write(&path, text).expect("write URDF");
     path
 }
