@@ -36,6 +36,21 @@ fn random_state(rng: &mut impl Rng) -> SoleState {
     }
 }
 
+/// A random sole acceleration: up to 3 m/s² and 9 rad/s² per axis.
+fn random_acceleration(rng: &mut impl Rng) -> SoleAcceleration {
+    let mut v = |bound: f64| {
+        Vector3::new(
+            rng.random_range(-bound..bound),
+            rng.random_range(-bound..bound),
+            rng.random_range(-bound..bound),
+        )
+    };
+    SoleAcceleration {
+        linear: v(3.0),
+        angular: v(9.0),
+    }
+}
+
 /// `∫_Ω [ρ; (x − o) × ρ] dΩ` with `ρ = k(x̄ − x) − b ẋ` [Romualdi 2022, eq. 8.1.4–8.1.6] by composite Simpson
 /// quadrature over the sole's `(u, v)` with the area element `|e₃ᵀRe₃| du dv` (eq. B.0.10).
 fn integrated_wrench(s: &SoleState, g: &GroundParameters, n: usize) -> Vector6<f64> {
@@ -109,18 +124,7 @@ fn the_wrench_rate_is_the_time_derivative_of_the_wrench() {
     let mut rng = common::rng(82);
     for _ in 0..20 {
         let s = random_state(&mut rng);
-        let acc = SoleAcceleration {
-            linear: Vector3::new(
-                rng.random_range(-3.0..3.0),
-                rng.random_range(-3.0..3.0),
-                rng.random_range(-3.0..3.0),
-            ),
-            angular: Vector3::new(
-                rng.random_range(-9.0..9.0),
-                rng.random_range(-9.0..9.0),
-                rng.random_range(-9.0..9.0),
-            ),
-        };
+        let acc = random_acceleration(&mut rng);
         // The state at time t along the motion with constant accelerations.
         let at = |t: f64| SoleState {
             position: s.position + s.linear_velocity * t + acc.linear * (0.5 * t * t),
@@ -161,18 +165,7 @@ fn the_held_wrench_rate_is_the_wrench_change_over_the_period() {
         s.rest_rotation = s.rotation;
         s.rest_position = s.position + Vector3::new(0.0, 0.0, rng.random_range(0.0..0.02));
         s.angular_velocity *= 0.1;
-        let acc = SoleAcceleration {
-            linear: Vector3::new(
-                rng.random_range(-3.0..3.0),
-                rng.random_range(-3.0..3.0),
-                rng.random_range(-3.0..3.0),
-            ),
-            angular: Vector3::new(
-                rng.random_range(-9.0..9.0),
-                rng.random_range(-9.0..9.0),
-                rng.random_range(-9.0..9.0),
-            ),
-        };
+        let acc = random_acceleration(&mut rng);
         let end = SoleState {
             position: s.position + s.linear_velocity * dt + acc.linear * (0.5 * dt * dt),
             rotation: Rotation3::new(s.angular_velocity * dt + acc.angular * (0.5 * dt * dt))
