@@ -578,6 +578,19 @@ pub(crate) struct TrackingMsg {
     pub(crate) measured_zmp: [f64; 2],
     pub(crate) base_height: f64,
     pub(crate) tilt_deg: f64,
+    /// The same errors from the plant's own model (absent when the plant runs on the controllers' model).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) plant: Option<PlantTrackingMsg>,
+}
+
+/// `/runner/tracking.plant`: the DCM and CoM of the plant's true state computed with the plant's own model
+/// (`[sim.model]`), and their errors against the same references as [`TrackingMsg`]'s.
+#[derive(Serialize)]
+pub(crate) struct PlantTrackingMsg {
+    pub(crate) dcm_error: f64,
+    pub(crate) com_error: f64,
+    pub(crate) com: [f64; 3],
+    pub(crate) dcm: [f64; 2],
 }
 
 /// One joint of `/runner/diagnosis`: time at its effort limit.

@@ -69,6 +69,16 @@ impl ErrorStats {
     }
 }
 
+/// Tracking errors of the plant's own CoM and DCM (the plant's model on its true state), against the same
+/// references as [`RunSummary::dcm_error`] and [`RunSummary::com_error`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct PlantTracking {
+    /// DCM tracking error (planar) \[m\].
+    pub dcm_error: ErrorStats,
+    /// CoM tracking error (3D) \[m\].
+    pub com_error: ErrorStats,
+}
+
 /// Percentiles of a layer's solve times \[s\].
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct SolveTimes {
@@ -127,10 +137,16 @@ pub struct RunSummary {
     pub min_base_height_fraction: f64,
     /// Largest torso tilt \[deg\].
     pub max_tilt_deg: f64,
-    /// DCM tracking error (measured vs planned, planar) \[m\].
+    /// DCM tracking error (measured vs planned, planar) \[m\]: the plant's true state with the
+    /// controllers' model (their view of the truth; the plant's own model in
+    /// [`RunSummary::plant_tracking`]).
     pub dcm_error: ErrorStats,
-    /// CoM tracking error (measured vs simplified-layer reference, 3D) \[m\].
+    /// CoM tracking error (measured vs simplified-layer reference, 3D) \[m\], as `dcm_error`.
     pub com_error: ErrorStats,
+    /// The DCM and CoM tracking errors of the plant's true state with the plant's own model, when it
+    /// differs from the controllers' (`[sim.model]`); `None` otherwise (then `dcm_error` and `com_error`
+    /// are the plant's).
+    pub plant_tracking: Option<PlantTracking>,
     /// ZMP tracking error (measured vs desired) \[m\], over ticks with a measurable ZMP.
     pub zmp_error: ErrorStats,
     /// Feet tracking error (measured vs planned sole positions, worst foot) \[m\].
@@ -187,6 +203,7 @@ impl RunSummary {
             max_tilt_deg: 0.0,
             dcm_error: ErrorStats::default(),
             com_error: ErrorStats::default(),
+            plant_tracking: None,
             zmp_error: ErrorStats::default(),
             feet_error: ErrorStats::default(),
             wbc_solve_time: SolveTimes::default(),
@@ -280,12 +297,19 @@ impl RunSummary {
             self.max_tilt_deg
         );
         let _ = writeln!(s, "  tracking        RMS [mm]   max [mm]");
+        let plant = self
+            .plant_tracking
+            .as_ref()
+            .map(|p| [("DCM plant", &p.dcm_error), ("CoM plant", &p.com_error)]);
         for (name, e) in [
             ("DCM", &self.dcm_error),
             ("CoM", &self.com_error),
             ("ZMP", &self.zmp_error),
             ("feet", &self.feet_error),
-        ] {
+        ]
+        .into_iter()
+        .chain(plant.into_iter().flatten())
+        {
             let _ = writeln!(
                 s,
                 "    {:<10} {:>10.1} {:>10.1}",

@@ -1,13 +1,16 @@
 //! What the scheduler measures while the loop runs: tracking errors, solve times, joint saturation, and
 //! the end checks (fall, goal reached). The figures end up in the [`RunSummary`].
 
+use std::sync::Arc;
+
 use nalgebra::Vector3;
+use stride_model::KinDyn;
 
 use crate::config::{EstimationKind, Goal, Scenario};
 use crate::diagnosis::{loaded_region, loaded_support, FallDiagnosis, COP_BOUND_MARGIN};
 use crate::estimation_summary::EstimationSummary;
 use crate::gait::GaitTracker;
-use crate::records::TrackingMsg;
+use crate::records::{PlantTrackingMsg, TrackingMsg};
 use crate::robot::{Measurement, Robot};
 use stride_planner::geometry::wrap_angle;
 
@@ -34,6 +37,10 @@ pub(crate) struct Tracker {
     initial_base_height: f64,
     start_mid: [f64; 3],
     standstill_since: Option<u64>,
+    /// The plant's own model when its inertial parameters differ from the controllers' (`[sim.model]`):
+    /// the plant's CoM and DCM for the summary's ground-truth tracking errors. `None` when the plant's
+    /// inertias are the controllers' (then [`Stack::truth`] is already the plant's).
+    plant_kd: Option<KinDyn>,
 }
 
 impl Tracker {
@@ -52,6 +59,11 @@ impl Tracker {
         let start_mid = mid_pose(&stack.truth.soles);
         let mass = robot.model().total_mass();
         let mut summary = RunSummary::new(&scenario.config.scenario.name, robot.name());
+        let plant_kd = (robot.model().inertial_parameters() != stack.model().inertial_parameters())
+            .then(|| KinDyn::new(Arc::clone(robot.model())));
+        if plant_kd.is_some() {
+            summary.plant_tracking = Some(Default::default());
+        }
         summary.estimation = EstimationSummary::new(match scenario.config.estimation.kind {
             EstimationKind::Ekf => "ekf",
             EstimationKind::GroundTruth => "ground_truth",
@@ -69,6 +81,7 @@ impl Tracker {
             initial_base_height: m.truth.state.base_pose.translation.z,
             start_mid,
             standstill_since: None,
+            plant_kd,
         }
     }
 
@@ -106,6 +119,22 @@ impl Tracker {
         let so = &stack.simplified_output;
         let com_ref = Vector3::new(so.com_position.x, so.com_position.y, s.com_position.z);
         let com_err = (m.com - com_ref).norm();
+        let plant_tracking = self.plant_kd.as_mut().and_then(|kd| {
+            // The plant's true state and its own model: CoM, CoM velocity and DCM (the plan's ω).
+            kd.set_state(&plant.truth.state).ok()?;
+            let com = kd.com_position();
+            let dcm = com.xy() + kd.com_velocity().xy() / s.omega;
+            Some(PlantTrackingMsg {
+                dcm_error: (dcm - s.dcm_position.xy()).norm(),
+                com_error: (com - com_ref).norm(),
+                com: com.into(),
+                dcm: dcm.into(),
+            })
+        });
+        if let (Some(p), Some(stats)) = (&plant_tracking, &mut self.summary.plant_tracking) {
+            stats.dcm_error.add(p.dcm_error);
+            stats.com_error.add(p.com_error);
+        }
         let zmp_err = m.zmp_from_wrenches.then(|| (m.zmp - so.desired_zmp).norm());
         let foot_err = |k: usize, planned: &nalgebra::Isometry3<f64>| {
             (m.soles[k].translation.vector - planned.translation.vector).norm()
@@ -135,6 +164,7 @@ impl Tracker {
             measured_zmp: m.zmp.into(),
             base_height: m.base_height,
             tilt_deg: m.tilt.to_degrees(),
+            plant: plant_tracking,
         }
     }
 

@@ -91,4 +91,10 @@ fn steady_state_ticks_do_not_allocate() {
          [[sim.pushes]]\nframe = \"chest\"\nstart = 2.0\nduration = 1.0\nwrench = [0.0, 15.0, 0.0, 0.0, 0.0, 0.0]\n",
     );
     assert_steady_on_simulator(&s, &push, extra_seconds, "push response");
+    // a plant with inertias of its own (`[sim.model]`): the plant model's CoM and DCM for the summary
+    let mismatch = s.write(
+        "m.toml",
+        "include = [\"s.toml\"]\n[sim.model]\nmass_scale = 1.1\n",
+    );
+    assert_steady_on_simulator(&s, &mismatch, extra_seconds, "plant model");
 }

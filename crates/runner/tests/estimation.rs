@@ -215,6 +215,66 @@ fn the_plant_model_can_differ_from_the_controllers() {
     }
 }
 
+/// The summary's `DCM plant` and `CoM plant` rows and `/runner/tracking.plant`: absent when the plant's
+/// inertias are the controllers' (also from another copy of the same URDF); with every mass scaled (the
+/// CoM does not move) equal to the controllers'-model rows; with the chest's CoM 2 cm forward, the plant's
+/// CoM is ahead of the controllers' view of it.
+#[test]
+fn the_plant_models_tracking_errors_are_reported_with_a_plant_model() {
+    let s = Scratch::new("plant-tracking");
+    let urdf = common::root().join("models/stride_humanoid.urdf");
+    let run = |name: &str, extra: &str| {
+        let sc = walk(&s, extra);
+        let options = common::log_options(&s, name);
+        let summary = stride_runner::run::run_scenario(&sc, &options).unwrap();
+        let log = read_log(&s.path(&format!("{name}.mcap"))).unwrap();
+        let msg = log.topic("/runner/tracking").last().unwrap();
+        let msg: serde_json::Value = serde_json::from_slice(&msg.data).unwrap();
+        (summary, msg)
+    };
+    let x = |v: &serde_json::Value| v.as_f64().unwrap();
+    let same = format!("[sim.model]\nurdf = {:?}", urdf.display().to_string());
+    for (name, extra) in [("own", ""), ("copy", same.as_str())] {
+        let (summary, msg) = run(name, extra);
+        assert!(summary.plant_tracking.is_none(), "{name}");
+        assert!(
+            !summary.render().contains("DCM plant"),
+            "{}",
+            summary.render()
+        );
+        assert!(msg.get("plant").is_none(), "{name}: {msg}");
+    }
+
+    let (scaled, msg) = run("scaled", &format!("{same}\nmass_scale = 1.1"));
+    let p = scaled.plant_tracking.expect("a plant model of its own");
+    assert!(scaled.render().contains("DCM plant"), "{}", scaled.render());
+    assert!(
+        (p.dcm_error.rms - scaled.dcm_error.rms).abs() < 1e-9,
+        "{p:?}"
+    );
+    assert!(
+        (p.com_error.rms - scaled.com_error.rms).abs() < 1e-9,
+        "{p:?}"
+    );
+    assert!(
+        (x(&msg["plant"]["dcm_error"]) - x(&msg["dcm_error"])).abs() < 1e-9,
+        "{msg}"
+    );
+
+    let (moved, msg) = run(
+        "moved",
+        &format!("{same}\n[sim.model.links.chest]\ncom_offset = [0.02, 0.0, 0.0]"),
+    );
+    let p = moved.plant_tracking.expect("a plant model of its own");
+    let forward = x(&msg["plant"]["com"][0]) - x(&msg["measured_com"][0]);
+    // The chest (5.0 of 32.8 kg) carries its 2 cm offset to the plant's CoM: about 3 mm forward.
+    assert!(
+        (forward - 0.02 * 5.0 / 32.8).abs() < 5e-4,
+        "{forward} m, {msg}"
+    );
+    assert!(p.dcm_error.rms != moved.dcm_error.rms, "{}", moved.render());
+}
+
 #[test]
 fn scenario_checks_of_estimation_and_the_plant_model() {
     let s = Scratch::new("est-config");
