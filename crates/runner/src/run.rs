@@ -126,9 +126,9 @@ pub fn run_scenario(scenario: &Scenario, options: &RunOptions) -> Result<RunSumm
         // The ideal plant has no IMU and no force/torque sensors: the controllers read its truth.
         let mut scenario = scenario.clone();
         scenario.config.estimation.kind = EstimationKind::GroundTruth;
-        return run_with_robot(&scenario, options, robot);
+        return run_with_model(&scenario, options, robot, model);
     }
-    run_with_robot(scenario, options, robot)
+    run_with_model(scenario, options, robot, model)
 }
 
 /// The state the run starts from, as the controllers know it: the robot stands on flat ground at its
@@ -163,8 +163,18 @@ pub fn run_with_robot(
     options: &RunOptions,
     robot: Box<dyn Robot>,
 ) -> Result<RunSummary, RunError> {
+    run_with_model(scenario, options, robot, load_model(scenario)?)
+}
+
+/// [`run_with_robot`] with the controllers' model already loaded (`load_model(scenario)`): `run_scenario`
+/// loaded it to build the plant, and loading it again would parse the URDF a second time.
+fn run_with_model(
+    scenario: &Scenario,
+    options: &RunOptions,
+    robot: Box<dyn Robot>,
+    model: Arc<stride_model::Model>,
+) -> Result<RunSummary, RunError> {
     let c = &scenario.config;
-    let model = load_model(scenario)?;
     check_same_joints(scenario, &model, robot.model())?;
     let duration = options.duration.unwrap_or(c.scenario.duration);
     let schedule = Schedule::new(c, duration);
