@@ -114,8 +114,8 @@ fn default_scenario_walks_two_metres_to_its_goal() {
     assert!((s.real_time_factor - rtf).abs() <= 1e-9 * rtf);
     assert_estimation_targets("walk_straight", &s);
     assert_dcm_within_10_mm("walk_straight", &s);
-    // Issue 15's ZMP target in position control at the default speed (measured 18.8 mm RMS; docs/gait.md,
-    // "Tracking at the default speed").
+    // Issue 15's ZMP target in position control at the default speed (measured 15.7 mm RMS on the hard
+    // default floor, k 3·10⁸ N/m³; 18.8 on the former 3·10⁷; docs/gait.md, "Tracking at the default speed").
     assert!(
         s.zmp_error.rms <= 0.020,
         "walk_straight: ZMP error {:.1} mm RMS",
@@ -363,10 +363,11 @@ fn icub_walks_fast_to_its_goal_in_both_modes() {
     }
 }
 
-/// The speed targets of issue 15 as far as they are met (docs/gait.md): the 4 m walk of 0.22 m steps every
-/// 0.5–0.8 s reaches its goal at a steady forward speed ≥ 0.33 m/s in position control (measured 0.334) and
-/// ≥ 0.30 m/s in torque control (the issue's target; measured 0.362 with the scenario's soft CoM task, no
-/// relaxed TSID solve; docs/mujoco.md, "Torque walks that fell on MuJoCo").
+/// The speed targets of issue 15 on the fast walks' own files (docs/gait.md, "Commanded against steady
+/// speed"): the 4 m walk of 0.22 m steps every 0.5–0.8 s reaches its goal at a steady forward speed ≥ 0.33 m/s
+/// in position control (measured 0.350 on the hard default floor, k 3·10⁸ N/m³) and ≥ 0.30 m/s in torque
+/// control (the issue's target; measured 0.363 with the scenario's soft CoM task; docs/mujoco.md, "Torque
+/// walks that fell on MuJoCo"). The position target, 0.40 m/s, is `walk_fast_upright`'s (below).
 #[test]
 fn the_fast_walks_reach_their_goals_at_speed() {
     for (name, min_speed) in [("walk_fast.toml", 0.33), ("walk_fast_torque.toml", 0.30)] {
@@ -540,7 +541,8 @@ fn position_control_walks_at_0_4_m_per_s_with_the_chest_upright() {
 
 /// Turning fast in place, both modes (issue 15's turn; docs/gait.md, "Turning"): 180° reached and standing
 /// still within 9.5 s of simulated time, the 1 s initial and final double supports and the 0.5 s standstill
-/// included (measured 8.7 / 8.8 s; 34.7 / 34.5°/s between 10 % and 90 % of the turn).
+/// included (measured 9.02 / 8.85 s on the hard default floor, k 3·10⁸ N/m³, 34.6 / 34.5°/s between 10 % and
+/// 90 % of the turn, `tools/scenarios/turn-rate.py`; 8.7 / 8.8 s and 34.7 / 34.5°/s on the former 3·10⁷).
 #[test]
 fn the_fast_turns_reach_their_heading_within_nine_and_a_half_seconds() {
     for name in ["turn_fast.toml", "turn_fast_torque.toml"] {
@@ -557,9 +559,10 @@ fn the_fast_turns_reach_their_heading_within_nine_and_a_half_seconds() {
 }
 
 /// Issue 15's curve: a 1 m radius half circle at ≥ 0.25 m/s steady forward speed in position control,
-/// goal pose reached (measured 0.272 m/s, 15.5 s; docs/gait.md, "Curves"). The other side: with the
-/// planner's default yaw per step (0.26 rad) the same curve is walked below 0.25 m/s (measured 0.19): the
-/// yaw-rate limit, not the legs, bounds the speed on a 1 m curve.
+/// goal pose reached (measured 0.273 m/s on the hard default floor, k 3·10⁸ N/m³; 0.272 on the former 3·10⁷;
+/// docs/gait.md, "Curves"). The other side: with the planner's default yaw per step (0.26 rad) the same curve
+/// is walked below 0.25 m/s (measured 0.201; 0.19 on the former floor): the yaw-rate limit, not the legs,
+/// bounds the speed on a 1 m curve.
 #[test]
 fn the_fast_curve_keeps_a_quarter_metre_per_second_only_with_a_larger_yaw_per_step() {
     let name = "walk_curve_fast.toml";
@@ -575,9 +578,10 @@ fn the_fast_curve_keeps_a_quarter_metre_per_second_only_with_a_larger_yaw_per_st
 
 /// Issue 15's curve in torque control: the 1 m radius half circle at ≥ 0.25 m/s steady forward speed, goal
 /// pose reached, with the TSID's CoM task soft at twice the upright tasks' weight (measured 0.270 m/s,
-/// goal 7 mm away, no relaxed QP solve; docs/gait.md, "Curves"). The other side: with the walking preset's
-/// hard CoM task and the encoders' joint velocities (as the scenario was measured) the same curve falls
-/// (measured at 12.2 s, torso roll, 97 relaxed solves); with the scenario's joint velocity filter the hard
+/// goal 9 mm away, no relaxed QP solve on the hard default floor, k 3·10⁸ N/m³; 7 mm on the former 3·10⁷;
+/// docs/gait.md, "Curves"). The other side: with the walking preset's hard CoM task and the encoders' joint
+/// velocities (as the scenario was measured) the same curve falls (measured on the former floor at 12.2 s,
+/// torso roll, 97 relaxed solves); with the scenario's joint velocity filter the hard
 /// task reaches the goal too, but only through relaxed solves (measured 20; docs/wbc.md, "Joint
 /// velocities").
 #[test]

@@ -98,6 +98,7 @@ impl EstimatorConfig {
 /// | `foot_tilt` | – | false | measure the sole's roll and pitch too, not only its heading. Off: roll and pitch are observable from gravity already, and a sole that rocks on its compliant contact or peels off before the break is detected pulls the IMU tilt with it (walk_straight: tilt error 0.44° RMS with it, 0.18° without; walk_straight_torque falls with it) |
 /// | `contact_foot_angular_velocity_noise` | rad/s/√Hz, sole frame | `[7e-3, 7.5e-3, 4e-3]` | how much a sole in contact may turn (rocking on a compliant sole, yaw slip); bipedal-locomotion-framework's `contact_foot_angular_velocity_noise_std_dev` (iCub Gazebo) |
 /// | `kinematics_orientation_noise` | rad | 1e-3 | σ of the sole orientation measured by forward kinematics, isotropic: six joints in series, each quantised by a 12-bit encoder (1.5e-3 rad steps, σ = 1.5e-3/√12 = 4.4e-4 rad), give √6 × 4.4e-4 ≈ 1.1e-3 rad (bipedal-locomotion-framework uses 1e-6 rad, i.e. exact kinematics) |
+/// | `sole_spin_threshold` | rad | 0 | a sole in contact whose heading, as the gyroscope and the kinematics see it, has turned by more than this since touch-down is spinning on the floor: until it lifts, its estimated orientation turns with what they see, so the gyroscope carries the heading ([`crate::sole_spin::SoleSpin`]); 0 = off (the sole's heading is held from touch-down) |
 /// | `flat_ground` | – | true | a foot in contact is at the ground height (the soles' height in the initial state): a pseudo-measurement of the contact point's z that bounds the height drift |
 /// | `ground_height_noise` | m | 2e-3 | σ of that pseudo-measurement (floor unevenness, sole compliance) |
 /// | `bias_estimation` | – | true | estimate the gyro and accelerometer biases (false: they stay at `initial_*_bias`) |
@@ -127,6 +128,8 @@ pub struct EkfConfig {
     pub contact_foot_angular_velocity_noise: [f64; 3],
     /// σ of a sole orientation from forward kinematics \[rad\].
     pub kinematics_orientation_noise: f64,
+    /// Turn from touch-down past which a stance sole is spinning \[rad\] (0: off).
+    pub sole_spin_threshold: f64,
     /// Use the flat-ground pseudo-measurement on feet in contact.
     pub flat_ground: bool,
     /// σ of the flat-ground pseudo-measurement \[m\].
@@ -154,6 +157,7 @@ impl Default for EkfConfig {
             foot_tilt: false,
             contact_foot_angular_velocity_noise: [7e-3, 7.5e-3, 4e-3],
             kinematics_orientation_noise: 1e-3,
+            sole_spin_threshold: 0.0,
             flat_ground: true,
             ground_height_noise: 2e-3,
             bias_estimation: true,
@@ -212,6 +216,7 @@ impl EkfConfig {
             self.kinematics_orientation_noise,
         )?;
         check_positive("ekf.ground_height_noise", self.ground_height_noise)?;
+        check_non_negative("ekf.sole_spin_threshold", self.sole_spin_threshold)?;
         self.prior.validate()
     }
 }

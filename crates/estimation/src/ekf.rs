@@ -22,6 +22,7 @@ use stride_model::spatial::skew;
 
 use crate::config::EkfConfig;
 use crate::error::{EstimatorError, Result};
+use crate::sole_spin::SoleSpin;
 
 /// Dimension of the error state.
 pub const DIM: usize = 27;
@@ -61,6 +62,10 @@ pub struct InvariantEkf {
     foot_orientation: bool,
     foot_tilt: bool,
     bias_estimation: bool,
+    /// The base heading integrated from the gyroscope alone \[rad\] (never corrected; only its changes
+    /// over a stance are used, by [`SoleSpin`]).
+    gyro_heading: f64,
+    sole_spin: [SoleSpin; 2],
 }
 
 /// The mean of the filter's state.
@@ -130,6 +135,11 @@ fn so3_log(r: &Matrix3<f64>) -> Vector3<f64> {
     vee * scale
 }
 
+/// The heading of a rotation \[rad\]: the angle of its x axis projected on the world's horizontal plane.
+fn heading(r: &Matrix3<f64>) -> f64 {
+    r[(1, 0)].atan2(r[(0, 0)])
+}
+
 /// Re-orthonormalises a rotation matrix that may be far from orthonormal (the initial state): the rotation
 /// nearest to `r`, by nalgebra's iteration (`Rotation3::from_matrix_eps`) to machine precision.
 fn orthonormalize(r: &Matrix3<f64>) -> Matrix3<f64> {
@@ -172,6 +182,8 @@ impl InvariantEkf {
             foot_orientation: config.foot_orientation,
             foot_tilt: config.foot_tilt,
             bias_estimation: config.bias_estimation,
+            gyro_heading: 0.0,
+            sole_spin: [SoleSpin::new(config.sole_spin_threshold); 2],
         }
     }
 
@@ -213,6 +225,7 @@ impl InvariantEkf {
         self.cov = cov;
         for foot in 0..2 {
             self.copy_base_error_to_foot(foot);
+            self.sole_spin[foot].lift();
         }
     }
 
@@ -286,6 +299,7 @@ impl InvariantEkf {
     /// covariance as it is: the pre-integration of the samples between two full ticks, whose covariance
     /// [`Self::propagate_over`] then propagates at once.
     pub fn propagate_mean(&mut self, gyro: &Vector3<f64>, acc: &Vector3<f64>, dt: f64) {
+        self.gyro_heading += (self.rot * (gyro - self.gyro_bias)).z * dt;
         let predicted = self.predicted_state(gyro, acc, dt);
         self.rot = predicted.rotation;
         self.vel = predicted.velocity;
@@ -438,6 +452,13 @@ impl InvariantEkf {
         self.feet[foot] = self.pos + self.rot * h;
         self.foot_rot[foot] = self.rot * r_h;
         self.copy_base_error_to_foot(foot);
+        self.sole_spin[foot].lift();
+    }
+
+    /// Whether the sole of foot `foot` has been found spinning on the floor since its touch-down
+    /// ([`SoleSpin`], option `sole_spin_threshold`).
+    pub fn sole_spinning(&self, foot: usize) -> bool {
+        self.sole_spin[foot].spinning()
     }
 
     fn copy_base_error_to_foot(&mut self, foot: usize) {
@@ -475,7 +496,9 @@ impl InvariantEkf {
     ///   `H = [−I … I at ψ …]`, constant like the position's; noise `kinematics_orientation_noise² I`.
     ///   As in DILIGENT-KIO [Ramadoss 2021] the sole's orientation is a state with its own uncertainty
     ///   (`ψ`, growing by `contact_foot_angular_velocity_noise` while in contact), so the repeated use of
-    ///   one touchdown reference does not make the filter overconfident.
+    ///   one touchdown reference does not make the filter overconfident. A sole found spinning on the
+    ///   floor (`sole_spin_threshold`, [`SoleSpin`]) first has `F̂` turned by what the gyroscope and the
+    ///   kinematics saw it turn, so the gyroscope carries the heading while it spins.
     ///
     /// By default (`foot_tilt` false) only the heading row of the orientation part is used (the world-z
     /// row of the residual and of `H`): roll and pitch come from gravity, and a sole that rocks on a
@@ -488,6 +511,13 @@ impl InvariantEkf {
             let noise = Matrix3::identity() * self.kin_var;
             let jac = [0, 1, 2].map(pos_row);
             return self.correct(&jac, &residual, &noise, "foot kinematics");
+        }
+        // A sole spinning on the floor turns `F̂` by what the gyroscope and the kinematics see (`SoleSpin`).
+        let seen = self.gyro_heading + heading(&(self.rot * r_h)) - heading(&self.rot);
+        let spin = self.sole_spin[foot].step(seen);
+        if spin != 0.0 {
+            let (rz, _) = so3_exp_and_jacobian(&Vector3::new(0.0, 0.0, spin));
+            self.foot_rot[foot] = rz * self.foot_rot[foot];
         }
         let rot_residual = so3_log(&(self.rot * r_h * self.foot_rot[foot].transpose()));
         let rot_row = |k: usize| [(PHI + k, -1.0), (FOOT_ROT[foot] + k, 1.0), (0, 0.0)];
@@ -805,6 +835,70 @@ mod tests {
             "covariances differ by {diff}"
         );
         assert_symmetric(&preintegrated.cov);
+    }
+
+    /// A robot standing still on its left foot, the IMU level at the origin, for `n` samples of 2 ms:
+    /// `base_yaw_rate` is what the gyroscope reads about the vertical and `sole_spin_rate` how fast the sole
+    /// turns on the floor (both rad/s). Returns the estimated heading and whether the sole was found spinning.
+    fn stand_on_a_turning_sole(
+        threshold: f64,
+        base_yaw_rate: f64,
+        sole_spin_rate: f64,
+        n: usize,
+    ) -> (f64, bool) {
+        let config = EkfConfig {
+            sole_spin_threshold: threshold,
+            ..EkfConfig::default()
+        };
+        let g = Vector3::new(0.0, 0.0, -9.81);
+        let mut ekf = InvariantEkf::new(&config, g);
+        let h = [Vector3::new(0.0, 0.1, -0.6), Vector3::new(0.0, -0.1, -0.6)];
+        ekf.initialize(
+            &config,
+            Matrix3::identity(),
+            Vector3::zeros(),
+            Vector3::new(0.0, 0.0, 0.6),
+            [Vector3::new(0.0, 0.1, 0.0), Vector3::new(0.0, -0.1, 0.0)],
+            [Matrix3::identity(); 2],
+        );
+        let rz = |a: f64| so3_exp_and_jacobian(&Vector3::new(0.0, 0.0, a)).0;
+        let (gyro, acc, dt) = (Vector3::new(0.0, 0.0, base_yaw_rate), -g, 2e-3);
+        for k in 1..=n {
+            let t = k as f64 * dt;
+            // The sole in the IMU frame: its own turn on the floor less the base's.
+            let r_h = [
+                rz((sole_spin_rate - base_yaw_rate) * t),
+                Matrix3::identity(),
+            ];
+            let base = rz(base_yaw_rate * t);
+            let h_imu = [base.transpose() * h[0], base.transpose() * h[1]];
+            ekf.propagate(&gyro, &acc, dt, [true, false], &r_h);
+            ekf.update_foot(0, &h_imu[0], &r_h[0]).expect("update");
+            ekf.reset_foot(1, &h_imu[1], &r_h[1]);
+        }
+        (heading(&ekf.state().rotation), ekf.sole_spinning(0))
+    }
+
+    /// The sole spin detector on synthetic data (docs/estimation.md, "A stance sole spinning on the
+    /// floor"): a sole that turns 0.1 rad in 0.2 s under a still base turns the estimated heading with it
+    /// when the sole's heading is held from touch-down (threshold 0), and leaves it within 1 mrad with the
+    /// detector on; a base that turns on a still sole is followed in both cases, and the still sole is not
+    /// taken for a spinning one.
+    #[test]
+    fn a_spinning_stance_sole_does_not_turn_the_heading_with_the_detector() {
+        let (held, _) = stand_on_a_turning_sole(0.0, 0.0, 0.5, 100);
+        assert!(held < -0.05, "held sole heading: estimated heading {held}");
+        let (detected, spinning) = stand_on_a_turning_sole(0.005, 0.0, 0.5, 100);
+        assert!(spinning);
+        assert!(detected.abs() < 1e-3, "estimated heading {detected}");
+        for threshold in [0.0, 0.005] {
+            let (turned, spinning) = stand_on_a_turning_sole(threshold, 0.5, 0.0, 100);
+            assert!(!spinning, "threshold {threshold}");
+            assert!(
+                (turned - 0.1).abs() < 1e-3,
+                "threshold {threshold}: {turned}"
+            );
+        }
     }
 
     #[test]

@@ -18,6 +18,7 @@ pub mod identification;
 mod io;
 mod joint_velocity;
 mod schmitt;
+pub mod sole_spin;
 
 pub use config::{ContactConfig, EkfConfig, EkfPrior, EstimatorConfig, FtOffsetConfig};
 pub use ekf::{EkfState, InvariantEkf};
