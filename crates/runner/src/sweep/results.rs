@@ -12,7 +12,7 @@ use serde::Serialize;
 use crate::run::{Outcome, RunSummary};
 
 /// The columns after the axes, in order.
-pub const METRIC_COLUMNS: [&str; 22] = [
+pub const METRIC_COLUMNS: [&str; 24] = [
     "outcome",
     "distance",
     "goal_distance",
@@ -35,6 +35,8 @@ pub const METRIC_COLUMNS: [&str; 22] = [
     "com_rms",
     "cop_bound_time",
     "push_holds",
+    "dcm_rms_plant",
+    "com_rms_plant",
 ];
 
 /// One cell.
@@ -163,6 +165,8 @@ pub fn metric_cells(summary: Option<&RunSummary>, wall_s: f64) -> Vec<Cell> {
         Cell::Float(s.com_error.rms),
         Cell::Float(s.diagnosis.cop_bound.at_edge),
         Cell::Int(i64::try_from(s.push_holds.0).unwrap_or(i64::MAX)),
+        Cell::opt(s.plant_tracking.as_ref().map(|p| p.dcm_error.rms)),
+        Cell::opt(s.plant_tracking.as_ref().map(|p| p.com_error.rms)),
     ]
 }
 
@@ -365,4 +369,41 @@ pub fn outcome_table(r: &Results, axes: usize) -> String {
         total[3]
     );
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::summary::PlantTracking;
+
+    fn column(name: &str) -> usize {
+        METRIC_COLUMNS
+            .iter()
+            .position(|c| *c == name)
+            .unwrap_or_else(|| panic!("no column {name}"))
+    }
+
+    #[test]
+    fn the_plant_columns_are_empty_without_a_plant_model_and_its_errors_with_one() {
+        let mut summary = RunSummary::new("walk", "simulator");
+        let cells = metric_cells(Some(&summary), 1.0);
+        assert_eq!(cells.len(), METRIC_COLUMNS.len());
+        assert_eq!(cells[column("dcm_rms_plant")], Cell::Empty);
+        assert_eq!(cells[column("com_rms_plant")], Cell::Empty);
+
+        let mut plant = PlantTracking::default();
+        plant.dcm_error.add(0.003);
+        plant.dcm_error.add(0.004);
+        plant.com_error.add(0.002);
+        summary.plant_tracking = Some(plant);
+        let cells = metric_cells(Some(&summary), 1.0);
+        // RMS of 3 and 4 mm: √((9 + 16) / 2) mm.
+        assert_eq!(
+            cells[column("dcm_rms_plant")],
+            Cell::Float((12.5e-6_f64).sqrt())
+        );
+        assert_eq!(cells[column("com_rms_plant")], Cell::Float(0.002));
+        // The controllers' view stays in `dcm_rms`.
+        assert_eq!(cells[column("dcm_rms")], Cell::Float(0.0));
+    }
 }
