@@ -29,11 +29,13 @@
 //! assert_eq!(*block.step(&1.0).unwrap(), 0.01);
 //! ```
 
+mod angle;
 mod filter;
 mod foot;
 mod polygon;
 mod time;
 
+pub use angle::wrap_angle;
 pub use filter::{low_pass_gain, FirstOrderLowPass};
 pub use foot::Foot;
 pub use polygon::{

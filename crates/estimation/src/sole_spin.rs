@@ -12,18 +12,11 @@
 //! while the sole turns. The part before detection (at most `threshold`) is handed over at detection, and
 //! the correction then pulls back what the base's heading took from it.
 
-use std::f64::consts::PI;
+use stride_block::wrap_angle;
 
 /// `a − b` wrapped to `(−π, π]` \[rad\].
 fn angle_difference(a: f64, b: f64) -> f64 {
-    let d = (a - b) % (2.0 * PI);
-    if d > PI {
-        d - 2.0 * PI
-    } else if d <= -PI {
-        d + 2.0 * PI
-    } else {
-        d
-    }
+    wrap_angle(a - b)
 }
 
 /// The spin detector of one sole (see the module documentation). A sole is in one of three states: in
@@ -88,6 +81,7 @@ impl SoleSpin {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     #[test]
     fn a_still_sole_hands_nothing_over() {

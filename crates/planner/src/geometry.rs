@@ -4,17 +4,7 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// Wraps an angle to (−π, π].
-pub fn wrap_angle(a: f64) -> f64 {
-    let two_pi = 2.0 * std::f64::consts::PI;
-    let mut r = a % two_pi;
-    if r > std::f64::consts::PI {
-        r -= two_pi;
-    } else if r <= -std::f64::consts::PI {
-        r += two_pi;
-    }
-    r
-}
+pub use stride_block::wrap_angle;
 
 /// Yaw (rotation about world z) of a 3D orientation, from its x axis projected on the ground.
 pub fn yaw_of(rotation: &UnitQuaternion<f64>) -> f64 {

@@ -13,8 +13,9 @@
 //! The default stays `hold`: the scenarios were tuned with it. With `interpolate` everywhere (stride-sim,
 //! defaults of 2026-12-05) the walks track the DCM as before within 2 mm RMS and do 20–25 % less positive
 //! actuator work, but `walk_fast_icub` falls while stopping and `walk_fast`'s 0.30 m steps fall (their
-//! margins were tuned on the staircase); `walk_fast_upright` sets `interpolate` (docs/mujoco.md, "The fast
-//! position walks").
+//! margins were tuned on the staircase, 2026-12-05). `walk_fast_upright` sets `interpolate` (docs/mujoco.md,
+//! "The fast position walks"), and so does `walk_fast_icub` since its retuning on the URDF's sole boxes
+//! (docs/gait.md, "On the URDF's sole").
 
 use serde::{Deserialize, Serialize};
 

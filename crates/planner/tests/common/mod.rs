@@ -38,16 +38,6 @@ pub fn yaw_of(h: &Isometry3<f64>) -> f64 {
     x.y.atan2(x.x)
 }
 
-pub fn wrap(a: f64) -> f64 {
-    let mut r = a % (2.0 * std::f64::consts::PI);
-    if r > std::f64::consts::PI {
-        r -= 2.0 * std::f64::consts::PI
-    } else if r <= -std::f64::consts::PI {
-        r += 2.0 * std::f64::consts::PI
-    }
-    r
-}
-
 /// Left sole position in the right sole frame (planar) and relative yaw.
 pub fn left_in_right(l: &Isometry3<f64>, r: &Isometry3<f64>) -> (Vector2<f64>, f64) {
     let ry = yaw_of(r);
@@ -55,7 +45,7 @@ pub fn left_in_right(l: &Isometry3<f64>, r: &Isometry3<f64>) -> (Vector2<f64>, f
     let (s, c) = ry.sin_cos();
     (
         Vector2::new(c * d.x + s * d.y, -s * d.x + c * d.y),
-        wrap(yaw_of(l) - ry),
+        stride_planner::geometry::wrap_angle(yaw_of(l) - ry),
     )
 }
 
