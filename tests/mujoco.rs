@@ -471,10 +471,19 @@ fn the_fast_walk_reaches_its_goal_at_0_4_m_per_s_on_mujoco_with_every_sensor_see
         let mut seeded = scenario.clone();
         seeded.config.sim.sensors.seed = seed;
         let s = run_scenario_on_mujoco(&seeded);
-        assert_eq!(s.outcome, Outcome::GoalReached, "seed {seed}: {}", s.outcome);
+        assert_eq!(
+            s.outcome,
+            Outcome::GoalReached,
+            "seed {seed}: {}",
+            s.outcome
+        );
         let speed = s.gait.steady_speed.expect("enough touch-downs");
         assert!(speed >= 0.40, "seed {seed}: steady speed {speed} m/s");
-        assert!(s.max_tilt_deg < 10.0, "seed {seed}: tilt {}°", s.max_tilt_deg);
+        assert!(
+            s.max_tilt_deg < 10.0,
+            "seed {seed}: tilt {}°",
+            s.max_tilt_deg
+        );
     }
     let mut unbraked = scenario;
     unbraked.config.sim.sensors.seed = 2;
@@ -500,7 +509,8 @@ fn the_fast_walk_reaches_its_goal_at_0_4_m_per_s_on_mujoco_with_every_sensor_see
 #[test]
 fn the_fast_walk_reaches_its_goal_on_mujoco_only_with_the_servo_limit_on_the_applied_force() {
     use stride_runner::config::mujoco::MujocoServoSaturation;
-    let mut scenario = Scenario::load(&config_path("layers/walk_fast_base.toml")).expect("scenario");
+    let mut scenario =
+        Scenario::load(&config_path("layers/walk_fast_base.toml")).expect("scenario");
     scenario.config.sim.sensors.seed = 3;
     assert_eq!(
         scenario.config.mujoco.servo_saturation,
