@@ -4,7 +4,7 @@
 # tables of docs/foot-admittance.md.
 #
 #   cargo build --release
-#   FLOORS="default 3e8:9.5e5 1e9:1.7e6" bash tools/scenarios/foot-admittance.sh walk_straight walk_fast
+#   FLOORS="default 3e8:9.5e5 1e9:1.7e6" bash tools/scenarios/foot-admittance.sh walk_straight layers/walk_fast_base
 #
 # FLOORS: `default` (the scenario's own ground) or `k:b`, a floor of normal stiffness k [N/m³] and damping
 # b [N·s/m³] (the tangential stick law set to the same k and b, as docs/sim.md's stiff-floor table); default
@@ -26,7 +26,7 @@ echo "|---|---|---|---|---|---|---|---|"
 for s in "$@"; do
     for floor in "${floors[@]}"; do
         for admittance in ${ADMITTANCE:-off on}; do
-            name="$s-${floor/:/-}-$admittance"
+            name="${s//\//_}-${floor/:/-}-$admittance"   # layers/x -> layers_x
             overlay="$out/$name.toml"
             includes="\"$root/configs/$s.toml\""
             if [ "$admittance" = on ]; then
