@@ -3,7 +3,9 @@
 //! (`configs/walk_soft_ground_torque.toml`) the walk fails within its first second, while the same scenario
 //! on the default floor (a hard floor, 300 times stiffer) reaches its goal: the comparison baseline of
 //! docs/soft-ground.md, asserted so that it cannot change silently. TSID-Compliant stands where the rigid
-//! preset falls (stage 1 of docs/soft-ground.md) and walks the first steps (stage 2, its limit asserted).
+//! preset falls (stage 1 of docs/soft-ground.md), walks the first steps (stage 2, its limit asserted) and,
+//! with the planned motion's angular momentum reference and soft momentum rows, the whole walk on a low-damping
+//! ground (stage 3).
 //! Ground patches reach the simulator from a scenario file.
 mod common;
 
@@ -179,6 +181,83 @@ fn the_held_contact_dynamics_outlast_the_instantaneous_ones_on_low_damping() {
     );
     assert!(held.simulated_time > 1.3, "{}", held.render());
     assert!(instant.simulated_time < 0.9, "{}", instant.render());
+}
+
+/// Stage 3 of docs/soft-ground.md: `configs/walk_soft_ground_compliant_planned_torque.toml` (the angular
+/// momentum reference of the planned feet motion, `reference_frames`; the CoM and angular momentum rows soft
+/// at 5e5; `k_h` = 40) walks the 1.5 m to its goal at a steady speed ≥ 0.15 m/s with the CoM error < 1 cm
+/// RMS on its own ground (k = 1e6 N/m³, b = 1e3 N·s/m³; measured 0.162 m/s, 3.3 mm) and on the stiffest one
+/// of Table 8.1 (k = 2e6, b = 1e4; 0.163 m/s, 5.1 mm). The other side, on the first ground: the same file
+/// without `reference_frames` (zero reference: measured 5.85 s, 0.72 m), the stage-2b scenario (1.88 s) and
+/// the rigid TSID (< 0.15 m) fall; on the second: with `k_h` = 20 (measured 2.68 s, 0.24 m) and the rigid
+/// TSID it falls.
+#[test]
+fn the_planned_momentum_reference_walks_to_the_goal_where_the_rigid_tsid_falls() {
+    let s = Scratch::new("soft_ground_planned_momentum");
+    let walk = common::root().join("configs/walk_soft_ground_compliant_planned_torque.toml");
+    let include = format!("include = [{:?}]\n", walk.display().to_string());
+    let stiff = format!(
+        "{include}[sim.contact]\nnormal_stiffness = 2e6\nnormal_damping = 1e4\n\
+         [wbc.tsid.compliant]\nground_stiffness = 2e6\nground_damping = 1e4\n"
+    );
+    for (name, text) in [
+        ("planned", include.clone()),
+        ("planned_stiff", stiff.clone()),
+    ] {
+        let scenario = Scenario::load(&s.write(&format!("{name}.toml"), &text)).unwrap();
+        let summary = run_scenario(&scenario, &options(&s, name)).unwrap();
+        assert_eq!(
+            summary.outcome,
+            Outcome::GoalReached,
+            "{name}: {}",
+            summary.render()
+        );
+        assert!(summary.distance > 1.49, "{name}: {}", summary.render());
+        let speed = summary.gait.steady_speed.expect("a steady speed");
+        assert!(speed >= 0.15, "{name}: {}", summary.render());
+        assert!(summary.com_error.rms < 0.01, "{name}: {}", summary.render());
+    }
+    let own = Scenario::load(&walk).unwrap();
+    assert_eq!(own.config.sim.contact.normal_stiffness, 1e6);
+    assert_eq!(own.config.sim.contact.normal_damping, 1e3);
+    // the same file, its angular momentum task without `reference_frames` (the list repeated)
+    let zero_reference = std::fs::read_to_string(&walk)
+        .unwrap()
+        .lines()
+        .skip_while(|l| !l.starts_with("[[wbc.tsid.tasks]]"))
+        .filter(|l| !l.contains("reference_frames") && !l.contains("{ frame") && *l != "]")
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(
+        zero_reference.contains("angular_momentum") && !zero_reference.contains("frame = \"l_sole")
+    );
+    assert_falls(
+        &s,
+        "zero_reference",
+        &format!("{include}{zero_reference}\n"),
+    );
+    let stage_2b = common::root().join("configs/walk_soft_ground_compliant_torque.toml");
+    assert_falls(
+        &s,
+        "stage_2b",
+        &format!(
+            "include = [{:?}]\n[sim.contact]\nnormal_damping = 1e3\n[wbc.tsid.compliant]\nground_damping = 1e3\n",
+            stage_2b.display().to_string()
+        ),
+    );
+    let rigid = "[wbc.tsid]\ncontact_model = \"rigid\"\n";
+    for (name, text) in [
+        ("rigid", format!("{include}{rigid}")),
+        ("rigid_stiff", format!("{stiff}{rigid}")),
+    ] {
+        let summary = assert_falls(&s, name, &text);
+        assert!(summary.distance < 0.15, "{name}: {}", summary.render());
+    }
+    assert_falls(
+        &s,
+        "stiff_kh20",
+        &format!("{stiff}momentum_rate_gain = 20.0\n"),
+    );
 }
 
 /// Runs the scenario file `text` (written as `name.toml`), asserts that the robot falls (or the run

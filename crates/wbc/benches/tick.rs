@@ -271,6 +271,7 @@ fn bench_tsid_compliant(c: &mut Criterion) {
             name: "angular_momentum".into(),
             kp: 10.0,
             reference_joints: Vec::new(),
+            reference_frames: Vec::new(),
             priority: stride_wbc::Priority::Hard,
             weight: None,
         },

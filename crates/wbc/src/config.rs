@@ -198,6 +198,7 @@ pub struct ComTaskConfig {
 /// | `name` | – | required |
 /// | `kp` | 1/s (TSID) | 0 |
 /// | `reference_joints` | joint names (TSID) | empty: the reference is `input.angular_momentum` |
+/// | `reference_frames` | `{ frame, reference }` list (TSID) | empty |
 /// | `priority` | – | `soft` |
 /// | `weight` | – | 1 (soft only: an error on a hard task) |
 ///
@@ -207,6 +208,13 @@ pub struct ComTaskConfig {
 /// Listing the legs asks the ground to carry the momentum of the legs' motion, where a zero reference makes
 /// the torso, pelvis and arms counter-rotate them (docs/soft-ground.md); it stands in for the momentum of
 /// the planned whole-body motion `h^ref` of [Romualdi 2022, eq. 8.2.4].
+///
+/// `reference_frames` (TSID only): the joints between the base and each listed frame instead move so that
+/// the frame follows its reference's velocity (the planned one) with the base translating at its measured
+/// velocity and not rotating, `ṡ_chain = J_chainᵀ (J_chain J_chainᵀ + λ² I)⁻¹ (v* − J_base,lin v_B)`
+/// (λ = 1e-3): the momentum of the planned feet motion, a velocity-level inverse kinematics of the planned
+/// references through the centroidal momentum matrix (the thesis's `h^ref`); joints of no listed chain keep
+/// their `reference_joints` velocity or none.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AngularMomentumTaskConfig {
@@ -218,12 +226,27 @@ pub struct AngularMomentumTaskConfig {
     /// TSID: the joints whose motion (base not rotating) sets the reference; empty: `input.angular_momentum`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub reference_joints: Vec<String>,
+    /// TSID: frames whose chains from the base follow their references' velocities in the reference
+    /// (see above); empty: none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub reference_frames: Vec<MomentumReferenceFrame>,
     /// Hard or soft.
     #[serde(default)]
     pub priority: Priority,
     /// Soft weight (scalar or per kept row; default 1). Setting it on a hard task is an error.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub weight: Option<Weight>,
+}
+
+/// A frame of an angular momentum task's `reference_frames`: the model frame and the name of its reference
+/// in the input (walking: `left_foot`, `right_foot` for the soles).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MomentumReferenceFrame {
+    /// Frame name in the model.
+    pub frame: String,
+    /// Name of its reference in the input.
+    pub reference: String,
 }
 
 /// Joint regularization / tracking: IK `ṡ = ṡ_ref + K_p (s_ref − s)` [Romualdi 2022, eq. 7.1.12]; TSID
@@ -674,6 +697,7 @@ pub enum ContactModel {
 /// | `estimator_wrench_std` | N, N·m | [2, 0.2] | standard deviations of the measured force and torque for that estimate |
 /// | `plan_on_surface` | – | false | the runner plans the footholds from the soles' zero-force poses (raised by their static sink `f_z / (k l w)`), so the swing feet land on the ground's surface, not as deep as the standing feet sank |
 /// | `held_acceleration` | – | false | the contact dynamics give the wrench rate averaged over one control period of a held acceleration: the acceleration gain of eq. 8.2.14 uses the damping `b + k·period/2` (see [`crate::soft_contact::WrenchRate::held_over`]) |
+/// | `lift_off_force` | N | inf | a contact whose load ramp has ended (planned lift-off) stays in the QP while its measured normal force exceeds this, its normal-force bound that measured force (the sole may only unload, toward the planned zero wrench of the wrench regularization), so that the swing task takes a sole that no longer carries the robot; `inf`: it leaves the QP when its ramp ends |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CompliantConfig {
@@ -703,6 +727,11 @@ pub struct CompliantConfig {
     /// (the acceleration gain of [Romualdi 2022, eq. 8.2.14] with the damping `b + k·period/2`); `false`:
     /// the instantaneous rate, whose sampled loop diverges for `period > 2b/k`.
     pub held_acceleration: bool,
+    /// A contact whose load ramp has ended (its planned lift-off) stays in the QP while its measured normal
+    /// force exceeds this (N), with that force as its normal-force bound (the sole may only unload): the
+    /// swing task takes a sole that no longer carries the robot; `inf` (the default): the contact leaves
+    /// the QP when its ramp ends.
+    pub lift_off_force: f64,
 }
 
 impl Default for CompliantConfig {
@@ -719,6 +748,7 @@ impl Default for CompliantConfig {
             estimator_wrench_std: [2.0, 0.2],
             plan_on_surface: false,
             held_acceleration: false,
+            lift_off_force: f64::INFINITY,
         }
     }
 }

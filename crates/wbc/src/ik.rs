@@ -157,10 +157,14 @@ impl QpIk {
                     com_tasks.push(t);
                 }
                 TaskConfig::AngularMomentum(c) => {
-                    if !c.reference_joints.is_empty() {
+                    if !c.reference_joints.is_empty() || !c.reference_frames.is_empty() {
                         return Err(WbcError::InvalidConfig {
                             task: c.name.clone(),
-                            key: "reference_joints",
+                            key: if c.reference_joints.is_empty() {
+                                "reference_frames"
+                            } else {
+                                "reference_joints"
+                            },
                             reason: "the QP-IK's angular momentum task takes its reference from the input"
                                 .into(),
                         });

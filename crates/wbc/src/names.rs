@@ -71,7 +71,8 @@ impl Resolver {
     }
 }
 
-/// The frame reference names (of the `se3`, `so3`, `r3` tasks, `"initial"` aside) and contact names (of
+/// The frame reference names (of the `se3`, `so3`, `r3` tasks, `"initial"` aside, and the angular
+/// momentum tasks' `reference_frames`) and contact names (of
 /// the `contact` tasks) of a task list, in task order. Errors: a contact task without a valid name.
 pub(crate) fn input_layout(tasks: &[TaskConfig]) -> Result<InputLayout, WbcError> {
     let mut layout = InputLayout::default();
@@ -80,6 +81,11 @@ pub(crate) fn input_layout(tasks: &[TaskConfig]) -> Result<InputLayout, WbcError
             TaskConfig::Se3(c) => layout.add_frame(&c.reference),
             TaskConfig::So3(c) | TaskConfig::R3(c) => layout.add_frame(&c.reference),
             TaskConfig::Contact(c) => layout.add_contact(c.contact_name()?),
+            TaskConfig::AngularMomentum(c) => {
+                for f in &c.reference_frames {
+                    layout.add_frame(&f.reference);
+                }
+            }
             _ => {}
         }
     }

@@ -24,7 +24,7 @@ use crate::names::input_layout;
 use crate::names::Resolver;
 use crate::tasks::compliant::{
     add_angular_momentum_drift, add_unloaded_wrenches, fill_contact_dynamics,
-    measured_joint_torques, to_rate_rows, CompliantContacts,
+    measured_joint_torques, to_rate_rows, CompliantContacts, HELD_LIFT_OFF_LOAD,
 };
 use crate::tasks::contact::fill_wrench_regularization;
 use crate::tasks::dynamics::{
@@ -185,7 +185,7 @@ impl TaskSet {
             }
             TaskConfig::AngularMomentum(c) => {
                 let t = AngularMomentumRateTask::new(c)?;
-                if let Some(r) = JointMomentumReference::new(model, c)? {
+                if let Some(r) = JointMomentumReference::new(model, &self.names, c)? {
                     self.momentum_references.push((self.tasks.len(), r));
                 }
                 (
@@ -812,7 +812,7 @@ impl Tsid {
     /// Sets the reference of every angular momentum task with `reference_joints` at this tick's state.
     fn update_momentum_references(&mut self, input: &WbcInput) -> Result<(), WbcError> {
         for (ti, r) in &mut self.momentum_references {
-            let reference = r.update(&mut self.kd, &input.state)?;
+            let reference = r.update(&mut self.kd, &input.state, &self.names, input)?;
             if let TsidTask::AngularMomentum(t) = &mut self.tasks[*ti] {
                 t.reference = Some(reference);
             }
@@ -1031,6 +1031,14 @@ impl Tsid {
                 contact.advance_load(flag, period);
             }
             if let Some(cc) = &mut self.compliant {
+                // `lift_off_force`: the ramp ended but the sole still carries load
+                contact.held_upper = None;
+                if !flag && was_loaded && contact.load == 0.0 {
+                    contact.held_upper = cc.held_lift_off(c, contact);
+                    if contact.held_upper.is_some() {
+                        contact.load = HELD_LIFT_OFF_LOAD;
+                    }
+                }
                 if !was_loaded && contact.load > 0.0 {
                     cc.touch_down(c, &contact.pose);
                 }
@@ -1106,6 +1114,7 @@ impl Block for Tsid {
             c.load = 0.0;
             c.unloading = false;
             c.last_fz = 0.0;
+            c.held_upper = None;
         }
         for t in &mut self.frame_tasks {
             t.reset();

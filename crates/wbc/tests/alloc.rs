@@ -155,8 +155,9 @@ fn tsid_flex_ticks_allocate_nothing() {
 
 /// TSID-Compliant (`contact_model = "compliant"`) ticks allocate nothing, with the measured wrenches
 /// changing every tick and a lift-off and touch-down of the right foot; with the held-period rate
-/// (`held_acceleration`) and an angular momentum task whose reference is the legs' momentum
-/// (`reference_joints`).
+/// (`held_acceleration`), a lift-off held while the sole still carries load (`lift_off_force`) and an
+/// angular momentum task whose reference is the legs' momentum (`reference_joints`) and the planned
+/// feet's (`reference_frames`).
 #[test]
 fn tsid_compliant_ticks_allocate_nothing() {
     let model = bundled_model();
@@ -165,11 +166,16 @@ fn tsid_compliant_ticks_allocate_nothing() {
     let mut config = TsidConfig::default_for_bundled_model();
     config.contact_model = stride_wbc::ContactModel::Compliant;
     config.compliant.held_acceleration = true;
+    config.compliant.lift_off_force = 20.0;
     config.tasks.push(stride_wbc::TaskConfig::AngularMomentum(
         stride_wbc::AngularMomentumTaskConfig {
             name: "angular_momentum".into(),
             kp: 10.0,
             reference_joints: vec!["l_knee".into(), "r_hip_roll".into()],
+            reference_frames: vec![stride_wbc::MomentumReferenceFrame {
+                frame: "r_sole".into(),
+                reference: "right_foot".into(),
+            }],
             priority: stride_wbc::Priority::Hard,
             weight: None,
         },

@@ -183,6 +183,7 @@ fn standing_still_needs_no_acceleration_and_carries_the_weight() {
             name: "angular_momentum".into(),
             kp: 0.0,
             reference_joints: Vec::new(),
+            reference_frames: Vec::new(),
             priority: Priority::Hard,
             weight: None,
         },
@@ -260,6 +261,7 @@ fn the_angular_momentum_reference_of_listed_joints_is_their_momentum() {
             name: "angular_momentum".into(),
             kp,
             reference_joints: legs.clone(),
+            reference_frames: Vec::new(),
             priority: Priority::Hard,
             weight: None,
         },
@@ -267,15 +269,7 @@ fn the_angular_momentum_reference_of_listed_joints_is_their_momentum() {
     let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
     let out = tsid.step(&references_at(&model, &state)).unwrap().clone();
     assert_eq!(out.report.status, QpStatus::Solved);
-    let com = kd.com_position();
-    let mut moment = Vector3::zeros();
-    for (w, sole) in out.contact_wrenches.iter().zip(["l_sole", "r_sole"]) {
-        let p = kd
-            .frame_pose(model.frame_id(sole).unwrap())
-            .translation
-            .vector;
-        moment += (p - com).cross(&w.fixed_rows::<3>(0)) + w.fixed_rows::<3>(3);
-    }
+    let moment = moment_about_com(&model, &kd, &out);
     let expected = (reference - h) * kp;
     assert!(
         (moment - expected).norm() < 1e-6 * (1.0 + expected.norm()),
@@ -289,12 +283,125 @@ fn the_angular_momentum_reference_of_listed_joints_is_their_momentum() {
             name: "angular_momentum".into(),
             kp,
             reference_joints: vec!["no_such_joint".into()],
+            reference_frames: Vec::new(),
             priority: Priority::Hard,
             weight: None,
         },
     ));
     let err = Tsid::new(Arc::clone(&model), config, PERIOD).err().unwrap();
     assert!(err.to_string().contains("no_such_joint"), "{err}");
+}
+
+/// The moment of `out`'s two sole wrenches about the CoM of the state `kd` holds (N·m).
+fn moment_about_com(model: &Model, kd: &KinDyn, out: &TsidOutput) -> Vector3<f64> {
+    let com = kd.com_position();
+    let mut moment = Vector3::zeros();
+    for (w, sole) in out.contact_wrenches.iter().zip(["l_sole", "r_sole"]) {
+        let p = kd
+            .frame_pose(model.frame_id(sole).unwrap())
+            .translation
+            .vector;
+        moment += (p - com).cross(&w.fixed_rows::<3>(0)) + w.fixed_rows::<3>(3);
+    }
+    moment
+}
+
+/// `reference_frames`: the reference is the angular momentum of the motion that moves the listed frames at
+/// their references' velocities with the base translating as measured and not rotating: with the soles'
+/// references set to their velocities in a state where only the 12 leg joints move (a random planned
+/// motion), the rigid TSID's contact moment about the CoM is `K_p (h* − h)` with `h*` stride-model's
+/// centroidal momentum of that planned state, to the damped least squares' bias (λ = 1e-3 against leg
+/// Jacobians whose smallest singular value is of order 0.1: a relative 1e-4); a reference name the
+/// controller does not know is refused by name, and so is the key in the QP-IK.
+#[test]
+fn the_angular_momentum_reference_of_planned_frames_is_the_momentum_of_the_planned_legs() {
+    let model = bundled_model();
+    let mut state = standing_state(&model, &default_posture(&model));
+    state.base_velocity = Vector6::new(0.05, -0.02, 0.01, 0.2, -0.1, 0.05);
+    let mut rng = common::rng(93);
+    for v in state.joint_velocities.iter_mut() {
+        *v = rng.random_range(-0.5..0.5);
+    }
+    let mut planned = state.clone();
+    for k in 3..6 {
+        planned.base_velocity[k] = 0.0;
+    }
+    for (j, v) in planned.joint_velocities.iter_mut().enumerate() {
+        let name = &model.joints()[j].name;
+        let leg = [
+            "hip_pitch",
+            "hip_roll",
+            "hip_yaw",
+            "knee",
+            "ankle_pitch",
+            "ankle_roll",
+        ]
+        .iter()
+        .any(|s| *name == format!("l_{s}") || *name == format!("r_{s}"));
+        *v = if leg {
+            rng.random_range(-0.5..0.5)
+        } else {
+            0.0
+        };
+    }
+    let kd_of = |s: &RobotState| {
+        let mut kd = KinDyn::new(Arc::clone(&model));
+        kd.set_representation(VelocityRepresentation::Mixed);
+        kd.set_state(s).unwrap();
+        kd
+    };
+    let kd_planned = kd_of(&planned);
+    let reference = kd_planned
+        .centroidal_momentum()
+        .fixed_rows::<3>(3)
+        .into_owned();
+    let kd = kd_of(&state);
+    let h = kd.centroidal_momentum().fixed_rows::<3>(3).into_owned();
+    let kp = 4.0;
+    let task = |frames: &[(&str, &str)]| {
+        TaskConfig::AngularMomentum(stride_wbc::AngularMomentumTaskConfig {
+            name: "angular_momentum".into(),
+            kp,
+            reference_joints: Vec::new(),
+            reference_frames: frames
+                .iter()
+                .map(|(f, r)| stride_wbc::MomentumReferenceFrame {
+                    frame: f.to_string(),
+                    reference: r.to_string(),
+                })
+                .collect(),
+            priority: Priority::Hard,
+            weight: None,
+        })
+    };
+    let mut config = TsidConfig::default_for_bundled_model();
+    config
+        .tasks
+        .push(task(&[("l_sole", "left_foot"), ("r_sole", "right_foot")]));
+    let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
+    let mut input = references_at(&model, &state);
+    input.lf_mut().velocity = kd_planned.frame_velocity(model.frame_id("l_sole").unwrap());
+    input.rf_mut().velocity = kd_planned.frame_velocity(model.frame_id("r_sole").unwrap());
+    let out = tsid.step(&input).unwrap().clone();
+    assert_eq!(out.report.status, QpStatus::Solved);
+    let moment = moment_about_com(&model, &kd, &out);
+    let expected = (reference - h) * kp;
+    assert!(
+        (moment - expected).norm() < 1e-4 * expected.norm(),
+        "{moment} vs {expected}"
+    );
+    assert!((reference - h).norm() > 1e-3, "the test needs h* ≠ h");
+    // an unknown frame is refused by name
+    let mut config = TsidConfig::default_for_bundled_model();
+    config.tasks.push(task(&[("no_such_frame", "left_foot")]));
+    let err = Tsid::new(Arc::clone(&model), config, PERIOD).err().unwrap();
+    assert!(err.to_string().contains("no_such_frame"), "{err}");
+    let mut ik = stride_wbc::IkConfig::default_for_bundled_model();
+    ik.tasks.push(task(&[("l_sole", "left_foot")]));
+    let err = stride_wbc::QpIk::new(Arc::clone(&model), ik, PERIOD)
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("reference_frames"), "{err}");
 }
 
 /// Integrates the closed loop TSID → forward dynamics with the planned wrenches as the contact

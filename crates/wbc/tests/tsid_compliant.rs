@@ -33,6 +33,7 @@ fn compliant_config() -> TsidConfig {
             name: "angular_momentum".into(),
             kp: 10.0,
             reference_joints: Vec::new(),
+            reference_frames: Vec::new(),
             priority: Priority::Hard,
             weight: None,
         }));
@@ -413,4 +414,52 @@ fn the_ground_estimate_inside_the_tsid_finds_k_and_b() {
         (ground.damping / GROUND.damping - 1.0).abs() < 0.01,
         "{ground:?}"
     );
+}
+
+/// `lift_off_force`: a contact whose flag opens (its planned lift-off) stays in the QP after its 0.02 s load
+/// ramp while its measured normal force exceeds the setting, with that force as its bound (the chosen wrench
+/// one period ahead does not exceed it), and leaves once the force is below; with the default (`inf`) it
+/// leaves when the ramp ends whatever it carries. A negative setting is refused by name.
+#[test]
+fn a_loaded_sole_leaves_the_qp_only_below_the_lift_off_force() {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let weight = model.total_mass() * 9.81;
+    let wrench = |fz: f64| Vector6::new(0.0, 0.0, fz, 0.0, 0.0, 0.0);
+    let run = |lift_off_force: f64| {
+        let mut config = compliant_config();
+        config.compliant.lift_off_force = lift_off_force;
+        let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
+        let mut input = input_with_wrenches(
+            &model,
+            &tsid,
+            &state,
+            &[wrench(weight / 2.0), wrench(weight / 2.0)],
+        );
+        tsid.step(&input).unwrap();
+        // the right contact opens with 60 N still on its sole, for 15 periods (0.03 s)
+        let right = input.contact_id(walking::RIGHT_FOOT).unwrap();
+        input.contact_mut(right).unwrap().active = false;
+        input.contact_mut(right).unwrap().measured_wrench = wrench(60.0);
+        let mut chosen = Vec::new();
+        for _ in 0..15 {
+            let out = tsid.step(&input).unwrap();
+            chosen.push((out.contact_load[1], out.contact_wrenches[1].z));
+        }
+        // the sole unloads to 10 N
+        input.contact_mut(right).unwrap().measured_wrench = wrench(10.0);
+        let load_after = tsid.step(&input).unwrap().contact_load[1];
+        (chosen, load_after)
+    };
+    let (held, after) = run(20.0);
+    let (last_load, last_fz) = *held.last().unwrap();
+    assert!(last_load > 0.0, "{held:?}");
+    assert!(last_fz <= 60.0 + 1e-6, "{held:?}");
+    assert_eq!(after, 0.0);
+    let (released, _) = run(f64::INFINITY);
+    assert_eq!(released.last().unwrap().0, 0.0, "{released:?}");
+    let mut config = compliant_config();
+    config.compliant.lift_off_force = -1.0;
+    let err = Tsid::new(Arc::clone(&model), config, PERIOD).err().unwrap();
+    assert!(err.to_string().contains("lift_off_force"), "{err}");
 }

@@ -50,7 +50,14 @@ pub(crate) struct CompliantContacts {
     pub estimator: Option<GroundEstimator>,
     /// `held_acceleration`: the period over which the rates are averaged (s); `None`: instantaneous.
     pub held_period: Option<f64>,
+    /// `lift_off_force`: a contact whose load ramp ends stays loaded while its measured normal force
+    /// exceeds this (N); `inf`: it leaves the QP when its ramp ends.
+    pub lift_off_force: f64,
 }
+
+/// The load of a contact held in the QP after its ramp ended (`lift_off_force`): not zero, so that the
+/// contact keeps its wrench-rate columns; its normal-force bound is then `Contact::held_upper`.
+pub(crate) const HELD_LIFT_OFF_LOAD: f64 = 1e-9;
 
 fn positive(key: &'static str, value: f64) -> Result<f64, WbcError> {
     if value.is_finite() && value > 0.0 {
@@ -82,6 +89,16 @@ impl CompliantContacts {
         Ok(CompliantContacts {
             estimator,
             held_period: c.held_acceleration.then_some(period),
+            lift_off_force: match c.lift_off_force {
+                f if f.is_nan() || f < 0.0 => {
+                    return Err(WbcError::InvalidConfig {
+                        task: "<tsid>".into(),
+                        key: "lift_off_force",
+                        reason: format!("compliant.lift_off_force = {f} must be >= 0 (inf: off)"),
+                    })
+                }
+                f => f,
+            },
             sole: SoleGeometry {
                 length: positive("sole_length", c.sole_length)?,
                 width: positive("sole_width", c.sole_width)?,
@@ -121,6 +138,14 @@ impl CompliantContacts {
             rest.translation.vector += self.measured[c].fixed_rows::<3>(0) / scale;
         }
         self.rest[c] = rest;
+    }
+
+    /// The normal-force bound of contact `c` held in the QP after its ramp ended (its planned lift-off):
+    /// its measured normal force (along the contact frame's z), which may then only decrease, when that
+    /// exceeds `lift_off_force`; `None`: the contact leaves the QP.
+    pub fn held_lift_off(&self, c: usize, contact: &Contact) -> Option<f64> {
+        let force = contact.pose.rotation.inverse() * self.measured[c].fixed_rows::<3>(0);
+        (force.z > self.lift_off_force).then_some(force.z)
     }
 
     /// The sole state of `contact` (index `c`) for the contact model.

@@ -40,6 +40,9 @@ pub(crate) struct Contact {
     pub(crate) pose: Isometry3<f64>,
     pub(crate) reference: Isometry3<f64>,
     pub(crate) last_fz: f64,
+    /// TSID-Compliant's `lift_off_force`: the normal-force bound of a contact held in the QP after its
+    /// ramp ended (N); `None`: the ramp's bound.
+    pub(crate) held_upper: Option<f64>,
 }
 
 impl Contact {
@@ -125,6 +128,7 @@ impl Contact {
             pose: Isometry3::identity(),
             reference: Isometry3::identity(),
             last_fz: 0.0,
+            held_upper: None,
         })
     }
 
@@ -135,7 +139,9 @@ impl Contact {
 
     /// Upper bound of f_z this tick.
     pub fn normal_upper(&self) -> f64 {
-        if self.unloading {
+        if let Some(upper) = self.held_upper {
+            upper
+        } else if self.unloading {
             self.unload_from * self.load
         } else {
             self.max_normal_force * self.load

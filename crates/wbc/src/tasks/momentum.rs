@@ -4,15 +4,16 @@
 //! (rows in N m, `K_p` in 1/s). The reference `h*` is `input.angular_momentum`, or with `reference_joints`
 //! the momentum of those joints' motion ([`JointMomentumReference`]).
 
-use nalgebra::{DMatrix, Matrix3, Vector3};
-use stride_model::{KinDyn, Model, RobotState};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector3};
+use stride_model::{FrameId, KinDyn, Model, RobotState};
 use stride_qp::TaskDataMut;
 
-use super::{check_gain, TsidContext};
+use super::{check_gain, frame_id, TsidContext};
 use crate::config::AngularMomentumTaskConfig;
 use crate::error::WbcError;
 use crate::io::WbcInput;
 use crate::math::skew;
+use crate::names::Resolver;
 
 /// Centroidal angular momentum, velocity level: `J_CMM,ω ν = h_ref`.
 #[derive(Debug, Clone)]
@@ -90,22 +91,38 @@ impl AngularMomentumRateTask {
     }
 }
 
-/// The reference of a TSID angular momentum task with `reference_joints`: the centroidal angular momentum
-/// of the listed joints' motion with the base translating but not rotating,
-/// `h* = A_ω(q) [v_B; 0; ṡ_listed]` (`A_ω`: the angular rows of the centroidal momentum matrix, mixed
-/// velocity [Orin 2013]), with `ḣ* = 0`: its change over the control period as `ḣ*` made the hard rows
-/// infeasible within 0.02 s on the soft-ground walk (a 500 Hz difference of measured velocities).
+/// The reference of a TSID angular momentum task with `reference_joints` or `reference_frames`: the
+/// centroidal angular momentum of the listed joints' motion with the base translating but not rotating,
+/// `h* = A_ω(q) [v_B; 0; ṡ]` (`A_ω`: the angular rows of the centroidal momentum matrix, mixed velocity
+/// [Orin 2013]), with `ḣ* = 0`: its change over the control period as `ḣ*` made the hard rows infeasible
+/// within 0.02 s on the soft-ground walk (a 500 Hz difference of measured velocities). `ṡ` is the measured
+/// velocity of the `reference_joints`, and on the chain of each `reference_frames` frame the velocity that
+/// makes the frame follow its reference's velocity (damped least squares, see
+/// [`crate::AngularMomentumTaskConfig`]); every other joint is still.
 #[derive(Debug, Clone)]
 pub(crate) struct JointMomentumReference {
     /// Velocity indices `6 + j` of the listed joints.
     columns: Vec<usize>,
+    /// `reference_frames`: the frame and its reference's index in the controller's frame names.
+    frames: Vec<(FrameId, usize)>,
     cmm: DMatrix<f64>,
+    /// Scratch: a frame's Jacobian (6 × nv) and the reference velocity `[v_B; 0; ṡ]` (nv).
+    jacobian: DMatrix<f64>,
+    velocity: DVector<f64>,
 }
 
+/// The damping `λ` of the chains' least squares (`reference_frames`), m and rad.
+const CHAIN_DAMPING: f64 = 1e-3;
+
 impl JointMomentumReference {
-    /// The reference of `c` (`None` when it lists no joints). Errors: an unknown joint name.
-    pub fn new(model: &Model, c: &AngularMomentumTaskConfig) -> Result<Option<Self>, WbcError> {
-        if c.reference_joints.is_empty() {
+    /// The reference of `c` (`None` when it lists no joints and no frames). Errors: an unknown joint or
+    /// frame name, a reference name that is not in `names`.
+    pub fn new(
+        model: &Model,
+        names: &Resolver,
+        c: &AngularMomentumTaskConfig,
+    ) -> Result<Option<Self>, WbcError> {
+        if c.reference_joints.is_empty() && c.reference_frames.is_empty() {
             return Ok(None);
         }
         let columns = c
@@ -121,29 +138,74 @@ impl JointMomentumReference {
                     })
             })
             .collect::<Result<Vec<_>, _>>()?;
+        let frames = c
+            .reference_frames
+            .iter()
+            .map(|f| {
+                let reference =
+                    names
+                        .frame_index(&f.reference)
+                        .ok_or_else(|| WbcError::InvalidConfig {
+                            task: c.name.clone(),
+                            key: "reference_frames",
+                            reason: format!("no reference named `{}`", f.reference),
+                        })?;
+                Ok((frame_id(model, &c.name, &f.frame)?, reference))
+            })
+            .collect::<Result<Vec<_>, WbcError>>()?;
         Ok(Some(JointMomentumReference {
             columns,
+            frames,
             cmm: DMatrix::zeros(6, model.nv()),
+            jacobian: DMatrix::zeros(6, model.nv()),
+            velocity: DVector::zeros(model.nv()),
         }))
     }
 
-    /// `h*` (kg m²/s) at the state `kd` holds (`state`: its velocities, mixed representation).
+    /// `h*` (kg m²/s) at the state `kd` holds (`state`: its velocities, mixed representation), the
+    /// references of `reference_frames` read from `input`.
     pub fn update(
         &mut self,
         kd: &mut KinDyn,
         state: &RobotState,
+        names: &Resolver,
+        input: &WbcInput,
     ) -> Result<Vector3<f64>, WbcError> {
         kd.centroidal_momentum_matrix(&mut self.cmm)?;
+        let v = &mut self.velocity;
+        v.fill(0.0);
+        for c in 0..3 {
+            v[c] = state.base_velocity[c];
+        }
+        for &c in &self.columns {
+            v[c] = state.joint_velocities[c - 6];
+        }
+        for &(frame, reference) in &self.frames {
+            kd.frame_jacobian(frame, &mut self.jacobian)?;
+            let j = &self.jacobian;
+            let nv = j.ncols();
+            // the chain: the joints that move the frame (a revolute joint's column has its axis in the
+            // angular rows)
+            let on_chain = |c: usize| j.fixed_view::<3, 1>(3, c).norm_squared() > 0.0;
+            let mut target = names.frame(input, reference).velocity;
+            for c in 0..3 {
+                target -= j.fixed_view::<6, 1>(0, c) * v[c];
+            }
+            let mut gram = Matrix6::identity() * (CHAIN_DAMPING * CHAIN_DAMPING);
+            for c in (6..nv).filter(|&c| on_chain(c)) {
+                let col = j.fixed_view::<6, 1>(0, c);
+                gram += col * col.transpose();
+            }
+            let Some(y) = gram.cholesky().map(|ch| ch.solve(&target)) else {
+                continue;
+            };
+            for c in (6..nv).filter(|&c| on_chain(c)) {
+                v[c] = j.fixed_view::<6, 1>(0, c).dot(&y);
+            }
+        }
         let mut h = Vector3::zeros();
         for k in 0..3 {
-            let mut v = 0.0;
-            for c in 0..3 {
-                v += self.cmm[(3 + k, c)] * state.base_velocity[c];
-            }
-            for &c in &self.columns {
-                v += self.cmm[(3 + k, c)] * state.joint_velocities[c - 6];
-            }
-            h[k] = v;
+            h[k] = (0..v.len()).map(|c| self.cmm[(3 + k, c)] * v[c]).sum();
         }
         Ok(h)
     }
