@@ -22,6 +22,12 @@ pub struct PushResponse {
     pushed_for: f64,
     /// The clock's delay when the current double support began (`None` outside double support) \[s\].
     double_support_start: Option<f64>,
+    /// Time since the last planned touch-down (the first tick of a double support; `None` before the
+    /// first) \[s\].
+    since_touch_down: Option<f64>,
+    /// Whether the estimate's current rise above `hold_force` came within `impact_window` of a planned
+    /// touch-down (then it must last `hold_delay` before a hold starts).
+    near_impact: bool,
     /// Double supports held so far.
     pub holds: u64,
 }
@@ -40,6 +46,8 @@ impl PushResponse {
             estimate: Vector2::zeros(),
             pushed_for: 0.0,
             double_support_start: None,
+            since_touch_down: None,
+            near_impact: false,
             holds: 0,
         })
     }
@@ -66,7 +74,9 @@ impl PushResponse {
     /// Tells `clock` to hold or run for the plan `sample` (taken at the clock's plan time) while
     /// `walking` (every simplified tick, `dt` \[s\] apart). A hold starts in a double support once the
     /// estimate has stayed above `hold_force` for `hold_delay`, and lasts while it stays above, at most
-    /// `max_hold`. Returns whether a hold started.
+    /// `max_hold`. With `hold_at_once` only an estimate that rose within `impact_window` of a planned
+    /// touch-down (before or after it) waits `hold_delay` (a touch-down's impact shows in the observer as
+    /// a short pulse); any other rise holds at once. Returns whether a hold started.
     pub fn decide(
         &mut self,
         dt: f64,
@@ -74,16 +84,22 @@ impl PushResponse {
         walking: bool,
         clock: &mut PlanClock,
     ) -> bool {
-        let pushed = self.estimate.norm() > self.config.hold_force;
-        self.pushed_for = if pushed { self.pushed_for + dt } else { 0.0 };
         let double_support = walking && sample.phase == PhaseKind::DoubleSupport;
+        let touch_down = double_support && self.double_support_start.is_none();
+        self.note_rise(dt, touch_down);
         if !double_support {
             self.double_support_start = None;
             clock.hold(false);
             return false;
         }
         let start = *self.double_support_start.get_or_insert(clock.delay());
-        let persistent = self.pushed_for >= self.config.hold_delay - 1e-9;
+        let pushed = self.pushed_for > 0.0;
+        let delay = if self.config.hold_at_once && !self.near_impact {
+            0.0
+        } else {
+            self.config.hold_delay
+        };
+        let persistent = self.pushed_for >= delay - 1e-9;
         let hold = self.config.hold_double_support
             && pushed
             && (clock.holding() || persistent)
@@ -94,6 +110,28 @@ impl PushResponse {
         }
         clock.hold(hold);
         started
+    }
+
+    /// Bookkeeping of one tick of `dt` \[s\] (`touch_down`: the first tick of a double support): how long
+    /// the estimate has been above `hold_force`, the time since the last touch-down, and whether the
+    /// current rise came within `impact_window` of a touch-down (a rise after it, or a rise at most
+    /// `impact_window` before it, seen at the touch-down).
+    fn note_rise(&mut self, dt: f64, touch_down: bool) {
+        let pushed = self.estimate.norm() > self.config.hold_force;
+        let rose = pushed && self.pushed_for == 0.0;
+        self.pushed_for = if pushed { self.pushed_for + dt } else { 0.0 };
+        self.since_touch_down = if touch_down {
+            Some(0.0)
+        } else {
+            self.since_touch_down.map(|s| s + dt)
+        };
+        let window = self.config.impact_window + 1e-9;
+        if rose {
+            self.near_impact = self.since_touch_down.is_some_and(|s| s <= window);
+        }
+        if touch_down && pushed && self.pushed_for <= window + dt {
+            self.near_impact = true;
+        }
     }
 
     /// Moves the planned CoM and DCM of `sample` against the push by `lean F̂/(m ω²)` (the pushed
@@ -174,6 +212,65 @@ mod tests {
         let mut r = response(PushConfig::default());
         push_run(&mut r, &mut clock, PhaseKind::DoubleSupport, false, 1.0);
         assert!(!clock.holding());
+    }
+
+    /// A walk in single support until 0.5 s, then in double support; the estimate is set directly to
+    /// 20 N along x on the ticks where `on(t)`. Returns the time of the first hold (`None`: none).
+    fn first_hold(hold_at_once: bool, on: impl Fn(f64) -> bool) -> Option<f64> {
+        let mut r = response(PushConfig {
+            hold_at_once,
+            ..PushConfig::default()
+        });
+        let mut clock = PlanClock::new(0.1);
+        let ss = sample(PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Left,
+        });
+        let ds = sample(PhaseKind::DoubleSupport);
+        for k in 0..100u64 {
+            let t = k as f64 * 0.01;
+            r.estimate = if on(t) {
+                Vector2::new(20.0, 0.0)
+            } else {
+                Vector2::zeros()
+            };
+            clock.plan_time(Duration::from_millis(k * 10));
+            if r.decide(
+                0.01,
+                if t < 0.5 - 1e-9 { &ss } else { &ds },
+                true,
+                &mut clock,
+            ) {
+                return Some(t);
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn with_hold_at_once_a_rise_near_a_touch_down_waits_the_hold_delay_and_a_rise_away_from_it_does_not(
+    ) {
+        // the impact pulses of a touch-down at 0.5 s: 80 ms back, then 80 ms forth (the norm is what
+        // counts), and one starting 40 ms before it: no hold
+        assert_eq!(first_hold(true, |t| (0.5..0.58).contains(&t)), None);
+        assert_eq!(
+            first_hold(true, |t| (0.5..0.58).contains(&t)
+                || (0.6..0.68).contains(&t)),
+            None
+        );
+        assert_eq!(first_hold(true, |t| (0.46..0.54).contains(&t)), None);
+        // a push rising 0.05 s after the touch-down holds once it has lasted `hold_delay` (0.1 s, ten
+        // ticks counting the rise's)
+        let t = first_hold(true, |t| t > 0.55 - 1e-9).unwrap();
+        assert!((t - 0.64).abs() < 1e-9, "{t}");
+        // a push rising 0.25 s after the touch-down (outside `impact_window`, 0.2 s) holds at once
+        let t = first_hold(true, |t| t > 0.75 - 1e-9).unwrap();
+        assert!((t - 0.75).abs() < 1e-9, "{t}");
+        // a push rising in the single support, 0.3 s before the touch-down, holds at the touch-down
+        let t = first_hold(true, |t| t > 0.2 - 1e-9).unwrap();
+        assert!((t - 0.5).abs() < 1e-9, "{t}");
+        // without `hold_at_once` every rise waits `hold_delay`
+        let t = first_hold(false, |t| t > 0.75 - 1e-9).unwrap();
+        assert!((t - 0.84).abs() < 1e-9, "{t}");
     }
 
     #[test]

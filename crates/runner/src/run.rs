@@ -416,7 +416,12 @@ impl<'a> Loop<'a> {
                 "{} footstep moved by ({dx:.3}, {dy:.3}) m, touch-down {:.3} s (planned {:.3} s)",
                 adjusted.foot, adjusted.touchdown_time, adjusted.nominal_touchdown_time
             );
-            self.event(t, "step_adjustment", detail)?;
+            let kind = if std::mem::take(&mut self.stack.early_touchdown) {
+                "early_touchdown"
+            } else {
+                "step_adjustment"
+            };
+            self.event(t, kind, detail)?;
         }
         if let Some(f) = self.stack.push_hold_started.take() {
             let detail = format!(

@@ -309,6 +309,9 @@ pub struct Stack {
     /// The push estimate \[N\] when a double-support hold started at the last simplified tick, for the
     /// `push_hold` event (taken by the scheduler).
     pub push_hold_started: Option<Vector2<f64>>,
+    /// Whether [`Stack::adjusted_footstep`] is an early touch-down (`step_adjustment.touchdown_force`)
+    /// rather than a step moved by the step-adjustment QP.
+    pub early_touchdown: bool,
     /// The whole-body period \[s\] (the push observer's step).
     wbc_period: f64,
     /// Angular momentum reference of the last simplified tick (the centroidal MPC's; zero otherwise)
@@ -343,6 +346,8 @@ pub struct Counters {
     pub step_adjustments: u64,
     /// Footstep adjustments the planner refused (the plan was kept).
     pub step_adjustment_failures: u64,
+    /// Early touch-downs: late swings landed where the foot struck the ground.
+    pub early_touchdowns: u64,
 }
 
 impl Stack {
@@ -484,6 +489,7 @@ impl Stack {
                 None
             },
             push_hold_started: None,
+            early_touchdown: false,
             wbc_period: 1.0 / f64::from(c.rates.wbc_hz),
             flexible,
             flexible_observer,
@@ -675,6 +681,7 @@ impl Stack {
         self.measure_dcm(self.plan_sample.omega);
         self.respond_to_push();
         self.adjust_step(time_ns);
+        self.early_touch_down(time_ns);
         if let Some(push) = &self.push {
             push.lean(&mut self.plan_sample);
         }
@@ -741,6 +748,60 @@ impl Stack {
         match self.planner.adjust_step(&request, &self.goal) {
             Ok(true) => {
                 self.counters.step_adjustments += 1;
+                self.adjusted_footstep =
+                    Some(tracker.applied(&request, adjuster.result(), &self.measured.dcm));
+            }
+            Ok(false) => {}
+            Err(_) => self.counters.step_adjustment_failures += 1,
+        }
+    }
+
+    /// The early touch-down of one simplified tick (when the step adjustment is on and its
+    /// `touchdown_force` is positive): in the second half of a swing, a swing foot that carries more than
+    /// `touchdown_force` of estimated vertical ground force has struck the ground before its plan (a body
+    /// roll under a side push lowers the sole) while the plan still has the sole `touchdown_height` or
+    /// more up. The step then lands where the foot is, `touchdown_lead`
+    /// later: the swing is retargeted to the measured sole position and the later steps replanned from
+    /// it (`Planner::adjust_step`), instead of the sole being dragged on towards its planned touch-down.
+    /// Once per swing (after it less than `touchdown_lead` is left).
+    fn early_touch_down(&mut self, time_ns: u64) {
+        let Some((adjuster, tracker)) = self.step_adjustment.as_mut() else {
+            return;
+        };
+        let c = *adjuster.config();
+        let Some(plan) = self.planner.plan() else {
+            return;
+        };
+        if c.touchdown_force <= 0.0 {
+            return;
+        }
+        let time = self.plan_clock.plan_time(Duration::from_nanos(time_ns));
+        let t = seconds(time);
+        let Some(step) = plan.current_step(t) else {
+            return;
+        };
+        let (lift, land) = (step.swing.lift_time, step.swing.land_time);
+        let i = match step.swing.foot {
+            stride_planner::Foot::Left => 0,
+            stride_planner::Foot::Right => 1,
+        };
+        let sole = [&self.plan_sample.left, &self.plan_sample.right][i];
+        let height = sole.pose.translation.z - step.swing.end.translation.z;
+        let late = t > 0.5 * (lift + land) && land - t > c.touchdown_lead;
+        let airborne = !sole.in_contact && height >= c.touchdown_height;
+        if !late || !airborne || self.estimate.foot_wrenches[i][2] < c.touchdown_force {
+            return;
+        }
+        let request = stride_planner::StepAdjustmentRequest {
+            time,
+            target: self.measured.soles[i].translation.vector.xy(),
+            land_time: t + c.touchdown_lead,
+            min_remaining: 0.0,
+        };
+        match self.planner.adjust_step(&request, &self.goal) {
+            Ok(true) => {
+                self.counters.early_touchdowns += 1;
+                self.early_touchdown = true;
                 self.adjusted_footstep =
                     Some(tracker.applied(&request, adjuster.result(), &self.measured.dcm));
             }

@@ -173,6 +173,8 @@ pub struct RunSummary {
     /// Footsteps moved by the step adjustment (`simplified.step_adjustment`), and the adjustments the planner
     /// refused (the plan kept).
     pub step_adjustments: (u64, u64),
+    /// Late swings landed where the foot struck the ground (`simplified.step_adjustment.touchdown_force`).
+    pub early_touchdowns: u64,
     /// Double supports held by a push (`simplified.push`), and the plan's delay behind the run's time at
     /// the end \[s\].
     pub push_holds: (u64, f64),
@@ -216,6 +218,7 @@ impl RunSummary {
             simplified_holds: 0,
             replans: 0,
             step_adjustments: (0, 0),
+            early_touchdowns: 0,
             push_holds: (0, 0.0),
             deadline_misses: 0,
             estimation: EstimationSummary::default(),
@@ -348,6 +351,13 @@ impl RunSummary {
             let _ = writeln!(
                 s,
                 "  step adjustments {applied} (refused by the planner {refused})"
+            );
+        }
+        if self.early_touchdowns > 0 {
+            let _ = writeln!(
+                s,
+                "  early touch-downs {} (swings landed where they struck the ground)",
+                self.early_touchdowns
             );
         }
         let (holds, delay) = self.push_holds;

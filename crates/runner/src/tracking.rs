@@ -227,6 +227,7 @@ impl Tracker {
         s.simplified_holds = counters.simplified_holds;
         s.replans = counters.replans;
         s.step_adjustments = (counters.step_adjustments, counters.step_adjustment_failures);
+        s.early_touchdowns = counters.early_touchdowns;
         s.push_holds = stack.push_holds();
         s.finish(self.start_mid, end, goal, wall);
         s.gait = self.gait.finish(s.distance);

@@ -19,13 +19,26 @@ const POSITION_STEPS: &[&str] = &["walk_straight_step_adjustment.toml"];
 const POSITION_STEPS_RESPONSE: &[&str] = &[
     "walk_straight_step_adjustment.toml",
     "layers/push_response.toml",
+    "layers/push_hold_at_once.toml",
 ];
 
 /// The configs `layers` run for 9 s with one 1 s push `force` \[N, world x, y\] at the chest from
 /// `start` \[s\].
 fn pushed(s: &Scratch, name: &str, layers: &[&str], force: [f64; 2], start: f64) -> RunSummary {
+    pushed_with(s, name, layers, "", force, start)
+}
+
+/// [`pushed`] with the TOML `keys` added to the scenario.
+fn pushed_with(
+    s: &Scratch,
+    name: &str,
+    layers: &[&str],
+    keys: &str,
+    force: [f64; 2],
+    start: f64,
+) -> RunSummary {
     let extra = format!(
-        "[scenario]\nduration = 9.0\n[[sim.pushes]]\nframe = \"chest\"\nstart = {start}\n\
+        "{keys}[scenario]\nduration = 9.0\n[[sim.pushes]]\nframe = \"chest\"\nstart = {start}\n\
          duration = 1.0\nwrench = [{}, {}, 0.0, 0.0, 0.0, 0.0]\n",
         force[0], force[1]
     );
@@ -33,15 +46,28 @@ fn pushed(s: &Scratch, name: &str, layers: &[&str], force: [f64; 2], start: f64)
     run_scenario(&sc, &options(s, name)).unwrap()
 }
 
+/// Asserts that `run` fell (its summary as the message otherwise).
+fn assert_fell(run: &RunSummary) {
+    assert!(
+        matches!(run.outcome, Outcome::Fell { .. }),
+        "{}",
+        run.render()
+    );
+}
+
 /// Without pushes the walk `base` with `layers/push_response.toml` is the same run as `base` with the
 /// estimation mode that layer sets (`estimation.update = "every_sample"`, configs/layers/push_response.toml).
 fn unchanged_without_pushes(test: &str, base: &str) {
+    unchanged_without_pushes_with(test, &[base, "layers/push_response.toml"]);
+}
+
+/// [`unchanged_without_pushes`] for the configs `layers` (the walk first, then the push response's).
+fn unchanged_without_pushes_with(test: &str, layers: &[&str]) {
     let s = Scratch::new(test);
     let every_sample = "[estimation]\nupdate = \"every_sample\"\n";
-    let reference = common::scenario_from_configs(&s, "off", &[base], every_sample);
+    let reference = common::scenario_from_configs(&s, "off", &layers[..1], every_sample);
     let off = run_scenario(&reference, &options(&s, "off")).unwrap();
-    let with_response =
-        common::scenario_from_configs(&s, "on", &[base, "layers/push_response.toml"], "");
+    let with_response = common::scenario_from_configs(&s, "on", layers, "");
     let on = run_scenario(&with_response, &options(&s, "on")).unwrap();
     assert_eq!(off.outcome, Outcome::GoalReached, "{}", off.render());
     assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
@@ -64,6 +90,26 @@ fn without_pushes_the_position_walk_with_step_adjustment_is_unchanged() {
     );
 }
 
+/// The position-control fast walk (0.36 m/s, double supports of 0.12–0.16 s) shows the observer's
+/// touch-down pulses (docs/push-recovery.md, "Why `hold_delay`"): with the hold at once away from the
+/// touch-downs (`layers/push_hold_at_once.toml`) and the delay kept for the estimate's rises within
+/// `impact_window` of a planned touch-down, no double support is held and the run is the walk's own;
+/// without that window (`impact_window = 0`: every hold starts at once) the pulses hold double supports.
+#[test]
+fn without_pushes_the_fast_walk_holds_no_double_support_and_would_without_the_impact_window() {
+    let layers = &[
+        "walk_fast.toml",
+        "layers/push_response.toml",
+        "layers/push_hold_at_once.toml",
+    ];
+    unchanged_without_pushes_with("push_response_fast_nominal", layers);
+    let s = Scratch::new("push_response_fast_no_window");
+    let no_window = "[simplified.push]\nimpact_window = 0.0\n";
+    let sc = common::scenario_from_configs(&s, "no_window", layers, no_window);
+    let run = run_scenario(&sc, &options(&s, "no_window")).unwrap();
+    assert!(run.push_holds.0 >= 1, "{}", run.render());
+}
+
 #[test]
 fn a_side_push_at_a_touch_down_is_walked_through_with_the_double_support_held() {
     let s = Scratch::new("push_response_side");
@@ -71,11 +117,7 @@ fn a_side_push_at_a_touch_down_is_walked_through_with_the_double_support_held() 
     // left foot lifts at 5.90 s into the push and the torso tips (docs/push-recovery.md)
     let off = pushed(&s, "off", TORQUE, [0.0, 20.0], 5.5);
     let on = pushed(&s, "on", TORQUE_RESPONSE, [0.0, 20.0], 5.5);
-    assert!(
-        matches!(off.outcome, Outcome::Fell { .. }),
-        "{}",
-        off.render()
-    );
+    assert_fell(&off);
     assert_eq!(on.outcome, Outcome::DurationReached, "{}", on.render());
     let (holds, delay) = on.push_holds;
     assert_eq!(holds, 1, "{}", on.render());
@@ -88,11 +130,7 @@ fn a_forward_push_beyond_the_soles_still_falls_with_the_double_support_held() {
     let s = Scratch::new("push_response_front");
     // 60 N forward: F h/(m g) = 60 · 0.65 / 321.8 = 0.12 m of CoP, twice the sole's half length
     let on = pushed(&s, "on", TORQUE_RESPONSE, [60.0, 0.0], 5.5);
-    assert!(
-        matches!(on.outcome, Outcome::Fell { .. }),
-        "{}",
-        on.render()
-    );
+    assert_fell(&on);
     assert!(on.push_holds.0 >= 1, "{}", on.render());
 }
 
@@ -107,18 +145,63 @@ fn position_control_a_side_push_at_a_touch_down_is_walked_through_with_the_doubl
     let s = Scratch::new("push_response_position_side");
     let off = pushed(&s, "off", POSITION_STEPS, [0.0, -20.0], 5.5);
     let on = pushed(&s, "on", POSITION_STEPS_RESPONSE, [0.0, -20.0], 5.5);
-    assert!(
-        matches!(off.outcome, Outcome::Fell { .. }),
-        "{}",
-        off.render()
-    );
+    assert_fell(&off);
     assert!(off.step_adjustments.0 > 0, "{}", off.render());
     assert_eq!(on.outcome, Outcome::DurationReached, "{}", on.render());
     assert!(on.push_holds.0 >= 1, "{}", on.render());
     let strong = pushed(&s, "strong", POSITION_STEPS_RESPONSE, [0.0, -40.0], 5.5);
-    assert!(
-        matches!(strong.outcome, Outcome::Fell { .. }),
-        "{}",
-        strong.render()
+    assert_fell(&strong);
+}
+
+/// Position control with the step adjustment and the push response, a push that starts in the middle of
+/// a double support (5.75 s; the right foot landed at 5.557 s): its estimate rises outside the
+/// `impact_window` of the touch-down, the hold starts at once (`layers/push_hold_at_once.toml`) and 40 N
+/// backward is walked through; with `hold_delay` waited at every rise (`hold_at_once = false`, the
+/// default) the hold comes too late and the walk falls. 40 N to the right from the same instant still falls (the
+/// other side of the limit; docs/push-recovery.md, "The hold without delay").
+#[test]
+fn position_control_a_push_in_mid_double_support_is_held_at_once_and_walked_through() {
+    let s = Scratch::new("push_response_position_mid_double_support");
+    let on = pushed(&s, "on", POSITION_STEPS_RESPONSE, [-40.0, 0.0], 5.75);
+    assert_eq!(on.outcome, Outcome::DurationReached, "{}", on.render());
+    assert!(on.push_holds.0 >= 1, "{}", on.render());
+    let always_delayed = "[simplified.push]\nhold_at_once = false\n";
+    let late = pushed_with(
+        &s,
+        "late",
+        POSITION_STEPS_RESPONSE,
+        always_delayed,
+        [-40.0, 0.0],
+        5.75,
     );
+    assert_fell(&late);
+    let right = pushed(&s, "right", POSITION_STEPS_RESPONSE, [0.0, -40.0], 5.75);
+    assert_fell(&right);
+}
+
+/// Position control with the step adjustment and the push response, 20 N to the right for 1 s from 5.0 s
+/// (the right foot swinging towards the push's side): the body rolls under the push, the swinging sole
+/// strikes the ground before its touch-down and the walk falls at once (5.5 s); with the early touch-down
+/// (`configs/layers/early_touchdown.toml`) the strike becomes the touch-down and the walk goes on past the
+/// push (the full scenario still falls at its last steps, 15.3 s: docs/push-recovery.md). 40 N to the
+/// right from 5.25 s falls with it (the other side).
+#[test]
+fn position_control_an_early_strike_of_the_swing_foot_becomes_a_touch_down() {
+    let s = Scratch::new("push_response_position_early_touchdown");
+    let early = "[simplified.step_adjustment]\ntouchdown_force = 150.0\ntouchdown_lead = 0.08\n";
+    let off = pushed(&s, "off", POSITION_STEPS_RESPONSE, [0.0, -20.0], 5.0);
+    assert_fell(&off);
+    assert_eq!(off.early_touchdowns, 0);
+    let on = pushed_with(&s, "on", POSITION_STEPS_RESPONSE, early, [0.0, -20.0], 5.0);
+    assert_eq!(on.outcome, Outcome::DurationReached, "{}", on.render());
+    assert!(on.early_touchdowns >= 1, "{}", on.render());
+    let strong = pushed_with(
+        &s,
+        "strong",
+        POSITION_STEPS_RESPONSE,
+        early,
+        [0.0, -40.0],
+        5.25,
+    );
+    assert_fell(&strong);
 }

@@ -31,7 +31,9 @@ use crate::error::{check_finite, check_non_negative, check_positive, Result, Sim
 /// | `threshold` | N | 6 | dead zone: the estimate's horizontal norm is reduced by this (smaller estimates are zero); above the observer's noise on an unpushed walk |
 /// | `hold_double_support` | – | `true` | hold the double support (the plan's clock slows to a stop) while the estimate exceeds `hold_force` |
 /// | `hold_force` | N | 8 | horizontal push (after the dead zone) above which the double support is held |
-/// | `hold_delay` | s | 0.1 | the estimate must stay above `hold_force` this long before a hold starts: a touch-down's impact shows in the observer as a ±20 N pulse of under 0.1 s on the fast walks (the CoM velocity estimate and the contact forces disagree for a few milliseconds) |
+/// | `hold_delay` | s | 0.1 | the estimate must stay above `hold_force` this long before a hold starts (with `hold_at_once`, only when it rose within `impact_window` of a planned touch-down): a touch-down's impact shows in the observer as a ±20 N pulse of under 0.1 s on the fast walks (the CoM velocity estimate and the contact forces disagree for a few milliseconds) |
+/// | `hold_at_once` | – | `false` | a rise of the estimate farther than `impact_window` from a planned touch-down holds the double support at once (without it every rise waits `hold_delay`) |
+/// | `impact_window` | s | 0.2 | with `hold_at_once`: time on either side of a planned touch-down (the start of a double support) within which a rise of the estimate is treated as a possible impact pulse and waits `hold_delay` |
 /// | `max_hold` | s | 2 | longest hold of one double support (an estimate that never decays cannot stop the walk) |
 /// | `hold_ramp` | s | 0.1 | time for the plan's clock rate to go from 1 to 0 and back (linear ramp) |
 /// | `step_adjustment` | – | `true` | the step-adjustment QP predicts the DCM with the push: its stance CoP is moved by `−F̂/(m ω²)` |
@@ -51,6 +53,10 @@ pub struct PushConfig {
     pub hold_force: f64,
     /// Time the estimate must stay above `hold_force` before a hold starts \[s\].
     pub hold_delay: f64,
+    /// Whether a rise away from the touch-downs (farther than `impact_window`) holds at once.
+    pub hold_at_once: bool,
+    /// Time on either side of a planned touch-down within which a rise of the estimate waits `hold_delay` \[s\].
+    pub impact_window: f64,
     /// Longest hold of one double support \[s\].
     pub max_hold: f64,
     /// Ramp time of the plan's clock rate between 1 and 0 \[s\].
@@ -70,6 +76,8 @@ impl Default for PushConfig {
             hold_double_support: true,
             hold_force: 8.0,
             hold_delay: 0.1,
+            hold_at_once: false,
+            impact_window: 0.2,
             max_hold: 2.0,
             hold_ramp: 0.1,
             step_adjustment: true,
@@ -85,6 +93,7 @@ impl PushConfig {
         check_non_negative("push.threshold", self.threshold)?;
         check_non_negative("push.hold_force", self.hold_force)?;
         check_non_negative("push.hold_delay", self.hold_delay)?;
+        check_non_negative("push.impact_window", self.impact_window)?;
         check_non_negative("push.max_hold", self.max_hold)?;
         check_positive("push.hold_ramp", self.hold_ramp)?;
         if !(0.0..=1.0).contains(&self.lean) {
