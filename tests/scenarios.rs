@@ -289,6 +289,42 @@ fn velocity_commands_replan_online_and_the_robot_follows() {
     assert!(real[0] > 0.8, "walked only {:.3} m forward", real[0]);
 }
 
+/// iCub's controllers stand on the plant's contact surface: the sole frames of configs/robots/icub_v2_7.toml
+/// lie on the bottom face of the URDF's sole collision boxes (the foot's collision geometry reaches nowhere
+/// below them, to 0.1 mm), 10.5 mm below the URDF's own `l_sole` / `r_sole`, on which the controllers' floor
+/// was 10.5 mm above the plant's (docs/gait.md, "The contact frame").
+#[test]
+fn icub_sole_frames_lie_on_the_sole_boxes() {
+    use stride_runner::feet::collision_depth_below;
+    let test = "icub_sole_frames_lie_on_the_sole_boxes";
+    if stride_testkit::icub_model_urdf(test, "iCubGazeboV2_7").is_none() {
+        return;
+    }
+    let scenario = Scenario::load(&config_path("walk_straight_icub.toml")).expect("scenario");
+    let model = stride_runner::setup::load_model(&scenario).expect("model");
+    let r = &scenario.config.robot;
+    for (sole, urdf_sole) in [
+        (r.left_sole.name(), "l_sole"),
+        (r.right_sole.name(), "r_sole"),
+    ] {
+        let depth = |frame: &str| {
+            let id = model.frame_id(frame).expect("frame");
+            collision_depth_below(&scenario.urdf_path, &model, id)
+                .expect("collision geometry read")
+                .expect("collision geometry")
+        };
+        let (contact, urdf) = (depth(sole), depth(urdf_sole));
+        assert!(
+            contact.abs() < 1e-4,
+            "{sole}: {contact} m above the sole's bottom"
+        );
+        assert!(
+            (urdf - 0.0105).abs() < 1e-4,
+            "{urdf_sole}: {urdf} m above it"
+        );
+    }
+}
+
 /// The official iCub model walks the default scenario's 2 m: checks the frame-convention handling too (the
 /// run starts at heading 0 although iCub's `root_link` points backward, and its chest, y up, is upright).
 fn assert_icub_walked_two_metres(name: &str, s: &RunSummary) {
