@@ -305,7 +305,10 @@ fn massless_leaf_gives_an_error_not_nan() {
 fn added_frames_name_the_urdf_link_they_stand_for() {
     use nalgebra::{Isometry3, Translation3, UnitQuaternion};
     let mut m = Model::from_urdf_str(TEST_URDF).unwrap();
-    let down = Isometry3::from_parts(Translation3::new(0.0, 0.0, -0.01), UnitQuaternion::identity());
+    let down = Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, -0.01),
+        UnitQuaternion::identity(),
+    );
     let contact = m.add_frame("l_contact", "l_sole", down).unwrap();
     let toe = m.add_frame("l_toe", "l_contact", down).unwrap();
     let sole = m.frame_id("l_sole").unwrap();
@@ -316,6 +319,8 @@ fn added_frames_name_the_urdf_link_they_stand_for() {
     assert_eq!(m.frames()[contact.index()].attached_to, Some(sole.index()));
     assert_eq!(f_sole.attached_to, None);
     assert_eq!(f_toe.link, f_sole.link);
-    let dz = (f_sole.placement.inverse() * f_toe.placement).translation.vector;
+    let dz = (f_sole.placement.inverse() * f_toe.placement)
+        .translation
+        .vector;
     assert!((dz - nalgebra::Vector3::new(0.0, 0.0, -0.02)).norm() < 1e-12);
 }
