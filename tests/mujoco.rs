@@ -144,11 +144,13 @@ fn icub_walks_to_its_goal_on_mujoco_in_torque_control() {
 
 /// The official iCub's fast position walk on MuJoCo, on its URDF's own sole boxes (issues 15 and 16,
 /// docs/gait.md "The official iCub"): `walk_fast_icub` reaches its 4 m goal upright at ≥ 0.34 m/s steady, the
-/// thesis's 0.3372 m/s on the real robot (measured 2026-12-06: 0.352 m/s, 76 mm from the goal, DCM 45.0 mm
-/// RMS, tilt 7.7°; sensor seeds 1–3: 0.351 m/s, 26–60 mm from the goal). The other side: the tuning it
-/// replaced, found by a search on stride-sim's former 0.19 m simulated sole (0.151 m steps every 0.46 s,
-/// 30 % double support, CoM at 0.53 m, K_CoM 4 / K_ZMP 2.5, k_p 1.6, the held command, the admittance
-/// unfiltered), falls (measured: at 11.9 s, 1.25 m from the goal, its heading 30° off).
+/// thesis's 0.3372 m/s on the real robot (measured 2026-12-06 with the sole frames on the sole boxes'
+/// bottom: 0.346 m/s, 9 mm from the goal, DCM 17.1 mm RMS, tilt 7.6°; sensor seeds 1–7: 0.352–0.353 m/s,
+/// 10–84 mm from the goal). The other side: the tuning it replaced, found by a search on stride-sim's former
+/// 0.19 m simulated sole (0.151 m steps every 0.46 s, 30 % double support, CoM 0.53 m above the URDF's
+/// `l_sole`, 0.5405 m above the sole frames now, K_CoM 4 / K_ZMP 2.5, k_p 1.6, the held command, the
+/// admittance unfiltered), falls (measured on the former frames: at 11.9 s, 1.25 m from the goal, its
+/// heading 30° off).
 #[cfg(feature = "mujoco")]
 #[test]
 fn icub_walks_fast_to_its_goal_on_mujoco_on_its_sole_boxes() {
@@ -168,7 +170,7 @@ fn icub_walks_fast_to_its_goal_on_mujoco_on_its_sole_boxes() {
     let p = &mut c.planner;
     (p.feet_distance_max, p.double_support_fraction) = (0.22, 0.3);
     (p.step_duration_min, p.step_duration_nominal) = (0.46, 1.0);
-    (p.com_height, p.nominal_width, p.stop_deceleration) = (0.53, 0.16, 0.0);
+    (p.com_height, p.nominal_width, p.stop_deceleration) = (0.5405, 0.16, 0.0);
     let zmp_com = &mut c.simplified.zmp_com.walking;
     (zmp_com.k_com, zmp_com.k_zmp) = (4.0, 2.5);
     c.simplified.instantaneous.kp = 1.6;

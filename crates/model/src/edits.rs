@@ -170,6 +170,7 @@ impl crate::Model {
             link: parent_frame.link,
             placement: body_h_frame,
             kind: crate::model::FrameKind::Added,
+            attached_to: Some(p),
         });
         self.frame_index.insert(name.to_string(), index);
         self.frame_rot

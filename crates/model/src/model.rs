@@ -103,6 +103,9 @@ pub struct Frame {
     pub placement: Isometry3<f64>,
     /// What the frame is.
     pub kind: FrameKind,
+    /// For an [`FrameKind::Added`] frame, the frame it was attached to (index into [`Model::frames`]);
+    /// `None` for the others.
+    pub attached_to: Option<usize>,
 }
 
 /// A rigid body of the model: one URDF link moved by a movable joint (or the root), with the inertias of every
@@ -284,6 +287,18 @@ impl Model {
     /// Name of a frame. Panics if `frame` comes from another, smaller model.
     pub fn frame_name(&self, frame: FrameId) -> &str {
         &self.frames[frame.0].name
+    }
+
+    /// The URDF link or sensor frame `frame` is attached to: its own name, or for an added frame
+    /// ([`Model::add_frame`]) the name of the first frame down its chain of attachments that is not added
+    /// (e.g. a sole frame attached to `l_sole` → `l_sole`). Panics if `frame` comes from another, smaller
+    /// model.
+    pub fn urdf_frame_name(&self, frame: FrameId) -> &str {
+        let mut f = &self.frames[frame.0];
+        while let Some(parent) = f.attached_to {
+            f = &self.frames[parent];
+        }
+        &f.name
     }
 
     /// All frames; [`FrameId::index`] indexes this slice. The first `bodies().len()` frames are the body frames.

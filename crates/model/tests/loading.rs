@@ -297,3 +297,30 @@ fn massless_leaf_gives_an_error_not_nan() {
         ModelError::NonFiniteInput { .. }
     ));
 }
+
+/// An added frame knows what it is attached to: [`Model::urdf_frame_name`] follows a chain of added frames
+/// to the URDF link (what a plant reading the URDF needs, e.g. MuJoCo keeping a sole's collision geometry),
+/// at the placement composed along the chain; a URDF frame is its own.
+#[test]
+fn added_frames_name_the_urdf_link_they_stand_for() {
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+    let mut m = Model::from_urdf_str(TEST_URDF).unwrap();
+    let down = Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, -0.01),
+        UnitQuaternion::identity(),
+    );
+    let contact = m.add_frame("l_contact", "l_sole", down).unwrap();
+    let toe = m.add_frame("l_toe", "l_contact", down).unwrap();
+    let sole = m.frame_id("l_sole").unwrap();
+    assert_eq!(m.urdf_frame_name(contact), "l_sole");
+    assert_eq!(m.urdf_frame_name(toe), "l_sole");
+    assert_eq!(m.urdf_frame_name(sole), "l_sole");
+    let [f_sole, f_toe] = [sole, toe].map(|f| m.frames()[f.index()].clone());
+    assert_eq!(m.frames()[contact.index()].attached_to, Some(sole.index()));
+    assert_eq!(f_sole.attached_to, None);
+    assert_eq!(f_toe.link, f_sole.link);
+    let dz = (f_sole.placement.inverse() * f_toe.placement)
+        .translation
+        .vector;
+    assert!((dz - nalgebra::Vector3::new(0.0, 0.0, -0.02)).norm() < 1e-12);
+}

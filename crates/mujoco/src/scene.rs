@@ -65,12 +65,19 @@ pub fn build(model: &Model, s: &SceneSpec<'_>) -> Result<Scene, MujocoError> {
         source,
     })?;
     let contact_links = contact_links(model, s.contact_frames)?;
+    // stride's frames are named after their URDF links; a frame the configuration added (a sole frame on
+    // the sole's bottom face) stands for the link it is attached to.
+    let urdf_links: Vec<String> = s
+        .contact_frames
+        .iter()
+        .filter_map(|name| model.frame_id(name))
+        .map(|f| model.urdf_frame_name(f).to_string())
+        .collect();
     let (text, _) = prepare(
         &text,
         &UrdfEdit {
             path: s.urdf,
-            // stride's frames are named after their URDF links.
-            contact_links: s.contact_frames,
+            contact_links: &urdf_links,
         },
     )?;
     let mut spec = MjSpec::from_xml_string(&text).map_err(|e| compile_error(e.to_string()))?;

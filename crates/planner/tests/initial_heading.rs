@@ -14,7 +14,7 @@ use stride_planner::{plan_from_standing, Foot, Goal, Plan, PlanOutcome, PlannerC
 /// `nominal_width`).
 fn icub() -> PlannerConfig {
     PlannerConfig {
-        com_height: 0.524,
+        com_height: 0.5345,
         nominal_width: 0.14,
         foot_length: 0.11,
         feet_distance_max: 0.20,

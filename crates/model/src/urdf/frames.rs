@@ -26,6 +26,7 @@ pub(super) fn body_and_merged_frames(bodies: &[Body], merged: Vec<Frame>, links:
             link: list.len(),
             placement: nalgebra::Isometry3::identity(),
             kind: FrameKind::Body,
+            attached_to: None,
         });
     }
     list.extend(merged);
@@ -130,6 +131,7 @@ fn sensor_frame(
         link: body,
         placement,
         kind: FrameKind::Sensor,
+        attached_to: None,
     });
     frames.links.push(link);
     frames.index.insert(s.name.clone(), frames.list.len() - 1);

@@ -96,6 +96,7 @@ pub(super) fn build(
                 link: body,
                 placement,
                 kind: FrameKind::MergedLink,
+                attached_to: None,
             });
         }
         // Push children in reverse so that they are visited in file order.
