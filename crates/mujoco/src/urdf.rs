@@ -41,7 +41,7 @@ pub struct UrdfEdit<'a> {
     /// The URDF file (for errors, and the start of the `package://` search).
     pub path: &'a Path,
     /// The URDF links of the contact frames (the soles): each keeps the collision elements of the nearest
-    /// link holding any, walking from it up its fixed joints ([`sole_collision_links`]).
+    /// link holding any, walking from it up its fixed joints.
     pub contact_links: &'a [String],
 }
 
