@@ -124,6 +124,9 @@ pub struct ActiveSetSolver {
     free: Vec<usize>,
     j0_ready: bool,
     last_start: StartKind,
+    /// Whether a rejected guess re-imposes the previous active set before the cold start (stage 2 of the
+    /// warm start); without it the guess is also tried from an empty previous active set.
+    reimpose: bool,
 }
 
 impl ActiveSetSolver {
@@ -161,7 +164,19 @@ impl ActiveSetSolver {
             free: Vec::new(),
             j0_ready: false,
             last_start: StartKind::Cold,
+            reimpose: true,
         }
+    }
+
+    /// This solver with the warm start reduced to its first stage: the previous active set (empty
+    /// included: the unconstrained minimum) is tried as a guess, and a rejected guess goes straight to
+    /// the cold start. For the null-space path's reduced problems, whose optimum usually keeps the
+    /// previous tick's few active inequalities (none on the position walk), and where re-imposing an
+    /// active set was measured slower than a cold start (docs/performance.md): an accepted guess needs
+    /// neither `J₀ = L⁻ᵀ` nor any Givens rotation.
+    pub(crate) fn guess_or_cold(mut self) -> Self {
+        self.reimpose = false;
+        self
     }
 
     /// How the last solve started (cold, accepted guess, or re-imposed active set).
@@ -227,6 +242,7 @@ impl ActiveSetSolver {
 
     /// Copies the rows in use of `E` and `C` into `nt` (constraint `i`'s normal contiguous at `i·n`) and
     /// their norms into `norms`, reading the column-major matrices column by column.
+    #[inline(never)]
     fn load_rows(&mut self, qp: &DenseQp) {
         let (n, me, mi) = (self.n, self.me, self.mi);
         for (first, rows, used) in [(0, &qp.e, me), (me, &qp.c, mi)] {
@@ -245,6 +261,7 @@ impl ActiveSetSolver {
     }
 
     /// Cholesky `H = L Lᵀ` (lower, column-major, right-looking) then `J₀ = L⁻ᵀ`. False if `H` is not PD.
+    #[inline(never)]
     fn factorize(&mut self, qp: &DenseQp) -> bool {
         let n = self.n;
         let l = &mut self.chol[..n * n];
@@ -1105,8 +1122,9 @@ impl QpSolver for ActiveSetSolver {
         }
         self.iterations = 0;
         self.warm_used = false;
-        let can_warm =
-            self.settings.warm_start && self.prev_dims == (n, me, mi) && !self.prev.is_empty();
+        let can_warm = self.settings.warm_start
+            && self.prev_dims == (n, me, mi)
+            && (!self.prev.is_empty() || !self.reimpose);
         let mut status = None;
         self.last_start = StartKind::Cold;
         if can_warm {
@@ -1114,6 +1132,8 @@ impl QpSolver for ActiveSetSolver {
                 self.warm_used = true;
                 self.last_start = StartKind::Guess;
                 status = Some(QpStatus::Solved);
+            } else if !self.reimpose {
+                self.iterations = 0;
             } else if let Run::Done(s) = self.run_warm(qp) {
                 self.warm_used = true;
                 self.last_start = StartKind::Reimposed;
@@ -1160,6 +1180,9 @@ impl QpSolver for ActiveSetSolver {
 
     fn reset(&mut self) {
         self.prev.clear();
+        // the next solve starts cold, as the first one did (without this a guess-or-cold solver would
+        // try the empty active set)
+        self.prev_dims = (usize::MAX, 0, 0);
     }
 
     fn reserve(&mut self, n: usize, n_eq: usize, n_ineq: usize) {
