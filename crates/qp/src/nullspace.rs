@@ -29,7 +29,7 @@ use crate::status::QpStatus;
 use crate::task::{Task, TaskKind};
 use crate::variables::VariableSet;
 
-mod kernels;
+pub(crate) mod kernels;
 use kernels::{add_lower_gram, apply_reflectors, project_row, Reflectors, SparseColumns};
 
 /// Relative pivot threshold of `R` below which `A_e` is treated as rank deficient (full path instead).

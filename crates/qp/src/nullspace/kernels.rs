@@ -8,10 +8,10 @@
 use std::ops::Range;
 
 /// Widest tile \[f64\]: four SSE2 registers of accumulators.
-const TILE: usize = 8;
+pub(crate) const TILE: usize = 8;
 
 /// The tiles `(start, width)` covering `range`: widths 8 while they fit, then 4, 2 and 1.
-fn tiles(range: Range<usize>) -> impl Iterator<Item = (usize, usize)> {
+pub(crate) fn tiles(range: Range<usize>) -> impl Iterator<Item = (usize, usize)> {
     let mut start = range.start;
     std::iter::from_fn(move || {
         let left = range.end.saturating_sub(start);
