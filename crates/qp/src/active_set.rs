@@ -16,6 +16,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dense::DenseQp;
+use crate::nullspace::kernels;
 use crate::solver::{QpSolver, SolverOutput};
 use crate::status::QpStatus;
 
@@ -124,6 +125,9 @@ pub struct ActiveSetSolver {
     free: Vec<usize>,
     j0_ready: bool,
     last_start: StartKind,
+    /// Whether a rejected guess re-imposes the previous active set before the cold start (stage 2 of the
+    /// warm start); without it the guess is also tried from an empty previous active set.
+    reimpose: bool,
 }
 
 impl ActiveSetSolver {
@@ -161,7 +165,19 @@ impl ActiveSetSolver {
             free: Vec::new(),
             j0_ready: false,
             last_start: StartKind::Cold,
+            reimpose: true,
         }
+    }
+
+    /// This solver with the warm start reduced to its first stage: the previous active set (empty
+    /// included: the unconstrained minimum) is tried as a guess, and a rejected guess goes straight to
+    /// the cold start. For the null-space path's reduced problems, whose optimum usually keeps the
+    /// previous tick's few active inequalities (none on the position walk), and where re-imposing an
+    /// active set was measured slower than a cold start (docs/performance.md): an accepted guess needs
+    /// neither `J₀ = L⁻ᵀ` nor any Givens rotation.
+    pub(crate) fn guess_or_cold(mut self) -> Self {
+        self.reimpose = false;
+        self
     }
 
     /// How the last solve started (cold, accepted guess, or re-imposed active set).
@@ -227,6 +243,7 @@ impl ActiveSetSolver {
 
     /// Copies the rows in use of `E` and `C` into `nt` (constraint `i`'s normal contiguous at `i·n`) and
     /// their norms into `norms`, reading the column-major matrices column by column.
+    #[inline(never)]
     fn load_rows(&mut self, qp: &DenseQp) {
         let (n, me, mi) = (self.n, self.me, self.mi);
         for (first, rows, used) in [(0, &qp.e, me), (me, &qp.c, mi)] {
@@ -244,42 +261,24 @@ impl ActiveSetSolver {
         }
     }
 
-    /// Cholesky `H = L Lᵀ` (lower, column-major, right-looking) then `J₀ = L⁻ᵀ`. False if `H` is not PD.
+    /// Cholesky `H = L Lᵀ` (lower, column-major, [`cholesky_lower`]); `J₀ = L⁻ᵀ` is formed later, when
+    /// dual iterations need it. False if `H` is not PD.
+    #[inline(never)]
     fn factorize(&mut self, qp: &DenseQp) -> bool {
         let n = self.n;
         let l = &mut self.chol[..n * n];
         let h = qp.h.as_slice();
         let mut max_diag: f64 = 0.0;
+        // the lower triangle (diagonal included) of (H + Hᵀ)/2: the only part any use of the factor reads
         for c in 0..n {
-            for r in 0..n {
+            for r in c..n {
                 l[r + c * n] = 0.5 * (h[r + c * n] + h[c + r * n]);
             }
             max_diag = max_diag.max(h[c + c * n].abs());
         }
         let pivot_min = 1e-14 * max_diag.max(f64::MIN_POSITIVE);
-        for c in 0..n {
-            let piv = l[c + c * n];
-            if piv.is_nan() || piv <= pivot_min {
-                return false;
-            }
-            let s = piv.sqrt();
-            for v in &mut l[c + c * n..(c + 1) * n] {
-                *v /= s;
-            }
-            for k in c + 1..n {
-                let f = l[k + c * n];
-                if f != 0.0 {
-                    let (left, right) = l.split_at_mut(k * n);
-                    let colc = &left[c * n + k..c * n + n];
-                    let colk = &mut right[k..n];
-                    for (a, b) in colk.iter_mut().zip(colc) {
-                        *a -= f * b;
-                    }
-                }
-            }
-        }
         self.j0_ready = false;
-        true
+        cholesky_lower(l, n, pivot_min)
     }
 
     /// `J₀ = L⁻ᵀ`: column `jj` solves `Lᵀ y = e_jj` (upper triangular back substitution).
@@ -418,27 +417,7 @@ impl ActiveSetSolver {
                 self.hff[r + c * nf] = 0.5 * (qp.h[(jr, jc)] + qp.h[(jc, jr)]);
             }
         }
-        let l = &mut self.hff[..nf * nf];
-        for c in 0..nf {
-            let piv = l[c + c * nf];
-            if piv.is_nan() || piv <= pivot_min {
-                return false;
-            }
-            let s = piv.sqrt();
-            for v in &mut l[c + c * nf..(c + 1) * nf] {
-                *v /= s;
-            }
-            for k in c + 1..nf {
-                let f = l[k + c * nf];
-                if f != 0.0 {
-                    let (left, right) = l.split_at_mut(k * nf);
-                    for (a, b) in right[k..nf].iter_mut().zip(&left[c * nf + k..c * nf + nf]) {
-                        *a -= f * b;
-                    }
-                }
-            }
-        }
-        true
+        cholesky_lower(&mut self.hff[..nf * nf], nf, pivot_min)
     }
 
     /// The primal point of the guess: the minimum of the cost on the free variables subject to the active
@@ -1105,8 +1084,9 @@ impl QpSolver for ActiveSetSolver {
         }
         self.iterations = 0;
         self.warm_used = false;
-        let can_warm =
-            self.settings.warm_start && self.prev_dims == (n, me, mi) && !self.prev.is_empty();
+        let can_warm = self.settings.warm_start
+            && self.prev_dims == (n, me, mi)
+            && (!self.prev.is_empty() || !self.reimpose);
         let mut status = None;
         self.last_start = StartKind::Cold;
         if can_warm {
@@ -1114,6 +1094,8 @@ impl QpSolver for ActiveSetSolver {
                 self.warm_used = true;
                 self.last_start = StartKind::Guess;
                 status = Some(QpStatus::Solved);
+            } else if !self.reimpose {
+                self.iterations = 0;
             } else if let Run::Done(s) = self.run_warm(qp) {
                 self.warm_used = true;
                 self.last_start = StartKind::Reimposed;
@@ -1160,9 +1142,141 @@ impl QpSolver for ActiveSetSolver {
 
     fn reset(&mut self) {
         self.prev.clear();
+        // the next solve starts cold, as the first one did (without this a guess-or-cold solver would
+        // try the empty active set)
+        self.prev_dims = (usize::MAX, 0, 0);
     }
 
     fn reserve(&mut self, n: usize, n_eq: usize, n_ineq: usize) {
         self.ensure_workspace(n, n_eq, n_ineq);
+    }
+}
+
+/// Cholesky factor in place of the lower triangle of the `n × n` column-major `l` (the strict upper
+/// triangle is neither read nor written); false at the first pivot that is NaN or `≤ pivot_min`.
+///
+/// Left-looking and register-tiled: column `k` is `l[k.., k] − Σ_{c<k} l[k, c] l[k.., c]` (the terms with
+/// `l[k, c] = 0` skipped), summed over `c` in ascending order, then divided by the square root of its
+/// pivot, tile by tile of [`kernels::TILE`] rows held in registers. That is every entry's sequence of
+/// operations in the right-looking rank-one form (`l[k.., k] −= l[k, c] l[k.., c]` after column `c` is
+/// final), so the factor is the same bit for bit, with a fraction of the loads and stores (the test
+/// below keeps the rank-one form as the reference).
+fn cholesky_lower(l: &mut [f64], n: usize, pivot_min: f64) -> bool {
+    for k in 0..n {
+        let (done, rest) = l.split_at_mut(k * n);
+        let col = &mut rest[..n];
+        let mut s = 1.0;
+        for (r0, width) in kernels::tiles(k..n) {
+            match width {
+                kernels::TILE => cholesky_tile::<{ kernels::TILE }>(done, n, k, r0, col),
+                4 => cholesky_tile::<4>(done, n, k, r0, col),
+                2 => cholesky_tile::<2>(done, n, k, r0, col),
+                _ => cholesky_tile::<1>(done, n, k, r0, col),
+            }
+            if r0 == k {
+                let piv = col[k];
+                if piv.is_nan() || piv <= pivot_min {
+                    return false;
+                }
+                s = piv.sqrt();
+            }
+            for v in &mut col[r0..r0 + width] {
+                *v /= s;
+            }
+        }
+    }
+    true
+}
+
+/// Rows `r0..r0 + W` of column `k` (`col`): minus the products with the final columns `0..k` (`done`).
+fn cholesky_tile<const W: usize>(done: &[f64], n: usize, k: usize, r0: usize, col: &mut [f64]) {
+    let mut acc = [0.0; W];
+    acc.copy_from_slice(&col[r0..r0 + W]);
+    for c in 0..k {
+        let f = done[c * n + k];
+        if f == 0.0 {
+            continue;
+        }
+        let src = &done[c * n + r0..c * n + r0 + W];
+        for t in 0..W {
+            acc[t] -= f * src[t];
+        }
+    }
+    col[r0..r0 + W].copy_from_slice(&acc);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cholesky_lower;
+
+    /// The right-looking rank-one form the tiled factorization replaced.
+    fn cholesky_reference(l: &mut [f64], n: usize, pivot_min: f64) -> bool {
+        for c in 0..n {
+            let piv = l[c + c * n];
+            if piv.is_nan() || piv <= pivot_min {
+                return false;
+            }
+            let s = piv.sqrt();
+            for v in &mut l[c + c * n..(c + 1) * n] {
+                *v /= s;
+            }
+            for k in c + 1..n {
+                let f = l[k + c * n];
+                if f != 0.0 {
+                    let (left, right) = l.split_at_mut(k * n);
+                    for (a, b) in right[k..n].iter_mut().zip(&left[c * n + k..c * n + n]) {
+                        *a -= f * b;
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// `B Bᵀ + δ I` with a third of `B`'s entries zero (sizes across the tile widths), and one matrix
+    /// that is not positive definite: same factor bit for bit (lower triangle), same verdict.
+    #[test]
+    fn the_tiled_cholesky_is_the_rank_one_form_bit_for_bit() {
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u = (seed >> 11) as f64 / (1u64 << 53) as f64;
+            if u < 1.0 / 3.0 {
+                0.0
+            } else {
+                2.0 * u - 1.0
+            }
+        };
+        for n in [1, 2, 3, 5, 8, 9, 17, 26, 32, 41] {
+            let b: Vec<f64> = (0..n * n).map(|_| next()).collect();
+            let mut h = vec![0.0; n * n];
+            for c in 0..n {
+                for r in 0..n {
+                    h[r + c * n] = (0..n).map(|i| b[r + i * n] * b[c + i * n]).sum::<f64>();
+                }
+                h[c + c * n] += 1e-3;
+            }
+            for indefinite in [false, true] {
+                let mut a = h.clone();
+                if indefinite {
+                    a[(n - 1) * (n + 1)] = -1.0;
+                }
+                let mut expected = a.clone();
+                let ok = cholesky_reference(&mut expected, n, 1e-14);
+                let got = cholesky_lower(&mut a, n, 1e-14);
+                assert_eq!(got, ok, "n {n}, indefinite {indefinite}");
+                assert_eq!(got, !indefinite, "n {n}");
+                if ok {
+                    for c in 0..n {
+                        for r in c..n {
+                            let (x, y) = (a[r + c * n], expected[r + c * n]);
+                            assert_eq!(x.to_bits(), y.to_bits(), "n {n}, entry ({r}, {c})");
+                        }
+                    }
+                }
+            }
+        }
     }
 }

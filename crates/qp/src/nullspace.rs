@@ -29,7 +29,7 @@ use crate::status::QpStatus;
 use crate::task::{Task, TaskKind};
 use crate::variables::VariableSet;
 
-mod kernels;
+pub(crate) mod kernels;
 use kernels::{add_lower_gram, apply_reflectors, project_row, Reflectors, SparseColumns};
 
 /// Relative pivot threshold of `R` below which `A_e` is treated as rank deficient (full path instead).
@@ -106,8 +106,11 @@ impl NullSpace {
         settings.fallback = false;
         // measured: on these equality-free problems the dual active-set solver's cold start (from the
         // unconstrained minimum) is faster than re-imposing the previous active set (IK 7 µs vs 87 µs,
-        // TSID 41 µs vs 68 µs on the bundled model)
-        settings.active_set.warm_start = false;
+        // TSID 41 µs vs 68 µs on the bundled model), but the previous active set as a guess (the
+        // unconstrained minimum when it was empty), checked for optimality and dropped for a cold start
+        // when it fails, is cheaper than both: no `J₀ = L⁻ᵀ`, no Givens rotation. `QpProblem::raw`
+        // builds the backend so, with `active_set.warm_start` as configured (on by default);
+        // docs/performance.md, "the reduced QP's warm start".
         let problem = QpProblem::raw(vars, ineq_rows + nx, settings)?;
         let soft_rows: usize = tasks
             .iter()
@@ -151,6 +154,7 @@ impl NullSpace {
     }
 
     /// Copies the hard equality rows into `A_eᵀ` and `b_e` (column by column of each task's `A`).
+    #[inline(never)]
     fn gather(&mut self, tasks: &[Task]) {
         let nx = self.nx;
         let at = self.at.as_mut_slice();
@@ -178,6 +182,7 @@ impl NullSpace {
     }
 
     /// Householder QR of `A_eᵀ` (in place, column slices: contiguous); false when rank deficient.
+    #[inline(never)]
     fn householder(&mut self) -> bool {
         let (nx, m) = (self.nx, self.m);
         let at = self.at.as_mut_slice();
@@ -210,6 +215,7 @@ impl NullSpace {
 
     /// `Nᵀ = (H_0 ⋯ H_{m−1} [0; I])ᵀ`: the last `nz` columns of `Q`, every reflector on them
     /// (`N ← N − τ_k v_k (v_kᵀ N)`, `v_k` on rows `k..nx`, tile by tile of columns); `Q₁` is never formed.
+    #[inline(never)]
     fn basis(&mut self) {
         let (nx, m, nz) = (self.nx, self.m, self.nz);
         let nt = self.nt.as_mut_slice();
@@ -227,6 +233,7 @@ impl NullSpace {
 
     /// `x_p = Q₁ R⁻ᵀ b_e = H_0 ⋯ H_{m−1} [y; 0]` with `Rᵀ y = b_e` (forward substitution; `R`: diagonal in
     /// `r_diag`, strict upper part in `at`).
+    #[inline(never)]
     fn particular(&mut self) {
         let (nx, m) = (self.nx, self.m);
         let at = self.at.as_slice();
@@ -275,6 +282,7 @@ impl NullSpace {
     }
 
     /// Projects every soft and inequality task (once per distinct `A`, see [`Projected::twins`]).
+    #[inline(never)]
     fn project_all(&mut self, tasks: &[Task]) {
         for k in 0..tasks.len() {
             let Some(p) = &self.proj[k] else { continue };
@@ -297,6 +305,7 @@ impl NullSpace {
     /// Stacks the soft rows scaled by the square roots of their weights: column `i` of `soft` is
     /// `√w_i (a_i N)ᵀ`, `soft_rhs[i] = √w_i (b_i − a_i x_p)`, so that the soft cost is
     /// `½‖Sᵀ z − r̃‖²` up to a constant. Returns the number of rows.
+    #[inline(never)]
     fn stack_soft_rows(&mut self, tasks: &[Task]) -> usize {
         let nz = self.nz;
         let mut col = 0;
@@ -324,6 +333,7 @@ impl NullSpace {
     /// Writes the reduced dense QP: Hessian `ρ I + Σ_soft (A N)ᵀ W (A N)`, gradient
     /// `−Σ_soft (A N)ᵀ W (b − A x_p)`, the projected inequality rows and one bound row per variable with a
     /// finite bound.
+    #[inline(never)]
     fn write_reduced(&mut self, tasks: &[Task], lower: &DVector<f64>, upper: &DVector<f64>) {
         let nz = self.nz;
         let rho = self.problem.settings().regularization;

@@ -292,14 +292,17 @@ impl QpProblem {
 
     /// A problem without tasks over `vars`, with room for `cap_in` inequality rows and no equality row,
     /// whose dense QP the crate writes directly ([`QpProblem::dense_mut`]) and solves as written
-    /// ([`QpProblem::solve_dense`]): the null-space path's reduced problem. Its backend's workspace is
-    /// sized here, so no solve allocates.
+    /// ([`QpProblem::solve_dense`]): the null-space path's reduced problem. Its backend is the active-set
+    /// solver with the guess-or-cold warm start ([`ActiveSetSolver::guess_or_cold`]; the warm start on
+    /// or off with `settings.active_set.warm_start`); its workspace is sized here, so no solve allocates.
     pub(crate) fn raw(
         vars: VariableSet,
         cap_in: usize,
         settings: QpSettings,
     ) -> Result<Self, QpError> {
-        let mut problem = Self::new(vars, Vec::new(), settings)?;
+        let solver = Box::new(ActiveSetSolver::new(settings.active_set.clone()).guess_or_cold());
+        let relaxed_solver = settings.backend.make(&settings);
+        let mut problem = Self::with_solvers(vars, Vec::new(), settings, solver, relaxed_solver)?;
         let n = problem.n();
         problem.nominal = DenseQp::with_capacity(n, 0, cap_in);
         problem.solver.reserve(n, 0, cap_in);

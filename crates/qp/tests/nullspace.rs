@@ -49,6 +49,56 @@ fn null_space_path_gives_the_full_solution_on_tsid_like_problems() {
 }
 
 /// `x0 + x1 = 1` hard, `x = (1, 2)` soft: the reduced problem has one variable.
+/// The reduced problem's warm start (the previous active set as a guess, a cold start when it is
+/// rejected): over small steps the guess is accepted on most ticks, over jumps rejected on some, and every
+/// tick's solution is the one of the same reduction with the warm start off (cold starts only) and of the
+/// full problem.
+#[test]
+fn the_reduced_problems_guess_gives_the_cold_solution_and_is_dropped_when_rejected() {
+    for make in [RandomWbc::ik_like, RandomWbc::tsid_like] {
+        let mut cold_settings = QpSettings::default();
+        cold_settings.active_set.warm_start = false;
+        let mut warm = make(4, QpSettings::default()).unwrap();
+        let mut cold = make(4, cold_settings).unwrap();
+        let mut full = make(4, QpSettings::default()).unwrap();
+        assert!(warm.problem.enable_null_space().unwrap());
+        assert!(cold.problem.enable_null_space().unwrap());
+        let (mut guessed, mut ticks) = ([0; 2], [0; 2]);
+        for k in 0..80 {
+            // ticks 0-39: steps of 1 ms; then jumps of 0.7 (the active set changes)
+            let jumps = usize::from(k >= 40);
+            let t = if jumps == 0 {
+                1e-3 * k as f64
+            } else {
+                0.7 * k as f64
+            };
+            for p in [&mut warm, &mut cold, &mut full] {
+                p.write(t);
+            }
+            let x_full = full.problem.solve().unwrap().x.clone();
+            let x_cold = cold.problem.solve().unwrap().x.clone();
+            assert!(!cold.problem.last_solved().solution().warm_started);
+            let sol = warm.problem.solve().unwrap();
+            assert_eq!(sol.path, SolvePath::NullSpace, "tick {k}");
+            let scale = 1.0 + x_cold.amax();
+            let (dc, df) = ((&sol.x - &x_cold).amax(), (&sol.x - &x_full).amax());
+            assert!(dc < 1e-9 * scale, "tick {k}: warm vs cold reduction {dc:e}");
+            assert!(df < 1e-6 * scale, "tick {k}: warm reduction vs full {df:e}");
+            let reduced = warm.problem.last_solved();
+            assert!(reduced.check_kkt().is_satisfied(1e-10), "tick {k}");
+            guessed[jumps] += usize::from(reduced.solution().warm_started);
+            ticks[jumps] += 1;
+        }
+        // the first tick has no previous solve: a cold start
+        assert!(
+            guessed[0] >= 35,
+            "guess accepted on {} of 40 small steps",
+            guessed[0]
+        );
+        assert!(guessed[1] < ticks[1], "every guess accepted over the jumps");
+    }
+}
+
 fn small() -> QpProblem {
     let mut vars = VariableSet::new();
     let v = vars.add("v", 2).unwrap();

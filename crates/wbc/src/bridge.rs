@@ -142,20 +142,11 @@ impl QpBridge {
         settings: &QpSettings,
         eliminate: bool,
     ) -> Result<Self, WbcError> {
-        let first_hard = specs
-            .iter()
-            .position(|s| s.kind == TaskKind::Equality && s.hard);
+        // `QpProblem::new` sizes every workspace of both backends (nominal and relaxed) and the null-space
+        // path sizes its own: no solve allocates, the first included (stride-qp's and this crate's
+        // counting-allocator tests), so nothing is solved here. (A priming solve of each QP here cost
+        // 34.5 M instructions of the torque walk's start-up: docs/performance.md.)
         let mut problem = QpProblem::new(layout.set, specs, settings.clone())?;
-        // Prime the backends: their workspaces are sized at the first solve, so solve once here, with an
-        // inconsistent hard row `0 = 1` so that the relaxed (fallback) backend is sized too; then forget
-        // everything. After this no tick allocates, whichever path it takes.
-        if let Some(k) = first_hard {
-            problem.task_mut(TaskId(k)).b_mut()[0] = 1.0;
-            let _ = problem.solve();
-            problem.task_mut(TaskId(k)).b_mut()[0] = 0.0;
-        }
-        let _ = problem.solve();
-        problem.reset_warm_start();
         if eliminate {
             problem.enable_null_space()?;
         }

@@ -8,10 +8,10 @@
 use std::ops::Range;
 
 /// Widest tile \[f64\]: four SSE2 registers of accumulators.
-const TILE: usize = 8;
+pub(crate) const TILE: usize = 8;
 
 /// The tiles `(start, width)` covering `range`: widths 8 while they fit, then 4, 2 and 1.
-fn tiles(range: Range<usize>) -> impl Iterator<Item = (usize, usize)> {
+pub(crate) fn tiles(range: Range<usize>) -> impl Iterator<Item = (usize, usize)> {
     let mut start = range.start;
     std::iter::from_fn(move || {
         let left = range.end.saturating_sub(start);
@@ -24,16 +24,22 @@ fn tiles(range: Range<usize>) -> impl Iterator<Item = (usize, usize)> {
 
 /// `H += Σ_i s_i s_iᵀ` on the lower triangle (rows `c..nz` of column `c`), then the upper triangle from
 /// the lower one. `h`: `nz × nz` column-major; `s`: the columns `s_i` (length `nz`), one after the other.
-/// A zero `s_i[c]` skips its update of column `c`.
+/// A zero `s_i[c]` skips its update of column `c`. Columns go in pairs: the pair's rows below its first
+/// diagonal entry are tiled once for both columns, so each tile of `s_i` is loaded once for two updates.
 pub(super) fn add_lower_gram(h: &mut [f64], s: &[f64], nz: usize) {
-    for c in 0..nz {
-        for (r0, width) in tiles(c..nz) {
-            let out = &mut h[c * nz + r0..c * nz + r0 + width];
+    for c in (0..nz).step_by(2) {
+        gram_tile::<1>(&mut h[c * nz + c..c * nz + c + 1], s, nz, c, c);
+        if c + 1 == nz {
+            continue;
+        }
+        let (first, second) = h[c * nz..(c + 2) * nz].split_at_mut(nz);
+        for (r0, width) in tiles(c + 1..nz) {
+            let out = [&mut first[r0..r0 + width], &mut second[r0..r0 + width]];
             match width {
-                TILE => gram_tile::<TILE>(out, s, nz, c, r0),
-                4 => gram_tile::<4>(out, s, nz, c, r0),
-                2 => gram_tile::<2>(out, s, nz, c, r0),
-                _ => gram_tile::<1>(out, s, nz, c, r0),
+                TILE => gram_pair_tile::<TILE>(out, s, nz, c, r0),
+                4 => gram_pair_tile::<4>(out, s, nz, c, r0),
+                2 => gram_pair_tile::<2>(out, s, nz, c, r0),
+                _ => gram_pair_tile::<1>(out, s, nz, c, r0),
             }
         }
     }
@@ -42,6 +48,32 @@ pub(super) fn add_lower_gram(h: &mut [f64], s: &[f64], nz: usize) {
             h[r * nz + c] = h[c * nz + r];
         }
     }
+}
+
+/// Rows `r0..r0 + W` of columns `c` and `c + 1` of the Gram update (`out`, each of length `W`; row
+/// `r0 = c + 1` of column `c + 1`'s is its diagonal entry).
+fn gram_pair_tile<const W: usize>(out: [&mut [f64]; 2], s: &[f64], nz: usize, c: usize, r0: usize) {
+    let [out0, out1] = out;
+    let mut acc0 = [0.0; W];
+    let mut acc1 = [0.0; W];
+    acc0.copy_from_slice(out0);
+    acc1.copy_from_slice(out1);
+    for si in s.chunks_exact(nz) {
+        let (f0, f1) = (si[c], si[c + 1]);
+        let src = &si[r0..r0 + W];
+        if f0 != 0.0 {
+            for t in 0..W {
+                acc0[t] += f0 * src[t];
+            }
+        }
+        if f1 != 0.0 {
+            for t in 0..W {
+                acc1[t] += f1 * src[t];
+            }
+        }
+    }
+    out0.copy_from_slice(&acc0);
+    out1.copy_from_slice(&acc1);
 }
 
 /// Rows `r0..r0 + W` of column `c` of the Gram update (`out`, length `W`).
