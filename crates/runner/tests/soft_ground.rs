@@ -275,3 +275,25 @@ fn assert_falls(s: &Scratch, name: &str, text: &str) -> RunSummary {
     );
     summary
 }
+
+/// Stage 3 on the estimated state (docs/soft-ground.md, "Stage 3 on the estimated state"): the scenario that
+/// reaches its goal on the plant's truth (above) falls at once with the EKF, on its own ground (measured
+/// 0.033 s, 0.015 m) and on the stiffest of Table 8.1 (0.034 s): the 1 kHz compliant TSID loses stability
+/// on the estimated joint velocities and foot wrenches. When a fix makes it walk, this test must move.
+#[test]
+fn the_planned_momentum_walk_falls_at_once_on_the_ekf() {
+    let s = Scratch::new("soft_ground_planned_momentum_ekf");
+    let walk = common::root().join("configs/walk_soft_ground_compliant_planned_torque.toml");
+    let include = format!("include = [{:?}]\n", walk.display().to_string());
+    let ekf = "[estimation]\nkind = \"ekf\"\n";
+    let stiff = "[sim.contact]\nnormal_stiffness = 2e6\nnormal_damping = 1e4\n\
+                 [wbc.tsid.compliant]\nground_stiffness = 2e6\nground_damping = 1e4\n";
+    for (name, text) in [
+        ("planned_ekf", format!("{include}{ekf}")),
+        ("planned_stiff_ekf", format!("{include}{ekf}{stiff}")),
+    ] {
+        let summary = assert_falls(&s, name, &text);
+        assert!(summary.simulated_time < 0.1, "{name}: {}", summary.render());
+        assert!(summary.distance < 0.05, "{name}: {}", summary.render());
+    }
+}
