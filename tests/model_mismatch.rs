@@ -67,12 +67,9 @@ fn ten_percent_heavier_plant_walks_in_both_modes() {
 fn position_control_mass_limit() {
     // On the hard default floor (k 3·10⁸ N/m³, since 2026-12-06). On the former 3·10⁷ floor: 1.95 / 2.0 with
     // the position-control defaults of 2026-12-06 (the simplified layer at 500 Hz, K_ZMP 2.0, the foot
-    // admittance's gains), 2.1 / 2.2 before them (docs/estimation.md). 2.4 / 2.45 on the hard floor until the
-    // reduced QP's warm start (stride-qp, 2026-12-06 noon), whose solutions equal the cold start's to 1e-9:
-    // at 2.4 the walk then falls (torso tilt 20.0°, against 4.9° before), so at the limit the outcome turns on
-    // round-off; 2.35 reaches the goal (tilt 2.5°).
-    assert_walks("walk_straight.toml", Mismatch::MassScale(2.35));
-    assert_falls("walk_straight.toml", Mismatch::MassScale(2.4));
+    // admittance's gains), 2.1 / 2.2 before them (docs/estimation.md).
+    assert_walks("walk_straight.toml", Mismatch::MassScale(2.4));
+    assert_falls("walk_straight.toml", Mismatch::MassScale(2.45));
 }
 
 #[test]
