@@ -109,8 +109,9 @@ impl NullSpace {
         // TSID 41 µs vs 68 µs on the bundled model), but the previous active set as a guess (the
         // unconstrained minimum when it was empty), checked for optimality and dropped for a cold start
         // when it fails, is cheaper than both: no `J₀ = L⁻ᵀ`, no Givens rotation. `QpProblem::raw`
-        // builds the backend so, with `active_set.warm_start` as configured (on by default);
-        // docs/performance.md, "the reduced QP's warm start".
+        // builds the backend so when `active_set.reduced_guess` is on (off by default: its round-off moves
+        // closed-loop limits; docs/performance.md, "the reduced QP's warm start").
+        settings.active_set.warm_start = settings.active_set.reduced_guess;
         let problem = QpProblem::raw(vars, ineq_rows + nx, settings)?;
         let soft_rows: usize = tasks
             .iter()

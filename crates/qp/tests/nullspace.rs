@@ -56,9 +56,10 @@ fn null_space_path_gives_the_full_solution_on_tsid_like_problems() {
 #[test]
 fn the_reduced_problems_guess_gives_the_cold_solution_and_is_dropped_when_rejected() {
     for make in [RandomWbc::ik_like, RandomWbc::tsid_like] {
-        let mut cold_settings = QpSettings::default();
-        cold_settings.active_set.warm_start = false;
-        let mut warm = make(4, QpSettings::default()).unwrap();
+        let cold_settings = QpSettings::default();
+        let mut warm_settings = QpSettings::default();
+        warm_settings.active_set.reduced_guess = true;
+        let mut warm = make(4, warm_settings).unwrap();
         let mut cold = make(4, cold_settings).unwrap();
         let mut full = make(4, QpSettings::default()).unwrap();
         assert!(warm.problem.enable_null_space().unwrap());
