@@ -94,12 +94,9 @@ const RY: usize = 8;
 /// | `touchdown_force` | N | 0 (off) | early touch-down: when the swing foot's estimated vertical ground force exceeds this in the second half of its swing while the plan has the sole `touchdown_height` or more above its landing height, the runner lands the step where the foot is, `touchdown_lead` later (the plan re-anchored at the real touch-down instead of the sole dragged on to its planned one) |
 /// | `touchdown_height` | m | 0.01 | planned height of the swing sole above its landing height below which a loaded sole is an ordinary (slightly early) touch-down, left to the plan |
 /// | `touchdown_lead` | s | 0.08 | time from a detected early touch-down to the planned one it becomes |
-/// | `crossover_min` | m | 0 (off) | crossover step: when the solution sits at the no-crossing bound (`lateral_min`, the DCM pushed towards the stance foot's side), the QP is solved again with the touch-down on the stance foot's far side, at least this far inward of the stance sole (stance frame; more than the sole's width, so the soles cannot overlap), and the cheaper solution is kept |
-/// | `crossover_max` | m | 0.15 | farthest crossover touch-down past the stance foot (stance frame y, the legs' reach) |
 ///
 /// `validate()` requires finite positive lengths, weights and durations, `lateral_min < lateral_max`,
-/// `step_duration_min < step_duration_max`, `min_remaining_time < step_duration_max` and, with the
-/// crossover on, `crossover_min < crossover_max`.
+/// `step_duration_min < step_duration_max` and `min_remaining_time < step_duration_max`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StepAdjustmentConfig {
@@ -145,10 +142,6 @@ pub struct StepAdjustmentConfig {
     pub touchdown_lead: f64,
     /// Planned sole height above the landing height below which a loaded sole is left to the plan \[m\].
     pub touchdown_height: f64,
-    /// Smallest inward distance of a crossover touch-down past the stance foot \[m\]; 0: no crossover.
-    pub crossover_min: f64,
-    /// Largest inward distance of a crossover touch-down past the stance foot \[m\].
-    pub crossover_max: f64,
 }
 
 impl Default for StepAdjustmentConfig {
@@ -175,8 +168,6 @@ impl Default for StepAdjustmentConfig {
             touchdown_force: 0.0,
             touchdown_lead: 0.08,
             touchdown_height: 0.01,
-            crossover_min: 0.0,
-            crossover_max: 0.15,
         }
     }
 }
@@ -211,8 +202,6 @@ impl StepAdjustmentConfig {
         check_non_negative("step_adjustment.touchdown_force", self.touchdown_force)?;
         check_positive("step_adjustment.touchdown_lead", self.touchdown_lead)?;
         check_non_negative("step_adjustment.touchdown_height", self.touchdown_height)?;
-        check_non_negative("step_adjustment.crossover_min", self.crossover_min)?;
-        check_positive("step_adjustment.crossover_max", self.crossover_max)?;
         let order = |name, value, ok, reason| {
             if ok {
                 Ok(())
@@ -241,12 +230,6 @@ impl StepAdjustmentConfig {
             self.min_remaining_time,
             self.min_remaining_time < self.step_duration_max,
             "must be < step_duration_max",
-        )?;
-        order(
-            "step_adjustment.crossover_max",
-            self.crossover_max,
-            self.crossover_min == 0.0 || self.crossover_max > self.crossover_min,
-            "must be > crossover_min (the crossover interval is empty)",
         )
     }
 }
@@ -306,8 +289,6 @@ pub struct StepAdjustmentDiagnostics {
     pub bound_active: bool,
     /// CoP offset `δr` the solution counts on (world) \[m\].
     pub cop_offset: Vector2<f64>,
-    /// Whether the touch-down is a crossover (on the stance foot's far side, `crossover_min`).
-    pub crossover: bool,
 }
 
 /// The adjusted step.
@@ -331,8 +312,6 @@ pub struct StepAdjuster {
     qp: DenseQp,
     solver: ActiveSetSolver,
     out: SolverOutput,
-    /// The crossover solve's output (`crossover_min > 0`), swapped with `out` when it is kept.
-    crossed: SolverOutput,
     result: StepAdjustment,
 }
 
@@ -344,7 +323,6 @@ impl StepAdjuster {
         let mut solver = ActiveSetSolver::new(ActiveSetSettings::default());
         solver.reserve(STEP_ADJUSTMENT_VARIABLES, 2, 4);
         let out = SolverOutput::new(&qp);
-        let crossed = SolverOutput::new(&qp);
         // The structure that never changes: the equality's unit columns and the softened offset rows.
         let mut e = qp.eq_matrix_mut();
         e[(0, UX)] = 1.0;
@@ -365,7 +343,6 @@ impl StepAdjuster {
             qp,
             solver,
             out,
-            crossed,
             result: StepAdjustment::default(),
         })
     }
@@ -396,7 +373,6 @@ impl StepAdjuster {
         check_input(input)?;
         let nominal = self.fill(input);
         self.solver.solve(&self.qp, &mut self.out);
-        let crossover = self.try_crossover(input);
         let x = &self.out.x;
         let rot = Rotation2::new(input.stance_yaw);
         let ok = self.out.status.is_success() && x.iter().all(|v| v.is_finite()) && x[TAU] > 0.0;
@@ -433,46 +409,9 @@ impl StepAdjuster {
                 } else {
                     Vector2::zeros()
                 },
-                crossover: ok && crossover,
             },
         };
         Ok(&self.result)
-    }
-
-    /// The crossover step (`crossover_min > 0`): when the solution of the ordinary box sits at its
-    /// no-crossing bound, the QP is solved again with the touch-down on the stance foot's far side
-    /// (`crossover_min ≤ ∓u_y ≤ crossover_max`); its solution replaces the ordinary one when it succeeds
-    /// with a lower objective (the bounds of the kept solution stay in the QP). Returns whether it did.
-    fn try_crossover(&mut self, input: &StepAdjustmentInput) -> bool {
-        let c = self.config;
-        if c.crossover_min <= 0.0 || !self.out.status.is_success() {
-            return false;
-        }
-        let side = input.stance.other().side();
-        let (lo, hi) = (self.qp.lower_bounds()[UY], self.qp.upper_bounds()[UY]);
-        let inner = if side > 0.0 { lo } else { hi };
-        let uy = self.out.x[UY];
-        if (uy - inner).abs() > 1e-9 * (1.0 + uy.abs()) {
-            return false;
-        }
-        let (cross_lo, cross_hi) = if side > 0.0 {
-            (-c.crossover_max, -c.crossover_min)
-        } else {
-            (c.crossover_min, c.crossover_max)
-        };
-        self.qp.lower_bounds_mut()[UY] = cross_lo;
-        self.qp.upper_bounds_mut()[UY] = cross_hi;
-        self.solver.solve(&self.qp, &mut self.crossed);
-        let better = self.crossed.status.is_success()
-            && self.crossed.x.iter().all(|v| v.is_finite())
-            && self.crossed.objective < self.out.objective;
-        if better {
-            std::mem::swap(&mut self.out, &mut self.crossed);
-        } else {
-            self.qp.lower_bounds_mut()[UY] = lo;
-            self.qp.upper_bounds_mut()[UY] = hi;
-        }
-        better
     }
 
     /// Whether a variable bound (box or duration) holds with equality at the solution (1e-9).

@@ -237,50 +237,6 @@ fn an_inward_push_stops_at_the_no_crossing_distance() {
     }
 }
 
-/// The crossover step (`crossover_min > 0`): the inward push of the test above lands the swing foot past
-/// the stance foot, on its far side within `[crossover_min, crossover_max]`, with a smaller offset slack
-/// than at the no-crossing bound; the KKT conditions hold for the kept (crossed) QP. A push along the
-/// walk leaves the step where the ordinary box puts it (no crossover).
-#[test]
-fn an_inward_push_crosses_over_when_the_crossover_is_on() {
-    let plain = StepAdjustmentConfig::default();
-    let config = StepAdjustmentConfig {
-        crossover_min: 0.10,
-        crossover_max: 0.15,
-        ..plain
-    };
-    for stance in [Foot::Left, Foot::Right] {
-        let side = stance.other().side();
-        let mut c = case(stance, 0.0);
-        c.input.dcm.y -= 0.08 * side;
-        let at_bound = *StepAdjuster::new(&plain).unwrap().solve(&c.input).unwrap();
-        let mut adj = StepAdjuster::new(&config).unwrap();
-        let r = *adj.solve(&c.input).unwrap();
-        let out = (r.touchdown.y - c.input.stance_position.y) * side;
-        assert!(r.diagnostics.crossover, "{r:?}");
-        assert!(
-            out <= -config.crossover_min + 1e-9 && out >= -config.crossover_max - 1e-9,
-            "{r:?}"
-        );
-        assert!(
-            r.diagnostics.offset_slack.y < at_bound.diagnostics.offset_slack.y,
-            "{r:?} against {at_bound:?}"
-        );
-        let kkt = check_kkt(adj.qp(), adj.solver_output());
-        assert!(kkt.is_satisfied(1e-9), "{kkt:?}");
-
-        let mut forward = case(stance, 0.0);
-        forward.input.dcm.x += 0.05;
-        let r = *adj.solve(&forward.input).unwrap();
-        let same = *StepAdjuster::new(&plain)
-            .unwrap()
-            .solve(&forward.input)
-            .unwrap();
-        assert!(!r.diagnostics.crossover);
-        assert!((r.touchdown - same.touchdown).norm() < 1e-12, "{r:?}");
-    }
-}
-
 #[test]
 fn kkt_holds_and_clarabel_agrees() {
     let config = StepAdjustmentConfig::default();
