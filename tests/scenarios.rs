@@ -766,7 +766,8 @@ fn tsid_flex_walks_the_softest_hips_with_calibrated_ft_sensors() {
 /// The FT offsets learnt at start-up (`estimation.ft_offsets.learn_while_standing`, docs/flexible-joints.md,
 /// "Offsets learnt while standing"): at the softest hips of the table (k = 209 N·m/rad, default sensor seed)
 /// TSID-Flex with its observer falls with the default offsets (asserted above) and walks the metre when the
-/// robot first stands still for 1 s while the estimation layer learns them from the model's standing wrenches.
+/// robot first stands still for 1 s while the estimation layer learns them from the model's standing wrenches
+/// (measured 2026-12-06: CoM 4.8 mm RMS; over sensor seeds 0-4 at this stiffness 4.8-5.5 mm).
 #[test]
 fn tsid_flex_walks_the_softest_hips_with_offsets_learnt_while_standing() {
     let name = "walk_flexible_hips_tsid_flex_torque.toml";

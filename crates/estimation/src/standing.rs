@@ -22,7 +22,8 @@ use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 /// map of the two sole wrenches to the total about the CoM. On a symmetric stance it halves the weight and
 /// the ankle torques; no tangential force unless the CoM is off the soles' plane of symmetry.
 ///
-/// `None` when the soles coincide (the split is singular).
+/// `None` when `G W⁻¹ Gᵀ` is not positive definite (a sole size that is not finite and positive; the
+/// estimator's `sole_size` is validated).
 pub fn standing_foot_wrenches(
     force: &Vector3<f64>,
     com: &Vector3<f64>,

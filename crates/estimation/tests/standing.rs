@@ -24,7 +24,7 @@ fn winkler_split(
     size: [f64; 2],
     n: usize,
 ) -> [Vector3<f64>; 2] {
-    let cells = |(r, p): &(Matrix3<f64>, Vector3<f64>)| {
+    let cells = |(r, p): (Matrix3<f64>, Vector3<f64>)| {
         let da = size[0] * size[1] / (n * n) as f64;
         (0..n * n).map(move |k| {
             let u = ((k / n) as f64 + 0.5) / n as f64 - 0.5;
@@ -35,7 +35,7 @@ fn winkler_split(
     // Rows: Σ p dA = fz, Σ (y − c_y) p dA = 0, Σ (x − c_x) p dA = 0; columns a, b, c.
     let mut m = Matrix3::zeros();
     for sole in soles {
-        for (q, da) in cells(sole) {
+        for (q, da) in cells(*sole) {
             let basis = Vector3::new(1.0, q.x, q.y) * da;
             m += Matrix3::from_rows(&[
                 basis.transpose(),
@@ -47,7 +47,7 @@ fn winkler_split(
     let coef = m.lu().solve(&Vector3::new(fz, 0.0, 0.0)).expect("field");
     soles.map(|sole| {
         let mut out = Vector3::zeros();
-        for (q, da) in cells(&sole) {
+        for (q, da) in cells(sole) {
             let f = (coef.x + coef.y * q.x + coef.z * q.y) * da;
             let arm = q - sole.1;
             // (f_z, τ_x, τ_y) of a vertical force f at arm.
@@ -100,9 +100,9 @@ fn the_standing_split_is_the_winkler_floor_and_balances_the_weight() {
             );
         }
     }
-    // Coincident soles: no split.
-    let same = [soles[0], soles[0]];
-    assert!(standing_foot_wrenches(&force, &Vector3::zeros(), &same, size).is_none());
+    // A sole size that is not a number: no split.
+    let com = Vector3::new(0.23, 0.01, 0.55);
+    assert!(standing_foot_wrenches(&force, &com, &soles, [f64::NAN, 0.09]).is_none());
 }
 
 fn true_offsets(n: usize) -> Vec<Vector6<f64>> {
