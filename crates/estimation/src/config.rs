@@ -15,6 +15,7 @@ use crate::error::{check_non_negative, check_positive, EstimatorError, Result};
 /// | `ekf` | [`EkfConfig`] | noise densities, priors and options of the invariant EKF [Hartley 2020] |
 /// | `contact` | [`ContactConfig`] | Schmitt-trigger contact detection on each foot's normal force |
 /// | `ft_offsets` | [`FtOffsetConfig`] | model-based offset estimation [Traversaro 2017, §4.7] |
+/// | `sole_size` | `[0.20, 0.09]` | \[m\] length and width of the sole rectangles (the bundled humanoid's), for the weight's split between the soles when `ft_offsets.learn_while_standing` > 0 ([`crate::standing_foot_wrenches`]; the runner takes `planner.foot_length`, `foot_width`) |
 /// | `joint_velocity_bandwidth` | 0 | \[Hz\] 0: the joint velocities as the encoders report them; > 0: the velocities of a critically damped α–β filter of that bandwidth on the encoder positions ([`crate::JointVelocityFilter`]) |
 /// | `ft_calibration` | sensor name → 6 × 6 rows | calibration matrix `C` of each named force/torque sensor: every reading `r` is used as the wrench `C (r − b)` [Traversaro 2017, eq. (5.1)], `b` the offset; sensors not named: identity (`stride calibrate` with added-mass logs writes it) |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -42,6 +43,8 @@ pub struct EstimatorConfig {
     /// Bandwidth \[Hz\] of the joint velocity filter on the encoder positions
     /// ([`crate::JointVelocityFilter`]); 0: the encoders' velocities as read.
     pub joint_velocity_bandwidth: f64,
+    /// Sole rectangle `[length, width]` \[m\] for the standing split of `ft_offsets.learn_while_standing`.
+    pub sole_size: [f64; 2],
 }
 
 impl Default for EstimatorConfig {
@@ -57,6 +60,7 @@ impl Default for EstimatorConfig {
             ft_offsets: FtOffsetConfig::default(),
             ft_calibration: std::collections::BTreeMap::new(),
             joint_velocity_bandwidth: 0.0,
+            sole_size: [0.20, 0.09],
         }
     }
 }
@@ -68,6 +72,8 @@ impl EstimatorConfig {
         self.contact.validate()?;
         self.ft_offsets.validate()?;
         check_non_negative("joint_velocity_bandwidth", self.joint_velocity_bandwidth)?;
+        check_positive("sole_size", self.sole_size[0])?;
+        check_positive("sole_size", self.sole_size[1])?;
         for rows in self.ft_calibration.values() {
             if !rows.iter().flatten().all(|v| v.is_finite()) {
                 return Err(EstimatorError::InvalidParameter {
@@ -357,6 +363,7 @@ impl ContactConfig {
 /// | `time_constant` | s | 5.0 | filter time constant (offsets drift over hours with temperature; a 0.4 s swing moves the estimate 8 % of the way) |
 /// | `min_swing_time` | s | 0.1 | samples are used only after the foot has been in swing this long (skips the lift-off transient) |
 /// | `initial` | N, N·m | zeros | offsets before any sample, [`stride_model::Model::ft_sensors`] order (empty: zeros); e.g. from a calibration with the robot hung, or the last session |
+/// | `learn_while_standing` | s | 0 | > 0: for this long from the first tick the robot is taken to stand still on both feet, and every sensor's offset is the mean of its reading minus the model's prediction with the weight split between the soles ([`crate::standing_foot_wrenches`]); the offsets apply from the first sample on (0: off) |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FtOffsetConfig {
@@ -368,6 +375,8 @@ pub struct FtOffsetConfig {
     pub min_swing_time: f64,
     /// Initial offsets `[f; τ]` per sensor (empty: zeros).
     pub initial: Vec<[f64; 6]>,
+    /// Learn the offsets while standing for this long from the first tick \[s\] (0: off).
+    pub learn_while_standing: f64,
 }
 
 impl Default for FtOffsetConfig {
@@ -377,6 +386,7 @@ impl Default for FtOffsetConfig {
             time_constant: 5.0,
             min_swing_time: 0.1,
             initial: Vec::new(),
+            learn_while_standing: 0.0,
         }
     }
 }
@@ -386,6 +396,7 @@ impl FtOffsetConfig {
     pub fn validate(&self) -> Result<()> {
         check_positive("ft_offsets.time_constant", self.time_constant)?;
         check_non_negative("ft_offsets.min_swing_time", self.min_swing_time)?;
+        check_non_negative("ft_offsets.learn_while_standing", self.learn_while_standing)?;
         for w in &self.initial {
             for &v in w {
                 if !v.is_finite() {

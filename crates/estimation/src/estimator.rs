@@ -15,6 +15,7 @@ use crate::error::{check_positive, EstimatorError, Result};
 use crate::io::{EstimatorInput, EstimatorOutput};
 use crate::joint_velocity::JointVelocityFilter;
 use crate::schmitt::SchmittTrigger;
+use crate::standing::{standing_foot_wrenches, StandingOffsets};
 
 /// The estimation layer.
 ///
@@ -81,6 +82,8 @@ pub struct Estimator {
     initialized: bool,
     /// The joint velocity filter (`joint_velocity_bandwidth` > 0), stepped on every sample.
     joint_velocity: Option<JointVelocityFilter>,
+    /// The offsets learnt while standing (`ft_offsets.learn_while_standing` > 0), until that time is over.
+    standing: Option<StandingOffsets>,
     output: EstimatorOutput,
 }
 
@@ -204,6 +207,8 @@ impl Estimator {
                 b if b > 0.0 => Some(JointVelocityFilter::new(model.dof(), b)?),
                 _ => None,
             },
+            standing: (config.ft_offsets.learn_while_standing > 0.0)
+                .then(|| StandingOffsets::new(config.ft_offsets.learn_while_standing, n_ft)),
             output,
             kd,
             model,
@@ -266,6 +271,9 @@ impl Estimator {
         self.last_time_ns = None;
         self.preintegrated = 0.0;
         self.initialized = true;
+        if let Some(st) = &mut self.standing {
+            st.restart();
+        }
         let out = &mut self.output;
         out.state.copy_from(&self.scratch);
         out.contacts = [true; 2];
@@ -507,6 +515,45 @@ impl Estimator {
         }
     }
 
+    /// Step 7b (`ft_offsets.learn_while_standing`): while the robot stands still on both feet, each sensor's
+    /// offset is the mean of its reading minus the model's prediction with the weight split between the soles
+    /// by [`standing_foot_wrenches`] (static: the force is `m (p̈_B − g)` with the estimated base
+    /// acceleration, no moment about the CoM). Runs after the joint torques (its sensor pass would replace
+    /// the one they read). The running mean is the offset from the first sample on.
+    fn learn_standing_offsets(&mut self, input: &EstimatorInput) -> Result<()> {
+        let Some(st) = &mut self.standing else {
+            return Ok(());
+        };
+        if !st.active(input.time_ns) {
+            return Ok(());
+        }
+        let soles = self.soles.map(|s| self.kd.frame_rotation_translation(s));
+        let acceleration = self.nu_dot.fixed_rows::<3>(0).into_owned();
+        let force = self.model.total_mass() * (acceleration - self.model.gravity());
+        let com = self.kd.com_position();
+        let Some(split) = standing_foot_wrenches(&force, &com, &soles, self.config.sole_size)
+        else {
+            return Ok(());
+        };
+        let external = [0, 1].map(|foot| ExternalWrench {
+            frame: self.soles[foot],
+            wrench: split[foot],
+        });
+        self.kd
+            .ft_sensor_wrenches(&self.nu_dot, &external, &mut st.expected)?;
+        st.count += 1;
+        let n = st.count as f64;
+        for (s, (sum, expected)) in st.sum.iter_mut().zip(&st.expected).enumerate() {
+            let expected_raw = match &self.calibration[s] {
+                Some((_, c_inv)) => c_inv * expected,
+                None => *expected,
+            };
+            *sum += input.ft_wrenches[s] - expected_raw;
+            self.output.ft_offsets[s] = *sum / n;
+        }
+        Ok(())
+    }
+
     /// Step 8: joint torques, from the RNEA of [`Self::foot_wrenches`] (same state and `ν̇`) with the foot
     /// wrenches subtracted ([`KinDyn::inverse_dynamics_after_ft_sensors`]).
     fn joint_torques(&mut self, wrenches: &[Vector6<f64>; 2]) -> Result<()> {
@@ -635,6 +682,7 @@ impl Estimator {
         }
         self.update_offsets(input, &wrenches, interval);
         self.joint_torques(&wrenches)?;
+        self.learn_standing_offsets(input)?;
         let (pose, twist, _) = self.base_from_imu(&self.ekf.state(), &kin, input);
         let out = &mut self.output;
         out.state.base_pose = pose;
@@ -704,6 +752,9 @@ impl Block for Estimator {
         self.swing_since_ns = [None; 2];
         if let Some(f) = &mut self.joint_velocity {
             f.reset();
+        }
+        if let Some(st) = &mut self.standing {
+            st.restart();
         }
         self.output = EstimatorOutput::new(&self.model);
         self.output.ft_offsets.clone_from(&self.initial_offsets);

@@ -19,6 +19,7 @@ mod io;
 mod joint_velocity;
 mod schmitt;
 pub mod sole_spin;
+mod standing;
 
 pub use config::{ContactConfig, EkfConfig, EkfPrior, EstimatorConfig, FtOffsetConfig};
 pub use ekf::{EkfState, InvariantEkf};
@@ -28,6 +29,7 @@ pub use flexible::{FlexibleJoint, FlexibleJointObserver};
 pub use io::{EstimatorInput, EstimatorOutput, ImuReading};
 pub use joint_velocity::JointVelocityFilter;
 pub use schmitt::SchmittTrigger;
+pub use standing::standing_foot_wrenches;
 
 /// What a user of the estimation layer needs in scope: `use stride_estimation::prelude::*;`.
 pub mod prelude {

@@ -145,9 +145,11 @@ impl Estimation {
         Ok(match c.estimation.kind {
             EstimationKind::GroundTruth => Estimation::GroundTruth,
             EstimationKind::Ekf => {
-                let config = c
-                    .estimation
-                    .estimator_config(&c.robot, &c.sim.sensors.imu_frame);
+                let config = c.estimation.estimator_config(
+                    &c.robot,
+                    &c.sim.sensors.imu_frame,
+                    [c.planner.foot_length, c.planner.foot_width],
+                );
                 let mut estimator =
                     Estimator::new(Arc::clone(model), &config, scenario.sim_period())?;
                 estimator.set_initial_state(initial)?;
@@ -209,6 +211,26 @@ pub fn goal_events(goal: &Goal) -> Vec<GoalEvent> {
             goal: PlannerGoal::Stand,
         }],
     }
+}
+
+/// The goal events `events` held back by `standing` \[s\], the robot standing until then
+/// (`estimation.ft_offsets.learn_while_standing`: the estimation layer learns the force/torque offsets while
+/// the robot stands still on both feet, docs/estimation.md). `standing` ≤ 0: unchanged.
+pub fn standing_first(mut events: Vec<GoalEvent>, standing: f64) -> Vec<GoalEvent> {
+    if standing > 0.0 {
+        let delay = (standing * 1e9).round() as u64;
+        for e in &mut events {
+            e.time_ns = e.time_ns.saturating_add(delay);
+        }
+        events.insert(
+            0,
+            GoalEvent {
+                time_ns: 0,
+                goal: PlannerGoal::Stand,
+            },
+        );
+    }
+    events
 }
 
 /// Measured quantities of one tick.
@@ -459,7 +481,10 @@ impl Stack {
             measured: Measured::default(),
             truth: Measured::default(),
             zmp_filter: (FirstOrderLowPass::new(c.estimation.measured_zmp_cutoff), 0),
-            events: goal_events(&c.goal),
+            events: standing_first(
+                goal_events(&c.goal),
+                c.estimation.ft_offsets.learn_while_standing,
+            ),
             next_event: 0,
             goal: PlannerGoal::Stand,
             step_adjustment: if c.simplified.step_adjustment.enabled {

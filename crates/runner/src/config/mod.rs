@@ -136,10 +136,12 @@ impl Default for EstimationSection {
 
 impl EstimationSection {
     /// The estimation layer's configuration with the robot's frames.
+    /// `sole_size`: the soles' `[length, width]` (`planner.foot_length`, `foot_width`).
     pub fn estimator_config(
         &self,
         robot: &RobotSection,
         imu_frame: &str,
+        sole_size: [f64; 2],
     ) -> stride_estimation::EstimatorConfig {
         stride_estimation::EstimatorConfig {
             left_sole: robot.left_sole.name().to_string(),
@@ -152,6 +154,7 @@ impl EstimationSection {
             ft_offsets: self.ft_offsets.clone(),
             ft_calibration: self.ft_calibration.clone(),
             joint_velocity_bandwidth: self.joint_velocity_bandwidth,
+            sole_size,
         }
     }
 }
@@ -951,7 +954,11 @@ impl Scenario {
             self.layer_invalid("simplified", name, e.to_string())
         })?;
         c.estimation
-            .estimator_config(&c.robot, &c.sim.sensors.imu_frame)
+            .estimator_config(
+                &c.robot,
+                &c.sim.sensors.imu_frame,
+                [c.planner.foot_length, c.planner.foot_width],
+            )
             .validate()
             .map_err(|e| {
                 let name = match &e {
