@@ -1002,8 +1002,6 @@ impl Stack {
     }
 }
 
-/// The scenario's foot admittance: `Some` in position control with `simplified.foot_admittance.enabled`,
-/// for the planner's sole rectangle and the model's weight, at the whole-body period.
 /// `estimation.joint_velocity_prediction`: the joint accelerations the TSID chose (`out.accelerations`
 /// past the 6 base entries) become the estimation layer's joint velocity prediction until its next tick
 /// (`stride_estimation::Estimator::set_joint_accelerations`; a held solve keeps its last). Off, or on
@@ -1021,6 +1019,8 @@ fn predict_joint_velocities(
     Ok(())
 }
 
+/// The scenario's foot admittance: `Some` in position control with `simplified.foot_admittance.enabled`,
+/// for the planner's sole rectangle and the model's weight, at the whole-body period.
 fn foot_admittance(
     scenario: &Scenario,
     model: &Model,
