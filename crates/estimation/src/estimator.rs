@@ -718,6 +718,30 @@ impl Estimator {
 }
 
 impl Estimator {
+    /// The joint accelerations \[rad/s²\] (model order, `dof` values) the joint velocity filter's
+    /// prediction holds from the next sample on ([`JointVelocityFilter::set_accelerations`]; the
+    /// accelerations a controller commanded). No filter (`joint_velocity_bandwidth` 0): nothing. Errors:
+    /// a size other than `dof` or a non-finite value (nothing changes).
+    pub fn set_joint_accelerations(&mut self, accelerations: &[f64]) -> Result<()> {
+        let dof = self.model.dof();
+        if accelerations.len() != dof {
+            return Err(EstimatorError::InputSize {
+                name: "joint_accelerations",
+                expected: dof,
+                actual: accelerations.len(),
+            });
+        }
+        if !accelerations.iter().all(|a| a.is_finite()) {
+            return Err(EstimatorError::NonFiniteInput {
+                name: "joint_accelerations",
+            });
+        }
+        if let Some(f) = &mut self.joint_velocity {
+            f.set_accelerations(accelerations);
+        }
+        Ok(())
+    }
+
     /// Steps the joint velocity filter (when configured) on the sample's encoder positions.
     fn filter_joint_velocities(&mut self, input: &EstimatorInput, dt: f64) {
         if let Some(f) = &mut self.joint_velocity {

@@ -57,6 +57,60 @@ fn a_constant_acceleration_leaves_the_closed_form_lag() {
     );
 }
 
+/// With the acceleration known (`set_accelerations`, the prediction `q⁻ = q̂ + T v̂ + T² a/2`,
+/// `v⁻ = v̂ + T a`) a constant acceleration is tracked without the lag `a T (α/β − ½)` of the plain filter;
+/// the estimator forwards it and refuses a wrong size or a non-finite value by name.
+#[test]
+fn a_known_acceleration_is_tracked_without_lag() {
+    let a = 30.0;
+    let samples = 8000;
+    let mut f = JointVelocityFilter::new(1, 20.0).unwrap();
+    f.set_accelerations(&[a]);
+    let zero = DVector::zeros(1);
+    for k in 0..samples {
+        let t = k as f64 * DT;
+        f.step(&DVector::from_element(1, 0.5 * a * t * t), &zero, DT);
+    }
+    let truth = a * (samples - 1) as f64 * DT;
+    assert!(
+        (f.velocities()[0] - truth).abs() < 1e-9 * truth,
+        "{} vs {truth}",
+        f.velocities()[0]
+    );
+    // after a reset the prediction is gone: the plain filter's lag again
+    f.reset();
+    for k in 0..samples {
+        let t = k as f64 * DT;
+        f.step(&DVector::from_element(1, 0.5 * a * t * t), &zero, DT);
+    }
+    let (alpha, beta) = f.gains(DT);
+    let lag = a * DT * (alpha / beta - 0.5);
+    assert!(((truth - f.velocities()[0]) - lag).abs() < 1e-9 * truth);
+    let model = bundled_model();
+    let config = EstimatorConfig {
+        joint_velocity_bandwidth: 150.0,
+        ..Default::default()
+    };
+    let mut estimator = Estimator::new(model.clone(), &config, Duration::from_micros(500)).unwrap();
+    let n = model.dof();
+    assert!(estimator.set_joint_accelerations(&vec![1.0; n]).is_ok());
+    assert!(matches!(
+        estimator.set_joint_accelerations(&vec![1.0; n + 1]),
+        Err(EstimatorError::InputSize {
+            name: "joint_accelerations",
+            ..
+        })
+    ));
+    let mut nan = vec![0.0; n];
+    nan[0] = f64::NAN;
+    assert!(matches!(
+        estimator.set_joint_accelerations(&nan),
+        Err(EstimatorError::NonFiniteInput {
+            name: "joint_accelerations"
+        })
+    ));
+}
+
 #[test]
 fn white_position_noise_gives_the_closed_form_velocity_variance() {
     let sigma = 1e-3;

@@ -346,6 +346,9 @@ pub struct Stack {
     /// `estimation.update = "when_read"`: the samples of ticks that do not read the estimate are
     /// pre-integrated ([`Stack::preintegrate`]).
     pub preintegrate_unread: bool,
+    /// `estimation.joint_velocity_prediction`: the TSID's joint accelerations feed the estimation layer's
+    /// joint velocity filter ([`predict_joint_velocities`]).
+    predict_joint_velocities: bool,
     /// The foot admittance of position control (`simplified.foot_admittance.enabled`, QP-IK only) and
     /// the whole-body period it runs at \[s\].
     pub foot_admittance: Option<(FootAdmittance, f64)>,
@@ -423,6 +426,15 @@ impl Stack {
             EstimationKind::Ekf => flexible.observer(&model, scenario.sim_period())?,
             EstimationKind::GroundTruth => None,
         };
+        let predict_joint_velocities = c.estimation.joint_velocity_prediction;
+        if predict_joint_velocities && c.estimation.joint_velocity_bandwidth <= 0.0 {
+            return Err(scenario
+                .invalid(
+                    "estimation.joint_velocity_prediction",
+                    "predicts in the joint velocity filter; expected estimation.joint_velocity_bandwidth > 0",
+                )
+                .into());
+        }
         let preintegrate_unread = c.estimation.update == EstimationUpdate::WhenRead;
         if preintegrate_unread && flexible_observer.is_some() {
             return Err(scenario
@@ -519,6 +531,7 @@ impl Stack {
             flexible,
             flexible_observer,
             preintegrate_unread,
+            predict_joint_velocities,
             foot_admittance: foot_admittance(scenario, &model)?,
             counters: Counters::default(),
             kd_estimate: kd.clone(),
@@ -965,6 +978,7 @@ impl Stack {
             }
             Wbc::Tsid(t) => {
                 let out = t.step(&self.wbc_input)?;
+                predict_joint_velocities(&mut self.estimation, self.predict_joint_velocities, out)?;
                 cmd.mode = ControlMode::Torque;
                 cmd.joint_torques.copy_from(&out.joint_torques);
                 cmd.joint_positions
@@ -1011,6 +1025,23 @@ impl Stack {
             t >= p.end_time && self.next_event >= self.events.len()
         })
     }
+}
+
+/// `estimation.joint_velocity_prediction`: the joint accelerations the TSID chose (`out.accelerations`
+/// past the 6 base entries) become the estimation layer's joint velocity prediction until its next tick
+/// (`stride_estimation::Estimator::set_joint_accelerations`; a held solve keeps its last). Off, or on
+/// the ground truth: nothing.
+fn predict_joint_velocities(
+    estimation: &mut Estimation,
+    enabled: bool,
+    out: &stride_wbc::TsidOutput,
+) -> Result<(), RunError> {
+    if let (true, Estimation::Estimator(e)) = (enabled, estimation) {
+        if !out.report.held {
+            e.set_joint_accelerations(&out.accelerations.as_slice()[6..])?;
+        }
+    }
+    Ok(())
 }
 
 /// The scenario's foot admittance: `Some` in position control with `simplified.foot_admittance.enabled`,

@@ -697,6 +697,8 @@ pub enum ContactModel {
 /// | `estimator_wrench_std` | N, N·m | [2, 0.2] | standard deviations of the measured force and torque for that estimate |
 /// | `plan_on_surface` | – | false | the runner plans the footholds from the soles' zero-force poses (raised by their static sink `f_z / (k l w)`), so the swing feet land on the ground's surface, not as deep as the standing feet sank |
 /// | `held_acceleration` | – | false | the contact dynamics give the wrench rate averaged over one control period of a held acceleration: the acceleration gain of eq. 8.2.14 uses the damping `b + k·period/2` (see [`crate::soft_contact::WrenchRate::held_over`]) |
+/// | `wrench_source` | – | `"measured"` | the wrench `f_c` the rows read: `"measured"` the input's (`ContactInput::measured_wrench`, every tick); `"model"` Lemma 1's wrench of the sole's state about its rest (touch-down) pose [eq. 8.1.7] (zero for a contact out of the QP); `"filtered"` the wrench the last solve predicted (`f + ḟ·period`) corrected toward the measured one with the time constant `wrench_filter_time` (see [`WrenchSource`]) |
+/// | `wrench_filter_time` | s | 0.05 | time constant of the `"filtered"` wrench's correction toward the measured one |
 /// | `lift_off_force` | N | inf | a contact whose load ramp has ended (planned lift-off) stays in the QP while its measured normal force exceeds this, its normal-force bound that measured force (the sole may only unload, toward the planned zero wrench of the wrench regularization), so that the swing task takes a sole that no longer carries the robot; `inf`: it leaves the QP when its ramp ends |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -732,6 +734,31 @@ pub struct CompliantConfig {
     /// swing task takes a sole that no longer carries the robot; `inf` (the default): the contact leaves
     /// the QP when its ramp ends.
     pub lift_off_force: f64,
+    /// The wrench the rows read as `f_c` ([`WrenchSource`]).
+    pub wrench_source: WrenchSource,
+    /// Time constant of the `"filtered"` wrench's correction toward the measured one, s (> 0).
+    pub wrench_filter_time: f64,
+}
+
+/// The wrench `f_c` TSID-Compliant's rows read (`[wbc.tsid.compliant] wrench_source`).
+///
+/// The contact dynamics rows feed `f_c` back every tick [Romualdi 2022, eq. 8.2.13, 8.2.15]; a measured
+/// wrench brings the sensors' noise and the estimate's inertial errors into that loop at the tick rate
+/// (docs/soft-ground.md, "Stage 3 on the estimated state").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum WrenchSource {
+    /// The input's measured wrench (`ContactInput::measured_wrench`), read every tick.
+    #[default]
+    Measured,
+    /// Lemma 1's wrench [Romualdi 2022, eq. 8.1.7] of the sole's state (the input's) about its rest pose
+    /// (its pose at touch-down, raised by the static sink of the measured wrench then), for the contacts
+    /// in the QP; zero for the others.
+    Model,
+    /// The wrench the last solve predicted for this tick, `f + ḟ·period` (the QP's chosen rate), corrected
+    /// toward the measured one by `period / (wrench_filter_time + period)` per tick: a complementary filter
+    /// whose fast part is the controller's own wrench-rate model and whose slow part is the sensor.
+    Filtered,
 }
 
 impl Default for CompliantConfig {
@@ -749,6 +776,8 @@ impl Default for CompliantConfig {
             plan_on_surface: false,
             held_acceleration: false,
             lift_off_force: f64::INFINITY,
+            wrench_source: WrenchSource::Measured,
+            wrench_filter_time: 0.05,
         }
     }
 }

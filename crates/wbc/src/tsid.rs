@@ -1018,6 +1018,7 @@ impl Tsid {
         let period = self.period;
         if let Some(cc) = &mut self.compliant {
             read_measured_wrenches(input, &self.names, &self.contacts, &mut cc.measured)?;
+            cc.filter_wrenches(&self.output.contact_wrenches, self.initialized);
         }
         for (c, contact) in self.contacts.iter_mut().enumerate() {
             let flag = self.names.contact(input, contact.flag).active;
@@ -1046,6 +1047,7 @@ impl Tsid {
         }
         if let Some(cc) = &mut self.compliant {
             cc.estimate_ground(&self.contacts);
+            cc.model_wrenches(&self.contacts);
             cc.update_rates(&self.contacts);
         }
         self.update_momentum_references(input)?;

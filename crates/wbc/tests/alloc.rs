@@ -157,14 +157,25 @@ fn tsid_flex_ticks_allocate_nothing() {
 /// changing every tick and a lift-off and touch-down of the right foot; with the held-period rate
 /// (`held_acceleration`), a lift-off held while the sole still carries load (`lift_off_force`) and an
 /// angular momentum task whose reference is the legs' momentum (`reference_joints`) and the planned
-/// feet's (`reference_frames`).
+/// feet's (`reference_frames`); for each `wrench_source`.
 #[test]
 fn tsid_compliant_ticks_allocate_nothing() {
+    for source in [
+        stride_wbc::WrenchSource::Measured,
+        stride_wbc::WrenchSource::Model,
+        stride_wbc::WrenchSource::Filtered,
+    ] {
+        compliant_ticks_allocate_nothing(source);
+    }
+}
+
+fn compliant_ticks_allocate_nothing(source: stride_wbc::WrenchSource) {
     let model = bundled_model();
     let state = standing_state(&model, &default_posture(&model));
     let mut input = references_at(&model, &state);
     let mut config = TsidConfig::default_for_bundled_model();
     config.contact_model = stride_wbc::ContactModel::Compliant;
+    config.compliant.wrench_source = source;
     config.compliant.held_acceleration = true;
     config.compliant.lift_off_force = 20.0;
     config.tasks.push(stride_wbc::TaskConfig::AngularMomentum(
@@ -197,5 +208,8 @@ fn tsid_compliant_ticks_allocate_nothing() {
             assert!(!tsid.step(&input).unwrap().report.held);
         }
     });
-    assert_eq!(n, 0, "TSID-Compliant ticks allocated {n} times");
+    assert_eq!(
+        n, 0,
+        "TSID-Compliant ticks ({source:?}) allocated {n} times"
+    );
 }

@@ -17,7 +17,7 @@ use stride_model::{ExternalWrench, KinDyn, Model, RobotState, VelocityRepresenta
 use stride_wbc::GroundParameters;
 use stride_wbc::{
     walking, AngularMomentumTaskConfig, ContactModel, Priority, SoleState, TaskConfig, Tsid,
-    TsidConfig, WbcInput,
+    TsidConfig, WbcInput, WrenchSource,
 };
 
 /// The TSID period of these tests (the runner's 500 Hz).
@@ -462,4 +462,75 @@ fn a_loaded_sole_leaves_the_qp_only_below_the_lift_off_force() {
     config.compliant.lift_off_force = -1.0;
     let err = Tsid::new(Arc::clone(&model), config, PERIOD).err().unwrap();
     assert!(err.to_string().contains("lift_off_force"), "{err}");
+}
+
+/// The joint torques of two ticks of a standing compliant TSID with `source`: the first with the soles'
+/// share of the weight measured, the second with `second` measured (the state unchanged).
+fn torques_after(
+    source: WrenchSource,
+    filter_time: f64,
+    second: &[Vector6<f64>; 2],
+) -> DVector<f64> {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let half = model.total_mass() * 9.81 / 2.0;
+    let share = Vector6::new(0.0, 0.0, half, 0.0, 0.0, 0.0);
+    let mut config = compliant_config();
+    config.compliant.wrench_source = source;
+    config.compliant.wrench_filter_time = filter_time;
+    let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
+    tsid.step(&input_with_wrenches(&model, &tsid, &state, &[share, share]))
+        .unwrap();
+    let input = input_with_wrenches(&model, &tsid, &state, second);
+    tsid.step(&input).unwrap().joint_torques.clone()
+}
+
+/// `wrench_source`: with `"model"` the rows read Lemma 1's wrench at the soles' state about their
+/// touch-down poses, so a measured wrench changed after the touch-down changes no torque, where with
+/// `"measured"` it does; with `"filtered"` a small change of the measured wrench moves the torques by
+/// `α = period / (τ + period)` of what it moves them with `"measured"` (the QP's solution is affine in
+/// the wrench while its active set holds), and a time constant near zero is the measured source.
+#[test]
+fn the_wrench_source_sets_what_the_rows_read() {
+    let model = bundled_model();
+    let half = model.total_mass() * 9.81 / 2.0;
+    let share = Vector6::new(0.0, 0.0, half, 0.0, 0.0, 0.0);
+    let same = [share, share];
+    let kick = Vector6::new(0.4, -0.3, 1.0, 0.02, -0.03, 0.01);
+    let changed = [share + kick, share - kick * 0.5];
+    let dist = |a: &DVector<f64>, b: &DVector<f64>| (a - b).norm();
+    // model: the measured change does nothing
+    let model_same = torques_after(WrenchSource::Model, 0.05, &same);
+    let model_changed = torques_after(WrenchSource::Model, 0.05, &changed);
+    assert!(
+        dist(&model_same, &model_changed) < 1e-9,
+        "{}",
+        dist(&model_same, &model_changed)
+    );
+    // measured: it does
+    let measured_same = torques_after(WrenchSource::Measured, 0.05, &same);
+    let measured_changed = torques_after(WrenchSource::Measured, 0.05, &changed);
+    let full = dist(&measured_same, &measured_changed);
+    assert!(full > 1e-3, "{full}");
+    // filtered: α of it
+    let tau = 0.05;
+    let alpha = PERIOD.as_secs_f64() / (tau + PERIOD.as_secs_f64());
+    let filtered_same = torques_after(WrenchSource::Filtered, tau, &same);
+    let filtered_changed = torques_after(WrenchSource::Filtered, tau, &changed);
+    let part = &filtered_changed - &filtered_same;
+    let expected = (&measured_changed - &measured_same) * alpha;
+    assert!(
+        dist(&part, &expected) < 1e-6 * full,
+        "{} of {}",
+        dist(&part, &expected),
+        full * alpha
+    );
+    // a time constant near zero: the measured wrench
+    let instant = torques_after(WrenchSource::Filtered, 1e-12, &changed);
+    assert!(dist(&instant, &measured_changed) < 1e-6 * full);
+    // refused
+    let mut config = compliant_config();
+    config.compliant.wrench_filter_time = 0.0;
+    let err = Tsid::new(Arc::clone(&model), config, PERIOD).err().unwrap();
+    assert!(err.to_string().contains("wrench_filter_time"), "{err}");
 }

@@ -111,6 +111,10 @@ pub struct EstimationSection {
     /// Bandwidth \[Hz\] of the estimation layer's joint velocity filter on the encoder positions
     /// (`stride_estimation::JointVelocityFilter`); 0 (default): the encoders' velocities as read.
     pub joint_velocity_bandwidth: f64,
+    /// The joint velocity filter predicts with the joint accelerations the TSID chose at its last tick
+    /// (`stride_estimation::Estimator::set_joint_accelerations`); needs `joint_velocity_bandwidth` > 0
+    /// and torque control.
+    pub joint_velocity_prediction: bool,
 }
 
 /// Default of `estimation.measured_zmp_cutoff` \[Hz\]: the middle of the band that walks on both plants
@@ -130,6 +134,7 @@ impl Default for EstimationSection {
             ft_offsets: Default::default(),
             ft_calibration: Default::default(),
             joint_velocity_bandwidth: 0.0,
+            joint_velocity_prediction: false,
         }
     }
 }

@@ -23,7 +23,7 @@ use nalgebra::{DVector, Isometry3, Vector3, Vector6};
 use stride_qp::TaskDataMut;
 
 use super::{Contact, TsidContext};
-use crate::config::CompliantConfig;
+use crate::config::{CompliantConfig, WrenchSource};
 use crate::error::WbcError;
 use crate::soft_contact::{
     EstimatorSettings, GroundEstimator, GroundParameters, SoleGeometry, SoleState, WrenchRate,
@@ -40,7 +40,8 @@ pub(crate) struct CompliantContacts {
     pub wrench_horizon: f64,
     /// `T` of the feasibility, s.
     pub feasibility_horizon: f64,
-    /// Per contact: the measured wrench of this tick (mixed, about the contact frame origin), N, N·m.
+    /// Per contact: the wrench of this tick the rows read (mixed, about the contact frame origin), N, N·m:
+    /// the measured one, or after the touch-downs and the ground estimate the `wrench_source`'s.
     pub measured: Vec<Vector6<f64>>,
     /// Per contact: the zero-force pose of the sole (its pose at touch-down).
     pub rest: Vec<Isometry3<f64>>,
@@ -53,6 +54,11 @@ pub(crate) struct CompliantContacts {
     /// `lift_off_force`: a contact whose load ramp ends stays loaded while its measured normal force
     /// exceeds this (N); `inf`: it leaves the QP when its ramp ends.
     pub lift_off_force: f64,
+    /// `wrench_source`: which wrench `measured` holds once the tick's inputs are read
+    /// (`tasks::compliant_wrench`).
+    pub wrench_source: WrenchSource,
+    /// `period / (wrench_filter_time + period)`: the `"filtered"` source's correction per tick.
+    pub filter_gain: f64,
 }
 
 /// The load of a contact held in the QP after its ramp ended (`lift_off_force`): not zero, so that the
@@ -89,6 +95,8 @@ impl CompliantContacts {
         Ok(CompliantContacts {
             estimator,
             held_period: c.held_acceleration.then_some(period),
+            wrench_source: c.wrench_source,
+            filter_gain: period / (positive("wrench_filter_time", c.wrench_filter_time)? + period),
             lift_off_force: match c.lift_off_force {
                 f if f.is_nan() || f < 0.0 => {
                     return Err(WbcError::InvalidConfig {
