@@ -14,6 +14,19 @@
 //! * **force difference control** (both feet loaded): `δ̇ = K_f ((f_L − f_R) − (f_L* − f_R*)) − δ / T_f`,
 //!   the left sole raised by `δ/2` and the right one lowered by `δ/2` [Kajita 2010, foot force difference control] (written with
 //!   `δ = z_L − z_R` and the sign that unloads the foot that carries too much);
+//! * **sink compensation** on a compliant ground (`ground_stiffness` `k` > 0, the visco-elastic continuum of
+//!   [Romualdi 2022, eq. 8.1.6]): each sole's reference is lowered by its static sink relative to the
+//!   even split, `Δz_i = (F/2 − f_i*) / (k l w)`, `f_i*` its desired normal force (the distribution below,
+//!   low-passed at `error_cutoff`), `F = f_L* + f_R*` and `k l w` the vertical stiffness of an `l × w`
+//!   sole [Romualdi 2022, eq. 8.1.9]. The desired forces, not the measured ones: with the measured ones
+//!   the compensation is a loop of gain one on the load split (a leg lengthened by its sink presses its
+//!   foot in by as much) and the load swings between the feet at about 3 Hz (measured). Without it the soles' references stay level while the loaded foot sinks and the other
+//!   rises: the whole robot rolls with the load (by `(f_L − f_R) / (k l w d)` over a sole distance `d`),
+//!   which shifts the CoM further onto the loaded foot, a loop of gain `2 m g h / (k l w d²)` (0.86 on
+//!   `k = 10⁶` N/m³ for the bundled humanoid); the kinematic QP-IK, holding the sunk sole at the planned
+//!   height, shortens its leg and closes that loop even faster. The compensation sums to zero over the
+//!   feet, so the planned CoM height is kept, and lifts an unloaded (swing) foot by the half-weight sink,
+//!   onto the ground's surface;
 //! * **distribution** of the desired ZMP `p*`: with both feet loaded, `α` is the projection of `p*` on the
 //!   segment between the sole origins (clamped to `[0, 1]`), `f_L* = (1 − α) F`, `f_R* = α F` (`F` the
 //!   measured total normal force) and each desired centre of pressure is its sole origin plus the part of
@@ -73,6 +86,7 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 /// | `force_leak_time` | s | 0.2 | `T_f`, time constant of the return of the height difference to the plan |
 /// | `max_height_offset` | m | 0.02 | bound on the height difference `δ` |
 /// | `error_cutoff` | Hz | 20 | cut-off of the low-pass filter on the torque and force errors (0: unfiltered) |
+/// | `ground_stiffness` | N/m³ | 0 | the ground's normal stiffness density `k` for the sink compensation (0: off, a rigid ground) |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FootAdmittanceConfig {
@@ -92,6 +106,8 @@ pub struct FootAdmittanceConfig {
     pub max_height_offset: f64,
     /// Cut-off of the first-order low-pass filter on the torque and force errors \[Hz\] (0: unfiltered).
     pub error_cutoff: f64,
+    /// Normal stiffness density `k` of the ground for the sink compensation \[N/m³\] (0: off).
+    pub ground_stiffness: f64,
 }
 
 impl Default for FootAdmittanceConfig {
@@ -105,6 +121,7 @@ impl Default for FootAdmittanceConfig {
             force_leak_time: 0.2,
             max_height_offset: 0.02,
             error_cutoff: DEFAULT_ERROR_CUTOFF,
+            ground_stiffness: 0.0,
         }
     }
 }
@@ -118,7 +135,8 @@ impl FootAdmittanceConfig {
         check_non_negative("foot_admittance.force_gain", self.force_gain)?;
         check_positive("foot_admittance.force_leak_time", self.force_leak_time)?;
         check_non_negative("foot_admittance.max_height_offset", self.max_height_offset)?;
-        check_non_negative("foot_admittance.error_cutoff", self.error_cutoff)
+        check_non_negative("foot_admittance.error_cutoff", self.error_cutoff)?;
+        check_non_negative("foot_admittance.ground_stiffness", self.ground_stiffness)
     }
 }
 
@@ -158,7 +176,7 @@ pub struct FootAdmittanceInput {
 /// |---|---|---|
 /// | `tilt` | rad | roll and pitch about the sole frame's x and y axes, applied after the planned orientation |
 /// | `tilt_rate` | rad/s | their rates `K_τ (τ − τ*) − θ/T_τ` |
-/// | `height` | m | world z offset (`±δ/2`) |
+/// | `height` | m | world z offset (`±δ/2`, plus the sink compensation `Δz_i`) |
 /// | `height_rate` | m/s | its rate |
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FootCorrection {
@@ -189,12 +207,18 @@ pub struct FootAdmittance {
     config: FootAdmittanceConfig,
     half_size: Vector2<f64>,
     min_force: f64,
+    /// Vertical compliance of one sole on the ground, `1 / (k l w)` \[m/N\] (0: no sink compensation).
+    sole_compliance: f64,
+    /// Half the robot's weight, the even split the normal-force filter starts from \[N\].
+    half_weight: f64,
     /// Height difference `δ = z_L − z_R` \[m\].
     height_difference: f64,
     /// Low-pass filters of the torque errors `[left, right]` (roll, pitch in the sole frame) \[N·m\].
     torque_errors: [FirstOrderLowPass<Vector2<f64>>; 2],
     /// Low-pass filter of the force difference error \[N\].
     force_error: FirstOrderLowPass<f64>,
+    /// Low-pass filter of the desired normal forces `[f_L*, f_R*]` of the sink compensation \[N\].
+    normal_forces: FirstOrderLowPass<Vector2<f64>>,
     output: FootAdmittanceOutput,
 }
 
@@ -218,10 +242,20 @@ impl FootAdmittance {
             config: *config,
             half_size: Vector2::new(foot_length, foot_width) * 0.5,
             min_force: MIN_ADMITTANCE_LOAD * weight,
+            sole_compliance: if config.ground_stiffness > 0.0 {
+                1.0 / (config.ground_stiffness * foot_length * foot_width)
+            } else {
+                0.0
+            },
+            half_weight: weight * 0.5,
             height_difference: 0.0,
             torque_errors: [FirstOrderLowPass::starting_at(config.error_cutoff, Vector2::zeros());
                 2],
             force_error: FirstOrderLowPass::starting_at(config.error_cutoff, 0.0),
+            normal_forces: FirstOrderLowPass::starting_at(
+                config.error_cutoff,
+                Vector2::repeat(weight * 0.5),
+            ),
             output: FootAdmittanceOutput::default(),
         })
     }
@@ -238,6 +272,8 @@ impl FootAdmittance {
             filter.reset_to(Vector2::zeros());
         }
         self.force_error.reset_to(0.0);
+        self.normal_forces
+            .reset_to(Vector2::repeat(self.half_weight));
         self.output = FootAdmittanceOutput::default();
     }
 
@@ -298,14 +334,42 @@ impl FootAdmittance {
         );
         self.height_difference = d;
         let rate = c.force_gain * force_error - d / c.force_leak_time;
-        for (foot, sign) in self.output.feet.iter_mut().zip([0.5, -0.5]) {
-            foot.height = sign * d;
-            foot.height_rate = sign * rate;
+        let (sink, sink_rate) = self.sink_compensation(&forces, input.dt);
+        for (k, (foot, sign)) in self.output.feet.iter_mut().zip([0.5, -0.5]).enumerate() {
+            foot.height = sign * d + sink[k];
+            foot.height_rate = sign * rate + sink_rate[k];
         }
         self.output.desired_cop = cops;
         self.output.desired_force = forces;
         Ok(&self.output)
     }
+}
+
+impl FootAdmittance {
+    /// The sink compensation `Δz_i = (F/2 − f_i*) / (k l w)` of the filtered desired normal forces `[f_L*,
+    /// f_R*]` \[N\] and its rate over the tick \[m, m/s\] (zero without a ground stiffness).
+    fn sink_compensation(&mut self, desired: &[f64; 2], dt: f64) -> ([f64; 2], [f64; 2]) {
+        if self.sole_compliance == 0.0 {
+            return ([0.0; 2], [0.0; 2]);
+        }
+        let desired = Vector2::new(desired[0], desired[1]);
+        let before = self.normal_forces.output().unwrap_or(desired);
+        let after = self.normal_forces.update(desired, dt);
+        let sink = |f: Vector2<f64>| sink_offsets(&f, self.sole_compliance);
+        let (z0, z1) = (sink(before), sink(after));
+        (z1, [(z1[0] - z0[0]) / dt, (z1[1] - z0[1]) / dt])
+    }
+}
+
+/// The sole height offsets `[Δz_L, Δz_R]` that put each sole at its static sink under the normal forces
+/// `forces` \[N\] relative to the even split: `Δz_i = (F/2 − f_i) c`, `F = f_L + f_R`, `c = 1 / (k l w)`
+/// the vertical compliance of a sole on the ground \[m/N\] [Romualdi 2022, eq. 8.1.9]. They sum to zero.
+pub fn sink_offsets(forces: &Vector2<f64>, compliance: f64) -> [f64; 2] {
+    let half = forces.sum() * 0.5;
+    [
+        (half - forces[0]) * compliance,
+        (half - forces[1]) * compliance,
+    ]
 }
 
 fn check_input(input: &FootAdmittanceInput) -> Result<()> {
@@ -567,5 +631,49 @@ mod tests {
             filtered.step(&lifted).unwrap();
         }
         assert!(filtered.output().feet[0].tilt.norm() < 1e-6);
+    }
+
+    /// On a ground of stiffness density `k`, a sole of `l × w` under `f` sinks `f / (k l w)`: the sink
+    /// compensation puts each sole at its sink relative to the even split (the loaded foot down, the other
+    /// up, summing to zero), reached through the force filter; off (`k = 0`) it adds nothing.
+    #[test]
+    fn the_sink_compensation_lowers_the_loaded_sole_by_its_static_sink() {
+        let (k, l, w) = (1e6, 0.2, 0.09);
+        let c = 1.0 / (k * l * w);
+        let offsets = sink_offsets(&Vector2::new(300.0, 20.0), c);
+        // 280 N more on the left: it sits 140 N · c below the even split, the right 140 N · c above
+        assert!((offsets[0] + 140.0 * c).abs() < 1e-15 && (offsets[1] - 140.0 * c).abs() < 1e-15);
+        assert!((140.0 * c - 7.78e-3).abs() < 1e-5, "{}", 140.0 * c);
+        let config = |ground_stiffness| FootAdmittanceConfig {
+            torque_gain: 0.0,
+            force_gain: 0.0,
+            ground_stiffness,
+            ..Default::default()
+        };
+        // all of the weight on the left foot (the left_cop_ahead input: 300 N left, 0 right)
+        let input = left_cop_ahead([true, false], 0.002);
+        let mut soft = FootAdmittance::new(&config(k), l, w, 320.0).unwrap();
+        let mut rigid = FootAdmittance::new(&config(0.0), l, w, 320.0).unwrap();
+        let mut previous = 0.0;
+        for n in 0..500 {
+            let out = soft.step(&input).unwrap();
+            let [left, right] = out.feet;
+            assert!((left.height + right.height).abs() < 1e-15);
+            assert!(
+                left.height <= previous,
+                "tick {n}: the left sole goes down monotonically"
+            );
+            assert!((left.height_rate * 0.002 - (left.height - previous)).abs() < 1e-15);
+            previous = left.height;
+            assert_eq!(rigid.step(&input).unwrap().feet[0].height, 0.0);
+        }
+        // after 1 s (20 time constants of the 20 Hz filter) the left sole is 150 N · c below the split
+        assert!((previous + 150.0 * c).abs() < 1e-9, "{previous}");
+        assert!(FootAdmittanceConfig {
+            ground_stiffness: -1.0,
+            ..Default::default()
+        }
+        .validate()
+        .is_err());
     }
 }
