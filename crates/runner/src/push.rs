@@ -6,7 +6,7 @@
 //! `p − F̂/(m ω²)` given to the step-adjustment QP as its stance CoP).
 
 use nalgebra::{Vector2, Vector3};
-use stride_planner::{PhaseKind, PlanSample};
+use stride_planner::{Phase, PhaseKind, Plan, PlanSample};
 use stride_simplified::{push_zmp_offset, PushConfig, PushObserver, SimplifiedError};
 use stride_walking::PlanClock;
 
@@ -72,16 +72,20 @@ impl PushResponse {
     }
 
     /// Tells `clock` to hold or run for the plan `sample` (taken at the clock's plan time) while
-    /// `walking` (every simplified tick, `dt` \[s\] apart). A hold starts in a double support once the
+    /// `walking` (every simplified tick, `dt` \[s\] apart; `start_or_stop`: the sample is in the walk's
+    /// first or last double support, [`in_start_or_stop`]). A hold starts in a double support once the
     /// estimate has stayed above `hold_force` for `hold_delay`, and lasts while it stays above, at most
     /// `max_hold`. With `hold_at_once` only an estimate that rose within `impact_window` of a planned
-    /// touch-down (before or after it) waits `hold_delay` (a touch-down's impact shows in the observer as
-    /// a short pulse); any other rise holds at once. Returns whether a hold started.
+    /// touch-down (before or after it), or in the start-up or stopping double support, waits
+    /// `hold_delay` (a touch-down's impact, and the torque walks' weight shift before the first lift-off
+    /// and after the last touch-down, show in the observer as short pulses); any other rise holds at
+    /// once. Returns whether a hold started.
     pub fn decide(
         &mut self,
         dt: f64,
         sample: &PlanSample,
         walking: bool,
+        start_or_stop: bool,
         clock: &mut PlanClock,
     ) -> bool {
         let double_support = walking && sample.phase == PhaseKind::DoubleSupport;
@@ -94,7 +98,7 @@ impl PushResponse {
         }
         let start = *self.double_support_start.get_or_insert(clock.delay());
         let pushed = self.pushed_for > 0.0;
-        let delay = if self.config.hold_at_once && !self.near_impact {
+        let delay = if self.config.hold_at_once && !self.near_impact && !start_or_stop {
             0.0
         } else {
             self.config.hold_delay
@@ -157,10 +161,27 @@ impl PushResponse {
     }
 }
 
+/// Whether plan time `t` \[s\] is in the start-up or the stopping double support of `plan`: before its
+/// first lift-off or after its last touch-down (false for a plan without steps). The observer is not quiet
+/// there in torque control (the unpushed `walk_curve_fast_torque` shows 8–17 N 0.2–0.9 s into its first
+/// double support, while it shifts its weight, and 0.4–0.7 s into its last, docs/push-recovery.md), away
+/// from any touch-down's `impact_window`. No allocation.
+pub fn in_start_or_stop(plan: &Plan, t: f64) -> bool {
+    let single = |p: &&Phase| matches!(p.kind, PhaseKind::SingleSupport { .. });
+    let (Some(first), Some(last)) = (
+        plan.phases.iter().find(single),
+        plan.phases.iter().rev().find(single),
+    ) else {
+        return false;
+    };
+    t < first.start || t >= last.end
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::time::Duration;
+    use stride_planner::{ContactList, Foot};
 
     fn response(config: PushConfig) -> PushResponse {
         PushResponse::new(&config, 30.0, Vector3::new(0.0, 0.0, -9.81)).unwrap()
@@ -189,7 +210,7 @@ mod tests {
             let v = Vector3::new(0.0, 20.0 * (t - 0.1).max(0.0) / 30.0, 0.0);
             clock.plan_time(Duration::from_millis(k * 10));
             r.observe(0.01, &v, &weight).unwrap();
-            r.decide(0.01, &s, walking, clock);
+            r.decide(0.01, &s, walking, false, clock);
         }
     }
 
@@ -217,6 +238,15 @@ mod tests {
     /// A walk in single support until 0.5 s, then in double support; the estimate is set directly to
     /// 20 N along x on the ticks where `on(t)`. Returns the time of the first hold (`None`: none).
     fn first_hold(hold_at_once: bool, on: impl Fn(f64) -> bool) -> Option<f64> {
+        first_hold_in(hold_at_once, false, on)
+    }
+
+    /// [`first_hold`] with the double support the walk's start-up or stopping one (`start_or_stop`).
+    fn first_hold_in(
+        hold_at_once: bool,
+        start_or_stop: bool,
+        on: impl Fn(f64) -> bool,
+    ) -> Option<f64> {
         let mut r = response(PushConfig {
             hold_at_once,
             ..PushConfig::default()
@@ -234,10 +264,12 @@ mod tests {
                 Vector2::zeros()
             };
             clock.plan_time(Duration::from_millis(k * 10));
+            let double_support = t >= 0.5 - 1e-9;
             if r.decide(
                 0.01,
-                if t < 0.5 - 1e-9 { &ss } else { &ds },
+                if double_support { &ds } else { &ss },
                 true,
+                start_or_stop && double_support,
                 &mut clock,
             ) {
                 return Some(t);
@@ -271,6 +303,83 @@ mod tests {
         // without `hold_at_once` every rise waits `hold_delay`
         let t = first_hold(false, |t| t > 0.75 - 1e-9).unwrap();
         assert!((t - 0.84).abs() < 1e-9, "{t}");
+    }
+
+    #[test]
+    fn with_hold_at_once_a_rise_in_the_start_up_or_stopping_double_support_waits_the_hold_delay() {
+        // the torque walks' weight-shift pulses, 80 ms long and 0.3 s from the touch-down: no hold
+        assert_eq!(
+            first_hold_in(true, true, |t| (0.8..0.88).contains(&t)),
+            None
+        );
+        assert_eq!(
+            first_hold_in(true, false, |t| (0.8..0.88).contains(&t)),
+            Some(0.8)
+        );
+        // a lasting push there still holds, once it has lasted `hold_delay`
+        let t = first_hold_in(true, true, |t| t > 0.75 - 1e-9).unwrap();
+        assert!((t - 0.84).abs() < 1e-9, "{t}");
+    }
+
+    /// A plan of `phases` (kind, start, end) and nothing else.
+    fn plan_of(phases: &[(PhaseKind, f64, f64)]) -> Plan {
+        Plan {
+            omega: 4.0,
+            com_height: 0.6,
+            ground_height: 0.0,
+            foot_length: 0.2,
+            foot_width: 0.1,
+            start_time: 0.0,
+            end_time: phases.last().map_or(0.0, |p| p.2),
+            segments: Vec::new(),
+            phases: phases
+                .iter()
+                .map(|&(kind, start, end)| Phase { kind, start, end })
+                .collect(),
+            left_contacts: ContactList {
+                foot: Foot::Left,
+                contacts: Vec::new(),
+            },
+            right_contacts: ContactList {
+                foot: Foot::Right,
+                contacts: Vec::new(),
+            },
+            left_swings: Vec::new(),
+            right_swings: Vec::new(),
+            outcome: stride_planner::PlanOutcome::Complete,
+            merge_times: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_start_up_and_stopping_double_supports_are_before_the_first_lift_off_and_after_the_last_touch_down(
+    ) {
+        let left = PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Left,
+        };
+        let right = PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Right,
+        };
+        let ds = PhaseKind::DoubleSupport;
+        let plan = plan_of(&[
+            (ds, 0.0, 1.0),
+            (right, 1.0, 1.6),
+            (ds, 1.6, 1.8),
+            (left, 1.8, 2.4),
+            (ds, 2.4, 3.0),
+        ]);
+        for (t, expected) in [
+            (0.0, true),
+            (0.99, true),
+            (1.0, false),
+            (1.7, false),
+            (2.39, false),
+            (2.4, true),
+            (3.5, true),
+        ] {
+            assert_eq!(in_start_or_stop(&plan, t), expected, "{t}");
+        }
+        assert!(!in_start_or_stop(&plan_of(&[(ds, 0.0, 1.0)]), 0.5));
     }
 
     #[test]

@@ -912,12 +912,18 @@ impl Stack {
         let Some(push) = self.push.as_mut() else {
             return;
         };
-        let walking = self
-            .planner
-            .plan()
-            .is_some_and(|p| stride_walking::is_walking(p, self.plan_sample.time));
+        let t = self.plan_sample.time;
+        let plan = self.planner.plan();
+        let walking = plan.is_some_and(|p| stride_walking::is_walking(p, t));
+        let start_or_stop = plan.is_some_and(|p| crate::push::in_start_or_stop(p, t));
         let dt = self.simplified.period();
-        if push.decide(dt, &self.plan_sample, walking, &mut self.plan_clock) {
+        if push.decide(
+            dt,
+            &self.plan_sample,
+            walking,
+            start_or_stop,
+            &mut self.plan_clock,
+        ) {
             self.push_hold_started = Some(push.estimate());
         }
     }

@@ -3,7 +3,9 @@
 //! (position control too);
 //! a side push at the chest that starts at a touch-down falls without it and is walked through with it
 //! (the double support is held while the momentum observer sees the push); a push beyond what the held
-//! double support can take still falls (the other side of the limit, docs/push-recovery.md). Position
+//! double support can take still falls (the other side of the limit, docs/push-recovery.md); with the
+//! hold started at once (`layers/push_hold_at_once.toml`) the unpushed curve walk holds nothing and a push
+//! in mid double support that falls with the delayed hold is walked through. Position
 //! control with the step adjustment on (`configs/walk_straight_step_adjustment.toml`): the same two sides
 //! of the limit on the hard default floor.
 mod common;
@@ -15,6 +17,11 @@ use stride_runner::summary::RunSummary;
 
 const TORQUE: &[&str] = &["walk_straight_torque.toml"];
 const TORQUE_RESPONSE: &[&str] = &["walk_straight_torque.toml", "layers/push_response.toml"];
+const TORQUE_RESPONSE_AT_ONCE: &[&str] = &[
+    "walk_straight_torque.toml",
+    "layers/push_response.toml",
+    "layers/push_hold_at_once.toml",
+];
 const POSITION_STEPS: &[&str] = &["walk_straight_step_adjustment.toml"];
 const POSITION_STEPS_RESPONSE: &[&str] = &[
     "walk_straight_step_adjustment.toml",
@@ -110,6 +117,22 @@ fn without_pushes_the_fast_walk_holds_no_double_support_and_would_without_the_im
     assert!(run.push_holds.0 >= 1, "{}", run.render());
 }
 
+/// The torque-control walk whose observer is not quiet in its start-up and stopping double supports
+/// (docs/push-recovery.md, "The hold at once in torque control"): `walk_curve_fast_torque` with the
+/// hold at once (`layers/push_hold_at_once.toml`) held 13 double supports there, unpushed, before those
+/// two double supports waited `hold_delay` too; now it holds none and is the walk's own run.
+#[test]
+fn without_pushes_the_torque_curve_walk_with_the_hold_at_once_holds_no_double_support() {
+    unchanged_without_pushes_with(
+        "push_response_torque_curve_nominal",
+        &[
+            "walk_curve_fast_torque.toml",
+            "layers/push_response.toml",
+            "layers/push_hold_at_once.toml",
+        ],
+    );
+}
+
 #[test]
 fn a_side_push_at_a_touch_down_is_walked_through_with_the_double_support_held() {
     let s = Scratch::new("push_response_side");
@@ -132,6 +155,34 @@ fn a_forward_push_beyond_the_soles_still_falls_with_the_double_support_held() {
     let on = pushed(&s, "on", TORQUE_RESPONSE, [60.0, 0.0], 5.5);
     assert_fell(&on);
     assert!(on.push_holds.0 >= 1, "{}", on.render());
+}
+
+/// Torque control, a push that starts in the middle of a double support (5.75 s; the right foot landed
+/// at 5.557 s and lifts at 5.90 s): 40 N backward and to the left (135°) for 1 s is walked through with
+/// the hold started at once (`layers/push_hold_at_once.toml`: the rise is outside the touch-down's
+/// `impact_window`), and falls by torso tilt when the hold waits `hold_delay` (`hold_at_once = false`,
+/// the default: the plan is 0.01 s behind when the right foot lifts). 40 N to the left from the same
+/// instant still falls with it (the other side of the limit; docs/push-recovery.md, "The hold at once in
+/// torque control").
+#[test]
+fn torque_control_a_push_in_mid_double_support_is_held_at_once_and_walked_through() {
+    let s = Scratch::new("push_response_torque_mid_double_support");
+    let force = [-40.0 * 0.5f64.sqrt(), 40.0 * 0.5f64.sqrt()];
+    let on = pushed(&s, "on", TORQUE_RESPONSE_AT_ONCE, force, 5.75);
+    assert_eq!(on.outcome, Outcome::DurationReached, "{}", on.render());
+    assert!(on.push_holds.0 >= 1, "{}", on.render());
+    let always_delayed = "[simplified.push]\nhold_at_once = false\n";
+    let late = pushed_with(
+        &s,
+        "late",
+        TORQUE_RESPONSE_AT_ONCE,
+        always_delayed,
+        force,
+        5.75,
+    );
+    assert_fell(&late);
+    let left = pushed(&s, "left", TORQUE_RESPONSE_AT_ONCE, [0.0, 40.0], 5.75);
+    assert_fell(&left);
 }
 
 /// Position control with the step adjustment, on the hard default floor (docs/push-recovery.md, "Position

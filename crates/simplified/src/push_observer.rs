@@ -32,7 +32,7 @@ use crate::error::{check_finite, check_non_negative, check_positive, Result, Sim
 /// | `hold_double_support` | – | `true` | hold the double support (the plan's clock slows to a stop) while the estimate exceeds `hold_force` |
 /// | `hold_force` | N | 8 | horizontal push (after the dead zone) above which the double support is held |
 /// | `hold_delay` | s | 0.1 | the estimate must stay above `hold_force` this long before a hold starts (with `hold_at_once`, only when it rose within `impact_window` of a planned touch-down): a touch-down's impact shows in the observer as a ±20 N pulse of under 0.1 s on the fast walks (the CoM velocity estimate and the contact forces disagree for a few milliseconds) |
-/// | `hold_at_once` | – | `false` | a rise of the estimate farther than `impact_window` from a planned touch-down holds the double support at once (without it every rise waits `hold_delay`) |
+/// | `hold_at_once` | – | `false` | a rise of the estimate farther than `impact_window` from a planned touch-down, outside the walk's start-up and stopping double supports (before the first lift-off, after the last touch-down), holds the double support at once (without it every rise waits `hold_delay`) |
 /// | `impact_window` | s | 0.2 | with `hold_at_once`: time on either side of a planned touch-down (the start of a double support) within which a rise of the estimate is treated as a possible impact pulse and waits `hold_delay` |
 /// | `max_hold` | s | 2 | longest hold of one double support (an estimate that never decays cannot stop the walk) |
 /// | `hold_ramp` | s | 0.1 | time for the plan's clock rate to go from 1 to 0 and back (linear ramp) |
@@ -53,7 +53,8 @@ pub struct PushConfig {
     pub hold_force: f64,
     /// Time the estimate must stay above `hold_force` before a hold starts \[s\].
     pub hold_delay: f64,
-    /// Whether a rise away from the touch-downs (farther than `impact_window`) holds at once.
+    /// Whether a rise away from the touch-downs (farther than `impact_window`) and from the walk's
+    /// start-up and stopping double supports holds at once.
     pub hold_at_once: bool,
     /// Time on either side of a planned touch-down within which a rise of the estimate waits `hold_delay` \[s\].
     pub impact_window: f64,
