@@ -128,6 +128,9 @@ pub struct ActiveSetSolver {
     hff: Vec<f64>,
     free: Vec<usize>,
     j0_ready: bool,
+    /// `J` is still `J₀` (no rotation since [`Self::reset_state`]): it is read from `j0`, and the first
+    /// rotation copies it into `j` ([`Self::own_j`]).
+    j_is_j0: bool,
     last_start: StartKind,
     /// Whether a rejected guess re-imposes the previous active set before the cold start (stage 2 of the
     /// warm start); without it the guess is also tried from an empty previous active set.
@@ -168,6 +171,7 @@ impl ActiveSetSolver {
             hff: Vec::new(),
             free: Vec::new(),
             j0_ready: false,
+            j_is_j0: false,
             last_start: StartKind::Cold,
             reimpose: true,
         }
@@ -595,8 +599,9 @@ impl ActiveSetSolver {
         let nrow = self.me + self.mi;
         if slot < nrow {
             let col = &self.nt[slot * n..(slot + 1) * n];
+            let j = if self.j_is_j0 { &self.j0 } else { &self.j };
             for k in 0..n {
-                let jc = &self.j[k * n..(k + 1) * n];
+                let jc = &j[k * n..(k + 1) * n];
                 let mut s = 0.0;
                 for (a, b) in jc.iter().zip(col) {
                     s += a * b;
@@ -605,8 +610,9 @@ impl ActiveSetSolver {
             }
         } else {
             let row = slot - nrow;
+            let j = if self.j_is_j0 { &self.j0 } else { &self.j };
             for k in 0..n {
-                self.d[k] = sign * self.j[row + k * n];
+                self.d[k] = sign * j[row + k * n];
             }
         }
     }
@@ -652,6 +658,7 @@ impl ActiveSetSolver {
     fn compute_z(&mut self, q: usize) -> (f64, f64) {
         let n = self.n;
         let z = &mut self.z[..n];
+        let j = if self.j_is_j0 { &self.j0 } else { &self.j };
         z.fill(0.0);
         let mut zn = 0.0;
         let mut dn = 0.0;
@@ -661,7 +668,7 @@ impl ActiveSetSolver {
             if k >= q {
                 zn += dk * dk;
                 if dk != 0.0 {
-                    for (a, b) in z.iter_mut().zip(&self.j[k * n..(k + 1) * n]) {
+                    for (a, b) in z.iter_mut().zip(&j[k * n..(k + 1) * n]) {
                         *a += dk * b;
                     }
                 }
@@ -696,6 +703,7 @@ impl ActiveSetSolver {
             let (c, s) = (a / h, b / h);
             self.d[i - 1] = h;
             self.d[i] = 0.0;
+            self.own_j();
             let (left, right) = self.j.split_at_mut(i * n);
             let col_a = &mut left[(i - 1) * n..i * n];
             let col_b = &mut right[..n];
@@ -737,6 +745,7 @@ impl ActiveSetSolver {
                     self.r[jcol + col * n] = c * va + s * vb;
                     self.r[jcol + 1 + col * n] = -s * va + c * vb;
                 }
+                self.own_j();
                 let (left, right) = self.j.split_at_mut((jcol + 1) * n);
                 let col_a = &mut left[jcol * n..(jcol + 1) * n];
                 let col_b = &mut right[..n];
@@ -758,15 +767,47 @@ impl ActiveSetSolver {
     /// Unconstrained minimiser into `x`: `x = −J Jᵀ g` (any J with J Jᵀ = H⁻¹).
     fn unconstrained(&mut self, qp: &DenseQp) {
         let n = self.n;
+        let j = if self.j_is_j0 { &self.j0 } else { &self.j };
         for k in 0..n {
-            let jc = &self.j[k * n..(k + 1) * n];
+            let jc = &j[k * n..(k + 1) * n];
             self.tmp[k] = jc.iter().zip(qp.g.iter()).map(|(a, b)| a * b).sum();
         }
         let x = &mut self.x[..n];
         x.fill(0.0);
         for k in 0..n {
             let t = self.tmp[k];
-            for (a, b) in x.iter_mut().zip(&self.j[k * n..(k + 1) * n]) {
+            for (a, b) in x.iter_mut().zip(&j[k * n..(k + 1) * n]) {
+                *a -= t * b;
+            }
+        }
+    }
+
+    /// [`Self::unconstrained`] right after [`Self::reset_state`], when `J = J₀ = L⁻ᵀ` is upper triangular:
+    /// column `k` of `J` is zero below row `k`, so the sums and updates stop at row `k`. With a finite `g`
+    /// and finite `Jᵀ g` that is the full form bit for bit: a dropped term `0 · g_r` is `±0`, which leaves a
+    /// nonzero sum as it is and can only change the sign of a zero `(Jᵀ g)_k`; the dropped updates
+    /// `x_r −= (Jᵀ g)_k · 0` subtract `±0`, which leaves every `x_r` as it is (`x` starts at `+0` and an
+    /// update never makes it `−0`), and so does a zero `(Jᵀ g)_k` of either sign. Otherwise (a NaN or
+    /// infinity, which `0 · ∞` would spread) the full form.
+    fn unconstrained_cold(&mut self, qp: &DenseQp) {
+        let n = self.n;
+        let g = &qp.g.as_slice()[..n];
+        if !g.iter().all(|v| v.is_finite()) {
+            return self.unconstrained(qp);
+        }
+        let j = &self.j0;
+        for k in 0..n {
+            let jc = &j[k * n..k * n + k + 1];
+            self.tmp[k] = jc.iter().zip(g).map(|(a, b)| a * b).sum();
+        }
+        if !self.tmp[..n].iter().all(|v| v.is_finite()) {
+            return self.unconstrained(qp);
+        }
+        let x = &mut self.x[..n];
+        x.fill(0.0);
+        for k in 0..n {
+            let t = self.tmp[k];
+            for (a, b) in x[..=k].iter_mut().zip(&j[k * n..k * n + k + 1]) {
                 *a -= t * b;
             }
         }
@@ -827,15 +868,26 @@ impl ActiveSetSolver {
         }
     }
 
+    /// `J = J₀`, no active constraint, `u = 0`. `J` is not copied: it is read from `j0` until a rotation
+    /// needs its own copy ([`Self::own_j`]); most cold solves of the whole-body problems add no constraint.
     fn reset_state(&mut self) {
         self.compute_j0();
         let n = self.n;
-        self.j[..n * n].copy_from_slice(&self.j0[..n * n]);
+        self.j_is_j0 = true;
         self.active.clear();
         for v in &mut self.is_active {
             *v = false;
         }
         self.u[..n].fill(0.0);
+    }
+
+    /// Makes `j` hold `J` before a rotation changes it (a copy of `J₀` after [`Self::reset_state`]).
+    fn own_j(&mut self) {
+        if self.j_is_j0 {
+            let n = self.n;
+            self.j[..n * n].copy_from_slice(&self.j0[..n * n]);
+            self.j_is_j0 = false;
+        }
     }
 
     /// Checks an equality row that was skipped as dependent: true if it holds at `x`.
@@ -849,7 +901,7 @@ impl ActiveSetSolver {
     /// Cold start: unconstrained minimum, then equalities with full steps, then the dual iterations.
     fn run_cold(&mut self, qp: &DenseQp) -> Run {
         self.reset_state();
-        self.unconstrained(qp);
+        self.unconstrained_cold(qp);
         let tol = self.settings.feasibility_tolerance;
         let dep = self.settings.dependence_tolerance;
         for i in 0..self.me {
@@ -973,9 +1025,10 @@ impl ActiveSetSolver {
             }
             self.rv[k] = s / self.r[k + k * n];
         }
+        let j = if self.j_is_j0 { &self.j0 } else { &self.j };
         for k in 0..q {
             let vk = self.rv[k];
-            for (a, b) in self.x[..n].iter_mut().zip(&self.j[k * n..(k + 1) * n]) {
+            for (a, b) in self.x[..n].iter_mut().zip(&j[k * n..(k + 1) * n]) {
                 *a += vk * b;
             }
         }
@@ -1213,6 +1266,83 @@ fn cholesky_tile<const W: usize>(done: &[f64], n: usize, k: usize, r0: usize, co
 mod tests {
     use super::cholesky_lower;
 
+    /// A reproducible stream of uniform numbers in `[0, 1)` (a linear congruential generator).
+    fn uniform_stream(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// The cold start's unconstrained minimum over the triangular `J₀` is the full `x = −J Jᵀ g` bit for
+    /// bit, with zeros of either sign in `g` and a gradient orthogonal to columns of `J₀`; and a
+    /// non-finite `g` gives the full form's non-finite `x`.
+    #[test]
+    fn the_cold_unconstrained_minimum_is_the_full_form_bit_for_bit() {
+        use super::{ActiveSetSettings, ActiveSetSolver};
+        use crate::dense::DenseQp;
+        let mut next = uniform_stream(5);
+        for n in [1, 2, 3, 8, 9, 25, 31] {
+            let b: Vec<f64> = (0..n * n)
+                .map(|_| {
+                    let u = next();
+                    if u < 0.3 {
+                        0.0
+                    } else {
+                        2.0 * u - 1.0
+                    }
+                })
+                .collect();
+            let mut qp = DenseQp::new(n, 0, 0);
+            for c in 0..n {
+                for r in 0..n {
+                    qp.h[(r, c)] = (0..n).map(|i| b[r + i * n] * b[c + i * n]).sum::<f64>();
+                }
+                qp.h[(c, c)] += 1e-2;
+            }
+            let gradients: Vec<Vec<f64>> = vec![
+                (0..n).map(|_| 2.0 * next() - 1.0).collect(),
+                (0..n)
+                    .map(|i| match i % 3 {
+                        0 => 0.0,
+                        1 => -0.0,
+                        _ => 2.0 * next() - 1.0,
+                    })
+                    .collect(),
+                (0..n)
+                    .map(|i| if i + 1 == n { 1.0 } else { -0.0 })
+                    .collect(),
+                (0..n).map(|_| 0.0).collect(),
+                (0..n)
+                    .map(|i| if i == 0 { f64::INFINITY } else { 1.0 })
+                    .collect(),
+                (0..n)
+                    .map(|i| if i + 1 == n { f64::NAN } else { 1.0 })
+                    .collect(),
+            ];
+            for g in gradients {
+                qp.g.copy_from_slice(&g);
+                let mut solver = ActiveSetSolver::new(ActiveSetSettings::default());
+                solver.ensure_workspace(n, 0, 0);
+                assert!(solver.factorize(&qp), "n {n}");
+                solver.reset_state();
+                solver.unconstrained(&qp);
+                let full = solver.x[..n].to_vec();
+                solver.x[..n].fill(7.0);
+                solver.unconstrained_cold(&qp);
+                for (k, (x, y)) in solver.x[..n].iter().zip(&full).enumerate() {
+                    if y.is_nan() {
+                        assert!(x.is_nan(), "n {n}, entry {k}: {x}");
+                    } else {
+                        assert_eq!(x.to_bits(), y.to_bits(), "n {n}, entry {k}: {x} vs {y}");
+                    }
+                }
+            }
+        }
+    }
+
     /// The right-looking rank-one form the tiled factorization replaced.
     fn cholesky_reference(l: &mut [f64], n: usize, pivot_min: f64) -> bool {
         for c in 0..n {
@@ -1241,12 +1371,9 @@ mod tests {
     /// that is not positive definite: same factor bit for bit (lower triangle), same verdict.
     #[test]
     fn the_tiled_cholesky_is_the_rank_one_form_bit_for_bit() {
-        let mut seed = 7u64;
+        let mut uniform = uniform_stream(7);
         let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let u = (seed >> 11) as f64 / (1u64 << 53) as f64;
+            let u = uniform();
             if u < 1.0 / 3.0 {
                 0.0
             } else {

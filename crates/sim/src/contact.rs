@@ -184,8 +184,11 @@ pub(crate) struct Surface {
     pub(crate) ft_pose: Isometry3<f64>,
     /// Mixed Jacobian of the surface frame (6 × nv).
     pub(crate) jacobian: DMatrix<f64>,
-    /// Indices of the non-zero columns of `jacobian`.
+    /// Indices of the non-zero columns of `jacobian`: the base's six and those of the joints between the
+    /// surface's body and the base, the same at every state ([`Surface::find_columns`]).
     pub(crate) columns: Vec<usize>,
+    /// `columns` (and `branch`) are found: [`Surface::find_columns`] ran once.
+    pub(crate) columns_found: bool,
     /// The columns of `J` and of `G₆ J` over `columns` (scratch of the implicit assembly).
     column_scratch: Vec<(Vector6<f64>, Vector6<f64>)>,
     /// Branch of the tree factorisation that holds the surface's joints (`None`: only the base moves it).
@@ -228,6 +231,7 @@ impl Surface {
             ft_pose: Isometry3::identity(),
             jacobian: DMatrix::zeros(6, nv),
             columns: Vec::with_capacity(nv),
+            columns_found: false,
             column_scratch: Vec::with_capacity(nv),
             branch: None,
             stale: Change::Mode,
@@ -245,7 +249,12 @@ impl Surface {
         self.first_point..self.first_point + self.point_count
     }
 
-    /// Records the non-zero columns of `jacobian` (the degrees of freedom that move the surface).
+    /// Records the non-zero columns of `jacobian` (the degrees of freedom that move the surface). They do not
+    /// depend on the state, so the implicit step finds them once: a column of the frame Jacobian is the
+    /// motion subspace `[p × a; a]` (revolute) or `[a; 0]` (prismatic) of a joint on the body's path to the
+    /// base shifted to the frame, whose world axis `a = R a_local` is as zero as `a_local` at any rotation
+    /// `R`; the columns of joints off the path are written as zeros; the base's columns hold `I` blocks.
+    /// Test `contact_jacobian_columns_do_not_depend_on_the_state`.
     pub(crate) fn find_columns(&mut self) {
         self.columns.clear();
         for c in 0..self.jacobian.ncols() {
@@ -733,6 +742,56 @@ pub(crate) fn start_wrench(points: &mut [Point], ground: &GroundPlane) -> Vector
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The premise of finding a surface's columns once: the non-zero columns of every frame Jacobian of the
+    /// bundled humanoid (mixed, as the simulator's) are the same at many states, far from the standing one.
+    #[test]
+    fn contact_jacobian_columns_do_not_depend_on_the_state() {
+        use std::sync::Arc;
+        use stride_model::{KinDyn, VelocityRepresentation};
+        let model = Arc::new(stride_model::bundled::model().expect("bundled model"));
+        let mut kd = KinDyn::new(Arc::clone(&model));
+        kd.set_representation(VelocityRepresentation::Mixed);
+        let mut state = stride_model::bundled::standing_state(&model).expect("standing state");
+        let ids: Vec<_> = model
+            .frames()
+            .iter()
+            .map(|f| model.frame_id(&f.name).expect("a frame's own name"))
+            .collect();
+        let mut surface = Surface::new(ids[0], None, 0, 0, model.nv());
+        let mut columns = Vec::new();
+        for (frame, &id) in ids.iter().enumerate() {
+            surface.frame = id;
+            for k in 0..40 {
+                let x = k as f64;
+                for (j, q) in state.joint_positions.iter_mut().enumerate() {
+                    *q = if k == 0 {
+                        0.0
+                    } else {
+                        3.0 * (1.3 * x + 0.7 * j as f64).sin()
+                    };
+                }
+                for (j, v) in state.joint_velocities.iter_mut().enumerate() {
+                    *v = (x + j as f64).cos();
+                }
+                state.base_pose.rotation = nalgebra::UnitQuaternion::from_euler_angles(
+                    0.3 * x.sin(),
+                    0.2 * x.cos(),
+                    0.1 * x,
+                );
+                kd.set_state(&state).expect("state");
+                kd.frame_jacobian(surface.frame, &mut surface.jacobian)
+                    .expect("jacobian");
+                surface.find_columns();
+                if k == 0 {
+                    columns.clone_from(&surface.columns);
+                    assert!(columns.len() >= 6, "frame {frame}");
+                } else {
+                    assert_eq!(surface.columns, columns, "frame {frame}, state {k}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn trapezoid_weights_sum_to_one_and_integrate_quadratics_in_the_limit() {

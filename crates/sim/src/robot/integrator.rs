@@ -65,11 +65,14 @@ impl SimRobot {
         self.kd.bias_forces(&mut self.bias)?;
         for s in &mut self.surfaces {
             self.kd.frame_jacobian(s.frame, &mut s.jacobian)?;
-            s.find_columns();
-            s.branch = s
-                .columns
-                .last()
-                .and_then(|c| self.factorization.branch_of(*c));
+            if !s.columns_found {
+                s.find_columns();
+                s.branch = s
+                    .columns
+                    .last()
+                    .and_then(|c| self.factorization.branch_of(*c));
+                s.columns_found = true;
+            }
             s.stale = Change::Mode;
         }
         for p in &mut self.points {
