@@ -26,6 +26,7 @@ pub mod estimation_summary;
 pub mod feet;
 pub mod flexible;
 pub mod gait;
+pub mod ground_estimate;
 pub mod identify;
 pub mod init;
 pub mod joint_trajectory;

@@ -655,3 +655,39 @@ pub(crate) struct FootstepsMsg {
     pub(crate) time: f64,
     pub(crate) footsteps: Vec<FootstepMsg>,
 }
+
+/// `/wbc/ground_estimate`: TSID-Compliant's ground estimate per contact (`[wbc.tsid.compliant]
+/// estimate_ground`, [Romualdi 2022, §8.2.3]): `{"contacts": [names], "stiffness": [N/m³],
+/// "damping": [N·s/m³]}`, the three arrays in the TSID's contact order. Serialized without allocating.
+pub struct GroundEstimateRecord<'a> {
+    /// The TSID (its contact names and estimates).
+    pub tsid: &'a stride_wbc::Tsid,
+    /// Its estimates ([`stride_wbc::Tsid::ground_estimates`]).
+    pub grounds: &'a [stride_wbc::GroundParameters],
+}
+
+impl Serialize for GroundEstimateRecord<'_> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        struct Seq<I>(I);
+        impl<I: Iterator<Item = T> + Clone, T: Serialize> Serialize for Seq<I> {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.collect_seq(self.0.clone())
+            }
+        }
+        let mut st = serializer.serialize_struct("GroundEstimate", 3)?;
+        st.serialize_field("contacts", &Names(self.tsid))?;
+        st.serialize_field("stiffness", &Seq(self.grounds.iter().map(|g| g.stiffness)))?;
+        st.serialize_field("damping", &Seq(self.grounds.iter().map(|g| g.damping)))?;
+        st.end()
+    }
+}
+
+/// The contact names of a TSID as a JSON array.
+struct Names<'a>(&'a stride_wbc::Tsid);
+
+impl Serialize for Names<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.0.contact_tasks())
+    }
+}

@@ -15,9 +15,9 @@ use crate::log::{
 };
 use crate::records::{
     simplified_output_record, ContactsMsg, DiagnosisMsg, EstimationMsg, EventRecord, FeetMsg,
-    FootMsg, FootstepMsg, FootstepsMsg, FtMsg, IkOutputRecord, ImuMsg, PlanSampleRecord,
-    PlannerInputRecord, PoseRecord, RobotDescription, RunnerTimingMsg, SimStateMsg, StateRecord,
-    TimingRecord, TrackingMsg, TsidOutputRecord, WbcInputRecord,
+    FootMsg, FootstepMsg, FootstepsMsg, FtMsg, GroundEstimateRecord, IkOutputRecord, ImuMsg,
+    PlanSampleRecord, PlannerInputRecord, PoseRecord, RobotDescription, RunnerTimingMsg,
+    SimStateMsg, StateRecord, TimingRecord, TrackingMsg, TsidOutputRecord, WbcInputRecord,
 };
 use crate::robot::Measurement;
 use crate::stack::{Stack, Wbc};
@@ -39,6 +39,7 @@ struct Topics {
     wbc_input: TopicId,
     wbc_output: TopicId,
     wbc_timing: TopicId,
+    wbc_ground_estimate: TopicId,
     sim_state: TopicId,
     sensors_feet: TopicId,
     sensors_imu: TopicId,
@@ -71,6 +72,11 @@ impl Topics {
             wbc_input: w.topic("/wbc/input", "stride.wbc.Input", None)?,
             wbc_output: w.topic("/wbc/output", "stride.wbc.Output", None)?,
             wbc_timing: w.topic("/wbc/timing", "stride.Timing", None)?,
+            wbc_ground_estimate: w.topic(
+                "/wbc/ground_estimate",
+                "stride.wbc.GroundEstimate",
+                None,
+            )?,
             sim_state: w.topic("/sim/state", "stride.sim.State", None)?,
             sensors_feet: w.topic("/sensors/feet", "stride.sensors.Feet", None)?,
             sensors_imu: w.topic("/sensors/imu", "stride.sensors.Imu", None)?,
@@ -385,7 +391,8 @@ impl LogSink {
         self.write(|tp| tp.simplified_timing, t, &timing)
     }
 
-    /// `/wbc/input`, `/wbc/output`, `/wbc/timing` after a whole-body tick.
+    /// `/wbc/input`, `/wbc/output`, `/wbc/timing` (and `/wbc/ground_estimate` with TSID-Compliant's
+    /// `estimate_ground`) after a whole-body tick.
     pub(crate) fn wbc(
         &mut self,
         t: u64,
@@ -396,7 +403,13 @@ impl LogSink {
         self.write(|tp| tp.wbc_input, t, &input)?;
         match &stack.wbc {
             Wbc::Ik(ik) => self.write(|tp| tp.wbc_output, t, &IkOutputRecord::new(ik.output())),
-            Wbc::Tsid(ts) => self.write(|tp| tp.wbc_output, t, &TsidOutputRecord::new(ts.output())),
+            Wbc::Tsid(ts) => {
+                if let Some(grounds) = ts.ground_estimates() {
+                    let record = GroundEstimateRecord { tsid: ts, grounds };
+                    self.write(|tp| tp.wbc_ground_estimate, t, &record)?;
+                }
+                self.write(|tp| tp.wbc_output, t, &TsidOutputRecord::new(ts.output()))
+            }
         }?;
         self.write(|tp| tp.wbc_timing, t, &timing)
     }

@@ -695,8 +695,17 @@ impl Stack {
                 (t.config().contact_model, c.plan_on_surface, t.ground())
             {
                 let area = c.sole_length * c.sole_width;
-                for (s, w) in soles.iter_mut().zip(&self.estimate.foot_wrenches) {
-                    *s = zero_force_sole(s, w, ground.stiffness, area);
+                for (i, (s, w)) in soles
+                    .iter_mut()
+                    .zip(&self.estimate.foot_wrenches)
+                    .enumerate()
+                {
+                    let flag = [
+                        stride_wbc::walking::LEFT_FOOT,
+                        stride_wbc::walking::RIGHT_FOOT,
+                    ][i];
+                    let k = t.ground_estimate_of(flag).unwrap_or(ground).stiffness;
+                    *s = zero_force_sole(s, w, k, area);
                 }
             }
         }

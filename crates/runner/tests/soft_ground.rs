@@ -11,7 +11,10 @@ mod common;
 
 use common::Scratch;
 use stride_runner::config::Scenario;
+use stride_runner::ground_estimate::{self, EstimateTouchDown};
+use stride_runner::log::read_log;
 use stride_runner::run::{run_scenario, Outcome, RunOptions, RunSummary};
+use stride_sim::GroundCompliance;
 
 /// A scenario file `name.toml` including `configs/walk_soft_ground_torque.toml`, with `extra` appended.
 fn soft_walk_file(s: &Scratch, name: &str, extra: &str) -> std::path::PathBuf {
@@ -350,4 +353,69 @@ fn the_sink_compensation_outlasts_the_first_step_in_position_control() {
     let with = assert_falls(&s, "with", &include);
     assert!(with.simulated_time > 1.9, "{}", with.render());
     assert!(with.distance > without.distance, "{}", with.render());
+}
+
+/// Runs `configs/walk_soft_ground_patches_compliant_torque.toml` with `extra` appended for `duration` s; with
+/// `estimated`, also its touch-downs: per touch-down, when the foot's ground estimate comes within 10 % of
+/// the patch under it for good, within 1 s of touch-down or its lift-off.
+fn patch_walk(
+    s: &Scratch,
+    name: &str,
+    extra: &str,
+    duration: f64,
+    estimated: bool,
+) -> (Vec<EstimateTouchDown>, RunSummary) {
+    let walk = common::root().join("configs/walk_soft_ground_patches_compliant_torque.toml");
+    let text = format!("include = [{:?}]\n{extra}", walk.display().to_string());
+    let scenario = Scenario::load(&s.write(&format!("{name}.toml"), &text)).unwrap();
+    let options = RunOptions {
+        duration: Some(duration),
+        ..options(s, name)
+    };
+    let summary = run_scenario(&scenario, &options).unwrap();
+    if !estimated {
+        return (Vec::new(), summary);
+    }
+    let log = read_log(&s.path(&format!("{name}.mcap"))).unwrap();
+    let sim = &scenario.config.sim;
+    let ground = GroundCompliance::from_config(&sim.ground, &sim.contact);
+    let sole = scenario.config.wbc.tsid.compliant.sole_length;
+    let touch_downs = ground_estimate::touch_downs(&log, &ground, sole, 0.1, 1.0).unwrap();
+    (touch_downs, summary)
+}
+
+/// The estimator in the closed loop (docs/soft-ground.md, "The estimator in the closed loop"), as it is
+/// today: walking over the three patches of Table 8.1's grounds with each foot's ground estimated online
+/// and fed to its contact model (the plant's truth, ideal actuators), the first touch-down on the `2e6, 1e4`
+/// patch does **not** bring `k̂` within 10 %: it stays more than 20 % below (measured 1.43e6 at lift-off:
+/// the rest pose taken at the impact of a tilted sole is its centre's, millimetres above the flat ground),
+/// and the walk falls within 5 s (measured 4.14 s, 0.43 m), where the same scenario with the ground fixed
+/// at the prior walks past 6 s. When the rest pose is fixed, this test must move to the claim.
+#[test]
+fn the_ground_estimate_in_the_loop_is_biased_and_the_patch_walk_falls() {
+    let s = Scratch::new("soft_ground_patches_estimate");
+    let (estimated, summary) = patch_walk(&s, "estimated", "", 12.0, true);
+    assert!(
+        matches!(
+            summary.outcome,
+            Outcome::Fell { .. } | Outcome::Error { .. }
+        ),
+        "{}",
+        summary.render()
+    );
+    assert!(summary.simulated_time < 5.0, "{}", summary.render());
+    let first = estimated
+        .iter()
+        .find(|t| t.foot == "left" && t.truth.is_some_and(|g| g.stiffness == 2e6))
+        .expect("a left touch-down on the first patch");
+    assert!(first.stiffness_within.is_none(), "{first:?}");
+    assert!(first.last.0 < 0.8 * 2e6, "{first:?}");
+    let (_, fixed) = patch_walk(
+        &s,
+        "fixed",
+        "[wbc.tsid.compliant]\nestimate_ground = false\n",
+        6.0,
+        false,
+    );
+    assert!(fixed.simulated_time >= 5.99, "{}", fixed.render());
 }

@@ -693,8 +693,10 @@ pub enum ContactModel {
 /// | `momentum_rate_gain` | 1/s | 20 | `k_h`: the momentum tasks ask `ḧ = k_h (ḣ* − ḣ)` |
 /// | `wrench_rate_gain` | 1/s | 10 | `k_f`: the wrench regularization asks `ḟ = k_f (f* − f)` [eq. 8.2.9] |
 /// | `feasibility_horizon` | s | 0.02 | `T` of the one-step-ahead feasibility `A (f + ḟ T) ≤ 0` [eq. 8.2.12] |
-/// | `estimate_ground` | – | false | estimate `k`, `b` online (RLS, [eq. 8.2.20–8.2.22]) from the loaded soles, covariance reset at touch-down, prior the two values above with their own size as standard deviation |
+/// | `estimate_ground` | – | false | estimate `k`, `b` online (RLS, [eq. 8.2.20–8.2.22]), one estimate per contact from its loaded sole, covariance reset at its touch-down, prior the two values above with their own size as standard deviation; each contact's model uses its estimate |
 /// | `estimator_wrench_std` | N, N·m | [2, 0.2] | standard deviations of the measured force and torque for that estimate |
+/// | `estimator_contact_force` | N | 5 | with `estimate_ground`: a sole after its planned touch-down meets the ground when its measured normal force exceeds this; until then its rest pose follows it and its estimate is not fed, then the covariance is reset and the rest pose set there |
+/// | `estimator_reset` | – | true | with `estimate_ground`: reset a contact's estimate covariance at its touch-down [Colman 2006] (`false` only to show what the reset buys) |
 /// | `plan_on_surface` | – | false | the runner plans the footholds from the soles' zero-force poses (raised by their static sink `f_z / (k l w)`), so the swing feet land on the ground's surface, not as deep as the standing feet sank |
 /// | `held_acceleration` | – | false | the contact dynamics give the wrench rate averaged over one control period of a held acceleration: the acceleration gain of eq. 8.2.14 uses the damping `b + k·period/2` (see [`crate::soft_contact::WrenchRate::held_over`]) |
 /// | `wrench_source` | – | `"measured"` | the wrench `f_c` the rows read: `"measured"` the input's (`ContactInput::measured_wrench`, every tick); `"model"` Lemma 1's wrench of the sole's state about its rest (touch-down) pose [eq. 8.1.7] (zero for a contact out of the QP); `"filtered"` the wrench the last solve predicted (`f + ḟ·period`) corrected toward the measured one with the time constant `wrench_filter_time` (see [`WrenchSource`]) |
@@ -721,6 +723,11 @@ pub struct CompliantConfig {
     pub estimate_ground: bool,
     /// `[force (N), torque (N·m)]` standard deviations of the measured wrench for the ground estimate.
     pub estimator_wrench_std: [f64; 2],
+    /// With `estimate_ground`: reset a contact's estimate covariance at its touch-down [Colman 2006].
+    pub estimator_reset: bool,
+    /// With `estimate_ground`: the measured normal force (N) above which a sole that touched down in the
+    /// plan is on the ground (its rest pose is set and its estimate fed from then on).
+    pub estimator_contact_force: f64,
     /// The runner plans the footholds from the soles' zero-force poses, raised by their static sink
     /// `f_z / (k l w)` of a flat sole [Romualdi 2022, eq. 8.1.7a], so that the swing feet land on the
     /// ground's surface rather than as deep as the standing feet sank.
@@ -773,6 +780,8 @@ impl Default for CompliantConfig {
             feasibility_horizon: 0.02,
             estimate_ground: false,
             estimator_wrench_std: [2.0, 0.2],
+            estimator_reset: true,
+            estimator_contact_force: 5.0,
             plan_on_surface: false,
             held_acceleration: false,
             lift_off_force: f64::INFINITY,

@@ -721,10 +721,27 @@ impl Tsid {
         Ok(())
     }
 
-    /// The ground the compliant contact model uses (`contact_model = "compliant"`; the online estimate
-    /// with `compliant.estimate_ground`), `None` for the rigid TSID.
+    /// The ground the compliant contact model uses for the first contact (`contact_model = "compliant"`;
+    /// its online estimate with `compliant.estimate_ground`), `None` for the rigid TSID.
     pub fn ground(&self) -> Option<crate::soft_contact::GroundParameters> {
-        self.compliant.as_ref().map(|c| c.ground)
+        self.compliant.as_ref().map(|c| c.ground_of(0))
+    }
+
+    /// With `compliant.estimate_ground`: the ground estimate of every contact, in the order of
+    /// [`Tsid::contact_tasks`] [Romualdi 2022, §8.2.3]; `None` otherwise.
+    pub fn ground_estimates(&self) -> Option<&[crate::soft_contact::GroundParameters]> {
+        self.compliant
+            .as_ref()
+            .and_then(|c| c.estimates.as_ref())
+            .map(|e| e.grounds())
+    }
+
+    /// With `compliant.estimate_ground`: the ground estimate of the contact whose flag is `flag` (e.g.
+    /// [`crate::walking::LEFT_FOOT`]); `None` otherwise.
+    pub fn ground_estimate_of(&self, flag: &str) -> Option<crate::soft_contact::GroundParameters> {
+        let k = self.names.contact_index(flag)?;
+        let c = self.contacts.iter().position(|c| c.flag == k)?;
+        self.ground_estimates()?.get(c).copied()
     }
 
     /// The last output.

@@ -385,35 +385,70 @@ fn the_compliant_tsid_falls_with_the_default_actuators() {
 /// loaded before the first tick has no zero-force pose, so its rest pose comes from the prior.)
 #[test]
 fn the_ground_estimate_inside_the_tsid_finds_k_and_b() {
+    // the soles touch down exactly at zero force: no threshold needed to find their impact
+    for ground in sink_and_rise(0.0, 0.0) {
+        assert!(
+            (ground.stiffness / GROUND.stiffness - 1.0).abs() < 0.01,
+            "{ground:?}"
+        );
+        assert!(
+            (ground.damping / GROUND.damping - 1.0).abs() < 0.01,
+            "{ground:?}"
+        );
+    }
+}
+
+/// The ground estimates of both soles after 300 ticks in which the robot, from a prior of `k = 2e6,
+/// b = 2e4` and `estimator_contact_force = threshold`, sinks and rises by up to 1 cm over a ground
+/// (`GROUND`, Lemma 1's wrenches) whose surface is `gap` (m) below the soles at the start (no wrench above it).
+fn sink_and_rise(threshold: f64, gap: f64) -> Vec<stride_wbc::GroundParameters> {
     let model = bundled_model();
     let mut config = compliant_config();
     config.compliant.ground_stiffness = 2e6;
     config.compliant.ground_damping = 2e4;
     config.compliant.estimate_ground = true;
+    config.compliant.estimator_contact_force = threshold;
     let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
     let start = standing_state(&model, &default_posture(&model));
     let kd = kd_at(&model, &start);
-    let rest = SOLES.map(|f| kd.frame_pose(model.frame_id(f).unwrap()));
+    let rest = SOLES.map(|f| {
+        let mut p = kd.frame_pose(model.frame_id(f).unwrap());
+        p.translation.vector.z -= gap;
+        p
+    });
     let dt = PERIOD.as_secs_f64();
     for k in 0..300 {
         let t = k as f64 * dt;
         let w = 2.0 * std::f64::consts::PI / 0.4;
+        let depth = 0.005 * (1.0 - (w * t).cos());
         let mut state = start.clone();
-        state.base_pose.translation.vector.z -= 0.005 * (1.0 - (w * t).cos());
+        state.base_pose.translation.vector.z -= depth;
         state.base_velocity[2] = -0.005 * w * (w * t).sin();
-        let measured = [0, 1].map(|c| lemma1(&model, &state, SOLES[c], &rest[c]));
+        let measured = [0, 1].map(|c| match depth >= gap {
+            true => lemma1(&model, &state, SOLES[c], &rest[c]),
+            false => Vector6::zeros(),
+        });
         let input = input_with_wrenches(&model, &tsid, &state, &measured);
         tsid.step(&input).unwrap();
     }
-    let ground = tsid.ground().unwrap();
-    assert!(
-        (ground.stiffness / GROUND.stiffness - 1.0).abs() < 0.01,
-        "{ground:?}"
-    );
-    assert!(
-        (ground.damping / GROUND.damping - 1.0).abs() < 0.01,
-        "{ground:?}"
-    );
+    assert_eq!(tsid.ground(), tsid.ground_estimates().map(|g| g[0]));
+    tsid.ground_estimates().unwrap().to_vec()
+}
+
+/// The ground estimate of a sole whose planned touch-down comes before its impact: both soles start 3 mm
+/// above the ground (no wrench there; Lemma 1's below) and sink by up to 1 cm (7 mm into the ground). With
+/// the default `estimator_contact_force` (5 N) the rest pose waits for the sole to meet the ground and the
+/// estimate ends within 10 % of `k = 1e6, b = 1e4` (prior `2e6, 2e4`); with the threshold at 0 the rest pose
+/// is the sole's pose at the planned touch-down, 3 mm above the ground, and `k̂` is more than 25 % off.
+#[test]
+fn the_ground_estimate_waits_for_the_sole_to_meet_the_ground() {
+    for g in sink_and_rise(5.0, 0.003) {
+        assert!((g.stiffness / GROUND.stiffness - 1.0).abs() < 0.1, "{g:?}");
+        assert!((g.damping / GROUND.damping - 1.0).abs() < 0.1, "{g:?}");
+    }
+    for g in sink_and_rise(0.0, 0.003) {
+        assert!((g.stiffness / GROUND.stiffness - 1.0).abs() > 0.25, "{g:?}");
+    }
 }
 
 /// `lift_off_force`: a contact whose flag opens (its planned lift-off) stays in the QP after its 0.02 s load

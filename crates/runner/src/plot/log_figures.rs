@@ -372,5 +372,60 @@ pub fn plot_log(log_path: &Path, dir: &Path) -> Result<Vec<PathBuf>, PlotError> 
         draw_time_figure(&path, &title, &panels, cols, &phases)?;
         written.push(path);
     }
+    if log.topic("/wbc/ground_estimate").next().is_some() {
+        let path = dir.join(GROUND_ESTIMATE_FIGURE);
+        let title = format!("{name}: ground estimate per foot against the ground under it");
+        draw_time_figure(&path, &title, &ground_estimate(&log, log_path)?, 2, &phases)?;
+        written.push(path);
+    }
     Ok(written)
+}
+
+/// The figure of TSID-Compliant's ground estimate, written besides [`LOG_FIGURES`] when the log has
+/// `/wbc/ground_estimate` (`estimate_ground = true`).
+pub const GROUND_ESTIMATE_FIGURE: &str = "ground_estimate.svg";
+
+/// Per foot, `k̂` and `b̂` of `/wbc/ground_estimate` against the scenario's ground under the planned sole
+/// while the foot's contact flag is set (where one patch holds under the whole sole).
+fn ground_estimate(log: &LogContents, log_path: &Path) -> Result<Vec<Panel>, PlotError> {
+    use crate::ground_estimate::{estimate_series, ground_under, FEET};
+    let scenario =
+        crate::replay::logged_scenario(log, log_path).map_err(|e| PlotError::Log(e.to_string()))?;
+    let sim = &scenario.config.sim;
+    let ground = stride_sim::GroundCompliance::from_config(&sim.ground, &sim.contact);
+    let sole = scenario.config.wbc.tsid.compliant.sole_length;
+    let estimates = estimate_series(log).map_err(PlotError::Log)?;
+    let input = Topic::read(log, "/wbc/input")?;
+    let mut panels = Vec::new();
+    for (what, unit, scale) in [("k", "k [1e6 N/m³]", 1e-6), ("b", "b [1e4 N·s/m³]", 1e-4)] {
+        for (f, (foot, _)) in FEET.iter().enumerate() {
+            let pick = |&(t, k, b): &(f64, f64, f64)| (t, scale * if what == "k" { k } else { b });
+            let truth = input
+                .0
+                .iter()
+                .filter(|(_, v)| v[format!("{foot}_in_contact")].as_bool() == Some(true))
+                .filter_map(|(t, v)| {
+                    let x = v[format!("{foot}_foot")]["pose"]["position"][0].as_f64()?;
+                    let g = ground_under(&ground, x, sole)?;
+                    Some((
+                        *t,
+                        scale * if what == "k" { g.stiffness } else { g.damping },
+                    ))
+                })
+                .collect();
+            panels.push(Panel {
+                title: format!("{foot} foot: {what}"),
+                y_label: unit.into(),
+                series: vec![
+                    Series::new(
+                        "estimate",
+                        MEASURED,
+                        estimates[f].iter().map(pick).collect(),
+                    ),
+                    Series::new("ground under the sole (in contact)", PLANNED, truth),
+                ],
+            });
+        }
+    }
+    Ok(panels)
 }

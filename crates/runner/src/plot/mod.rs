@@ -7,7 +7,7 @@ pub mod chart;
 pub mod log_figures;
 pub mod sweep;
 
-pub use log_figures::{plot_log, LOG_FIGURES};
+pub use log_figures::{plot_log, GROUND_ESTIMATE_FIGURE, LOG_FIGURES};
 pub use sweep::plot_sweep;
 
 /// Why a plot failed.

@@ -22,17 +22,18 @@
 use nalgebra::{DVector, Isometry3, Vector3, Vector6};
 use stride_qp::TaskDataMut;
 
+use super::compliant_ground::ContactGroundEstimates;
 use super::{Contact, TsidContext};
 use crate::config::{CompliantConfig, WrenchSource};
 use crate::error::WbcError;
-use crate::soft_contact::{
-    EstimatorSettings, GroundEstimator, GroundParameters, SoleGeometry, SoleState, WrenchRate,
-};
+use crate::soft_contact::{GroundParameters, SoleGeometry, SoleState, WrenchRate};
 
 /// What the compliant TSID keeps per contact and its settings.
 #[derive(Debug, Clone)]
 pub(crate) struct CompliantContacts {
     pub sole: SoleGeometry,
+    /// The configured ground (`ground_stiffness`, `ground_damping`); with `estimate_ground` the prior of
+    /// the per-contact estimates, which then set each contact's ground ([`Self::ground_of`]).
     pub ground: GroundParameters,
     /// `1/k_h`, s.
     pub momentum_horizon: f64,
@@ -47,8 +48,8 @@ pub(crate) struct CompliantContacts {
     pub rest: Vec<Isometry3<f64>>,
     /// Per contact: the wrench-rate model of this tick [Romualdi 2022, eq. 8.2.14].
     pub rates: Vec<WrenchRate>,
-    /// The online ground estimate (`estimate_ground`), which then sets `ground` every tick.
-    pub estimator: Option<GroundEstimator>,
+    /// The online ground estimates, one per contact (`estimate_ground`).
+    pub estimates: Option<ContactGroundEstimates>,
     /// `held_acceleration`: the period over which the rates are averaged (s); `None`: instantaneous.
     pub held_period: Option<f64>,
     /// `lift_off_force`: a contact whose load ramp ends stays loaded while its measured normal force
@@ -81,19 +82,12 @@ impl CompliantContacts {
     /// Checked settings for `contacts` contacts of a controller running every `period` (s). Errors: a
     /// value that is not finite and > 0.
     pub fn new(c: &CompliantConfig, contacts: usize, period: f64) -> Result<Self, WbcError> {
-        let estimator = match c.estimate_ground {
-            true => Some(GroundEstimator::new(&EstimatorSettings {
-                initial: GroundParameters {
-                    stiffness: c.ground_stiffness,
-                    damping: c.ground_damping,
-                },
-                initial_std: [c.ground_stiffness, c.ground_damping],
-                wrench_std: c.estimator_wrench_std,
-            })?),
+        let estimates = match c.estimate_ground {
+            true => Some(ContactGroundEstimates::new(c, contacts)?),
             false => None,
         };
         Ok(CompliantContacts {
-            estimator,
+            estimates,
             held_period: c.held_acceleration.then_some(period),
             wrench_source: c.wrench_source,
             filter_gain: period / (positive("wrench_filter_time", c.wrench_filter_time)? + period),
@@ -133,19 +127,25 @@ impl CompliantContacts {
     /// The rest pose of contact `c` touching down at `pose` with the measured wrench: `pose` raised by the
     /// static sink `f / (k l w |e₃ᵀRe₃|)` of Lemma 1 (eq. 8.1.7a at zero velocity), so that a contact
     /// already loaded (at start-up) starts where the model gives its measured force.
-    /// A touch-down also resets the ground estimate's covariance [Colman 2006].
+    /// With `estimate_ground`, the contact's estimate waits for the sole to meet the ground
+    /// ([`Self::estimate_ground`]).
     pub fn touch_down(&mut self, c: usize, pose: &Isometry3<f64>) {
-        if let Some(e) = &mut self.estimator {
-            e.touch_down();
+        if let Some(e) = &mut self.estimates {
+            e.touch_down(c);
         }
-        let scale = self.ground.stiffness
+        self.rest[c] = self.rest_at(c, pose);
+    }
+
+    /// `pose` raised by the static sink of contact `c`'s measured force on its ground (see [`Self::touch_down`]).
+    fn rest_at(&self, c: usize, pose: &Isometry3<f64>) -> Isometry3<f64> {
+        let scale = self.ground_of(c).stiffness
             * self.sole.area()
             * pose.rotation.to_rotation_matrix()[(2, 2)].abs();
         let mut rest = *pose;
         if scale > 0.0 {
             rest.translation.vector += self.measured[c].fixed_rows::<3>(0) / scale;
         }
-        self.rest[c] = rest;
+        rest
     }
 
     /// The normal-force bound of contact `c` held in the QP after its ramp ended (its planned lift-off):
@@ -168,27 +168,36 @@ impl CompliantContacts {
         }
     }
 
-    /// Updates the ground estimate (when estimated) with the measured wrench of every loaded contact
-    /// [Romualdi 2022, eq. 8.2.20–8.2.22] and takes its positive components as `ground`.
+    /// The ground of contact `c`'s model: its estimate with `estimate_ground`, else the configured one.
+    pub fn ground_of(&self, c: usize) -> GroundParameters {
+        self.estimates.as_ref().map_or(self.ground, |e| e.ground(c))
+    }
+
+    /// Updates the ground estimate of every loaded contact (when estimated) with its measured wrench and
+    /// the regressor of its sole relative to its rest pose [Romualdi 2022, eq. 8.2.20–8.2.22], while its
+    /// measured normal force exceeds `estimator_contact_force`. After a planned touch-down
+    /// ([`Self::touch_down`]) the sole may not have met the ground yet: until its force exceeds that
+    /// threshold its rest pose follows it, so the rest pose is the sole's last pose above the threshold
+    /// (within one period of its impact), and the covariance is reset at its first sample: the touch-down
+    /// of the estimate is the sole's, not the plan's.
     pub fn estimate_ground(&mut self, contacts: &[Contact]) {
-        if self.estimator.is_none() {
+        let Some(threshold) = self.estimates.as_ref().map(|e| e.contact_force()) else {
             return;
-        }
+        };
         for (c, contact) in contacts.iter().enumerate() {
-            if contact.load > 0.0 {
-                let regressor = self.sole.regressor(&self.sole_state(c, contact));
-                if let Some(e) = &mut self.estimator {
-                    e.update(&regressor, &self.measured[c]);
+            if contact.load <= 0.0 {
+                continue;
+            }
+            let normal = (contact.pose.rotation.inverse() * self.measured[c].fixed_rows::<3>(0)).z;
+            if normal < threshold {
+                if self.estimates.as_ref().is_some_and(|e| e.awaiting(c)) {
+                    self.rest[c] = self.rest_at(c, &contact.pose);
                 }
+                continue;
             }
-        }
-        if let Some(e) = &self.estimator {
-            let estimate = e.estimate();
-            if estimate.stiffness > 0.0 {
-                self.ground.stiffness = estimate.stiffness;
-            }
-            if estimate.damping > 0.0 {
-                self.ground.damping = estimate.damping;
+            let regressor = self.sole.regressor(&self.sole_state(c, contact));
+            if let Some(e) = &mut self.estimates {
+                e.update(c, &regressor, &self.measured[c]);
             }
         }
     }
@@ -198,9 +207,10 @@ impl CompliantContacts {
     pub fn update_rates(&mut self, contacts: &[Contact]) {
         for (c, contact) in contacts.iter().enumerate() {
             let state = self.sole_state(c, contact);
-            let rate = self.sole.wrench_rate(&state, &self.ground);
+            let ground = self.ground_of(c);
+            let rate = self.sole.wrench_rate(&state, &ground);
             self.rates[c] = match self.held_period {
-                Some(dt) => rate.held_over(dt, &self.ground),
+                Some(dt) => rate.held_over(dt, &ground),
                 None => rate,
             };
         }

@@ -23,6 +23,7 @@ use crate::error::WbcError;
 
 pub(crate) mod com;
 pub(crate) mod compliant;
+pub(crate) mod compliant_ground;
 pub(crate) mod compliant_wrench;
 pub(crate) mod contact;
 pub(crate) mod dynamics;

@@ -1,0 +1,104 @@
+//! The ground estimate of TSID-Compliant (`[wbc.tsid.compliant] estimate_ground`): one recursive
+//! least-squares estimator of `π = [k; b]` per contact [Romualdi 2022, §8.2.3, eq. 8.2.20–8.2.22], fed with
+//! its sole's measured wrench and the regressor of its pose and velocity relative to its touch-down rest
+//! pose, its covariance reset at each of its touch-downs [Colman 2006], its estimate the ground of that
+//! contact's model. One per contact, because on a ground whose compliance changes along the path the two
+//! feet stand on different patches. Allocates nothing after construction.
+
+use nalgebra::{Matrix6x2, Vector6};
+
+use crate::config::CompliantConfig;
+use crate::error::WbcError;
+use crate::soft_contact::{EstimatorSettings, GroundEstimator, GroundParameters};
+
+/// The per-contact ground estimates and the ground each contact's model uses.
+#[derive(Debug, Clone)]
+pub(crate) struct ContactGroundEstimates {
+    estimators: Vec<GroundEstimator>,
+    /// Per contact: the ground its contact model uses (the estimate's positive components over the prior).
+    grounds: Vec<GroundParameters>,
+    /// `estimator_reset`: reset a contact's covariance at its touch-down.
+    reset_at_touch_down: bool,
+    /// `estimator_contact_force`: the measured normal force (N) above which a sole is on the ground.
+    contact_force: f64,
+    /// Per contact: touched down in the plan, not yet on the ground (its normal force below `contact_force`).
+    awaiting: Vec<bool>,
+}
+
+impl ContactGroundEstimates {
+    /// `contacts` estimators at the prior `ground_stiffness`, `ground_damping` of `c` (their own size as
+    /// standard deviation). Errors: the estimator's settings ([`GroundEstimator::new`]).
+    pub fn new(c: &CompliantConfig, contacts: usize) -> Result<Self, WbcError> {
+        let prior = GroundParameters {
+            stiffness: c.ground_stiffness,
+            damping: c.ground_damping,
+        };
+        let estimator = GroundEstimator::new(&EstimatorSettings {
+            initial: prior,
+            initial_std: [c.ground_stiffness, c.ground_damping],
+            wrench_std: c.estimator_wrench_std,
+        })?;
+        Ok(Self {
+            estimators: vec![estimator; contacts],
+            grounds: vec![prior; contacts],
+            reset_at_touch_down: c.estimator_reset,
+            contact_force: match c.estimator_contact_force {
+                f if f.is_finite() && f >= 0.0 => f,
+                f => {
+                    return Err(WbcError::InvalidConfig {
+                        task: "<tsid>".into(),
+                        key: "estimator_contact_force",
+                        reason: format!(
+                            "compliant.estimator_contact_force = {f} must be finite and >= 0"
+                        ),
+                    })
+                }
+            },
+            awaiting: vec![false; contacts],
+        })
+    }
+
+    /// Contact `c` touched down in the plan: its estimate waits for the sole to meet the ground.
+    pub fn touch_down(&mut self, c: usize) {
+        self.awaiting[c] = true;
+    }
+
+    /// The measured normal force above which a sole is on the ground, N.
+    pub fn contact_force(&self) -> f64 {
+        self.contact_force
+    }
+
+    /// Whether contact `c` touched down in the plan and its sole has not met the ground yet.
+    pub fn awaiting(&self, c: usize) -> bool {
+        self.awaiting[c]
+    }
+
+    /// One RLS step of contact `c` with its sole's regressor and measured wrench (its sole on the ground);
+    /// its model's ground takes the estimate's positive components. The first step after a touch-down
+    /// resets the covariance to `P₀` (with `estimator_reset`), keeping the estimate [Colman 2006].
+    pub fn update(&mut self, c: usize, regressor: &Matrix6x2<f64>, wrench: &Vector6<f64>) {
+        if std::mem::take(&mut self.awaiting[c]) && self.reset_at_touch_down {
+            self.estimators[c].touch_down();
+        }
+        let e = &mut self.estimators[c];
+        e.update(regressor, wrench);
+        let estimate = e.estimate();
+        let g = &mut self.grounds[c];
+        if estimate.stiffness > 0.0 {
+            g.stiffness = estimate.stiffness;
+        }
+        if estimate.damping > 0.0 {
+            g.damping = estimate.damping;
+        }
+    }
+
+    /// The ground of contact `c`'s model.
+    pub fn ground(&self, c: usize) -> GroundParameters {
+        self.grounds[c]
+    }
+
+    /// The grounds of every contact's model, in contact order.
+    pub fn grounds(&self) -> &[GroundParameters] {
+        &self.grounds
+    }
+}
