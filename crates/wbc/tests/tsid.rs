@@ -221,6 +221,77 @@ fn standing_still_needs_no_acceleration_and_carries_the_weight() {
     );
 }
 
+/// A known external force at the CoM (`WbcInput::external_force`, the push estimate of the runner): the
+/// contacts carry it (`Σ f = −m g − F` standing still, the CoM task's `Σ f = m ẍ* − m g − F`) and the
+/// torques satisfy the equations of motion with its generalized force `J_CoMᵀ F` (stride-model's RNEA and
+/// CoM Jacobian); without it the same robot's contacts carry no horizontal force.
+#[test]
+fn a_known_external_force_at_the_com_is_carried_by_the_contacts_and_the_dynamics() {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let mut config = TsidConfig::default_for_bundled_model();
+    config
+        .tasks
+        .retain(|t| !matches!(t, TaskConfig::TorqueRegularization(_)));
+    config.tasks.push(TaskConfig::AngularMomentum(
+        stride_wbc::AngularMomentumTaskConfig {
+            name: "angular_momentum".into(),
+            kp: 0.0,
+            reference_joints: Vec::new(),
+            reference_frames: Vec::new(),
+            priority: Priority::Hard,
+            weight: None,
+        },
+    ));
+    let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
+    let mut input = references_at(&model, &state);
+    let horizontal = |out: &TsidOutput| {
+        out.contact_wrenches
+            .iter()
+            .fold(Vector2::zeros(), |s, w| s + Vector2::new(w[0], w[1]))
+    };
+    let free = tsid.step(&input).unwrap().clone();
+    assert!(horizontal(&free).norm() < 1e-8, "{}", horizontal(&free));
+    let force = Vector3::new(12.0, -20.0, 0.0);
+    input.external_force = force;
+    let out = tsid.step(&input).unwrap().clone();
+    assert_eq!(out.report.status, QpStatus::Solved);
+    let f = horizontal(&out);
+    assert!((f + force.xy()).norm() < 1e-8, "Σ f_xy = {f}");
+    let fz: f64 = out.contact_wrenches.iter().map(|w| w[2]).sum();
+    assert!(
+        (fz - model.total_mass() * 9.81).abs() < 1e-8,
+        "Σ f_z = {fz}"
+    );
+    // M ν̇ + h − Σ J_cᵀ f − J_CoMᵀ F = [0; τ]
+    let mut kd = kd_at(&model, &state);
+    let frames = [
+        model.frame_id("l_sole").unwrap(),
+        model.frame_id("r_sole").unwrap(),
+    ];
+    let wrenches: Vec<ExternalWrench> = frames
+        .iter()
+        .zip(out.contact_wrenches.iter())
+        .map(|(f, w)| ExternalWrench {
+            frame: *f,
+            wrench: *w,
+        })
+        .collect();
+    let mut gen = DVector::zeros(model.nv());
+    kd.inverse_dynamics(&out.accelerations, &wrenches, &mut gen)
+        .unwrap();
+    let mut jacobian = nalgebra::DMatrix::zeros(3, model.nv());
+    kd.com_jacobian(&mut jacobian).unwrap();
+    gen -= jacobian.transpose() * force;
+    let base = gen.rows(0, 6).amax();
+    assert!(base < 1e-6, "base rows of the dynamics violated by {base}");
+    let joints = (gen.rows(6, model.dof()) - &out.joint_torques).amax();
+    assert!(joints < 1e-6, "torques differ from the RNEA ones by {joints}");
+    // a non-finite force is refused
+    input.external_force = Vector3::new(f64::NAN, 0.0, 0.0);
+    assert!(tsid.step(&input).is_err());
+}
+
 /// The angular momentum task with `reference_joints`: the contact wrenches' moment about the CoM is
 /// `K_p (h* − h)` with `h*` the centroidal angular momentum (stride-model's, not the task's product of the
 /// momentum matrix) of the same state with the base not rotating and only the listed joints moving.
