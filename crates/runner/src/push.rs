@@ -151,13 +151,6 @@ impl PushResponse {
         }
     }
 
-    /// The known external force the TSID takes at the CoM \[N, world\]: `tsid_force` × the horizontal
-    /// estimate (zero when `tsid_force` is 0).
-    pub fn tsid_force(&self) -> Vector3<f64> {
-        let f = self.estimate * self.config.tsid_force;
-        Vector3::new(f.x, f.y, 0.0)
-    }
-
     /// The stance CoP the step-adjustment QP predicts the DCM with: the planned one moved by the push's
     /// LIPM offset, `p − F̂/(m ω²)` (unchanged when `step_adjustment` is off).
     pub fn effective_cop(&self, planned: Vector2<f64>, omega: f64) -> Vector2<f64> {

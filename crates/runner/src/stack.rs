@@ -971,10 +971,6 @@ impl Stack {
         }
         i.posture = None;
         i.angular_momentum = self.angular_momentum_reference;
-        i.external_force = self
-            .push
-            .as_ref()
-            .map_or_else(Vector3::zeros, PushResponse::tsid_force);
         self.flexible
             .fill(&self.estimate.state, &mut i.flexible_torques);
         self.admit_feet()?;

@@ -38,7 +38,6 @@ use crate::error::{check_finite, check_non_negative, check_positive, Result, Sim
 /// | `hold_ramp` | s | 0.1 | time for the plan's clock rate to go from 1 to 0 and back (linear ramp) |
 /// | `step_adjustment` | – | `true` | the step-adjustment QP predicts the DCM with the push: its stance CoP is moved by `−F̂/(m ω²)` |
 /// | `lean` | – | 0 | fraction in \[0, 1\] of the push's LIPM offset by which the planned CoM and DCM the simplified layer tracks move against the push, `−lean F̂/(m ω²)`: with 1 the pushed LIPM's ZMP stays on the plan's |
-/// | `tsid_force` | – | 0 | fraction in \[0, 1\] of the horizontal estimate the TSID takes as a known external force at the CoM (its dynamics and its CoM task `Σ f = m ẍ* − m g − tsid_force F̂`, `stride_wbc::WbcInput::external_force`); no effect in position control |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PushConfig {
@@ -67,8 +66,6 @@ pub struct PushConfig {
     pub step_adjustment: bool,
     /// Fraction of the push's LIPM offset the tracked CoM and DCM lean against the push, in \[0, 1\].
     pub lean: f64,
-    /// Fraction of the estimate the TSID takes as a known external force at the CoM, in \[0, 1\].
-    pub tsid_force: f64,
 }
 
 impl Default for PushConfig {
@@ -86,7 +83,6 @@ impl Default for PushConfig {
             hold_ramp: 0.1,
             step_adjustment: true,
             lean: 0.0,
-            tsid_force: 0.0,
         }
     }
 }
@@ -101,14 +97,12 @@ impl PushConfig {
         check_non_negative("push.impact_window", self.impact_window)?;
         check_non_negative("push.max_hold", self.max_hold)?;
         check_positive("push.hold_ramp", self.hold_ramp)?;
-        for (name, value) in [("push.lean", self.lean), ("push.tsid_force", self.tsid_force)] {
-            if !(0.0..=1.0).contains(&value) {
-                return Err(SimplifiedError::InvalidParameter {
-                    name,
-                    value,
-                    reason: "must be in [0, 1]",
-                });
-            }
+        if !(0.0..=1.0).contains(&self.lean) {
+            return Err(SimplifiedError::InvalidParameter {
+                name: "push.lean",
+                value: self.lean,
+                reason: "must be in [0, 1]",
+            });
         }
         Ok(())
     }

@@ -503,7 +503,6 @@ pub(crate) fn check_references(model: &Model, input: &WbcInput) -> Result<(), Wb
         && finite(input.com_velocity.as_slice())
         && finite(input.com_acceleration.as_slice())
         && finite(input.angular_momentum.as_slice())
-        && finite(input.external_force.as_slice())
         && input.desired_zmp.is_none_or(|z| finite(z.as_slice()))
         && frames_ok
         && input

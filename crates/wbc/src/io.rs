@@ -109,10 +109,6 @@ pub struct WbcInput {
     /// Torque of each passive flexible joint (n entries, model order, N·m; only the TSID's
     /// `flexible_joints` are read): `τ^f = −k s^f − d ṡ^f` as estimated [Romualdi 2022, eq. (9.1.1), §9.3].
     pub flexible_torques: DVector<f64>,
-    /// A known external force on the robot (N, world frame; TSID only, zero by default), taken as acting
-    /// at the CoM: the TSID's dynamics carry its generalized force `J_CoMᵀ F` and its CoM task asks the
-    /// contacts for `Σ f = m ẍ* − m g − F` (e.g. the push estimate, docs/push-recovery.md).
-    pub external_force: Vector3<f64>,
     layout: Arc<InputLayout>,
     frames: Vec<FrameReference>,
     contacts: Vec<ContactInput>,
@@ -155,7 +151,6 @@ impl WbcInput {
             desired_zmp: None,
             posture: None,
             angular_momentum: Vector3::zeros(),
-            external_force: Vector3::zeros(),
             frames: vec![FrameReference::default(); layout.frames.len()],
             contacts: vec![ContactInput::default(); layout.contacts.len()],
             layout,

@@ -462,10 +462,6 @@ pub struct Tsid {
     gravity: Vector3<f64>,
     mass_matrix: DMatrix<f64>,
     bias_forces: DVector<f64>,
-    /// CoM Jacobian (3 × nv), filled only under a known external force.
-    com_jacobian: DMatrix<f64>,
-    /// This tick's known external force at the CoM (N, world).
-    external_force: Vector3<f64>,
     com_position: Vector3<f64>,
     com_velocity: Vector3<f64>,
     momentum: Vector6<f64>,
@@ -546,8 +542,6 @@ impl Tsid {
             gravity: model.gravity(),
             mass_matrix: DMatrix::zeros(nv, nv),
             bias_forces: DVector::zeros(nv),
-            com_jacobian: DMatrix::zeros(3, nv),
-            external_force: Vector3::zeros(),
             com_position: Vector3::zeros(),
             com_velocity: Vector3::zeros(),
             momentum: Vector6::zeros(),
@@ -847,14 +841,6 @@ impl Tsid {
         self.kd.set_state(&input.state)?;
         self.kd.mass_matrix(&mut self.mass_matrix)?;
         self.kd.bias_forces(&mut self.bias_forces)?;
-        self.external_force = input.external_force;
-        if self.external_force != Vector3::zeros() {
-            // `M ν̇ + h = Sᵀτ + Σ J_cᵀ f + J_CoMᵀ F`: the force's generalized force moves into the bias.
-            self.kd.com_jacobian(&mut self.com_jacobian)?;
-            for (j, h) in self.bias_forces.iter_mut().enumerate() {
-                *h -= self.com_jacobian.column(j).dot(&self.external_force);
-            }
-        }
         self.com_position = self.kd.com_position();
         self.com_velocity = self.kd.com_velocity();
         self.momentum = self.kd.centroidal_momentum();
@@ -880,7 +866,6 @@ impl Tsid {
             momentum: self.momentum,
             contacts: &self.contacts,
             offsets: &variant.offsets,
-            external_force: self.external_force,
         };
         let comp = self.compliant.as_ref();
         let n = self.model.dof();
@@ -995,7 +980,6 @@ impl Tsid {
             momentum: self.momentum,
             contacts: &self.contacts,
             offsets: &variant.offsets,
-            external_force: self.external_force,
         };
         match &self.compliant {
             Some(cc) => {

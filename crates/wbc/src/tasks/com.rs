@@ -78,8 +78,7 @@ impl ComVelocityTask {
 }
 
 /// TSID linear momentum rate (the CoM task of the TSID): one row per kept axis `r`,
-/// `Σ_c f_{c,r} = m (ẍ*_r + K_d (ẋ*_r − ẋ_r) + K_p (x*_r − x_r)) − m g_r − F_r` (N), `F` the known external
-/// force ([`crate::WbcInput::external_force`], zero by default).
+/// `Σ_c f_{c,r} = m (ẍ*_r + K_d (ẋ*_r − ẋ_r) + K_p (x*_r − x_r)) − m g_r` (N).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ComMomentumTask {
     kp: f64,
@@ -121,7 +120,7 @@ impl ComMomentumTask {
         let acc = input.com_acceleration
             + self.kd * (input.com_velocity - s.com_velocity)
             + self.kp * (input.com_position - s.com_position);
-        let rhs = m * acc - m * s.gravity - s.external_force;
+        let rhs = m * acc - m * s.gravity;
         let mut k = 0;
         for r in 0..3 {
             if !self.rows[r] {

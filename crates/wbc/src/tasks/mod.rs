@@ -87,7 +87,4 @@ pub(crate) struct TsidContext<'a> {
     pub contacts: &'a [Contact],
     /// Contact index → first column of its wrench in `x` (`None`: not loaded in this QP).
     pub offsets: &'a [Option<usize>],
-    /// Known external force at the CoM (N, world; [`crate::WbcInput::external_force`]); its generalized
-    /// force is already in `bias_forces`.
-    pub external_force: Vector3<f64>,
 }
