@@ -16,6 +16,8 @@ use crate::error::{check_non_negative, check_positive, EstimatorError, Result};
 /// | `contact` | [`ContactConfig`] | Schmitt-trigger contact detection on each foot's normal force |
 /// | `ft_offsets` | [`FtOffsetConfig`] | model-based offset estimation [Traversaro 2017, §4.7] |
 /// | `sole_size` | `[0.20, 0.09]` | \[m\] length and width of the sole rectangles (the bundled humanoid's), for the weight's split between the soles when `ft_offsets.learn_while_standing` > 0 ([`crate::standing_foot_wrenches`]; the runner takes `planner.foot_length`, `foot_width`) |
+/// | `ground_stiffness` | 0 | \[N/m³\] stiffness density `k` of the ground under the soles ([`crate::sole_sink`]); 0: a rigid ground. > 0: a stance foot's contact point is its sole's zero-force point, and the kinematics measure it as the sole's position minus its sink `s`, `ṡ = −(f/A + k s)/b` from the foot's estimated force `f` (`A` the area of `sole_size`); the runner sets it from the compliant TSID's ground with `estimation.sole_sink = "controller_ground"` |
+/// | `ground_damping` | 0 | \[N·s/m³\] damping density `b` of the same ground (0: the sink follows the force at once) |
 /// | `joint_velocity_bandwidth` | 0 | \[Hz\] 0: the joint velocities as the encoders report them; > 0: the velocities of a critically damped α–β filter of that bandwidth on the encoder positions ([`crate::JointVelocityFilter`]) |
 /// | `ft_calibration` | sensor name → 6 × 6 rows | calibration matrix `C` of each named force/torque sensor: every reading `r` is used as the wrench `C (r − b)` [Traversaro 2017, eq. (5.1)], `b` the offset; sensors not named: identity (`stride calibrate` with added-mass logs writes it) |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -43,6 +45,10 @@ pub struct EstimatorConfig {
     /// Bandwidth \[Hz\] of the joint velocity filter on the encoder positions
     /// ([`crate::JointVelocityFilter`]); 0: the encoders' velocities as read.
     pub joint_velocity_bandwidth: f64,
+    /// Stiffness density `k` \[N/m³\] of the ground the soles sink into ([`crate::sole_sink`]); 0: rigid.
+    pub ground_stiffness: f64,
+    /// Damping density `b` \[N·s/m³\] of that ground.
+    pub ground_damping: f64,
     /// Sole rectangle `[length, width]` \[m\] for the standing split of `ft_offsets.learn_while_standing`.
     pub sole_size: [f64; 2],
 }
@@ -60,6 +66,8 @@ impl Default for EstimatorConfig {
             ft_offsets: FtOffsetConfig::default(),
             ft_calibration: std::collections::BTreeMap::new(),
             joint_velocity_bandwidth: 0.0,
+            ground_stiffness: 0.0,
+            ground_damping: 0.0,
             sole_size: [0.20, 0.09],
         }
     }
@@ -74,6 +82,11 @@ impl EstimatorConfig {
         check_non_negative("joint_velocity_bandwidth", self.joint_velocity_bandwidth)?;
         check_positive("sole_size", self.sole_size[0])?;
         check_positive("sole_size", self.sole_size[1])?;
+        crate::sole_sink::SoleSink::new(
+            self.ground_stiffness,
+            self.ground_damping,
+            self.sole_size[0] * self.sole_size[1],
+        )?;
         for rows in self.ft_calibration.values() {
             if !rows.iter().flatten().all(|v| v.is_finite()) {
                 return Err(EstimatorError::InvalidParameter {

@@ -455,6 +455,13 @@ impl InvariantEkf {
         self.sole_spin[foot].lift();
     }
 
+    /// Moves the mean of foot `foot`'s contact point by `delta` (world, m), its covariance unchanged: the
+    /// contact point redefined as another point of the same foot, known relative to the first
+    /// (the estimator's zero-force point of a sunk sole, [`crate::sole_sink`]).
+    pub fn shift_contact_point(&mut self, foot: usize, delta: &Vector3<f64>) {
+        self.feet[foot] += delta;
+    }
+
     /// Whether the sole of foot `foot` has been found spinning on the floor since its touch-down
     /// ([`SoleSpin`], option `sole_spin_threshold`).
     pub fn sole_spinning(&self, foot: usize) -> bool {

@@ -15,6 +15,7 @@ use crate::error::{check_positive, EstimatorError, Result};
 use crate::io::{EstimatorInput, EstimatorOutput};
 use crate::joint_velocity::JointVelocityFilter;
 use crate::schmitt::SchmittTrigger;
+use crate::sole_sink::SoleSink;
 use crate::standing::{standing_foot_wrenches, StandingOffsets};
 
 /// The estimation layer.
@@ -75,6 +76,11 @@ pub struct Estimator {
     scratch: RobotState,
     swing_since_ns: [Option<u64>; 2],
     ground_height: f64,
+    /// The ground the soles sink into (`ground_stiffness`, `ground_damping`; rigid by default).
+    sole_sink: SoleSink,
+    /// Each sole's sink \[m\], world: its origin's displacement from its zero-force point, the EKF's
+    /// contact point ([`crate::sole_sink`]); `None` until the first tick has measured the standing load.
+    sinks: Option<[Vector3<f64>; 2]>,
     thresholds: (f64, f64),
     last_time_ns: Option<u64>,
     /// Time \[s\] pre-integrated since the last full tick ([`Estimator::preintegrate`]).
@@ -199,6 +205,12 @@ impl Estimator {
             scratch: RobotState::zero(&model),
             swing_since_ns: [None; 2],
             ground_height: 0.0,
+            sole_sink: SoleSink::new(
+                config.ground_stiffness,
+                config.ground_damping,
+                config.sole_size[0] * config.sole_size[1],
+            )?,
+            sinks: None,
             thresholds,
             last_time_ns: None,
             preintegrated: 0.0,
@@ -264,6 +276,7 @@ impl Estimator {
             foot_rotations,
         );
         self.ground_height = 0.5 * (feet[0].z + feet[1].z);
+        self.sinks = None;
         for t in &mut self.triggers {
             t.set_state(true, 0);
         }
@@ -660,8 +673,8 @@ impl Estimator {
         let interval = self.preintegrated + dt;
         self.preintegrated = 0.0;
         let (kin, imu_r_sole) = self.predict(input, dt, interval)?;
-        let h = kin.imu_h_sole.map(|h| h.translation.vector);
         let wrenches = self.foot_wrenches(input)?;
+        let h = self.contact_points(&kin, &wrenches, interval);
         for foot in 0..2 {
             let contact = self.triggers[foot].update(wrenches[foot].z, input.time_ns);
             if contact {
@@ -694,6 +707,38 @@ impl Estimator {
         out.foot_wrenches = wrenches;
         self.last_time_ns = Some(input.time_ns);
         Ok(&self.output)
+    }
+
+    /// Each foot's contact point in the IMU frame, the EKF's measurement of it: the sole's origin from the
+    /// kinematics `kin`, less its sink on a compliant ground ([`crate::sole_sink`]), stepped over
+    /// `interval` \[s\] with the foot's estimated force. On the first tick the sinks start at rest under
+    /// the standing load, and the contact points and the ground height move up by them (the soles stay
+    /// where the initial state put them). On a rigid ground (the default) the sole's origin, bit for bit.
+    fn contact_points(
+        &mut self,
+        kin: &RelativeKinematics,
+        wrenches: &[Vector6<f64>; 2],
+        interval: f64,
+    ) -> [Vector3<f64>; 2] {
+        let h = kin.imu_h_sole.map(|h| h.translation.vector);
+        if self.sole_sink.rigid() {
+            return h;
+        }
+        let force = wrenches.map(|w| Vector3::new(w.x, w.y, w.z));
+        let sinks = match self.sinks {
+            Some(s) => [0, 1].map(|i| self.sole_sink.step(&s[i], &force[i], interval)),
+            None => {
+                let s = force.map(|f| self.sole_sink.at_rest(&f));
+                for (foot, sink) in s.iter().enumerate() {
+                    self.ekf.shift_contact_point(foot, &-sink);
+                }
+                self.ground_height -= 0.5 * (s[0].z + s[1].z);
+                s
+            }
+        };
+        self.sinks = Some(sinks);
+        let r = self.ekf.state().rotation;
+        [0, 1].map(|i| h[i] - r.tr_mul(&sinks[i]))
     }
 
     /// Pre-integrates one sample between two full ticks ([`Self::step`]): checks it as a tick does, then

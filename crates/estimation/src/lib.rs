@@ -18,6 +18,7 @@ pub mod identification;
 mod io;
 mod joint_velocity;
 mod schmitt;
+pub mod sole_sink;
 pub mod sole_spin;
 mod standing;
 

@@ -145,11 +145,7 @@ impl Estimation {
         Ok(match c.estimation.kind {
             EstimationKind::GroundTruth => Estimation::GroundTruth,
             EstimationKind::Ekf => {
-                let config = c.estimation.estimator_config(
-                    &c.robot,
-                    &c.sim.sensors.imu_frame,
-                    [c.planner.foot_length, c.planner.foot_width],
-                );
+                let config = c.estimator_config();
                 let mut estimator =
                     Estimator::new(Arc::clone(model), &config, scenario.sim_period())?;
                 estimator.set_initial_state(initial)?;

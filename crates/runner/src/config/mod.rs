@@ -115,6 +115,23 @@ pub struct EstimationSection {
     /// (`stride_estimation::Estimator::set_joint_accelerations`); needs `joint_velocity_bandwidth` > 0
     /// and torque control.
     pub joint_velocity_prediction: bool,
+    /// The ground the estimation layer's soles sink into (`stride_estimation::sole_sink`): `none`
+    /// (default) a rigid ground; `controller_ground` the compliant TSID's (`wbc.tsid.compliant.ground_stiffness`,
+    /// `ground_damping`; needs `[wbc.tsid] contact_model = "compliant"`).
+    pub sole_sink: SoleSinkSource,
+}
+
+/// The ground the estimation layer's soles sink into (`estimation.sole_sink`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SoleSinkSource {
+    /// A rigid ground: a stance sole's origin is the EKF's static contact point.
+    #[default]
+    None,
+    /// The compliant TSID's ground model (`wbc.tsid.compliant.ground_stiffness`, `ground_damping`): the
+    /// EKF's contact point is the sole's zero-force point, the sole's origin less its sink under the
+    /// foot's estimated force (docs/estimation.md, "A sole sinking into a compliant ground").
+    ControllerGround,
 }
 
 /// Default of `estimation.measured_zmp_cutoff` \[Hz\]: the middle of the band that walks on both plants
@@ -135,18 +152,21 @@ impl Default for EstimationSection {
             ft_calibration: Default::default(),
             joint_velocity_bandwidth: 0.0,
             joint_velocity_prediction: false,
+            sole_sink: SoleSinkSource::None,
         }
     }
 }
 
 impl EstimationSection {
     /// The estimation layer's configuration with the robot's frames.
-    /// `sole_size`: the soles' `[length, width]` (`planner.foot_length`, `foot_width`).
+    /// `sole_size`: the soles' `[length, width]` (`planner.foot_length`, `foot_width`); `ground`: the
+    /// `[stiffness, damping]` densities of the ground the soles sink into (`estimation.sole_sink`; zeros: rigid).
     pub fn estimator_config(
         &self,
         robot: &RobotSection,
         imu_frame: &str,
         sole_size: [f64; 2],
+        ground: [f64; 2],
     ) -> stride_estimation::EstimatorConfig {
         stride_estimation::EstimatorConfig {
             left_sole: robot.left_sole.name().to_string(),
@@ -159,6 +179,8 @@ impl EstimationSection {
             ft_offsets: self.ft_offsets.clone(),
             ft_calibration: self.ft_calibration.clone(),
             joint_velocity_bandwidth: self.joint_velocity_bandwidth,
+            ground_stiffness: ground[0],
+            ground_damping: ground[1],
             sole_size,
         }
     }
@@ -515,6 +537,26 @@ pub fn expand_env_vars(
     }
     out.push_str(rest);
     Ok(out)
+}
+
+impl ScenarioConfig {
+    /// The estimation layer's configuration ([`EstimationSection::estimator_config`]) with the robot's
+    /// frames, the planner's sole size and the ground of `estimation.sole_sink`.
+    pub fn estimator_config(&self) -> stride_estimation::EstimatorConfig {
+        let ground = match self.estimation.sole_sink {
+            SoleSinkSource::None => [0.0; 2],
+            SoleSinkSource::ControllerGround => {
+                let g = &self.wbc.tsid.compliant;
+                [g.ground_stiffness, g.ground_damping]
+            }
+        };
+        self.estimation.estimator_config(
+            &self.robot,
+            &self.sim.sensors.imu_frame,
+            [self.planner.foot_length, self.planner.foot_width],
+            ground,
+        )
+    }
 }
 
 /// A loaded, validated scenario with its sources (for error locations and relative paths).
@@ -958,20 +1000,21 @@ impl Scenario {
             };
             self.layer_invalid("simplified", name, e.to_string())
         })?;
-        c.estimation
-            .estimator_config(
-                &c.robot,
-                &c.sim.sensors.imu_frame,
-                [c.planner.foot_length, c.planner.foot_width],
-            )
-            .validate()
-            .map_err(|e| {
-                let name = match &e {
-                    stride_estimation::EstimatorError::InvalidParameter { name, .. } => Some(*name),
-                    _ => None,
-                };
-                self.layer_invalid("estimation", name, e.to_string())
-            })?;
+        if c.estimation.sole_sink == SoleSinkSource::ControllerGround
+            && c.wbc.tsid.contact_model != stride_wbc::ContactModel::Compliant
+        {
+            return Err(self.invalid(
+                "estimation.sole_sink",
+                "\"controller_ground\" needs the compliant TSID ([wbc.tsid] contact_model = \"compliant\"), whose ground it reads",
+            ));
+        }
+        c.estimator_config().validate().map_err(|e| {
+            let name = match &e {
+                stride_estimation::EstimatorError::InvalidParameter { name, .. } => Some(*name),
+                _ => None,
+            };
+            self.layer_invalid("estimation", name, e.to_string())
+        })?;
         c.sim.validate().map_err(|e| {
             let name = match &e {
                 stride_sim::SimError::InvalidConfig { parameter, .. } => Some(parameter.as_str()),
