@@ -16,10 +16,15 @@ use stride_runner::log::read_log;
 use stride_runner::run::{run_scenario, Outcome, RunOptions, RunSummary};
 use stride_sim::GroundCompliance;
 
+/// The text of a scenario overlay: `include = [<the repository's config>]` with `extra` appended.
+fn overlay(config: &str, extra: &str) -> String {
+    let base = common::root().join(config);
+    format!("include = [{:?}]\n{extra}", base.display().to_string())
+}
+
 /// A scenario file `name.toml` including `configs/walk_soft_ground_torque.toml`, with `extra` appended.
 fn soft_walk_file(s: &Scratch, name: &str, extra: &str) -> std::path::PathBuf {
-    let base = common::root().join("configs/walk_soft_ground_torque.toml");
-    let text = format!("include = [{:?}]\n{extra}", base.display().to_string());
+    let text = overlay("configs/walk_soft_ground_torque.toml", extra);
     s.write(&format!("{name}.toml"), &text)
 }
 
@@ -117,7 +122,7 @@ fn the_compliant_tsid_stands_where_the_rigid_preset_falls() {
     );
     assert!(summary.com_error.rms < 3e-3, "{}", summary.render());
     assert_eq!(summary.wbc_fallbacks, 0, "{}", summary.render());
-    let include = format!("include = [{:?}]\n", stand.display().to_string());
+    let include = overlay("configs/stand_soft_ground_compliant_torque.toml", "");
     // the rigid preset: the scenario's plant, no compliant model, the angular momentum task weighed 0
     let rigid_text = format!(
         "{include}[wbc.tsid]\ncontact_model = \"rigid\"\n[[wbc.tsid.tasks]]\ntype = \"angular_momentum\"\n\
@@ -150,7 +155,7 @@ fn the_compliant_tsid_walks_its_first_steps_where_the_rigid_one_falls() {
         "{}",
         summary.render()
     );
-    let include = format!("include = [{:?}]\n", walk.display().to_string());
+    let include = overlay("configs/walk_soft_ground_compliant_torque.toml", "");
     for (name, extra) in [
         ("rigid", "[wbc.tsid]\ncontact_model = \"rigid\"\n"),
         (
@@ -171,10 +176,9 @@ fn the_compliant_tsid_walks_its_first_steps_where_the_rigid_one_falls() {
 #[test]
 fn the_held_contact_dynamics_outlast_the_instantaneous_ones_on_low_damping() {
     let s = Scratch::new("soft_ground_held_rate");
-    let walk = common::root().join("configs/walk_soft_ground_compliant_torque.toml");
-    let low_damping = format!(
-        "include = [{:?}]\n[sim.contact]\nnormal_damping = 1e3\n[wbc.tsid.compliant]\nground_damping = 1e3\n",
-        walk.display().to_string()
+    let low_damping = overlay(
+        "configs/walk_soft_ground_compliant_torque.toml",
+        "[sim.contact]\nnormal_damping = 1e3\n[wbc.tsid.compliant]\nground_damping = 1e3\n",
     );
     let held = assert_falls(&s, "held", &low_damping);
     let instant = assert_falls(
@@ -198,7 +202,7 @@ fn the_held_contact_dynamics_outlast_the_instantaneous_ones_on_low_damping() {
 fn the_planned_momentum_reference_walks_to_the_goal_where_the_rigid_tsid_falls() {
     let s = Scratch::new("soft_ground_planned_momentum");
     let walk = common::root().join("configs/walk_soft_ground_compliant_planned_torque.toml");
-    let include = format!("include = [{:?}]\n", walk.display().to_string());
+    let include = overlay("configs/walk_soft_ground_compliant_planned_torque.toml", "");
     let stiff = format!(
         "{include}[sim.contact]\nnormal_stiffness = 2e6\nnormal_damping = 1e4\n\
          [wbc.tsid.compliant]\nground_stiffness = 2e6\nground_damping = 1e4\n"
@@ -239,13 +243,12 @@ fn the_planned_momentum_reference_walks_to_the_goal_where_the_rigid_tsid_falls()
         "zero_reference",
         &format!("{include}{zero_reference}\n"),
     );
-    let stage_2b = common::root().join("configs/walk_soft_ground_compliant_torque.toml");
     assert_falls(
         &s,
         "stage_2b",
-        &format!(
-            "include = [{:?}]\n[sim.contact]\nnormal_damping = 1e3\n[wbc.tsid.compliant]\nground_damping = 1e3\n",
-            stage_2b.display().to_string()
+        &overlay(
+            "configs/walk_soft_ground_compliant_torque.toml",
+            "[sim.contact]\nnormal_damping = 1e3\n[wbc.tsid.compliant]\nground_damping = 1e3\n",
         ),
     );
     let rigid = "[wbc.tsid]\ncontact_model = \"rigid\"\n";
@@ -286,8 +289,7 @@ fn assert_falls(s: &Scratch, name: &str, text: &str) -> RunSummary {
 #[test]
 fn the_planned_momentum_walk_falls_at_once_on_the_ekf() {
     let s = Scratch::new("soft_ground_planned_momentum_ekf");
-    let walk = common::root().join("configs/walk_soft_ground_compliant_planned_torque.toml");
-    let include = format!("include = [{:?}]\n", walk.display().to_string());
+    let include = overlay("configs/walk_soft_ground_compliant_planned_torque.toml", "");
     let ekf = "[estimation]\nkind = \"ekf\"\n";
     let stiff = "[sim.contact]\nnormal_stiffness = 2e6\nnormal_damping = 1e4\n\
                  [wbc.tsid.compliant]\nground_stiffness = 2e6\nground_damping = 1e4\n";
@@ -312,8 +314,7 @@ fn the_planned_momentum_walk_falls_at_once_on_the_ekf() {
 #[test]
 fn the_filtered_wrench_stands_on_the_ekf_with_unquantised_encoders_only() {
     let s = Scratch::new("soft_ground_planned_ekf_inputs");
-    let walk = common::root().join("configs/walk_soft_ground_compliant_planned_torque.toml");
-    let include = format!("include = [{:?}]\n", walk.display().to_string());
+    let include = overlay("configs/walk_soft_ground_compliant_planned_torque.toml", "");
     let inputs = |source: &str, counts: u32| {
         format!(
             "{include}[estimation]\nkind = \"ekf\"\njoint_velocity_bandwidth = 300.0\n\
@@ -342,8 +343,7 @@ fn the_filtered_wrench_stands_on_the_ekf_with_unquantised_encoders_only() {
 #[test]
 fn the_sink_compensation_outlasts_the_first_step_in_position_control() {
     let s = Scratch::new("soft_ground_position_sink");
-    let walk = common::root().join("configs/walk_soft_ground_position_sink.toml");
-    let include = format!("include = [{:?}]\n", walk.display().to_string());
+    let include = overlay("configs/walk_soft_ground_position_sink.toml", "");
     let without = assert_falls(
         &s,
         "without",
@@ -365,8 +365,10 @@ fn patch_walk(
     duration: f64,
     estimated: bool,
 ) -> (Vec<EstimateTouchDown>, RunSummary) {
-    let walk = common::root().join("configs/walk_soft_ground_patches_compliant_torque.toml");
-    let text = format!("include = [{:?}]\n{extra}", walk.display().to_string());
+    let text = overlay(
+        "configs/walk_soft_ground_patches_compliant_torque.toml",
+        extra,
+    );
     let scenario = Scenario::load(&s.write(&format!("{name}.toml"), &text)).unwrap();
     let options = RunOptions {
         duration: Some(duration),
@@ -384,15 +386,20 @@ fn patch_walk(
     (touch_downs, summary)
 }
 
-/// The estimator in the closed loop (docs/soft-ground.md, "The estimator in the closed loop"), as it is
-/// today: walking over the three patches of Table 8.1's grounds with each foot's ground estimated online
-/// and fed to its contact model (the plant's truth, ideal actuators), the first touch-down on the `2e6, 1e4`
-/// patch does **not** bring `k̂` within 10 %: it stays more than 20 % below (measured 1.43e6 at lift-off:
-/// the rest pose taken at the impact of a tilted sole is its centre's, millimetres above the flat ground),
-/// and the walk falls within 5 s (measured 4.14 s, 0.43 m), where the same scenario with the ground fixed
-/// at the prior walks past 6 s. When the rest pose is fixed, this test must move to the issue's claim.
+/// The estimator in the closed loop (docs/soft-ground.md, "The estimator in the closed loop"): walking over
+/// the three patches of Table 8.1's grounds with each foot's ground estimated online and fed to its contact
+/// model (the plant's truth, ideal actuators), the rest pose of a sole where it meets the ground levelled
+/// about its lowest corner (`estimator_rest_pose = "level"`, the default): on every touch-down of a sole
+/// wholly on one patch (before the walk falls: both feet on the `2e6, 1e4` patch) `k̂` comes within 10 %
+/// of the patch's `k` within 1 s of the touch-down (measured 0.25 s and 0.13 s) and stays there until the
+/// lift-off; `b̂` does not (measured +140 % and +77 %: the damping column's signal is a few newtons,
+/// docs/soft-ground.md). The other side: with the rest pose the sole's tilted pose at its impact
+/// (`"impact"`, the former one) neither of those touch-downs brings `k̂` within 10 % (measured −10.2 % and
+/// −11.0 % at lift-off). The walk itself still falls within 5 s (measured 4.47 s, 0.55 m, the left sole
+/// straddling the first border), where the same scenario with the ground fixed at the prior walks past 6 s
+/// (7.13 s): when a fix makes the walk reach the third patch, this test must move.
 #[test]
-fn the_ground_estimate_in_the_loop_is_biased_and_the_patch_walk_falls() {
+fn the_ground_estimate_in_the_loop_finds_k_within_10_percent_on_the_patches() {
     let s = Scratch::new("soft_ground_patches_estimate");
     let (estimated, summary) = patch_walk(&s, "estimated", "", 12.0, true);
     assert!(
@@ -404,12 +411,37 @@ fn the_ground_estimate_in_the_loop_is_biased_and_the_patch_walk_falls() {
         summary.render()
     );
     assert!(summary.simulated_time < 5.0, "{}", summary.render());
-    let first = estimated
+    let whole = |t: &&EstimateTouchDown| t.truth.is_some() && t.lift_off - t.time >= 1.0;
+    let landed: Vec<&EstimateTouchDown> = estimated.iter().filter(whole).collect();
+    for foot in ["left", "right"] {
+        assert!(
+            landed
+                .iter()
+                .any(|t| t.foot == foot && t.truth.is_some_and(|g| g.stiffness == 2e6)),
+            "{foot}: {estimated:?}"
+        );
+    }
+    for t in &landed {
+        assert!(t.stiffness_within.is_some_and(|w| w <= 1.0), "{t:?}");
+        assert!(t.damping_within.is_none(), "{t:?}");
+    }
+    let (impact, _) = patch_walk(
+        &s,
+        "impact",
+        "[wbc.tsid.compliant]\nestimator_rest_pose = \"impact\"\n",
+        12.0,
+        true,
+    );
+    let first_patch: Vec<&EstimateTouchDown> = impact
         .iter()
-        .find(|t| t.foot == "left" && t.truth.is_some_and(|g| g.stiffness == 2e6))
-        .expect("a left touch-down on the first patch");
-    assert!(first.stiffness_within.is_none(), "{first:?}");
-    assert!(first.last.0 < 0.8 * 2e6, "{first:?}");
+        .filter(whole)
+        .filter(|t| t.truth.is_some_and(|g| g.stiffness == 2e6))
+        .collect();
+    assert_eq!(first_patch.len(), 2, "{impact:?}");
+    for t in first_patch {
+        assert!(t.stiffness_within.is_none(), "{t:?}");
+        assert!(t.last.0 < 2e6, "{t:?}");
+    }
     let (_, fixed) = patch_walk(
         &s,
         "fixed",

@@ -696,6 +696,8 @@ pub enum ContactModel {
 /// | `estimate_ground` | – | false | estimate `k`, `b` online (RLS, [eq. 8.2.20–8.2.22]), one estimate per contact from its loaded sole, covariance reset at its touch-down, prior the two values above with their own size as standard deviation; each contact's model uses its estimate |
 /// | `estimator_wrench_std` | N, N·m | [2, 0.2] | standard deviations of the measured force and torque for that estimate |
 /// | `estimator_contact_force` | N | 5 | with `estimate_ground`: a sole after its planned touch-down meets the ground when its measured normal force exceeds this; until then its rest pose follows it and its estimate is not fed, then the covariance is reset and the rest pose set there |
+/// | `estimator_rest_pose` | – | `"level"` | with `estimate_ground`: the zero-force pose of a sole where it meets the ground: `"level"` its pose rotated about its lowest corner until flat (the horizontal plane through that corner: flat ground); `"impact"` its pose there as it is (tilted as it landed), raised by the static sink of its force (see [`EstimatorRestPose`]) |
+/// | `estimator_rows` | – | `"all"` | with `estimate_ground`: the rows of the measured wrench (world axes) the estimate reads: `"all"` the six of [eq. 8.2.17]; `"normal"` those the ground's normal density makes on flat ground, the vertical force and the roll and pitch torques; `"vertical_force"` the vertical force alone (see [`EstimatorRows`]) |
 /// | `estimator_reset` | – | true | with `estimate_ground`: reset a contact's estimate covariance at its touch-down [Colman 2006] (`false` only to show what the reset buys) |
 /// | `plan_on_surface` | – | false | the runner plans the footholds from the soles' zero-force poses (raised by their static sink `f_z / (k l w)`), so the swing feet land on the ground's surface, not as deep as the standing feet sank |
 /// | `held_acceleration` | – | false | the contact dynamics give the wrench rate averaged over one control period of a held acceleration: the acceleration gain of eq. 8.2.14 uses the damping `b + k·period/2` (see [`crate::soft_contact::WrenchRate::held_over`]) |
@@ -728,6 +730,11 @@ pub struct CompliantConfig {
     /// With `estimate_ground`: the measured normal force (N) above which a sole that touched down in the
     /// plan is on the ground (its rest pose is set and its estimate fed from then on).
     pub estimator_contact_force: f64,
+    /// With `estimate_ground`: the zero-force pose of a sole where it meets the ground
+    /// ([`EstimatorRestPose`]).
+    pub estimator_rest_pose: EstimatorRestPose,
+    /// With `estimate_ground`: the rows of the measured wrench the estimate reads ([`EstimatorRows`]).
+    pub estimator_rows: EstimatorRows,
     /// The runner plans the footholds from the soles' zero-force poses, raised by their static sink
     /// `f_z / (k l w)` of a flat sole [Romualdi 2022, eq. 8.1.7a], so that the swing feet land on the
     /// ground's surface rather than as deep as the standing feet sank.
@@ -745,6 +752,50 @@ pub struct CompliantConfig {
     pub wrench_source: WrenchSource,
     /// Time constant of the `"filtered"` wrench's correction toward the measured one, s (> 0).
     pub wrench_filter_time: f64,
+}
+
+/// The zero-force (rest) pose of a sole where it meets the ground, with `estimate_ground`
+/// (`[wbc.tsid.compliant] estimator_rest_pose`): the pose about which the regressor of the ground estimate
+/// [Romualdi 2022, eq. 8.2.17] and the contact model measure the sole's deflection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum EstimatorRestPose {
+    /// Flat ground: the sole's pose at its impact rotated about its lowest corner until flat (roll and
+    /// pitch removed, heading kept), the horizontal plane through the corner that met the ground.
+    #[default]
+    Level,
+    /// The sole's pose at its impact as it is (tilted as it landed), raised by the static sink of its
+    /// measured force: millimetres above flat ground for a sole landing on its heel.
+    Impact,
+}
+
+/// The rows of a sole's measured wrench (force, torque about the sole centre; world axes) the ground
+/// estimate reads, with `estimate_ground` (`[wbc.tsid.compliant] estimator_rows`). Lemma 1's density is
+/// isotropic [Romualdi 2022, eq. 8.1.6]; a ground whose tangential law is not its normal one (stride-sim's
+/// stick springs, anchored where each point touched down, with their own densities) makes the
+/// horizontal forces and the yaw torque of a different law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum EstimatorRows {
+    /// The six rows of the regressor [Romualdi 2022, eq. 8.2.17]: an isotropic ground.
+    #[default]
+    All,
+    /// The rows the normal density makes on flat ground: the vertical force and the roll and pitch
+    /// torques.
+    Normal,
+    /// The vertical force alone.
+    VerticalForce,
+}
+
+impl EstimatorRows {
+    /// The rows (of `[f; μ]`, world axes) the estimate does not read.
+    pub fn unread(self) -> &'static [usize] {
+        match self {
+            EstimatorRows::All => &[],
+            EstimatorRows::Normal => &[0, 1, 5],
+            EstimatorRows::VerticalForce => &[0, 1, 3, 4, 5],
+        }
+    }
 }
 
 /// The wrench `f_c` TSID-Compliant's rows read (`[wbc.tsid.compliant] wrench_source`).
@@ -782,6 +833,8 @@ impl Default for CompliantConfig {
             estimator_wrench_std: [2.0, 0.2],
             estimator_reset: true,
             estimator_contact_force: 5.0,
+            estimator_rest_pose: EstimatorRestPose::Level,
+            estimator_rows: EstimatorRows::All,
             plan_on_surface: false,
             held_acceleration: false,
             lift_off_force: f64::INFINITY,
