@@ -464,16 +464,15 @@ fn the_ground_estimate_in_the_loop_finds_k_within_10_percent_on_the_patches() {
 #[test]
 fn the_sole_sink_keeps_the_ekf_estimate_in_place_on_soft_ground() {
     let s = Scratch::new("soft_ground_sole_sink");
-    let walk = common::root().join("configs/walk_soft_ground_compliant_planned_ekf_torque.toml");
-    let include = format!("include = [{:?}]\n", walk.display().to_string());
+    let walk = "configs/walk_soft_ground_compliant_planned_ekf_torque.toml";
     let clean =
         "[estimation]\njoint_velocity_bandwidth = 300.0\njoint_velocity_prediction = true\n";
     let unquantised = "[sim.sensors.encoder]\ncounts_per_revolution = 0\n";
-    let with = assert_falls(&s, "with", &format!("{include}{clean}{unquantised}"));
+    let with = assert_falls(&s, "with", &overlay(walk, &format!("{clean}{unquantised}")));
     let without = assert_falls(
         &s,
         "without",
-        &format!("{include}{clean}sole_sink = \"none\"\n{unquantised}"),
+        &overlay(walk, &format!("{clean}sole_sink = \"none\"\n{unquantised}")),
     );
     let horizontal = |r: &RunSummary| {
         let e = r.estimation.final_position_error;
@@ -492,10 +491,9 @@ fn the_sole_sink_keeps_the_ekf_estimate_in_place_on_soft_ground() {
         "{}",
         without.render()
     );
-    let rigid = common::root().join("configs/walk_straight_torque.toml");
-    let text = format!(
-        "include = [{:?}]\n[estimation]\nsole_sink = \"controller_ground\"\n",
-        rigid.display().to_string()
+    let text = overlay(
+        "configs/walk_straight_torque.toml",
+        "[estimation]\nsole_sink = \"controller_ground\"\n",
     );
     let error = Scenario::load(&s.write("rigid.toml", &text))
         .unwrap_err()
