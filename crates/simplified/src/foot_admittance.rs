@@ -27,6 +27,12 @@
 //!   height, shortens its leg and closes that loop even faster. The compensation sums to zero over the
 //!   feet, so the planned CoM height is kept, and lifts an unloaded (swing) foot by the half-weight sink,
 //!   onto the ground's surface;
+//! * **sole-tilt feed-forward** on that ground (`tilt_feedforward_gain` `g` > 0): an `l × w` sole on a ground
+//!   `k` has roll and pitch stiffnesses `k l w³/12` and `k w l³/12` (12 and 60 N·m/rad on `k = 10⁶` N/m³,
+//!   against `m g h` ≈ 174 N·m/rad for the bundled humanoid), so its desired ankle torque `τ*` needs a tilt of
+//!   `−τ*` over them; each loaded sole gets `g` times that tilt (bounded by `max_feedforward_tilt`, low-passed
+//!   at `error_cutoff`) on top of the damping control's. The full tilt (`g = 1`) is tenths of a radian in a
+//!   few ticks at a weight shift and kicks the robot over (measured, docs/soft-ground.md);
 //! * **distribution** of the desired ZMP `p*`: with both feet loaded, `α` is the projection of `p*` on the
 //!   segment between the sole origins (clamped to `[0, 1]`), `f_L* = (1 − α) F`, `f_R* = α F` (`F` the
 //!   measured total normal force) and each desired centre of pressure is its sole origin plus the part of
@@ -87,6 +93,8 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 /// | `max_height_offset` | m | 0.02 | bound on the height difference `δ` |
 /// | `error_cutoff` | Hz | 20 | cut-off of the low-pass filter on the torque and force errors (0: unfiltered) |
 /// | `ground_stiffness` | N/m³ | 0 | the ground's normal stiffness density `k` for the sink compensation (0: off, a rigid ground) |
+/// | `tilt_feedforward_gain` | – | 0 | with `ground_stiffness` > 0: tilt each loaded sole by this fraction of the angle that gives its desired ankle torque on the ground, `−τ*/(k l w³/12)` in roll, `−τ*/(k w l³/12)` in pitch (0: off, 1: the full static tilt) |
+/// | `max_feedforward_tilt` | rad | 0.3 | bound on each feed-forward tilt angle |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FootAdmittanceConfig {
@@ -108,6 +116,11 @@ pub struct FootAdmittanceConfig {
     pub error_cutoff: f64,
     /// Normal stiffness density `k` of the ground for the sink compensation \[N/m³\] (0: off).
     pub ground_stiffness: f64,
+    /// Fraction of the tilt each loaded sole needs for its desired ankle torque on the ground
+    /// `ground_stiffness` (the sole-tilt feed-forward; 0: off; no effect without a ground stiffness).
+    pub tilt_feedforward_gain: f64,
+    /// Bound on each feed-forward tilt angle (roll, pitch) \[rad\].
+    pub max_feedforward_tilt: f64,
 }
 
 impl Default for FootAdmittanceConfig {
@@ -122,6 +135,8 @@ impl Default for FootAdmittanceConfig {
             max_height_offset: 0.02,
             error_cutoff: DEFAULT_ERROR_CUTOFF,
             ground_stiffness: 0.0,
+            tilt_feedforward_gain: 0.0,
+            max_feedforward_tilt: 0.3,
         }
     }
 }
@@ -136,7 +151,15 @@ impl FootAdmittanceConfig {
         check_positive("foot_admittance.force_leak_time", self.force_leak_time)?;
         check_non_negative("foot_admittance.max_height_offset", self.max_height_offset)?;
         check_non_negative("foot_admittance.error_cutoff", self.error_cutoff)?;
-        check_non_negative("foot_admittance.ground_stiffness", self.ground_stiffness)
+        check_non_negative("foot_admittance.ground_stiffness", self.ground_stiffness)?;
+        check_non_negative(
+            "foot_admittance.tilt_feedforward_gain",
+            self.tilt_feedforward_gain,
+        )?;
+        check_non_negative(
+            "foot_admittance.max_feedforward_tilt",
+            self.max_feedforward_tilt,
+        )
     }
 }
 
@@ -209,6 +232,13 @@ pub struct FootAdmittance {
     min_force: f64,
     /// Vertical compliance of one sole on the ground, `1 / (k l w)` \[m/N\] (0: no sink compensation).
     sole_compliance: f64,
+    /// Roll and pitch compliance of one sole on the ground, `[12 / (k l w³), 12 / (k w l³)]` \[rad/(N·m)\],
+    /// times `tilt_feedforward_gain` (zero without the tilt feed-forward).
+    tilt_compliance: Vector2<f64>,
+    /// The damping control's tilts `[left, right]` (roll, pitch in the sole frame) \[rad\].
+    feedback_tilts: [Vector2<f64>; 2],
+    /// Low-pass filters of the feed-forward tilts `[left, right]` (roll, pitch in the sole frame) \[rad\].
+    feedforward_tilts: [FirstOrderLowPass<Vector2<f64>>; 2],
     /// Half the robot's weight, the even split the normal-force filter starts from \[N\].
     half_weight: f64,
     /// Height difference `δ = z_L − z_R` \[m\].
@@ -247,6 +277,20 @@ impl FootAdmittance {
             } else {
                 0.0
             },
+            tilt_compliance: if config.ground_stiffness > 0.0 {
+                let k = config.ground_stiffness;
+                Vector2::new(
+                    12.0 / (k * foot_length * foot_width.powi(3)),
+                    12.0 / (k * foot_width * foot_length.powi(3)),
+                ) * config.tilt_feedforward_gain
+            } else {
+                Vector2::zeros()
+            },
+            feedback_tilts: [Vector2::zeros(); 2],
+            feedforward_tilts: [FirstOrderLowPass::starting_at(
+                config.error_cutoff,
+                Vector2::zeros(),
+            ); 2],
             half_weight: weight * 0.5,
             height_difference: 0.0,
             torque_errors: [FirstOrderLowPass::starting_at(config.error_cutoff, Vector2::zeros());
@@ -272,6 +316,10 @@ impl FootAdmittance {
             filter.reset_to(Vector2::zeros());
         }
         self.force_error.reset_to(0.0);
+        self.feedback_tilts = [Vector2::zeros(); 2];
+        for filter in &mut self.feedforward_tilts {
+            filter.reset_to(Vector2::zeros());
+        }
         self.normal_forces
             .reset_to(Vector2::repeat(self.half_weight));
         self.output = FootAdmittanceOutput::default();
@@ -303,10 +351,12 @@ impl FootAdmittance {
                 Vector2::zeros()
             };
             let error = self.torque_errors[k].update(raw, input.dt);
+            let (feedforward, feedforward_rate) =
+                self.feedforward_tilt(k, loaded[k], &input.soles[k], &cops[k], forces[k], input.dt);
             let foot = &mut self.output.feet[k];
             for axis in 0..2 {
                 let e = error[axis];
-                let tilt = &mut foot.tilt[axis];
+                let tilt = &mut self.feedback_tilts[k][axis];
                 *tilt = leaky_admittance(
                     *tilt,
                     c.torque_gain,
@@ -315,8 +365,10 @@ impl FootAdmittance {
                     input.dt,
                     c.max_tilt,
                 );
-                foot.tilt_rate[axis] = c.torque_gain * e - *tilt / c.torque_leak_time;
+                foot.tilt_rate[axis] =
+                    c.torque_gain * e - *tilt / c.torque_leak_time + feedforward_rate[axis];
             }
+            foot.tilt = self.feedback_tilts[k] + feedforward;
         }
         let raw_force_error = if loaded[0] && loaded[1] {
             (input.wrenches[0][2] - input.wrenches[1][2]) - (forces[0] - forces[1])
@@ -346,6 +398,37 @@ impl FootAdmittance {
 }
 
 impl FootAdmittance {
+    /// The sole-tilt feed-forward of foot `k` and its rate over the tick \[rad, rad/s\]: `g` =
+    /// `tilt_feedforward_gain` times the roll and pitch that give the desired ankle torque
+    /// `τ* = (c* − s) × f* e_z` (sole frame) on a ground of stiffness density `k`, `θ = −g τ* / (k l w³/12)`
+    /// in roll and `−g τ* / (k w l³/12)` in pitch (a sole rolled by `θ` about its x axis presses its −y edge
+    /// in: `τ_x = −k l w³/12 θ`), bounded by `max_feedforward_tilt` and low-passed at `error_cutoff`; it goes
+    /// back to zero on an unloaded foot.
+    fn feedforward_tilt(
+        &mut self,
+        k: usize,
+        loaded: bool,
+        sole: &Isometry3<f64>,
+        cop: &Vector2<f64>,
+        force: f64,
+        dt: f64,
+    ) -> (Vector2<f64>, Vector2<f64>) {
+        if self.tilt_compliance == Vector2::zeros() {
+            return (Vector2::zeros(), Vector2::zeros());
+        }
+        let target = if loaded {
+            let torque = desired_ankle_torque(sole, cop, force);
+            let bound = self.config.max_feedforward_tilt;
+            (-torque.component_mul(&self.tilt_compliance)).map(|v| v.clamp(-bound, bound))
+        } else {
+            Vector2::zeros()
+        };
+        let filter = &mut self.feedforward_tilts[k];
+        let before = filter.output().unwrap_or(Vector2::zeros());
+        let after = filter.update(target, dt);
+        (after, (after - before) / dt)
+    }
+
     /// The sink compensation `Δz_i = (F/2 − f_i*) / (k l w)` of the filtered desired normal forces `[f_L*,
     /// f_R*]` \[N\] and its rate over the tick \[m, m/s\] (zero without a ground stiffness).
     fn sink_compensation(&mut self, desired: &[f64; 2], dt: f64) -> ([f64; 2], [f64; 2]) {
@@ -398,11 +481,16 @@ pub fn ankle_torque_error(
     wrench: &Vector6<f64>,
     cop: &Vector2<f64>,
 ) -> Vector2<f64> {
-    let fz = wrench[2];
+    let measured = sole.rotation.inverse() * Vector3::new(wrench[3], wrench[4], wrench[5]);
+    measured.xy() - desired_ankle_torque(sole, cop, wrench[2])
+}
+
+/// The ankle torque that puts the centre of pressure at `cop` (world xy) under the normal force `fz` \[N\],
+/// `τ* = (c* − s) × f_z e_z`, roll and pitch in the sole frame \[N·m\].
+pub fn desired_ankle_torque(sole: &Isometry3<f64>, cop: &Vector2<f64>, fz: f64) -> Vector2<f64> {
     let s = sole.translation.vector;
     let desired = Vector3::new((cop.y - s.y) * fz, -(cop.x - s.x) * fz, 0.0);
-    let measured = Vector3::new(wrench[3], wrench[4], wrench[5]);
-    (sole.rotation.inverse() * (measured - desired)).xy()
+    (sole.rotation.inverse() * desired).xy()
 }
 
 /// The right foot's share `α ∈ [0, 1]` of a double support's normal force for the desired ZMP `zmp`: where
@@ -675,5 +763,78 @@ mod tests {
         }
         .validate()
         .is_err());
+    }
+
+    /// The sole-tilt feed-forward: a sole of `l × w` on a ground `k` has roll and pitch stiffnesses
+    /// `k l w³/12` and `k w l³/12`, so the tilt that gives the desired ankle torque `τ*` is `−τ*` over them
+    /// (times the gain, within its bound), reached through the error filter; unloaded, it leaks back to
+    /// zero; with the gain at 0 (the default) the corrections are those without it, bit for bit.
+    #[test]
+    fn the_tilt_feedforward_tilts_the_sole_by_its_desired_torque_over_the_ground_stiffness() {
+        let (k, l, w): (f64, f64, f64) = (1e6, 0.2, 0.09);
+        let config = |tilt_feedforward_gain, max_feedforward_tilt| FootAdmittanceConfig {
+            torque_gain: 0.0,
+            force_gain: 0.0,
+            ground_stiffness: k,
+            tilt_feedforward_gain,
+            max_feedforward_tilt,
+            ..Default::default()
+        };
+        // the left foot alone carries 300 N; the desired ZMP is 1 cm ahead of and 1 cm outside its origin
+        let input = FootAdmittanceInput {
+            desired_zmp: Vector2::new(0.01, 0.08),
+            ..left_cop_ahead([true, false], 0.002)
+        };
+        // τ* = (c* − s) × f e_z = (0.01 · 300, −0.01 · 300) N·m in the sole frame
+        let roll = -3.0 / (k * l * w.powi(3) / 12.0);
+        let pitch = 3.0 / (k * w * l.powi(3) / 12.0);
+        assert!((roll + 0.2469).abs() < 1e-4 && (pitch - 0.05).abs() < 1e-12);
+        for (gain, bound, expected) in [
+            (1.0, 0.3, Vector2::new(roll, pitch)),
+            (0.1, 0.3, Vector2::new(roll, pitch) * 0.1),
+            (1.0, 0.1, Vector2::new(-0.1, pitch)),
+        ] {
+            let mut on = FootAdmittance::new(&config(gain, bound), l, w, 320.0).unwrap();
+            let mut previous = Vector2::zeros();
+            for _ in 0..500 {
+                let foot = on.step(&input).unwrap().feet[0];
+                assert!((foot.tilt_rate * 0.002 - (foot.tilt - previous)).norm() < 1e-12);
+                previous = foot.tilt;
+            }
+            assert!(
+                (previous - expected).norm() < 1e-9,
+                "{previous} vs {expected}"
+            );
+            let lifted = FootAdmittanceInput {
+                contacts: [false, false],
+                ..input
+            };
+            for _ in 0..500 {
+                on.step(&lifted).unwrap();
+            }
+            assert!(on.output().feet[0].tilt.norm() < 1e-9);
+        }
+        // gain 0: the same corrections as without the key (the default admittance on the same ground)
+        let plain = FootAdmittanceConfig {
+            ground_stiffness: k,
+            ..Default::default()
+        };
+        let mut off = FootAdmittance::new(&plain, l, w, 320.0).unwrap();
+        let mut zero = FootAdmittance::new(
+            &FootAdmittanceConfig {
+                tilt_feedforward_gain: 0.0,
+                max_feedforward_tilt: 0.5,
+                ..plain
+            },
+            l,
+            w,
+            320.0,
+        )
+        .unwrap();
+        for _ in 0..100 {
+            assert_eq!(off.step(&input).unwrap(), zero.step(&input).unwrap());
+        }
+        assert!(config(-0.1, 0.3).validate().is_err());
+        assert!(config(0.1, -0.3).validate().is_err());
     }
 }
