@@ -3,7 +3,7 @@
 //! escaping. The keys are constant bytes (from the field names, in declaration order, by
 //! [`json_object!`]); numbers go through serde_json's own `CompactFormatter` (its float formatting, `null`
 //! for NaN and ±∞ as its serializer writes); strings, enums and the rare sub-values through serde_json
-//! itself ([`Serde`]). The pattern of `tf_json.rs`, for `/wbc/input`, `/wbc/output` (position control),
+//! itself ([`Serde`]). The pattern of `tf_json.rs`, for `/wbc/input`, `/wbc/output`,
 //! `/planner/references`, `/simplified/input`, `/simplified/output` and `/runner/tracking`: the bulk of the
 //! log's bytes at the whole-body and simplified rates (docs/performance.md, "the last 52 M").
 //!
@@ -13,7 +13,7 @@
 use std::borrow::Cow;
 use std::time::Duration;
 
-use nalgebra::Vector2;
+use nalgebra::SVector;
 use serde::Serialize;
 use serde_json::ser::{CompactFormatter, Formatter};
 use stride_simplified::{
@@ -24,7 +24,7 @@ use stride_wbc::{SolveReport, TaskResidual};
 use crate::records::{
     ContactsMsg, EstimationMsg, FeetMsg, FootMsg, FootReferenceRecord, FootSampleRecord, FtMsg,
     IkOutputRecord, ImuMsg, OrientationRecord, PlanSampleRecord, PlantTrackingMsg, PoseRecord,
-    SimStateMsg, StateRecord, TrackingMsg, WbcInputRecord,
+    SimStateMsg, StateRecord, TrackingMsg, TsidOutputRecord, WbcInputRecord,
 };
 
 type Result = std::result::Result<(), serde_json::Error>;
@@ -75,7 +75,16 @@ impl<T: Serialize + ?Sized> Json for Serde<'_, T> {
 impl Json for f64 {
     #[inline]
     fn json(&self, out: &mut Vec<u8>) -> Result {
-        // serde_json's `serialize_f64`: `null` for NaN and ±∞, else its formatter's shortest round trip.
+        // serde_json's `serialize_f64`: `null` for NaN and ±∞, else its formatter's shortest round trip,
+        // which writes the zeros (a sixth of the log's numbers) as `0.0` and `-0.0`.
+        if *self == 0.0 {
+            out.extend_from_slice(if self.is_sign_negative() {
+                b"-0.0"
+            } else {
+                b"0.0"
+            });
+            return Ok(());
+        }
         if self.is_finite() {
             CompactFormatter.write_f64(out, *self)
         } else {
@@ -171,7 +180,7 @@ impl<T: Json> Json for Option<T> {
     }
 }
 
-impl Json for Vector2<f64> {
+impl<const D: usize> Json for SVector<f64, D> {
     fn json(&self, out: &mut Vec<u8>) -> Result {
         // nalgebra's serde form of a fixed-size vector: the sequence of its entries.
         self.as_slice().json(out)
@@ -246,6 +255,13 @@ impl Json for IkOutputRecord<'_> {
     fn json(&self, out: &mut Vec<u8>) -> Result {
         json_object!(out, self;
             joint_positions, joint_velocities, base_velocity, base_pose, report, residuals)
+    }
+}
+
+impl Json for TsidOutputRecord<'_> {
+    fn json(&self, out: &mut Vec<u8>) -> Result {
+        json_object!(out, self;
+            joint_torques, accelerations, contact_wrenches, contact_load, report, residuals)
     }
 }
 
@@ -389,6 +405,7 @@ impl Json for ImuMsg {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{Vector2, Vector6};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
     use stride_simplified::{
@@ -564,6 +581,19 @@ mod tests {
                 residuals: &residuals,
             };
             check(&r, "/wbc/output", k);
+            let wrenches: Vec<Vector6<f64>> = (0..rng.random_range(0..5))
+                .map(|_| Vector6::from(floats::<6>(&mut rng)))
+                .collect();
+            let load: Vec<f64> = wrenches.iter().map(|_| float(&mut rng)).collect();
+            let tsid = TsidOutputRecord {
+                joint_torques: &q,
+                accelerations: &v,
+                contact_wrenches: &wrenches,
+                contact_load: &load,
+                report: r.report,
+                residuals: &residuals,
+            };
+            check(&tsid, "/wbc/output (TSID)", k);
         }
     }
 

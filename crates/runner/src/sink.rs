@@ -425,7 +425,7 @@ impl LogSink {
                     let record = GroundEstimateRecord { tsid: ts, grounds };
                     self.write(|tp| tp.wbc_ground_estimate, t, &record)?;
                 }
-                self.write(|tp| tp.wbc_output, t, &TsidOutputRecord::new(ts.output()))
+                self.write_json(|tp| tp.wbc_output, t, &TsidOutputRecord::new(ts.output()))
             }
         }?;
         self.write(|tp| tp.wbc_timing, t, &timing)
