@@ -1,11 +1,12 @@
 //! The JSON of the log's per-tick messages written straight into the message buffer: byte for byte what
 //! `serde_json::to_writer` writes for the same value, without serde's field-by-field dispatch and key
-//! escaping. The keys are constant bytes (from the field names, in declaration order, by
-//! [`json_object!`]); numbers go through serde_json's own `CompactFormatter` (its float formatting, `null`
-//! for NaN and ±∞ as its serializer writes); strings, enums and the rare sub-values through serde_json
-//! itself ([`Serde`]). The pattern of `tf_json.rs`, for `/wbc/input`, `/wbc/output`,
-//! `/planner/references`, `/simplified/input`, `/simplified/output` and `/runner/tracking`: the bulk of the
-//! log's bytes at the whole-body and simplified rates (docs/performance.md, "the last 52 M").
+//! escaping. The keys are constant bytes (from the field names, in declaration order, by `json_object!`
+//! and `json_fields!`); numbers go through serde_json's own `CompactFormatter` (its float formatting,
+//! `null` for NaN and ±∞ as its serializer writes); strings, enums and the rare sub-values through
+//! serde_json itself (`Serde`). The pattern of `tf_json.rs`, for `/wbc/input`, `/wbc/output`,
+//! `/planner/references`, `/simplified/input`, `/simplified/output`, `/runner/tracking` and the state
+//! topics: the bulk of the log's bytes (docs/performance.md, "the log's per-tick messages without serde's
+//! dispatch").
 //!
 //! A field added to one of these records without its line here makes the bytes differ from serde's: the
 //! tests below compare both over random values of every record.
