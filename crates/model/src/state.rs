@@ -6,6 +6,23 @@ use crate::error::{check_len, ModelError};
 use crate::model::Model;
 use crate::spatial::{ang, join, lin, skew};
 
+/// `true` if no entry is `±∞` or NaN, `values.iter().all(|v| v.is_finite())` without a branch per entry
+/// (every state the kinematics and the simulator take is checked): `v · 0` is `±0` for a finite `v` and
+/// NaN otherwise, and NaN survives the sums (four lanes, which the compiler vectorizes).
+fn all_finite(values: &[f64]) -> bool {
+    let chunks = values.chunks_exact(4);
+    let tail: f64 = chunks.remainder().iter().map(|v| v * 0.0).sum();
+    let lanes = chunks.fold([0.0; 4], |a, c| {
+        [
+            a[0] + c[0] * 0.0,
+            a[1] + c[1] * 0.0,
+            a[2] + c[2] * 0.0,
+            a[3] + c[3] * 0.0,
+        ]
+    });
+    lanes.iter().sum::<f64>() + tail == 0.0
+}
+
 /// How the base velocity (and frame velocities, Jacobians, accelerations) are expressed
 /// [Traversaro 2017, Table 2.1] (iDynTree semantics).
 #[derive(
@@ -87,26 +104,18 @@ impl RobotState {
         let n = model.dof();
         check_len("joint_positions", n, self.joint_positions.len())?;
         check_len("joint_velocities", n, self.joint_velocities.len())?;
-        let pose_finite = self
-            .base_pose
-            .translation
-            .vector
-            .iter()
-            .all(|v| v.is_finite())
-            && self.base_pose.rotation.coords.iter().all(|v| v.is_finite());
+        let pose_finite = all_finite(self.base_pose.translation.vector.as_slice())
+            && all_finite(self.base_pose.rotation.coords.as_slice());
         for (what, finite) in [
             ("base_pose", pose_finite),
             (
                 "joint_positions",
-                self.joint_positions.iter().all(|v| v.is_finite()),
+                all_finite(self.joint_positions.as_slice()),
             ),
-            (
-                "base_velocity",
-                self.base_velocity.iter().all(|v| v.is_finite()),
-            ),
+            ("base_velocity", all_finite(self.base_velocity.as_slice())),
             (
                 "joint_velocities",
-                self.joint_velocities.iter().all(|v| v.is_finite()),
+                all_finite(self.joint_velocities.as_slice()),
             ),
         ] {
             if !finite {
@@ -242,4 +251,32 @@ pub fn check_joint_limits(model: &Model, q: &DVector<f64>) -> Result<(), ModelEr
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod finite_tests {
+    use super::all_finite;
+
+    /// The entrywise answer for every length up to a few lanes past a multiple of four and every
+    /// position of one non-finite entry, among finite entries of extreme magnitudes and both zeros.
+    #[test]
+    fn all_finite_is_the_entrywise_check() {
+        let finite = [1.0, -2.5, f64::MAX, -f64::MAX, 5e-324, -0.0, 0.0, -3.0e300];
+        for len in 0..=13 {
+            let values: Vec<f64> = (0..len).map(|k| finite[k % finite.len()]).collect();
+            assert!(all_finite(&values), "len {len}");
+            for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+                for at in 0..len {
+                    let mut v = values.clone();
+                    v[at] = bad;
+                    assert!(!all_finite(&v), "len {len}, {bad} at {at}");
+                }
+            }
+        }
+        // +∞ and −∞ in different lanes do not cancel
+        let mut v = vec![0.0; 9];
+        v[0] = f64::INFINITY;
+        v[5] = f64::NEG_INFINITY;
+        assert!(!all_finite(&v));
+    }
 }

@@ -31,6 +31,7 @@ pub mod identify;
 pub mod init;
 pub mod joint_trajectory;
 pub mod log;
+mod log_json;
 pub mod mcap_file;
 pub mod model_cmd;
 #[cfg(feature = "mujoco")]

@@ -13,6 +13,7 @@ use crate::log::{
     FoxgloveQuaternion, FoxgloveTime, FoxgloveVector3, FrameTransform, FrameTransforms, LogError,
     LogOptions, LogStats, LogWriter, TopicId, FRAME_TRANSFORMS_SCHEMA,
 };
+use crate::log_json::Json;
 use crate::records::{
     simplified_output_record, ContactsMsg, DiagnosisMsg, EstimationMsg, EventRecord, FeetMsg,
     FootMsg, FootstepMsg, FootstepsMsg, FtMsg, GroundEstimateRecord, IkOutputRecord, ImuMsg,
@@ -254,6 +255,18 @@ impl LogSink {
         self.writer.write(pick(&self.topics), t, v)
     }
 
+    /// [`LogSink::write`] for the messages with a hand-written JSON writer (`crate::log_json`): the same
+    /// bytes.
+    fn write_json<T: Json + ?Sized>(
+        &mut self,
+        pick: impl Fn(&Topics) -> TopicId,
+        t: u64,
+        v: &T,
+    ) -> Result<(), LogError> {
+        self.writer
+            .write_encoded(pick(&self.topics), t, |buf| v.json(buf))
+    }
+
     /// `/events`.
     pub(crate) fn event(&mut self, t: u64, kind: &str, detail: String) -> Result<(), LogError> {
         let e = EventRecord {
@@ -309,17 +322,19 @@ impl LogSink {
             names: &self.ft_names,
             wrenches: &self.ft_wrenches,
         };
-        self.writer.write(self.topics.sensors_ft, t, &ft)?;
-        self.write(
+        let sensors_ft = self.topics.sensors_ft;
+        self.writer
+            .write_encoded(sensors_ft, t, |buf| ft.json(buf))?;
+        self.write_json(
             |tp| tp.estimation_state,
             t,
             &estimation_msg(time, &stack.estimate),
         )?;
         let stamp = FoxgloveTime::from_ns(t);
         self.tf.update(kd, stamp);
-        self.write(|tp| tp.sim_state, t, &state)?;
-        self.write(|tp| tp.sensors_feet, t, &feet)?;
-        self.write(|tp| tp.sensors_imu, t, &imu)?;
+        self.write_json(|tp| tp.sim_state, t, &state)?;
+        self.write_json(|tp| tp.sensors_feet, t, &feet)?;
+        self.write_json(|tp| tp.sensors_imu, t, &imu)?;
         let moving = &self.tf.moving;
         self.writer.write_encoded(self.topics.tf, t, |buf| {
             crate::tf_json::write_frame_transforms(buf, moving)
@@ -380,10 +395,10 @@ impl LogSink {
     /// simplified tick; `time` is the running controller's time \[s\].
     pub(crate) fn simplified(&mut self, t: u64, stack: &Stack, time: f64) -> Result<(), LogError> {
         let sample = PlanSampleRecord::from_sample(&stack.plan_sample);
-        self.write(|tp| tp.planner_references, t, &sample)?;
-        self.write(|tp| tp.simplified_input, t, &stack.simplified_input)?;
+        self.write_json(|tp| tp.planner_references, t, &sample)?;
+        self.write_json(|tp| tp.simplified_input, t, &stack.simplified_input)?;
         let out = simplified_output_record(&stack.simplified_output);
-        self.write(|tp| tp.simplified_output, t, &out)?;
+        self.write_json(|tp| tp.simplified_output, t, &out)?;
         let timing = TimingRecord {
             solve_time: time,
             tick_time: time,
@@ -400,15 +415,17 @@ impl LogSink {
         timing: TimingRecord,
     ) -> Result<(), LogError> {
         let input = WbcInputRecord::from_input(t, &stack.wbc_input);
-        self.write(|tp| tp.wbc_input, t, &input)?;
+        self.write_json(|tp| tp.wbc_input, t, &input)?;
         match &stack.wbc {
-            Wbc::Ik(ik) => self.write(|tp| tp.wbc_output, t, &IkOutputRecord::new(ik.output())),
+            Wbc::Ik(ik) => {
+                self.write_json(|tp| tp.wbc_output, t, &IkOutputRecord::new(ik.output()))
+            }
             Wbc::Tsid(ts) => {
                 if let Some(grounds) = ts.ground_estimates() {
                     let record = GroundEstimateRecord { tsid: ts, grounds };
                     self.write(|tp| tp.wbc_ground_estimate, t, &record)?;
                 }
-                self.write(|tp| tp.wbc_output, t, &TsidOutputRecord::new(ts.output()))
+                self.write_json(|tp| tp.wbc_output, t, &TsidOutputRecord::new(ts.output()))
             }
         }?;
         self.write(|tp| tp.wbc_timing, t, &timing)
@@ -416,7 +433,7 @@ impl LogSink {
 
     /// `/runner/tracking`.
     pub(crate) fn tracking(&mut self, t: u64, msg: &TrackingMsg) -> Result<(), LogError> {
-        self.write(|tp| tp.tracking, t, msg)
+        self.write_json(|tp| tp.tracking, t, msg)
     }
 
     /// `/runner/diagnosis`: the end-of-run diagnosis and gait figures of `summary`, at `t`.

@@ -1,11 +1,10 @@
 //! `/tf` and `/tf_static` (`foxglove.FrameTransforms`) written as JSON straight into the message buffer: the
-//! bytes `serde_json::to_writer` writes for the same value (numbers and names still go through serde_json,
-//! so their formatting and escaping are its own), without its field-by-field dispatch and key escaping.
+//! bytes `serde_json::to_writer` writes for the same value (numbers and names through `crate::log_json`:
+//! serde_json's own formatting and escaping), without its field-by-field dispatch and key escaping.
 //! `/tf` is the log's largest message (one transform per body at every state tick).
 
-use serde::Serialize;
-
 use crate::log::{FoxgloveQuaternion, FoxgloveVector3, FrameTransforms};
+use crate::log_json::Json;
 
 /// Appends the JSON of `tf` to `out`, byte for byte `serde_json::to_writer(out, tf)`.
 pub(crate) fn write_frame_transforms(
@@ -18,13 +17,13 @@ pub(crate) fn write_frame_transforms(
             out.push(b',');
         }
         out.extend_from_slice(b"{\"timestamp\":{\"sec\":");
-        value(out, &t.timestamp.sec)?;
+        t.timestamp.sec.json(out)?;
         out.extend_from_slice(b",\"nsec\":");
-        value(out, &t.timestamp.nsec)?;
+        t.timestamp.nsec.json(out)?;
         out.extend_from_slice(b"},\"parent_frame_id\":");
-        value(out, t.parent_frame_id.as_str())?;
+        t.parent_frame_id.json(out)?;
         out.extend_from_slice(b",\"child_frame_id\":");
-        value(out, t.child_frame_id.as_str())?;
+        t.child_frame_id.json(out)?;
         out.extend_from_slice(b",\"translation\":");
         vector3(out, &t.translation)?;
         out.extend_from_slice(b",\"rotation\":");
@@ -54,15 +53,10 @@ fn quaternion(out: &mut Vec<u8>, q: &FoxgloveQuaternion) -> Result<(), serde_jso
 fn numbers_object(out: &mut Vec<u8>, fields: &[(&[u8], f64)]) -> Result<(), serde_json::Error> {
     for (key, v) in fields {
         out.extend_from_slice(key);
-        value(out, v)?;
+        v.json(out)?;
     }
     out.push(b'}');
     Ok(())
-}
-
-/// One number or string, as serde_json writes it (a non-finite number as `null`).
-fn value<T: Serialize + ?Sized>(out: &mut Vec<u8>, v: &T) -> Result<(), serde_json::Error> {
-    serde_json::to_writer(&mut *out, v)
 }
 
 #[cfg(test)]
