@@ -481,16 +481,23 @@ pub fn ankle_torque_error(
     wrench: &Vector6<f64>,
     cop: &Vector2<f64>,
 ) -> Vector2<f64> {
-    let measured = sole.rotation.inverse() * Vector3::new(wrench[3], wrench[4], wrench[5]);
-    measured.xy() - desired_ankle_torque(sole, cop, wrench[2])
+    // The difference is taken in the world frame before the rotation, as it always was: the damping
+    // control's closed loops (MuJoCo's fast walk above all) are sensitive to the last bit.
+    let measured = Vector3::new(wrench[3], wrench[4], wrench[5]);
+    let desired = desired_ankle_torque_world(sole, cop, wrench[2]);
+    (sole.rotation.inverse() * (measured - desired)).xy()
 }
 
 /// The ankle torque that puts the centre of pressure at `cop` (world xy) under the normal force `fz` \[N\],
 /// `τ* = (c* − s) × f_z e_z`, roll and pitch in the sole frame \[N·m\].
 pub fn desired_ankle_torque(sole: &Isometry3<f64>, cop: &Vector2<f64>, fz: f64) -> Vector2<f64> {
+    (sole.rotation.inverse() * desired_ankle_torque_world(sole, cop, fz)).xy()
+}
+
+/// [`desired_ankle_torque`] in the world frame \[N·m\].
+fn desired_ankle_torque_world(sole: &Isometry3<f64>, cop: &Vector2<f64>, fz: f64) -> Vector3<f64> {
     let s = sole.translation.vector;
-    let desired = Vector3::new((cop.y - s.y) * fz, -(cop.x - s.x) * fz, 0.0);
-    (sole.rotation.inverse() * desired).xy()
+    Vector3::new((cop.y - s.y) * fz, -(cop.x - s.x) * fz, 0.0)
 }
 
 /// The right foot's share `α ∈ [0, 1]` of a double support's normal force for the desired ZMP `zmp`: where
