@@ -219,8 +219,9 @@ impl Estimator {
                 b if b > 0.0 => Some(JointVelocityFilter::new(model.dof(), b)?),
                 _ => None,
             },
-            standing: (config.ft_offsets.learn_while_standing > 0.0)
-                .then(|| StandingOffsets::new(config.ft_offsets.learn_while_standing, n_ft)),
+            standing: (config.ft_offsets.learn_while_standing > 0.0).then(|| {
+                StandingOffsets::new(config.ft_offsets.learn_while_standing, n_ft, model.nv())
+            }),
             output,
             kd,
             model,
@@ -530,9 +531,18 @@ impl Estimator {
 
     /// Step 7b (`ft_offsets.learn_while_standing`): while the robot stands still on both feet, each sensor's
     /// offset is the mean of its reading minus the model's prediction with the weight split between the soles
-    /// by [`standing_foot_wrenches`] (static: the force is `m (p̈_B − g)` with the estimated base
-    /// acceleration, no moment about the CoM). Runs after the joint torques (its sensor pass would replace
-    /// the one they read). The running mean is the offset from the first sample on.
+    /// by [`standing_foot_wrenches`] (static: the force is the weight `−m g`, no moment about the CoM, no
+    /// acceleration). Runs after the joint torques (its sensor pass would replace the one they read). The
+    /// running mean is the offset from the first sample on.
+    ///
+    /// The prediction is the standing robot's, `ν̇ = 0`: with the estimated base acceleration in the force
+    /// (and nothing of the joints' accelerations nor of the angular momentum rate, which the split takes as
+    /// zero) a robot that moves while it learns had each sample's prediction swing with the accelerometer,
+    /// the split turning a horizontal acceleration into opposite vertical forces of the two feet, and the
+    /// first samples' swings stayed in the offsets: on soft ground the estimated normal forces jumped between
+    /// 54 and 282 N within 20 ms and the compliant TSID diverged at 0.06 s (docs/soft-ground.md, "TSID-Compliant
+    /// with real actuators, 2026-12-06 night"). Static, a sample's error is the robot's real dynamic wrench,
+    /// which the running mean averages out.
     fn learn_standing_offsets(&mut self, input: &EstimatorInput) -> Result<()> {
         let Some(st) = &mut self.standing else {
             return Ok(());
@@ -541,8 +551,7 @@ impl Estimator {
             return Ok(());
         }
         let soles = self.soles.map(|s| self.kd.frame_rotation_translation(s));
-        let acceleration = self.nu_dot.fixed_rows::<3>(0).into_owned();
-        let force = self.model.total_mass() * (acceleration - self.model.gravity());
+        let force = -self.model.total_mass() * self.model.gravity();
         let com = self.kd.com_position();
         let Some(split) = standing_foot_wrenches(&force, &com, &soles, self.config.sole_size)
         else {
@@ -553,7 +562,7 @@ impl Estimator {
             wrench: split[foot],
         });
         self.kd
-            .ft_sensor_wrenches(&self.nu_dot, &external, &mut st.expected)?;
+            .ft_sensor_wrenches(&st.still, &external, &mut st.expected)?;
         st.count += 1;
         let n = st.count as f64;
         for (s, (sum, expected)) in st.sum.iter_mut().zip(&st.expected).enumerate() {

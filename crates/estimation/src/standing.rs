@@ -8,7 +8,7 @@
 //! the contact, [`standing_foot_wrenches`]. What the real split differs from it by (internal forces, an
 //! uneven floor) goes into the offsets: the method suits a robot standing still and symmetric on a flat floor.
 
-use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
+use nalgebra::{DVector, Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 
 /// The wrenches `[f; τ]` (world orientation, about each sole origin; N, N·m) the ground applies on two flat
 /// soles that carry the total force `force` (N) with no moment about the CoM `com` (the robot standing still:
@@ -87,17 +87,20 @@ pub(crate) struct StandingOffsets {
     pub(crate) count: usize,
     /// The readings the model predicts with the standing split, per sensor (scratch).
     pub(crate) expected: Vec<Vector6<f64>>,
+    /// The standing robot's generalized acceleration: zero (`nv`).
+    pub(crate) still: DVector<f64>,
 }
 
 impl StandingOffsets {
-    /// Learning for `duration` \[s\] over `n_ft` sensors.
-    pub(crate) fn new(duration: f64, n_ft: usize) -> Self {
+    /// Learning for `duration` \[s\] over `n_ft` sensors of a model with `nv` velocities.
+    pub(crate) fn new(duration: f64, n_ft: usize, nv: usize) -> Self {
         Self {
             until_ns: None,
             duration_ns: (duration * 1e9).round() as u64,
             sum: vec![Vector6::zeros(); n_ft],
             count: 0,
             expected: vec![Vector6::zeros(); n_ft],
+            still: DVector::zeros(nv),
         }
     }
 

@@ -30,7 +30,7 @@ pub use stride_walking::soles_heading;
 use stride_walking::{
     scale_plan_sample, MeasuredCentroidal, PlanClock, SimplifiedInputBuilder, WalkingHandles,
 };
-use stride_wbc::{ContactId, ContactModel, QpIk, Tsid, WbcInput};
+use stride_wbc::{ActuatorCompensation, ContactId, ContactModel, QpIk, Tsid, WbcInput};
 
 use crate::centroidal::{CentroidalLayer, CentroidalMeasurement};
 use crate::config::{ControlMode, EstimationKind, EstimationUpdate, Goal, Scenario};
@@ -345,6 +345,9 @@ pub struct Stack {
     /// `estimation.joint_velocity_prediction`: the TSID's joint accelerations feed the estimation layer's
     /// joint velocity filter ([`predict_joint_velocities`]).
     predict_joint_velocities: bool,
+    /// `wbc.tsid.actuators`: the motors' torque lag and friction the TSID's torques are compensated for
+    /// (`None`: ideal motors, the command is the TSID's torques).
+    actuators: Option<ActuatorCompensation>,
     /// The foot admittance of position control (`simplified.foot_admittance.enabled`, QP-IK only) and
     /// the whole-body period it runs at \[s\].
     pub foot_admittance: Option<(FootAdmittance, f64)>,
@@ -417,6 +420,14 @@ impl Stack {
                 springs
             }
             Wbc::Ik(_) => FlexibleSprings::default(),
+        };
+        let actuators = match &wbc {
+            Wbc::Tsid(t) if t.config().actuators.is_active() => Some(ActuatorCompensation::new(
+                t.config().actuators,
+                model.dof(),
+                1.0 / f64::from(c.rates.wbc_hz),
+            )?),
+            _ => None,
         };
         let flexible_observer = match c.estimation.kind {
             EstimationKind::Ekf => flexible.observer(&model, scenario.sim_period())?,
@@ -528,6 +539,7 @@ impl Stack {
             flexible_observer,
             preintegrate_unread,
             predict_joint_velocities,
+            actuators,
             foot_admittance: foot_admittance(scenario, &model)?,
             counters: Counters::default(),
             kd_estimate: kd.clone(),
@@ -941,6 +953,9 @@ impl Stack {
         let s = &self.plan_sample;
         let i = &mut self.wbc_input;
         i.state.copy_from(&self.estimate.state);
+        if let Some(a) = &self.actuators {
+            a.predict(&mut i.state)?;
+        }
         let simplified = self.simplified_valid.then_some(&self.simplified_output);
         stride_walking::fill_wbc_input(i, &self.wbc_handles, s, simplified)?;
         for (id, wrench) in self.foot_contacts.iter().zip(&self.estimate.foot_wrenches) {
@@ -992,6 +1007,13 @@ impl Stack {
                 predict_joint_velocities(&mut self.estimation, self.predict_joint_velocities, out)?;
                 cmd.mode = ControlMode::Torque;
                 cmd.joint_torques.copy_from(&out.joint_torques);
+                if let Some(a) = &mut self.actuators {
+                    a.apply(
+                        &mut cmd.joint_torques,
+                        &self.estimate.state.joint_velocities,
+                        &out.accelerations,
+                    )?;
+                }
                 cmd.joint_positions
                     .copy_from(&self.estimate.state.joint_positions);
                 cmd.joint_velocities.fill(0.0);

@@ -113,6 +113,7 @@ impl TsidConfig {
                 flexible_joints: Vec::new(),
                 contact_model: ContactModel::Rigid,
                 compliant: CompliantConfig::default(),
+                actuators: crate::ActuatorConfig::default(),
                 tasks: vec![TaskConfig::FloatingBaseDynamics(
                     FloatingBaseDynamicsTaskConfig {
                         name: "dynamics".into(),

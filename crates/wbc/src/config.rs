@@ -643,6 +643,9 @@ fn yes() -> bool {
 /// | `qp` | – | stride-qp defaults | `backend` (`active_set` / `clarabel`), `regularization`, `fallback`, `relaxation_weight`, … |
 /// | `eliminate_equalities` | – | true | solve the null-space reduced QP (no hard equalities) first; the full QP only when that fails |
 /// | `tasks` | – | see `default_for_bundled_model` | task list |
+/// | `flexible_joints` | – | `[]` | passive flexible joints (TSID-Flex) |
+/// | `contact_model` | – | `"rigid"` | `"rigid"` or `"compliant"` (TSID-Compliant; settings `compliant`) |
+/// | `actuators` | – | ideal | the motors' torque lag and friction the command compensates ([`crate::ActuatorConfig`]) |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TsidConfig {
@@ -669,6 +672,11 @@ pub struct TsidConfig {
     /// Settings of the compliant contact model (read when `contact_model = "compliant"`).
     #[serde(default)]
     pub compliant: CompliantConfig,
+    /// The motors' dynamics the commanded torques compensate (`[wbc.tsid.actuators]`, applied by the
+    /// runner to the TSID's torques: [`crate::ActuatorCompensation`]); default ideal motors, no
+    /// compensation.
+    #[serde(default)]
+    pub actuators: crate::ActuatorConfig,
 }
 
 /// How the TSID models its contacts (`[wbc.tsid] contact_model`).

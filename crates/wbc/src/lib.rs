@@ -17,6 +17,7 @@
 
 #![warn(missing_docs)]
 
+pub mod actuators;
 mod bridge;
 mod builder;
 pub mod config;
@@ -30,6 +31,7 @@ pub mod soft_contact;
 mod tasks;
 mod tsid;
 
+pub use actuators::{ActuatorCompensation, ActuatorConfig};
 pub use builder::{IkConfigBuilder, TsidConfigBuilder};
 pub use config::*;
 pub use error::WbcError;

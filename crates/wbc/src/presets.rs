@@ -266,6 +266,7 @@ pub fn walking_tsid(p: &WalkingPreset) -> TsidConfig {
         flexible_joints: Vec::new(),
         contact_model: ContactModel::Rigid,
         compliant: CompliantConfig::default(),
+        actuators: crate::ActuatorConfig::default(),
         tasks: vec![
             TaskConfig::FloatingBaseDynamics(FloatingBaseDynamicsTaskConfig {
                 name: "dynamics".into(),

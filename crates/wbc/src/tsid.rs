@@ -487,6 +487,7 @@ impl Tsid {
                 reason: format!("{period} s must be > 0"),
             });
         }
+        config.actuators.validate()?;
         let n = model.dof();
         let nv = model.nv();
         let set = TaskSet::parse(&model, &config, period)?;
