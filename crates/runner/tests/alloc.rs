@@ -91,6 +91,14 @@ fn steady_state_ticks_do_not_allocate() {
          [[sim.pushes]]\nframe = \"chest\"\nstart = 2.0\nduration = 1.0\nwrench = [0.0, 15.0, 0.0, 0.0, 0.0, 0.0]\n",
     );
     assert_steady_on_simulator(&s, &push, extra_seconds, "push response");
+    // torque control with the actuator compensation (`wbc.tsid.actuators`: the lead, the friction
+    // feed-forward, the delay's prediction) on the simulator's default actuators
+    let actuators = s.write(
+        "c.toml",
+        "include = [\"s.toml\"]\n[scenario]\ncontrol_mode = \"torque\"\n[wbc.tsid.actuators]\n\
+         torque_bandwidth = 30.0\ncoulomb_friction = 0.1\ncommand_delay = 0.001\n",
+    );
+    assert_steady_on_simulator(&s, &actuators, extra_seconds, "actuator compensation");
     // a plant with inertias of its own (`[sim.model]`): the plant model's CoM and DCM for the summary
     let mismatch = s.write(
         "m.toml",
