@@ -1044,6 +1044,7 @@ impl Stack {
             soles: self.measured.soles,
             wrenches: e.foot_wrenches,
             contacts: [planned[0] && e.contacts[0], planned[1] && e.contacts[1]],
+            planned,
             dt: *dt,
         };
         let out = admittance.step(&input)?;

@@ -609,3 +609,30 @@ fn the_offsets_learnt_while_standing_outlast_the_unknown_ones_on_the_ekf() {
     let unknown = assert_falls(&s, "unknown", &include);
     assert!(unknown.simulated_time < 1.5, "{}", unknown.render());
 }
+
+/// The foot admittance's touch-down search in position control (docs/soft-ground.md "Position control on
+/// the grounds of Table 8.1: the touch-down search and the step adjustment"): the QP-IK integrates its own
+/// state with the stance sole flat, the stance sole rolls in the ground and the landing foot hangs over it
+/// at its planned touch-down; searching at 0.1 m/s lands it by the measured load. On k = 2e6, b = 1e4 with
+/// the sole-tilt feed-forward at 0.1 the robot then walks past its third touch-down (measured 4.48 s,
+/// 0.469 m) where it falls at the second step without (2.38 s, 0.206 m); it still falls (0 of 6), so the
+/// limit cannot move silently.
+#[test]
+fn the_touchdown_search_outlasts_the_clock_landing_and_still_falls() {
+    let s = Scratch::new("soft_ground_position_search");
+    let walk = |speed: f64| {
+        overlay(
+            "configs/walk_soft_ground_position_tilt.toml",
+            &format!(
+                "[sim.contact]\nnormal_stiffness = 2e6\n[simplified.foot_admittance]\n\
+                 ground_stiffness = 2e6\ntouchdown_search_speed = {speed:?}\n"
+            ),
+        )
+    };
+    let with = assert_falls(&s, "search", &walk(0.1));
+    assert!(with.simulated_time > 4.0, "{}", with.render());
+    assert!(with.distance > 0.4, "{}", with.render());
+    let without = assert_falls(&s, "clock", &walk(0.0));
+    assert!(without.simulated_time < 2.6, "{}", without.render());
+    assert!(without.distance < 0.25, "{}", without.render());
+}

@@ -33,6 +33,14 @@
 //!   `−τ*` over them; each loaded sole gets `g` times that tilt (bounded by `max_feedforward_tilt`, low-passed
 //!   at `error_cutoff`) on top of the damping control's. The full tilt (`g = 1`) is tenths of a radian in a
 //!   few ticks at a weight shift and kicks the robot over (measured, docs/soft-ground.md);
+//! * **touch-down search** (`touchdown_search_speed` `v` > 0): a foot that the plan has put down but that
+//!   carries no load yet (below [`MIN_ADMITTANCE_LOAD`] of the weight) keeps descending, its reference
+//!   lowered at `v` (up to `max_touchdown_search`) until its sole carries load; the depth it reached is held
+//!   while the plan keeps the foot down and leaks back to the plan with `force_leak_time` once it lifts it.
+//!   The kinematic QP-IK integrates its own state with the stance sole flat, so a stance sole rolled in a
+//!   soft ground turns the real robot about it and holds the landing foot over the ground (16–30 mm on
+//!   `k = 10⁶` N/m³, measured, docs/soft-ground.md); the search lands it by the measured load, not by the
+//!   clock;
 //! * **distribution** of the desired ZMP `p*`: with both feet loaded, `α` is the projection of `p*` on the
 //!   segment between the sole origins (clamped to `[0, 1]`), `f_L* = (1 − α) F`, `f_R* = α F` (`F` the
 //!   measured total normal force) and each desired centre of pressure is its sole origin plus the part of
@@ -95,6 +103,8 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 /// | `ground_stiffness` | N/m³ | 0 | the ground's normal stiffness density `k` for the sink compensation (0: off, a rigid ground) |
 /// | `tilt_feedforward_gain` | – | 0 | with `ground_stiffness` > 0: tilt each loaded sole by this fraction of the angle that gives its desired ankle torque on the ground, `−τ*/(k l w³/12)` in roll, `−τ*/(k w l³/12)` in pitch (0: off, 1: the full static tilt) |
 /// | `max_feedforward_tilt` | rad | 0.3 | bound on each feed-forward tilt angle |
+/// | `touchdown_search_speed` | m/s | 0 | speed at which a foot planned in contact since its touch-down, not yet loaded, keeps descending (0: off) |
+/// | `max_touchdown_search` | m | 0.05 | bound on the depth of that descent |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FootAdmittanceConfig {
@@ -121,6 +131,11 @@ pub struct FootAdmittanceConfig {
     pub tilt_feedforward_gain: f64,
     /// Bound on each feed-forward tilt angle (roll, pitch) \[rad\].
     pub max_feedforward_tilt: f64,
+    /// Speed at which a foot planned in contact since its touch-down but not yet loaded keeps descending
+    /// (the touch-down search) \[m/s\] (0: off).
+    pub touchdown_search_speed: f64,
+    /// Bound on the depth of the touch-down search \[m\].
+    pub max_touchdown_search: f64,
 }
 
 impl Default for FootAdmittanceConfig {
@@ -137,6 +152,8 @@ impl Default for FootAdmittanceConfig {
             ground_stiffness: 0.0,
             tilt_feedforward_gain: 0.0,
             max_feedforward_tilt: 0.3,
+            touchdown_search_speed: 0.0,
+            max_touchdown_search: 0.05,
         }
     }
 }
@@ -159,6 +176,14 @@ impl FootAdmittanceConfig {
         check_non_negative(
             "foot_admittance.max_feedforward_tilt",
             self.max_feedforward_tilt,
+        )?;
+        check_non_negative(
+            "foot_admittance.touchdown_search_speed",
+            self.touchdown_search_speed,
+        )?;
+        check_non_negative(
+            "foot_admittance.max_touchdown_search",
+            self.max_touchdown_search,
         )
     }
 }
@@ -178,6 +203,7 @@ pub fn leaky_admittance(x: f64, gain: f64, error: f64, leak_time: f64, dt: f64, 
 /// | `soles` | m, – | measured `[left, right]` sole poses |
 /// | `wrenches` | N, N·m | measured `[f; τ]` the ground applies on each foot, world orientation, torque about its sole origin |
 /// | `contacts` | – | feet in contact (planned and measured) |
+/// | `planned` | – | feet the plan has in contact (the touch-down search) |
 /// | `dt` | s | time since the last tick (> 0) |
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FootAdmittanceInput {
@@ -189,6 +215,8 @@ pub struct FootAdmittanceInput {
     pub wrenches: [Vector6<f64>; 2],
     /// Feet in contact.
     pub contacts: [bool; 2],
+    /// Feet in contact in the plan.
+    pub planned: [bool; 2],
     /// Tick period \[s\].
     pub dt: f64,
 }
@@ -199,7 +227,7 @@ pub struct FootAdmittanceInput {
 /// |---|---|---|
 /// | `tilt` | rad | roll and pitch about the sole frame's x and y axes, applied after the planned orientation |
 /// | `tilt_rate` | rad/s | their rates `K_τ (τ − τ*) − θ/T_τ` |
-/// | `height` | m | world z offset (`±δ/2`, plus the sink compensation `Δz_i`) |
+/// | `height` | m | world z offset (`±δ/2`, plus the sink compensation `Δz_i`, minus the touch-down search's depth) |
 /// | `height_rate` | m/s | its rate |
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FootCorrection {
@@ -249,6 +277,12 @@ pub struct FootAdmittance {
     force_error: FirstOrderLowPass<f64>,
     /// Low-pass filter of the desired normal forces `[f_L*, f_R*]` of the sink compensation \[N\].
     normal_forces: FirstOrderLowPass<Vector2<f64>>,
+    /// Depths of the touch-down search `[left, right]` \[m\] (≥ 0, below the plan).
+    search_depths: [f64; 2],
+    /// Feet searching for the ground: planned in contact since their touch-down, not loaded since.
+    searching: [bool; 2],
+    /// The planned contacts of the last tick.
+    planned_before: [bool; 2],
     output: FootAdmittanceOutput,
 }
 
@@ -300,6 +334,9 @@ impl FootAdmittance {
                 config.error_cutoff,
                 Vector2::repeat(weight * 0.5),
             ),
+            search_depths: [0.0; 2],
+            searching: [false; 2],
+            planned_before: [true; 2],
             output: FootAdmittanceOutput::default(),
         })
     }
@@ -322,6 +359,9 @@ impl FootAdmittance {
         }
         self.normal_forces
             .reset_to(Vector2::repeat(self.half_weight));
+        self.search_depths = [0.0; 2];
+        self.searching = [false; 2];
+        self.planned_before = [true; 2];
         self.output = FootAdmittanceOutput::default();
     }
 
@@ -387,9 +427,10 @@ impl FootAdmittance {
         self.height_difference = d;
         let rate = c.force_gain * force_error - d / c.force_leak_time;
         let (sink, sink_rate) = self.sink_compensation(&forces, input.dt);
+        let (depth, depth_rate) = self.touchdown_search(input);
         for (k, (foot, sign)) in self.output.feet.iter_mut().zip([0.5, -0.5]).enumerate() {
-            foot.height = sign * d + sink[k];
-            foot.height_rate = sign * rate + sink_rate[k];
+            foot.height = sign * d + sink[k] - depth[k];
+            foot.height_rate = sign * rate + sink_rate[k] - depth_rate[k];
         }
         self.output.desired_cop = cops;
         self.output.desired_force = forces;
@@ -427,6 +468,40 @@ impl FootAdmittance {
         let before = filter.output().unwrap_or(Vector2::zeros());
         let after = filter.update(target, dt);
         (after, (after - before) / dt)
+    }
+
+    /// The touch-down search's depths `[left, right]` and their rates over the tick \[m, m/s\]: a foot
+    /// whose planned contact begins starts searching; while it searches and its measured normal force is
+    /// below the loaded threshold its depth grows at `touchdown_search_speed` (bounded by
+    /// `max_touchdown_search`); once loaded it stops searching and holds its depth while the plan keeps
+    /// it in contact; once the plan lifts it the depth leaks back to zero with `force_leak_time` (zero
+    /// without the search). Holding only through the double support and leaking in the single support
+    /// was measured too and walked less far (docs/soft-ground.md, "the touch-down search").
+    fn touchdown_search(&mut self, input: &FootAdmittanceInput) -> ([f64; 2], [f64; 2]) {
+        let c = self.config;
+        if c.touchdown_search_speed == 0.0 {
+            return ([0.0; 2], [0.0; 2]);
+        }
+        let rates = std::array::from_fn(|k| {
+            let planned = input.planned[k];
+            if planned && !self.planned_before[k] {
+                self.searching[k] = true;
+            }
+            if !planned || input.wrenches[k][2] >= self.min_force {
+                self.searching[k] = false;
+            }
+            let before = self.search_depths[k];
+            self.search_depths[k] = if self.searching[k] {
+                (before + c.touchdown_search_speed * input.dt).min(c.max_touchdown_search)
+            } else if planned {
+                before
+            } else {
+                leaky_admittance(before, 0.0, 0.0, c.force_leak_time, input.dt, f64::INFINITY)
+            };
+            (self.search_depths[k] - before) / input.dt
+        });
+        self.planned_before = input.planned;
+        (self.search_depths, rates)
     }
 
     /// The sink compensation `Δz_i = (F/2 − f_i*) / (k l w)` of the filtered desired normal forces `[f_L*,
@@ -643,6 +718,7 @@ mod tests {
                 Vector6::zeros(),
             ],
             contacts,
+            planned: contacts,
             dt,
         }
     }
@@ -843,5 +919,74 @@ mod tests {
         }
         assert!(config(-0.1, 0.3).validate().is_err());
         assert!(config(0.1, -0.3).validate().is_err());
+    }
+
+    #[test]
+    fn touchdown_search_descends_until_loaded_then_leaks_back() {
+        let config = FootAdmittanceConfig {
+            touchdown_search_speed: 0.2,
+            max_touchdown_search: 0.03,
+            ..Default::default()
+        };
+        let dt = 0.002;
+        let mut on = FootAdmittance::new(&config, 0.2, 0.09, 320.0).unwrap();
+        let mut off =
+            FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
+        // the right foot swings (planned up), then the plan puts it down while it carries nothing
+        let swing = FootAdmittanceInput {
+            planned: [true, false],
+            ..left_cop_ahead([true, false], dt)
+        };
+        on.step(&swing).unwrap();
+        off.step(&swing).unwrap();
+        assert_eq!(on.output(), off.output(), "no search in the swing");
+        let down = FootAdmittanceInput {
+            planned: [true, true],
+            ..swing
+        };
+        for n in 1..=10 {
+            on.step(&down).unwrap();
+            off.step(&down).unwrap();
+            let extra = off.output().feet[1].height - on.output().feet[1].height;
+            assert!(
+                (extra - 0.2 * dt * n as f64).abs() < 1e-12,
+                "tick {n}: {extra}"
+            );
+            let rate = off.output().feet[1].height_rate - on.output().feet[1].height_rate;
+            assert!((rate - 0.2).abs() < 1e-9, "{rate}");
+            assert_eq!(
+                on.output().feet[0],
+                off.output().feet[0],
+                "the loaded foot is left alone"
+            );
+        }
+        for _ in 0..200 {
+            on.step(&down).unwrap();
+            off.step(&down).unwrap();
+        }
+        let extra = off.output().feet[1].height - on.output().feet[1].height;
+        assert!((extra - 0.03).abs() < 1e-12, "bounded: {extra}");
+        // loaded: the depth is held while the plan keeps the foot down (an unload does not restart the
+        // search, nor does the other foot's lift-off), and once the plan lifts it the depth leaks back
+        // with force_leak_time
+        let mut loaded = down;
+        let mut depths = Vec::new();
+        for (w, planned) in [
+            (100.0, [false, true]),
+            (0.0, [true, true]),
+            (0.0, [true, false]),
+        ] {
+            loaded.wrenches[1][2] = w;
+            loaded.planned = planned;
+            for _ in 0..100 {
+                on.step(&loaded).unwrap();
+                off.step(&loaded).unwrap();
+            }
+            depths.push(off.output().feet[1].height - on.output().feet[1].height);
+        }
+        let a = (-0.2 / config.force_leak_time).exp();
+        assert!((depths[0] - 0.03).abs() < 1e-12, "{depths:?}");
+        assert!((depths[1] - 0.03).abs() < 1e-12, "{depths:?}");
+        assert!((depths[2] - 0.03 * a).abs() < 1e-9, "{depths:?}");
     }
 }

@@ -150,6 +150,7 @@ fn foot_admittance_does_not_allocate() {
     use nalgebra::{Isometry3, Vector6};
     let config = FootAdmittanceConfig {
         enabled: true,
+        touchdown_search_speed: 0.1,
         ..Default::default()
     };
     let mut admittance = FootAdmittance::new(&config, 0.2, 0.09, 320.0).unwrap();
@@ -161,12 +162,14 @@ fn foot_admittance_does_not_allocate() {
         ],
         wrenches: [Vector6::new(0.0, 0.0, 200.0, 1.0, -2.0, 0.0); 2],
         contacts: [true, true],
+        planned: [true, true],
         dt: 0.002,
     };
     let (_, n) = ALLOC.allocations_during(|| {
         for i in 0..200 {
             // double support, then each foot alone
             input.contacts = [i % 3 != 1, i % 3 != 2];
+            input.planned = input.contacts;
             input.wrenches[0][4] = -0.01 * i as f64;
             admittance.step(&input).unwrap();
         }
