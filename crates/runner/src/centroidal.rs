@@ -48,6 +48,8 @@ pub struct CentroidalMeasurement {
     pub feet_force: nalgebra::Vector3<f64>,
     /// Sole half length and half width \[m\].
     pub foot_half: (f64, f64),
+    /// The push response's horizontal estimate of the external force (zero without it) \[N\].
+    pub push_estimate: Vector2<f64>,
 }
 
 impl CentroidalLayer {
@@ -132,15 +134,20 @@ impl CentroidalLayer {
         Ok(())
     }
 
-    /// The horizontal external force `m ẍ − Σ f_feet` \[N\] (zero when disabled, at the first solve or
-    /// below the threshold); remembers the velocity for the next solve.
+    /// The horizontal external force \[N\]: with `push_estimate` the push response's estimate, with
+    /// `external_force` `m ẍ − Σ f_feet` (zero at the first solve); zero when both are off or below the
+    /// threshold. Remembers the velocity for the next solve.
     fn external_force(&mut self, m: &CentroidalMeasurement, t: f64) -> nalgebra::Vector3<f64> {
         let c = self.mpc.config();
         let last = self.last_velocity.replace((t, m.com_velocity));
-        let Some((t0, v0)) = last.filter(|(t0, _)| c.external_force && t > *t0) else {
-            return nalgebra::Vector3::zeros();
+        let mut f = if c.push_estimate {
+            nalgebra::Vector3::new(m.push_estimate.x, m.push_estimate.y, 0.0)
+        } else {
+            let Some((t0, v0)) = last.filter(|(t0, _)| c.external_force && t > *t0) else {
+                return nalgebra::Vector3::zeros();
+            };
+            (m.com_velocity - v0) * (self.mass / (t - t0)) - m.feet_force
         };
-        let mut f = (m.com_velocity - v0) * (self.mass / (t - t0)) - m.feet_force;
         f.z = 0.0;
         if f.norm() < c.external_force_threshold {
             f.fill(0.0);
@@ -244,6 +251,7 @@ mod tests {
             com_velocity: velocity,
             feet_force: feet,
             foot_half: (0.06, 0.03),
+            push_estimate: Vector2::zeros(),
         }
     }
 
@@ -276,5 +284,25 @@ mod tests {
         let mut off = CentroidalLayer::new(&CentroidalMpcConfig::default(), 30.0, 9.81).unwrap();
         off.external_force(&still, 1.0);
         assert_eq!(off.external_force(&pushed, 1.05), Vector3::zeros());
+    }
+
+    #[test]
+    fn with_push_estimate_the_external_force_is_the_push_responses() {
+        let config = CentroidalMpcConfig {
+            push_estimate: true,
+            ..CentroidalMpcConfig::default()
+        };
+        let mut layer = CentroidalLayer::new(&config, 30.0, 9.81).unwrap();
+        let weight = Vector3::new(0.0, 0.0, 30.0 * 9.81);
+        // the estimate as it is from the first solve, whatever the CoM does
+        let mut m = measurement(Vector3::new(0.3, 0.0, 0.0), weight);
+        m.push_estimate = Vector2::new(-35.0, 12.0);
+        assert_eq!(
+            layer.external_force(&m, 1.0),
+            Vector3::new(-35.0, 12.0, 0.0)
+        );
+        // below the threshold: ignored
+        m.push_estimate = Vector2::new(20.0, -10.0);
+        assert_eq!(layer.external_force(&m, 1.05), Vector3::zeros());
     }
 }

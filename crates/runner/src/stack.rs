@@ -882,6 +882,10 @@ impl Stack {
             com_velocity: self.measured.com_velocity,
             feet_force,
             foot_half: (self.foot_half_length, self.foot_half_width),
+            push_estimate: self
+                .push
+                .as_ref()
+                .map_or(Vector2::zeros(), |p| p.estimate()),
         };
         match layer.tick(plan, &measurement, &mut self.horizon_sample, time) {
             Ok(true) => {}

@@ -2,7 +2,11 @@
 //! stride-sim with the bundled humanoid: without pushes the default walks (position and torque control)
 //! reach the goal exactly as without it (no footstep moves past the dead band); with a side push it moves
 //! the swing foot's touch-down outward, in the push direction, inside its box, and logs it on
-//! `/planner/adjusted_footsteps`.
+//! `/planner/adjusted_footsteps`. With the push response's estimate as the MPC's external force
+//! (`layers/centroidal_mpc_push_estimate.toml`, position control,
+//! `configs/walk_straight_centroidal_mpc_push_response.toml`): the unpushed torque walk is the same run as
+//! without the estimate, and a 40 N push forward-right from mid single support that falls without it does
+//! not with it, while 45 N still falls (docs/push-recovery.md, "Part 2 on the hard floor").
 mod common;
 
 use common::{adjusted_footsteps, log_options as options, Scratch};
@@ -56,4 +60,68 @@ fn a_side_push_moves_the_swing_foot_outward_and_is_logged() {
         assert!(dy > 0.02 && dy <= box_outward[1] + 1e-6, "{m}");
         assert_eq!(m["qp_status"], "solved", "{m}");
     }
+}
+
+/// `configs/walk_straight_centroidal_mpc_push_response.toml` with `push_estimate` set to `estimate`, 9 s,
+/// one 1 s push of `force` \[N\] towards 315° (forward and to the right) at the chest from 5.0 s (mid single
+/// support on the left foot).
+fn pushed_forward_right(
+    s: &Scratch,
+    name: &str,
+    estimate: bool,
+    force: f64,
+) -> stride_runner::summary::RunSummary {
+    let c = force / std::f64::consts::SQRT_2;
+    let extra = format!(
+        "[simplified.centroidal_mpc]\npush_estimate = {estimate}\n[scenario]\nduration = 9.0\n\
+         [[sim.pushes]]\nframe = \"chest\"\nstart = 5.0\nduration = 1.0\n\
+         wrench = [{c}, {}, 0.0, 0.0, 0.0, 0.0]\n",
+        -c
+    );
+    let layers = ["walk_straight_centroidal_mpc_push_response.toml"];
+    let sc = common::scenario_from_configs(s, name, &layers, &extra);
+    run_scenario(&sc, &options(s, name)).unwrap()
+}
+
+#[test]
+fn with_the_push_estimate_a_forward_right_push_is_walked_through() {
+    let s = Scratch::new("centroidal_mpc_push_estimate");
+    let with = pushed_forward_right(&s, "with", true, 40.0);
+    assert_eq!(with.outcome, Outcome::DurationReached, "{}", with.render());
+    assert!(with.step_adjustments.0 >= 1, "{}", with.render());
+    let without = pushed_forward_right(&s, "without", false, 40.0);
+    assert!(
+        matches!(without.outcome, Outcome::Fell { .. }),
+        "{}",
+        without.render()
+    );
+    // the other side of the limit: 45 N falls with the estimate too
+    let beyond = pushed_forward_right(&s, "beyond", true, 45.0);
+    assert!(
+        matches!(beyond.outcome, Outcome::Fell { .. }),
+        "{}",
+        beyond.render()
+    );
+}
+
+#[test]
+fn without_pushes_the_push_estimate_changes_nothing() {
+    let s = Scratch::new("centroidal_mpc_push_estimate_nominal");
+    let layers = [
+        "walk_straight_torque.toml",
+        "layers/centroidal_mpc.toml",
+        "layers/push_response.toml",
+        "layers/push_hold_at_once.toml",
+    ];
+    let run = |name: &str, estimate: bool| {
+        let extra = format!("[simplified.centroidal_mpc]\npush_estimate = {estimate}\n");
+        let sc = common::scenario_from_configs(&s, name, &layers, &extra);
+        run_scenario(&sc, &options(&s, name)).unwrap()
+    };
+    let (off, on) = (run("off", false), run("on", true));
+    assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
+    assert_eq!(on.step_adjustments, off.step_adjustments);
+    assert_eq!(on.push_holds, off.push_holds);
+    assert_eq!(on.dcm_error.rms, off.dcm_error.rms);
+    assert_eq!(on.goal_distance, off.goal_distance);
 }

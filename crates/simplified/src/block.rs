@@ -84,6 +84,13 @@ impl SimplifiedConfig {
         self.centroidal_mpc.validate()?;
         self.step_adjustment.validate()?;
         self.push.validate()?;
+        if self.centroidal_mpc.push_estimate && !self.push.enabled {
+            return Err(SimplifiedError::InvalidParameter {
+                name: "centroidal_mpc.push_estimate",
+                value: 1.0,
+                reason: "needs the push response's estimate: [simplified.push] enabled = true",
+            });
+        }
         self.foot_admittance.validate()
     }
 }

@@ -34,6 +34,7 @@ pub type Interval = [f64; 2];
 /// | `external_force` | false | the runner estimates the horizontal external force (`m ẍ − Σ f_feet`) and passes it to the MPC [Romualdi 2022, eq. 11.2.1] |
 /// | `external_force_threshold` | 30 N | smaller estimates are ignored (the thesis's code: 30 N) |
 /// | `external_force_stages` | 1 | stages over which the external force acts in the prediction (the thesis: the first only) |
+/// | `push_estimate` | false | the runner passes the push response's momentum-observer estimate (`[simplified.push] enabled = true` needed; not with `external_force`) as the external force, held constant over the whole horizon (all `stages`; `external_force_stages` is not used); `external_force_threshold` applies |
 /// | `deadband` | 0.02 m | the runner retargets the swing only when the adjusted touch-down differs from the plan's by more |
 /// | `track_prediction` | false | the DCM PI tracks the MPC's predicted CoM (false: the plan's, and the MPC only moves the footsteps) |
 /// | `warm_start_active_set` | false | start the active-set solver from the previous active set of the same QP size (the RTI itself always linearises about the previous solution); off: not faster in two measurements on a loaded machine (docs/simplified.md) |
@@ -75,6 +76,9 @@ pub struct CentroidalMpcConfig {
     pub external_force_threshold: f64,
     /// Stages over which the external force acts in the prediction.
     pub external_force_stages: usize,
+    /// Whether the runner passes the push response's estimate as the external force, over the whole
+    /// horizon.
+    pub push_estimate: bool,
     /// Dead band of the runner's swing retargeting \[m\].
     pub deadband: f64,
     /// Whether the DCM PI tracks the MPC's prediction (else the plan's CoM).
@@ -103,6 +107,7 @@ impl Default for CentroidalMpcConfig {
             external_force: false,
             external_force_threshold: 30.0,
             external_force_stages: 1,
+            push_estimate: false,
             deadband: 0.02,
             track_prediction: false,
             warm_start_active_set: false,
@@ -183,6 +188,23 @@ impl CentroidalMpcConfig {
                 "must be <= stages",
             ));
         }
+        if self.push_estimate && self.external_force {
+            return Err(invalid(
+                "centroidal_mpc.push_estimate",
+                1.0,
+                "one source of the external force: not with `external_force`",
+            ));
+        }
         non_negative("centroidal_mpc.min_remaining_time", self.min_remaining_time)
+    }
+
+    /// Stages over which the input's external force acts in the prediction: all of them with
+    /// `push_estimate` (the estimate held over the horizon), else `external_force_stages`.
+    pub fn external_stages(&self) -> usize {
+        if self.push_estimate {
+            self.stages
+        } else {
+            self.external_force_stages
+        }
     }
 }

@@ -67,7 +67,7 @@ impl CentroidalMpc {
                 mass,
                 gravity,
                 dt: config.stage_duration,
-                external_stages: config.external_force_stages,
+                external_stages: config.external_stages(),
             },
             layout: Layout::with_capacity(n),
             geometry: [ContactGeometry::default(); MAX_MPC_CONTACTS],

@@ -288,9 +288,94 @@ fn config_ranges_and_unknown_keys_are_rejected() {
             outward: [-0.1, f64::NAN],
             ..ok
         },
+        CentroidalMpcConfig {
+            push_estimate: true,
+            external_force: true,
+            ..ok
+        },
     ] {
         assert!(bad.validate().is_err(), "{bad:?}");
     }
     assert!(toml::from_str::<CentroidalMpcConfig>("stages = 10\nfriction = 0.5").is_ok());
     assert!(toml::from_str::<CentroidalMpcConfig>("horizon = 10").is_err());
+    // the push estimate needs the push response that makes it
+    let mut simplified = crate::SimplifiedConfig::default();
+    simplified.centroidal_mpc.push_estimate = true;
+    assert!(simplified.validate().is_err());
+    simplified.push.enabled = true;
+    assert!(simplified.validate().is_ok());
+}
+
+#[test]
+fn a_constant_external_force_moves_the_standing_cop_by_the_closed_form() {
+    // Static balance under a horizontal force F at the CoM (the push estimate held over the horizon):
+    // the feet push back with −F and, moments about the CoM, their CoP sits F h / (m g) = F / (m ω²)
+    // along F from the CoM [Romualdi 2022, eq. 11.2.1] (4.6 and 3.1 cm here, inside the soles).
+    let config = CentroidalMpcConfig {
+        push_estimate: true,
+        ..CentroidalMpcConfig::default()
+    };
+    for force in [Vector3::new(30.0, 0.0, 0.0), Vector3::new(0.0, -20.0, 0.0)] {
+        let mut input = standing(&config);
+        input.external_force = force;
+        let mpc = solve(&config, &input, 10);
+        let expected = input.com_position.xy() + force.xy() * HEIGHT / (MASS * G);
+        // within 2 mm (4 % of the larger shift): the CoM may wander by a millimetre over the horizon,
+        // traded against the force-rate and corner-average costs
+        let zmp = mpc.output().desired_zmp;
+        assert!(
+            (zmp - expected).norm() < 2e-3,
+            "F {force}: CoP {zmp}, closed form {expected}"
+        );
+        let first: Vector3<f64> = mpc
+            .corner_forces(0)
+            .iter()
+            .flatten()
+            .flat_map(|(_, f)| f.iter())
+            .sum();
+        assert!(
+            (first.xy() + force.xy()).norm() < 0.03 * force.norm(),
+            "F {force}: feet {first}"
+        );
+        assert!((first.z - MASS * G).abs() < 1e-3 * MASS * G, "{first}");
+    }
+}
+
+#[test]
+fn a_constant_external_force_moves_the_next_touch_down_along_it() {
+    // The push estimate held over the horizon: the stance CoP must end F h / (m g) along F from the
+    // CoM (the standing closed form above); the sole takes part of it (±6 cm lengthwise, ±3 cm across)
+    // and the next touch-down the rest, so the step moves along F by a part of that shift. Inward
+    // (+y for the right foot) the box has no room (`outward` ≥ 0).
+    let config = CentroidalMpcConfig {
+        push_estimate: true,
+        ..CentroidalMpcConfig::default()
+    };
+    let touch_down = |force: Vector3<f64>| {
+        let mut input = walking(&config, Vector3::zeros());
+        input.external_force = force;
+        solve(&config, &input, 10)
+            .output()
+            .next_adjusted()
+            .unwrap()
+            .position
+    };
+    let base = touch_down(Vector3::zeros());
+    let mut moves = Vec::new();
+    for force in [
+        Vector3::new(40.0, 0.0, 0.0),
+        Vector3::new(-40.0, 0.0, 0.0),
+        Vector3::new(0.0, -40.0, 0.0),
+        Vector3::new(20.0, 0.0, 0.0),
+    ] {
+        let shift = force.norm() * HEIGHT / (MASS * G);
+        let moved = (touch_down(force) - base).dot(&force.normalize());
+        assert!(
+            moved > 0.25 * shift && moved < 0.10 * 2f64.sqrt() + 1e-9,
+            "F {force}: moved {moved} m along it, closed-form CoP shift {shift} m"
+        );
+        moves.push(moved);
+    }
+    // twice the force, a larger move
+    assert!(moves[0] > moves[3] + 5e-3, "{moves:?}");
 }
