@@ -207,6 +207,66 @@ impl KinDyn {
         Ok(())
     }
 
+    /// [`Self::set_state`], taking the kinematics from `source` when it is at the same state: the same model
+    /// (the same `Arc`), the same representation and every number of `state` bit for bit (its state, set
+    /// by [`Self::set_state`]). The forward pass is then a copy of `source`'s per-body poses, velocities and
+    /// bias accelerations, which is what the pass would compute (it is a function of these alone); otherwise
+    /// it runs. A plant that keeps the kinematics of its true state saves the runner a pass per tick.
+    pub fn set_state_from(
+        &mut self,
+        state: &RobotState,
+        source: &KinDyn,
+    ) -> Result<(), ModelError> {
+        if !(Arc::ptr_eq(&self.model, &source.model)
+            && self.repr == source.repr
+            && source.holds_state(state))
+        {
+            return self.set_state(state);
+        }
+        state.validate(&self.model)?;
+        self.base_pose = state.base_pose;
+        self.q.copy_from(&state.joint_positions);
+        self.qd.copy_from(&state.joint_velocities);
+        self.base_velocity = state.base_velocity;
+        self.base_rot = source.base_rot;
+        self.base_pos = source.base_pos;
+        self.rot.copy_from_slice(&source.rot);
+        self.pos.copy_from_slice(&source.pos);
+        self.s.copy_from_slice(&source.s);
+        self.vel.copy_from_slice(&source.vel);
+        self.c.copy_from_slice(&source.c);
+        self.bias.copy_from_slice(&source.bias);
+        self.local_rot.copy_from_slice(&source.local_rot);
+        self.local_rot_q.copy_from_slice(&source.local_rot_q);
+        self.inertia_ready = false;
+        self.sensor_pass_ready = false;
+        Ok(())
+    }
+
+    /// Whether this workspace's state is `state`, every number bit for bit.
+    fn holds_state(&self, state: &RobotState) -> bool {
+        let (pose, other) = (&self.base_pose, &state.base_pose);
+        let pairs: [(&[f64], &[f64]); 5] = [
+            (
+                pose.translation.vector.as_slice(),
+                other.translation.vector.as_slice(),
+            ),
+            (
+                pose.rotation.coords.as_slice(),
+                other.rotation.coords.as_slice(),
+            ),
+            (
+                self.base_velocity.as_slice(),
+                state.base_velocity.as_slice(),
+            ),
+            (self.q.as_slice(), state.joint_positions.as_slice()),
+            (self.qd.as_slice(), state.joint_velocities.as_slice()),
+        ];
+        pairs.iter().all(|(a, b)| {
+            a.len() == b.len() && a.iter().zip(*b).all(|(x, y)| x.to_bits() == y.to_bits())
+        })
+    }
+
     /// Copies the current state (base velocity in the current representation) into `state` (no allocation
     /// when `state` already has the model's sizes).
     pub fn state_into(&self, state: &mut RobotState) {
@@ -251,35 +311,55 @@ impl KinDyn {
         };
         self.inertia_ready = false;
         self.sensor_pass_ready = false;
-        for i in 1..m.body_count() {
-            let p = m.parent[i];
+        // The per-body vectors as slices of the body count, held in locals: the loop reads no `Vec` header
+        // back after a store and checks only the parent's index (the same arithmetic, bit for bit).
+        let nb = m.body_count();
+        let (rot, pos, s, vel) = (
+            &mut self.rot[..nb],
+            &mut self.pos[..nb],
+            &mut self.s[..nb],
+            &mut self.vel[..nb],
+        );
+        let (c, bias) = (&mut self.c[..nb], &mut self.bias[..nb]);
+        let (local_rot, local_rot_q) = (&mut self.local_rot[..nb], &mut self.local_rot_q[..nb]);
+        let (parent, prismatic) = (&m.parent[..nb], &m.prismatic[..nb]);
+        let (placement_pos, axis_in_parent) = (&m.placement_pos[..nb], &m.axis_in_parent[..nb]);
+        let (placement_rot, placement_k, placement_k2) = (
+            &m.placement_rot[..nb],
+            &m.placement_k[..nb],
+            &m.placement_k2[..nb],
+        );
+        let (q_all, qd_all) = (self.q.as_slice(), self.qd.as_slice());
+        let (q_all, qd_all) = (&q_all[..nb - 1], &qd_all[..nb - 1]);
+        for i in 1..nb {
+            let p = parent[i];
             let j = i - 1;
-            let rp = self.rot[p];
-            let pj = self.pos[p] + rp * m.placement_pos[i];
+            let rp = rot[p];
+            let pj = pos[p] + rp * placement_pos[i];
             // Joint axis in world orientation (invariant under the joint's own rotation).
-            let axis_w = rp * m.axis_in_parent[i];
-            let q = self.q[j];
-            if m.prismatic[i] {
-                self.rot[i] = rp * m.placement_rot[i];
-                self.pos[i] = pj + axis_w * q;
-                self.s[i] = join(&axis_w, &Vector3::zeros());
+            let axis_w = rp * axis_in_parent[i];
+            let q = q_all[j];
+            if prismatic[i] {
+                rot[i] = rp * placement_rot[i];
+                pos[i] = pj + axis_w * q;
+                s[i] = join(&axis_w, &Vector3::zeros());
             } else {
-                if q.to_bits() != self.local_rot_q[i].to_bits() {
+                if q.to_bits() != local_rot_q[i].to_bits() {
                     // placement · R(axis, q) = P + sin q · P K + (1 − cos q) · P K²  (Rodrigues).
                     let (sin, cos) = q.sin_cos();
-                    self.local_rot[i] = m.placement_rot[i]
-                        + m.placement_k[i] * sin
-                        + m.placement_k2[i] * (1.0 - cos);
-                    self.local_rot_q[i] = q;
+                    local_rot[i] =
+                        placement_rot[i] + placement_k[i] * sin + placement_k2[i] * (1.0 - cos);
+                    local_rot_q[i] = q;
                 }
-                self.rot[i] = rp * self.local_rot[i];
-                self.pos[i] = pj;
-                self.s[i] = join(&pj.cross(&axis_w), &axis_w);
+                rot[i] = rp * local_rot[i];
+                pos[i] = pj;
+                s[i] = join(&pj.cross(&axis_w), &axis_w);
             }
-            let qd = self.qd[j];
-            self.vel[i] = self.vel[p] + self.s[i] * qd;
-            self.c[i] = cross_motion(&self.vel[p], &self.s[i]) * qd;
-            self.bias[i] = self.bias[p] + self.c[i];
+            let qd = qd_all[j];
+            let vp = vel[p];
+            vel[i] = vp + s[i] * qd;
+            c[i] = cross_motion(&vp, &s[i]) * qd;
+            bias[i] = bias[p] + c[i];
         }
     }
 
@@ -309,8 +389,18 @@ impl KinDyn {
     /// Computes the world inertias of all bodies once per state (lazily: kinematics-only users skip it).
     fn ensure_inertias(&mut self) {
         if !self.inertia_ready {
-            for i in 0..self.model.body_count() {
-                self.inertia[i] = self.compute_inertia(i);
+            // [`Self::compute_inertia`] of every body, over zipped slices (no index checks).
+            let m = &*self.model;
+            let nb = m.body_count();
+            let bodies = m.inertia[..nb]
+                .iter()
+                .zip(&m.body_com[..nb])
+                .zip(&m.body_inertia_com[..nb]);
+            let poses = self.rot[..nb].iter().zip(&self.pos[..nb]);
+            for (out, (((inertia, com), i_com), (r, p))) in
+                self.inertia[..nb].iter_mut().zip(bodies.zip(poses))
+            {
+                *out = Inertia::from_body_com(inertia.m, com, i_com, r, p);
             }
             self.inertia_ready = true;
         }
@@ -816,8 +906,10 @@ impl KinDyn {
         let g6 = self.world_gravity6();
         if velocity {
             self.proper_accelerations(nu_dot);
-            for i in 0..nb {
-                self.force[i] = self.net_body_force(i);
+            let motions = self.vel[..nb].iter().zip(&self.acc[..nb]);
+            let bodies = self.inertia[..nb].iter().zip(motions).zip(&self.ext[..nb]);
+            for (f, ((inertia, (v, a)), ext)) in self.force[..nb].iter_mut().zip(bodies) {
+                *f = net_force(inertia, v, a, ext);
             }
         } else {
             for i in 0..nb {
@@ -836,8 +928,7 @@ impl KinDyn {
     /// [`Self::ensure_inertias`]) [Traversaro 2017, eq. 4.17].
     #[inline]
     fn net_body_force(&self, i: usize) -> Vector6<f64> {
-        let iv = self.inertia[i].mul_motion(&self.vel[i]);
-        self.inertia[i].mul_motion(&self.acc[i]) + cross_force(&self.vel[i], &iv) - self.ext[i]
+        net_force(&self.inertia[i], &self.vel[i], &self.acc[i], &self.ext[i])
     }
 
     /// [`Self::rnea_forces`] (with velocities) for the bodies of the sensors' child-side subtrees only: the
@@ -874,13 +965,20 @@ impl KinDyn {
         };
         self.acc[0] = base_acc + self.bias[0] - self.world_gravity6();
         let m = &*self.model;
-        for i in 1..m.body_count() {
-            let p = m.parent[i];
-            let mut a = self.acc[p] + self.c[i];
+        let nb = m.body_count();
+        let (acc, c, s, parent) = (
+            &mut self.acc[..nb],
+            &self.c[..nb],
+            &self.s[..nb],
+            &m.parent[..nb],
+        );
+        let nu_dot = nu_dot.map(|nd| &nd.as_slice()[..nb + 5]);
+        for i in 1..nb {
+            let mut a = acc[parent[i]] + c[i];
             if let Some(nd) = nu_dot {
-                a += self.s[i] * nd[5 + i];
+                a += s[i] * nd[5 + i];
             }
-            self.acc[i] = a;
+            acc[i] = a;
         }
     }
 
@@ -964,6 +1062,19 @@ impl KinDyn {
         }
         Ok(())
     }
+}
+
+/// `I a + v ×̄* I v − f^x` of a body with world inertia `I`, velocity `v`, proper acceleration `a` and
+/// external wrench `f^x` [Traversaro 2017, eq. 4.17].
+#[inline]
+fn net_force(
+    inertia: &Inertia,
+    v: &Vector6<f64>,
+    a: &Vector6<f64>,
+    ext: &Vector6<f64>,
+) -> Vector6<f64> {
+    let iv = inertia.mul_motion(v);
+    inertia.mul_motion(a) + cross_force(v, &iv) - ext
 }
 
 /// Per body: whether it lies on the child side of a force/torque sensor below the sensor's host body (a

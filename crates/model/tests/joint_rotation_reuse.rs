@@ -110,3 +110,94 @@ fn com_velocity_is_the_linear_momentum_over_the_mass() {
         }
     }
 }
+
+/// `fingerprint` with every frame's velocity and bias acceleration and the bias forces (the velocity
+/// products of the forward pass).
+fn full_fingerprint(kd: &mut KinDyn, model: &Model) -> Vec<u64> {
+    let mut bits = fingerprint(kd, model);
+    for f in 0..model.frames().len() {
+        let id = model
+            .frame_id(&model.frames()[f].name)
+            .expect("a frame's own name");
+        bits.extend(kd.frame_velocity(id).iter().map(|v| v.to_bits()));
+        bits.extend(kd.frame_bias_acceleration(id).iter().map(|v| v.to_bits()));
+    }
+    let mut h = nalgebra::DVector::zeros(model.nv());
+    kd.bias_forces(&mut h).unwrap();
+    bits.extend(h.iter().map(|v| v.to_bits()));
+    bits
+}
+
+/// `KinDyn::set_state_from` copies the source's kinematics only when the source is at the same state of the
+/// same model in the same representation; in every case the workspace then computes bit for bit what
+/// `set_state` gives, and an invalid state is the same error.
+#[test]
+fn set_state_from_gives_what_set_state_gives() {
+    use stride_model::VelocityRepresentation as Repr;
+    for model in models() {
+        let copy_of_model = Arc::new((*model).clone());
+        for seed in 0..4 {
+            let state = common::random_state(&model, seed);
+            let other = common::random_state(&model, seed + 10);
+            let mut zero_signs = state.clone();
+            for v in zero_signs.joint_velocities.iter_mut().step_by(2) {
+                *v = 0.0;
+            }
+            let mut negative_zeros = zero_signs.clone();
+            for v in negative_zeros.joint_velocities.iter_mut().step_by(2) {
+                *v = -0.0;
+            }
+            let cases = [
+                (Arc::clone(&model), Repr::Mixed, &state, "the same state"),
+                (Arc::clone(&model), Repr::Mixed, &other, "another state"),
+                (
+                    Arc::clone(&model),
+                    Repr::Body,
+                    &state,
+                    "another representation",
+                ),
+                (
+                    Arc::clone(&copy_of_model),
+                    Repr::Mixed,
+                    &state,
+                    "an equal model",
+                ),
+                (
+                    Arc::clone(&model),
+                    Repr::Mixed,
+                    &negative_zeros,
+                    "zeros of the other sign",
+                ),
+            ];
+            for (source_model, repr, source_state, case) in cases {
+                let target_state = if case == "zeros of the other sign" {
+                    &zero_signs
+                } else {
+                    &state
+                };
+                let mut source = KinDyn::new(source_model);
+                source.set_representation(repr);
+                source.set_state(source_state).unwrap();
+                let mut kd = KinDyn::new(Arc::clone(&model));
+                kd.set_state(&other).unwrap();
+                kd.set_state_from(target_state, &source).unwrap();
+                let mut fresh = KinDyn::new(Arc::clone(&model));
+                fresh.set_state(target_state).unwrap();
+                assert_eq!(
+                    full_fingerprint(&mut kd, &model),
+                    full_fingerprint(&mut fresh, &model),
+                    "seed {seed}: {case}"
+                );
+            }
+            let mut source = KinDyn::new(Arc::clone(&model));
+            source.set_state(&state).unwrap();
+            let mut bad = state.clone();
+            bad.joint_positions[0] = f64::NAN;
+            let mut kd = KinDyn::new(Arc::clone(&model));
+            assert_eq!(
+                kd.set_state_from(&bad, &source).unwrap_err().to_string(),
+                kd.set_state(&bad).unwrap_err().to_string()
+            );
+        }
+    }
+}

@@ -144,6 +144,11 @@ pub trait Robot {
     /// Advances one period (simulation step; a real robot would wait for the next sample) and refreshes
     /// the measurement.
     fn advance(&mut self) -> Result<(), RobotError>;
+    /// The kinematics of the measurement's true state, if the plant keeps them for the runner's model
+    /// (the runner copies them instead of running the forward pass again: [`KinDyn::set_state_from`]).
+    fn kinematics(&self) -> Option<&KinDyn> {
+        None
+    }
 }
 
 /// The ideal kinematic plant (the first bring-up step of docs/architecture.md): commanded joint positions are applied exactly and the

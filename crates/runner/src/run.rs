@@ -251,7 +251,7 @@ impl<'a> Loop<'a> {
         options: &RunOptions,
     ) -> Result<Self, RunError> {
         stack.sense(robot.measurement())?;
-        stack.measure(robot.measurement())?;
+        stack.measure(robot.measurement(), robot.kinematics())?;
         let tracker = Tracker::new(
             scenario,
             robot.as_ref(),
@@ -334,7 +334,8 @@ impl<'a> Loop<'a> {
             }
         }
         if run_simplified || run_wbc || run_planner || log_state {
-            self.stack.measure(self.robot.measurement())?;
+            self.stack
+                .measure(self.robot.measurement(), self.robot.kinematics())?;
         }
         if run_simplified || run_wbc {
             self.stack.filter_measured_zmp(t);
@@ -519,7 +520,9 @@ impl<'a> Loop<'a> {
         let wall = self.wall_start.elapsed().as_secs_f64();
         let t_end = (self.tracker.summary.simulated_time * 1e9).round() as u64;
         let detail = outcome.to_string();
-        let _ = self.stack.measure(self.robot.measurement());
+        let _ = self
+            .stack
+            .measure(self.robot.measurement(), self.robot.kinematics());
         let end = mid_pose(&self.stack.truth.soles);
         let goal = &self.scenario.config.goal;
         let mut summary = self.tracker.finish(&self.stack, goal, outcome, end, wall);

@@ -139,6 +139,9 @@ impl Robot for SimPlant {
         self.sim.step(&self.input)?;
         self.read_output()
     }
+    fn kinematics(&self) -> Option<&KinDyn> {
+        Some(self.sim.kinematics())
+    }
 }
 
 /// Copies a joint command sized for `dof` joints into a simulator input (positions, velocities, torques);

@@ -600,11 +600,13 @@ impl Stack {
     /// Measured CoM, ZMP, soles and tilt, twice: [`Stack::measured`] from the estimate (what the layers
     /// use) and [`Stack::truth`] from the plant's truth (what the summary reports). First step of every tick
     /// that runs a layer or logs the state; it leaves the kinematics at the true state (for `/tf`). The DCM
-    /// needs the plan's ω: the simplified tick computes it.
-    pub fn measure(&mut self, m: &Measurement) -> Result<(), RunError> {
+    /// needs the plan's ω: the simplified tick computes it. `plant`: the plant's kinematics of its true
+    /// state if it keeps them ([`crate::robot::Robot::kinematics`]), copied instead of recomputed.
+    pub fn measure(&mut self, m: &Measurement, plant: Option<&KinDyn>) -> Result<(), RunError> {
         let weight = self.model.total_mass() * self.gravity;
         let e = &self.estimate;
         let frames = &self.frames;
+        self.kd_estimate.set_state(&e.state)?;
         let measured = measure_state(
             &mut self.kd_estimate,
             frames,
@@ -612,12 +614,16 @@ impl Stack {
             &e.state,
             &e.foot_wrenches,
             e.contacts,
-        )?;
+        );
         self.measured = Measured {
             dcm: self.measured.dcm,
             ..measured
         };
         let t = &m.truth;
+        match plant {
+            Some(source) => self.kd.set_state_from(&t.state, source)?,
+            None => self.kd.set_state(&t.state)?,
+        }
         let truth = measure_state(
             &mut self.kd,
             frames,
@@ -625,7 +631,7 @@ impl Stack {
             &t.state,
             &t.foot_wrenches,
             t.feet_in_contact,
-        )?;
+        );
         self.truth = Measured {
             dcm: self.truth.dcm,
             ..truth
@@ -1123,7 +1129,7 @@ struct MeasureFrames {
 }
 
 /// CoM, ZMP (the walking stack's rule, [`stride_walking::feet_zmp`], the CoM's ground projection when it has none),
-/// soles and tilt of `state`; the DCM is left at zero (it needs the plan's ω).
+/// soles and tilt of `state`, `kd` being at `state`; the DCM is left at zero (it needs the plan's ω).
 fn measure_state(
     kd: &mut KinDyn,
     frames: &MeasureFrames,
@@ -1131,8 +1137,7 @@ fn measure_state(
     state: &RobotState,
     foot_wrenches: &[Vector6<f64>; 2],
     contacts: [bool; 2],
-) -> Result<Measured, RunError> {
-    kd.set_state(state)?;
+) -> Measured {
     let com = kd.com_position();
     let soles = [
         kd.frame_pose(frames.soles[0]),
@@ -1144,7 +1149,7 @@ fn measure_state(
     };
     let torso = kd.frame_pose(frames.torso);
     let up = torso.rotation * frames.torso_up;
-    Ok(Measured {
+    Measured {
         com,
         com_velocity: kd.com_velocity(),
         dcm: Vector2::zeros(),
@@ -1154,5 +1159,5 @@ fn measure_state(
         tilt: up.z.clamp(-1.0, 1.0).acos(),
         torso_up: up,
         base_height: state.base_pose.translation.z,
-    })
+    }
 }

@@ -290,6 +290,12 @@ impl SimRobot {
         &self.state
     }
 
+    /// The dynamics workspace, at the current state after a step or a state change (the kinematics of
+    /// [`Self::state`]; its dynamics caches are those of the last step's solve).
+    pub fn kinematics(&self) -> &KinDyn {
+        &self.kd
+    }
+
     /// The last output (after the last step or state change).
     pub fn output(&self) -> &SimOutput {
         &self.output
