@@ -140,12 +140,7 @@ pub fn box_on_patches_config(grid: [usize; 2]) -> SimConfig {
     let mut config = box_sim_config(grid);
     config.ground.patches = PATCHES
         .iter()
-        .map(|&(x_min, x_max, k, b)| GroundPatchConfig {
-            x_min,
-            x_max,
-            normal_stiffness: k,
-            normal_damping: b,
-        })
+        .map(|&(x_min, x_max, k, b)| GroundPatchConfig::normal(x_min, x_max, k, b))
         .collect();
     config
 }
