@@ -348,12 +348,7 @@ mod tests {
             .sim
             .ground
             .patches
-            .push(stride_sim::GroundPatchConfig {
-                x_min: 1.0,
-                x_max: 2.0,
-                normal_stiffness: 1e6,
-                normal_damping: 1e4,
-            });
+            .push(stride_sim::GroundPatchConfig::normal(1.0, 2.0, 1e6, 1e4));
         let (key, _) = unsupported_by_mujoco(&with_patch).expect("refused");
         assert_eq!(key, "sim.ground.patches");
         let on_a_pole = scenario("identify_ft_legs.toml");

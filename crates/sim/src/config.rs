@@ -152,7 +152,7 @@ pub enum IntegratorKind {
 /// |---|---|---|---|
 /// | `height` | m | 0 | height of the plane at the world origin |
 /// | `inclination` | rad | `[0, 0]` | `[roll, pitch]` of the plane; a positive pitch makes the ground descend along +x |
-/// | `patches` | – | none | [`GroundPatchConfig`] list: strips of ground with their own normal stiffness and damping |
+/// | `patches` | – | none | [`GroundPatchConfig`] list: strips of ground with their own normal (and optionally tangential) stiffness and damping |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GroundConfig {
@@ -161,7 +161,8 @@ pub struct GroundConfig {
     /// `[roll, pitch]` of the plane, rad.
     pub inclination: [f64; 2],
     /// Strips `x_min ≤ x < x_max` (world) whose normal stiffness and damping densities replace
-    /// [`ContactConfig::normal_stiffness`] and [`ContactConfig::normal_damping`] (they must not overlap).
+    /// [`ContactConfig::normal_stiffness`] and [`ContactConfig::normal_damping`], and their tangential ones,
+    /// when given, the [`ContactConfig`] tangential ones (they must not overlap).
     pub patches: Vec<GroundPatchConfig>,
 }
 
@@ -175,16 +176,18 @@ impl Default for GroundConfig {
     }
 }
 
-/// A strip of ground `x_min ≤ x < x_max` (world x of the contact point) with its own normal law: a contact
-/// point over the strip carries the densities below instead of the [`ContactConfig`] ones (the tangential
-/// law and the friction stay the [`ContactConfig`] ones). For ground whose compliance changes along the path
-/// (the anisotropic ground of [Romualdi 2022, §8.3.3]).
+/// A strip of ground `x_min ≤ x < x_max` (world x of the contact point) with its own law: a contact point
+/// over the strip carries the densities below instead of the [`ContactConfig`] ones (the tangential ones only
+/// when given; the friction stays the [`ContactConfig`] one). For ground whose compliance changes along the
+/// path (the anisotropic ground of [Romualdi 2022, §8.3.3]).
 ///
 /// | field | unit | default | meaning |
 /// |---|---|---|---|
 /// | `x_min`, `x_max` | m | – (required) | extent along world x, `x_min < x_max` |
 /// | `normal_stiffness` | N/m³ | – (required) | `k` over the strip (> 0) |
 /// | `normal_damping` | N·s/m³ | – (required) | `b` over the strip (≥ 0) |
+/// | `tangential_stiffness` | N/m³ | [`ContactConfig::tangential_stiffness`] | stick-spring stiffness density over the strip (> 0: the slip law divides by it) |
+/// | `tangential_damping` | N·s/m³ | [`ContactConfig::tangential_damping`] | stick-spring damping density over the strip (≥ 0) |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GroundPatchConfig {
@@ -196,6 +199,27 @@ pub struct GroundPatchConfig {
     pub normal_stiffness: f64,
     /// Normal damping density `b`, N·s/m³.
     pub normal_damping: f64,
+    /// Tangential (stick) stiffness density, N/m³ (`None`: the [`ContactConfig`] one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tangential_stiffness: Option<f64>,
+    /// Tangential (stick) damping density, N·s/m³ (`None`: the [`ContactConfig`] one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tangential_damping: Option<f64>,
+}
+
+impl GroundPatchConfig {
+    /// The strip `x_min ≤ x < x_max` with normal densities `normal_stiffness`, `normal_damping` and the
+    /// floor's tangential ones.
+    pub fn normal(x_min: f64, x_max: f64, normal_stiffness: f64, normal_damping: f64) -> Self {
+        Self {
+            x_min,
+            x_max,
+            normal_stiffness,
+            normal_damping,
+            tangential_stiffness: None,
+            tangential_damping: None,
+        }
+    }
 }
 
 /// The compliant contact law and the surfaces of the robot that touch the ground.
@@ -924,8 +948,8 @@ impl SimConfig {
         Ok(())
     }
 
-    /// The ground patches: finite extents with `x_min < x_max`, positive stiffness, non-negative damping, no
-    /// two overlapping.
+    /// The ground patches: finite extents with `x_min < x_max`, positive stiffnesses, non-negative dampings
+    /// (normal, and tangential when given), no two overlapping.
     fn validate_patches(&self) -> Result<(), SimError> {
         let patches = &self.ground.patches;
         for (i, p) in patches.iter().enumerate() {
@@ -945,6 +969,20 @@ impl SimConfig {
                 &format!("{name}.normal_damping"),
                 "must be ≥ 0",
             )?;
+            if let Some(k) = p.tangential_stiffness {
+                check(
+                    k.is_finite() && k > 0.0,
+                    &format!("{name}.tangential_stiffness"),
+                    "must be > 0",
+                )?;
+            }
+            if let Some(b) = p.tangential_damping {
+                check(
+                    finite_nonneg(b),
+                    &format!("{name}.tangential_damping"),
+                    "must be ≥ 0",
+                )?;
+            }
             for (j, q) in patches.iter().enumerate().take(i) {
                 check(
                     p.x_max <= q.x_min || q.x_max <= p.x_min,

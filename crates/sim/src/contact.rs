@@ -12,7 +12,7 @@ use stride_model::{FrameId, Model};
 use crate::config::{ContactConfig, ContactSurfaceConfig, GroundConfig};
 use crate::error::{find_frame, SimError};
 use crate::linalg::{ang, join, lin, TreeCholesky, TreeMatrix};
-use crate::patches::NormalDensities;
+use crate::patches::{NormalDensities, TangentialDensities};
 
 /// The ground: the plane through `origin` with unit `normal` (pointing out of the ground).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -400,10 +400,16 @@ impl Point {
         self.penetration = -ground.height_of(&self.position);
     }
 
-    /// The normal law from the ground's densities where the point is: `k_n = k A`, `b_n = b A` (`A` its area).
-    pub(crate) fn set_normal_densities(&mut self, densities: NormalDensities) {
-        self.law.normal_stiffness = densities.stiffness * self.area;
-        self.law.normal_damping = densities.damping * self.area;
+    /// The law from the ground's densities where the point is: `k_n = k A`, `b_n = b A`, and the tangential
+    /// `k_t A`, `b_t A` (`A` its area).
+    pub(crate) fn set_densities(
+        &mut self,
+        (normal, tangential): (NormalDensities, TangentialDensities),
+    ) {
+        self.law.normal_stiffness = normal.stiffness * self.area;
+        self.law.normal_damping = normal.damping * self.area;
+        self.law.tangential_stiffness = tangential.stiffness * self.area;
+        self.law.tangential_damping = tangential.damping * self.area;
     }
 
     /// After the state was replaced: a penetrating point keeps its anchor (or sticks where it is), the others

@@ -51,7 +51,7 @@ pub use io::{ContactPointState, ImuMeasurement, SimInput, SimOutput, SurfaceMeas
 pub use linalg::{cholesky_in_place, cholesky_solve_in_place, TreeCholesky, TreeMatrix};
 pub use noise::GaussianNoise;
 pub use passive::PassiveJointConfig;
-pub use patches::{GroundCompliance, NormalDensities};
+pub use patches::{GroundCompliance, NormalDensities, TangentialDensities};
 pub use robot::SimRobot;
 /// The sensor models of [`SimRobot`] for another plant (stride-mujoco): fill a [`SensorTruth`] each step and
 /// [`SensorModels::record`] returns the delayed [`SensorReading`].

@@ -1,5 +1,5 @@
-//! The ground's normal compliance along the path: the densities of the [`GroundPatchConfig`] strips over the
-//! default ones of [`ContactConfig`].
+//! The ground's compliance along the path: the normal and tangential densities of the [`GroundPatchConfig`]
+//! strips over the default ones of [`ContactConfig`].
 
 use crate::config::{ContactConfig, GroundConfig, GroundPatchConfig};
 
@@ -12,11 +12,21 @@ pub struct NormalDensities {
     pub damping: f64,
 }
 
-/// Where on the ground which normal densities hold: the validated patches (non-overlapping strips along
-/// world x) and the default elsewhere.
+/// Tangential (stick-spring) stiffness and damping densities of the ground at a place.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TangentialDensities {
+    /// Stiffness density, N/m³.
+    pub stiffness: f64,
+    /// Damping density, N·s/m³.
+    pub damping: f64,
+}
+
+/// Where on the ground which densities hold: the validated patches (non-overlapping strips along world x)
+/// and the default elsewhere.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GroundCompliance {
     default: NormalDensities,
+    default_tangential: TangentialDensities,
     patches: Vec<GroundPatchConfig>,
 }
 
@@ -28,19 +38,45 @@ impl GroundCompliance {
                 stiffness: contact.normal_stiffness,
                 damping: contact.normal_damping,
             },
+            default_tangential: TangentialDensities {
+                stiffness: contact.tangential_stiffness,
+                damping: contact.tangential_damping,
+            },
             patches: ground.patches.clone(),
         }
     }
 
-    /// The densities at world abscissa `x` (m): those of the patch with `x_min ≤ x < x_max`, else the default.
+    /// The patch with `x_min ≤ x < x_max`, if any.
+    fn patch_at(&self, x: f64) -> Option<&GroundPatchConfig> {
+        self.patches.iter().find(|p| p.x_min <= x && x < p.x_max)
+    }
+
+    /// The normal densities at world abscissa `x` (m): those of the patch with `x_min ≤ x < x_max`, else the
+    /// default.
     pub fn at(&self, x: f64) -> NormalDensities {
-        self.patches
-            .iter()
-            .find(|p| p.x_min <= x && x < p.x_max)
-            .map_or(self.default, |p| NormalDensities {
-                stiffness: p.normal_stiffness,
-                damping: p.normal_damping,
-            })
+        self.densities_at(x).0
+    }
+
+    /// The normal and tangential densities at world abscissa `x` (m): those of the patch with
+    /// `x_min ≤ x < x_max` (its tangential ones when given, else the default tangential ones), else the
+    /// defaults.
+    pub fn densities_at(&self, x: f64) -> (NormalDensities, TangentialDensities) {
+        let Some(p) = self.patch_at(x) else {
+            return (self.default, self.default_tangential);
+        };
+        let normal = NormalDensities {
+            stiffness: p.normal_stiffness,
+            damping: p.normal_damping,
+        };
+        let tangential = TangentialDensities {
+            stiffness: p
+                .tangential_stiffness
+                .unwrap_or(self.default_tangential.stiffness),
+            damping: p
+                .tangential_damping
+                .unwrap_or(self.default_tangential.damping),
+        };
+        (normal, tangential)
     }
 }
 
@@ -56,6 +92,8 @@ mod tests {
                 x_max: 1.0,
                 normal_stiffness: 8e5,
                 normal_damping: 1e3,
+                tangential_stiffness: None,
+                tangential_damping: Some(2e3),
             }],
             ..GroundConfig::default()
         };
@@ -73,5 +111,16 @@ mod tests {
         assert_eq!(c.at(0.99), soft);
         assert_eq!(c.at(1.0), default);
         assert_eq!(c.at(0.4999), default);
+        let default_tangential = TangentialDensities {
+            stiffness: contact.tangential_stiffness,
+            damping: contact.tangential_damping,
+        };
+        // The patch's tangential damping, the floor's tangential stiffness (not given on the patch).
+        let patch_tangential = TangentialDensities {
+            stiffness: contact.tangential_stiffness,
+            damping: 2e3,
+        };
+        assert_eq!(c.densities_at(0.7), (soft, patch_tangential));
+        assert_eq!(c.densities_at(1.0), (default, default_tangential));
     }
 }

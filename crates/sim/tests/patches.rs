@@ -1,5 +1,5 @@
-//! Ground patches: the contact force under a sole on each patch follows that patch's law, a sole across a
-//! border sums the two laws point by point, a box resting on a patch sinks by that patch's static sink, and
+//! Ground patches: the contact force under a sole on each patch follows that patch's law (normal, and
+//! tangential when the patch gives it), a sole across a border sums the two laws point by point, a box resting on a patch sinks by that patch's static sink, and
 //! invalid patches are refused.
 
 mod common;
@@ -22,12 +22,7 @@ fn three_patches() -> Vec<GroundPatchConfig> {
         (2.0, 3.0, 1e6, 1e4),
     ]
     .into_iter()
-    .map(|(x_min, x_max, k, b)| GroundPatchConfig {
-        x_min,
-        x_max,
-        normal_stiffness: k,
-        normal_damping: b,
-    })
+    .map(|(x_min, x_max, k, b)| GroundPatchConfig::normal(x_min, x_max, k, b))
     .collect()
 }
 
@@ -68,6 +63,57 @@ fn the_normal_force_on_each_patch_follows_that_patch_law() {
             f[2]
         );
         assert!(f.fixed_rows::<3>(3).norm() < 1e-9 * expected, "x {x}: {f}");
+    }
+}
+
+/// The sole's wrenches over 40 steps (20 ms) of the box sunk 4 mm at `x` and sliding along +x at 1 cm/s.
+fn sliding_wrenches(config: SimConfig, x: f64) -> Vec<Vector6<f64>> {
+    let model = common::box_model(1.0, L, W, LZ);
+    let mut sim = SimRobot::new(Arc::clone(&model), config, common::PERIOD).unwrap();
+    let mut state = RobotState::zero(&model);
+    state.base_pose.translation.vector = Vector3::new(x, 0.0, LZ / 2.0 - 0.004);
+    state.base_velocity[0] = 0.01;
+    sim.set_state(&state).unwrap();
+    let input = SimInput::zeros(0);
+    let mut wrenches = vec![sim.output().surfaces[0].wrench];
+    for _ in 0..40 {
+        sim.step(&input).unwrap();
+        wrenches.push(sim.output().surfaces[0].wrench);
+    }
+    wrenches
+}
+
+#[test]
+fn the_tangential_law_on_a_patch_is_its_own_and_the_floor_s_off_it() {
+    // Patch 2 (x in [1, 2)) with its tangential densities equal to its normal ones; the others without.
+    let (kt, bt) = (8e5, 1e3);
+    let mut patched = patched_config([5, 5]);
+    patched.ground.patches[1].tangential_stiffness = Some(kt);
+    patched.ground.patches[1].tangential_damping = Some(bt);
+    // At rest sunk on patch 2 and sliding at 1 cm/s: every point's stick spring is anchored where it is, so
+    // the force is the damping's `−b_t v` per area, the patch's `b_t`, not the floor's.
+    let first = sliding_wrenches(patched.clone(), 1.5)[0];
+    let expected = -L * W * bt * 0.01;
+    assert!(
+        (first[0] - expected).abs() < 1e-9 * expected.abs(),
+        "fx {} vs {expected}",
+        first[0]
+    );
+    // Through the steps (stiffness and damping, sticking and slipping): on patch 2 the same, bit for bit, as
+    // a floor whose own tangential densities are the patch's; off it (patches 1 and 3 and the default
+    // ground) the same as without the patch's tangential keys.
+    let mut floor_like_patch = patched_config([5, 5]);
+    floor_like_patch.contact.tangential_stiffness = kt;
+    floor_like_patch.contact.tangential_damping = bt;
+    let on_patch = sliding_wrenches(patched.clone(), 1.5);
+    assert_eq!(on_patch, sliding_wrenches(floor_like_patch, 1.5));
+    assert_ne!(on_patch, sliding_wrenches(patched_config([5, 5]), 1.5));
+    for x in [-0.5, 0.5, 2.5] {
+        assert_eq!(
+            sliding_wrenches(patched.clone(), x),
+            sliding_wrenches(patched_config([5, 5]), x),
+            "x {x}"
+        );
     }
 }
 
@@ -135,6 +181,15 @@ fn invalid_or_overlapping_patches_are_refused() {
     let mut damping = three_patches();
     damping[2].normal_damping = f64::NAN;
     cases.push((damping, "ground.patches[2].normal_damping"));
+    let mut slippery = three_patches();
+    slippery[1].tangential_stiffness = Some(0.0);
+    cases.push((slippery, "ground.patches[1].tangential_stiffness"));
+    let mut tangential_damping = three_patches();
+    tangential_damping[0].tangential_damping = Some(-1.0);
+    cases.push((tangential_damping, "ground.patches[0].tangential_damping"));
+    let mut infinite = three_patches();
+    infinite[0].tangential_damping = Some(f64::INFINITY);
+    cases.push((infinite, "ground.patches[0].tangential_damping"));
     for (patches, name) in cases {
         let mut config = common::box_config(L, W, [3, 3]);
         config.ground.patches = patches;

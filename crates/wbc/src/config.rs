@@ -706,6 +706,9 @@ pub enum ContactModel {
 /// | `estimator_contact_force` | N | 5 | with `estimate_ground`: a sole after its planned touch-down meets the ground when its measured normal force exceeds this; until then its rest pose follows it and its estimate is not fed, then the covariance is reset and the rest pose set there |
 /// | `estimator_rest_pose` | – | `"level"` | with `estimate_ground`: the zero-force pose of a sole where it meets the ground: `"level"` its pose rotated about its lowest corner until flat (the horizontal plane through that corner: flat ground); `"impact"` its pose there as it is (tilted as it landed), raised by the static sink of its force (see [`EstimatorRestPose`]) |
 /// | `estimator_rows` | – | `"all"` | with `estimate_ground`: the rows of the measured wrench (world axes) the estimate reads: `"all"` the six of [eq. 8.2.17]; `"normal"` those the ground's normal density makes on flat ground, the vertical force and the roll and pitch torques; `"vertical_force"` the vertical force alone (see [`EstimatorRows`]) |
+/// | `estimate_rest_height` | – | false | with `estimate_ground`: estimate a third parameter, the error `δ` of the rest (zero-force) height the regressor measures the sole's sink from, as `k δ` with the column `l w abs(e₃ᵀRe₃) e₃` (see [`crate::GroundRestEstimator`]), reset to zero at each touch-down; `k̂`, `b̂` then do not absorb the rest plane's error |
+/// | `estimator_rest_height_std` | m | 0.001 | with `estimate_rest_height`: the standard deviation of `δ`'s prior (zero) |
+/// | `estimator_open_loop` | – | false | with `estimate_ground`: run and log the estimate but give the contact models (and the runner's `plan_on_surface`) the configured `ground_stiffness`, `ground_damping` |
 /// | `estimator_reset` | – | true | with `estimate_ground`: reset a contact's estimate covariance at its touch-down [Colman 2006] (`false` only to show what the reset buys) |
 /// | `plan_on_surface` | – | false | the runner plans the footholds from the soles' zero-force poses (raised by their static sink `f_z / (k l w)`), so the swing feet land on the ground's surface, not as deep as the standing feet sank |
 /// | `held_acceleration` | – | false | the contact dynamics give the wrench rate averaged over one control period of a held acceleration: the acceleration gain of eq. 8.2.14 uses the damping `b + k·period/2` (see [`crate::soft_contact::WrenchRate::held_over`]) |
@@ -735,6 +738,14 @@ pub struct CompliantConfig {
     pub estimator_wrench_std: [f64; 2],
     /// With `estimate_ground`: reset a contact's estimate covariance at its touch-down [Colman 2006].
     pub estimator_reset: bool,
+    /// With `estimate_ground`: also estimate the rest height's error `δ` (as `k δ`, a third regressor
+    /// column), reset to zero at each touch-down ([`crate::GroundRestEstimator`]).
+    pub estimate_rest_height: bool,
+    /// With `estimate_rest_height`: standard deviation of the prior `δ = 0`, m (> 0).
+    pub estimator_rest_height_std: f64,
+    /// With `estimate_ground`: the estimate runs and is logged, the contact models keep the configured
+    /// ground (open loop).
+    pub estimator_open_loop: bool,
     /// With `estimate_ground`: the measured normal force (N) above which a sole that touched down in the
     /// plan is on the ground (its rest pose is set and its estimate fed from then on).
     pub estimator_contact_force: f64,
@@ -840,6 +851,9 @@ impl Default for CompliantConfig {
             estimate_ground: false,
             estimator_wrench_std: [2.0, 0.2],
             estimator_reset: true,
+            estimate_rest_height: false,
+            estimator_rest_height_std: 1e-3,
+            estimator_open_loop: false,
             estimator_contact_force: 5.0,
             estimator_rest_pose: EstimatorRestPose::Level,
             estimator_rows: EstimatorRows::All,

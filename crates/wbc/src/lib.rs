@@ -38,8 +38,8 @@ pub use error::WbcError;
 pub use ik::QpIk;
 pub use io::*;
 pub use soft_contact::{
-    EstimatorSettings, GroundEstimator, GroundParameters, SoleAcceleration, SoleGeometry,
-    SoleState, WrenchRate,
+    EstimatorSettings, GroundEstimator, GroundParameters, GroundRestEstimator, SoleAcceleration,
+    SoleGeometry, SoleState, WrenchRate,
 };
 pub use stride_block::Block;
 pub use stride_qp::QpStatus;

@@ -737,12 +737,14 @@ impl Tsid {
             .map(|e| e.grounds())
     }
 
-    /// With `compliant.estimate_ground`: the ground estimate of the contact whose flag is `flag` (e.g.
-    /// [`crate::walking::LEFT_FOOT`]); `None` otherwise.
+    /// With `compliant.estimate_ground`: the ground the contact model of the contact whose flag is `flag`
+    /// (e.g. [`crate::walking::LEFT_FOOT`]) uses, its estimate (the prior with
+    /// `compliant.estimator_open_loop`); `None` otherwise.
     pub fn ground_estimate_of(&self, flag: &str) -> Option<crate::soft_contact::GroundParameters> {
         let k = self.names.contact_index(flag)?;
         let c = self.contacts.iter().position(|c| c.flag == k)?;
-        self.ground_estimates()?.get(c).copied()
+        let estimates = self.compliant.as_ref()?.estimates.as_ref()?;
+        (c < estimates.grounds().len()).then(|| estimates.ground(c))
     }
 
     /// The last output.

@@ -103,12 +103,16 @@ fn soft_contact_model_and_ground_estimator_allocate_nothing() {
     use common::soft::{rigid_guess_settings, stance_sample, GROUND, SOLE};
     let state = stance_sample();
     let mut estimator = stride_wbc::GroundEstimator::new(&rigid_guess_settings()).unwrap();
+    let mut with_rest =
+        stride_wbc::GroundRestEstimator::new(&rigid_guess_settings(), 1e-3).unwrap();
     let (_, n) = ALLOC.allocations_during(|| {
         for _ in 0..20 {
             let wrench = SOLE.wrench(&state, &GROUND);
             let _ = SOLE.wrench_rate(&state, &GROUND);
             estimator.touch_down();
             assert!(estimator.update(&SOLE.regressor(&state), &wrench));
+            with_rest.touch_down();
+            assert!(with_rest.update(&SOLE.regressor_with_rest_height(&state), &wrench));
         }
     });
     assert_eq!(n, 0, "soft-contact model and estimator allocated {n} times");
@@ -153,8 +157,9 @@ fn tsid_flex_ticks_allocate_nothing() {
     assert_eq!(n, 0, "TSID-Flex ticks allocated {n} times");
 }
 
-/// TSID-Compliant (`contact_model = "compliant"`) ticks allocate nothing, with the measured wrenches
-/// changing every tick and a lift-off and touch-down of the right foot; with the held-period rate
+/// TSID-Compliant (`contact_model = "compliant"`, its ground estimated with the rest height) ticks
+/// allocate nothing, with the measured wrenches changing every tick and a lift-off and touch-down of the
+/// right foot; with the held-period rate
 /// (`held_acceleration`), a lift-off held while the sole still carries load (`lift_off_force`) and an
 /// angular momentum task whose reference is the legs' momentum (`reference_joints`) and the planned
 /// feet's (`reference_frames`); for each `wrench_source`.
@@ -178,6 +183,9 @@ fn compliant_ticks_allocate_nothing(source: stride_wbc::WrenchSource) {
     config.compliant.wrench_source = source;
     config.compliant.held_acceleration = true;
     config.compliant.lift_off_force = 20.0;
+    // The ground estimate per contact, with the rest height as its third parameter.
+    config.compliant.estimate_ground = true;
+    config.compliant.estimate_rest_height = true;
     config.tasks.push(stride_wbc::TaskConfig::AngularMomentum(
         stride_wbc::AngularMomentumTaskConfig {
             name: "angular_momentum".into(),
@@ -204,7 +212,9 @@ fn compliant_ticks_allocate_nothing(source: stride_wbc::WrenchSource) {
             for id in ids {
                 input.contact_mut(id).unwrap().measured_wrench[2] = 150.0 + k as f64;
             }
-            input.set_contact("right_foot", k < 20).unwrap();
+            input
+                .set_contact("right_foot", !(10..20).contains(&k))
+                .unwrap();
             assert!(!tsid.step(&input).unwrap().report.held);
         }
     });

@@ -10,38 +10,20 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use common::soft::{
-    at_rest, box_model, box_sim_config, rigid_guess_settings, sole_state, SOLE, SOLE_DROP,
+    at_rest, box_model, box_on_patches_config, estimator_sample, rigid_guess_settings, sole_state,
+    BOX_MASS, PATCHES, SOLE, SOLE_DROP,
 };
 use nalgebra::Vector3;
 use stride_model::{Model, RobotState};
-use stride_sim::{GaussianNoise, GroundPatchConfig, SimInput, SimRobot};
+use stride_sim::{GaussianNoise, SimRobot};
 use stride_wbc::{EstimatorSettings, GroundEstimator, GroundParameters};
 
-/// Half the bundled humanoid's mass, kg.
-const MASS: f64 = 16.0;
-/// The patches: `(x_min, x_max, k, b)`.
-const PATCHES: [(f64, f64, f64, f64); 3] = [
-    (0.0, 1.0, 2e6, 1e4),
-    (1.0, 2.0, 8e5, 1e3),
-    (2.0, 3.0, 1e6, 1e4),
-];
-/// Simulator steps per estimator update (2 kHz simulation, 500 Hz estimator as the whole-body controller).
-const DECIMATION: usize = 4;
 /// Force/torque measurement noise, N and N·m.
 const WRENCH_STD: [f64; 2] = [2.0, 0.2];
 
 /// The three-patch ground under an 11 × 11 grid on the sole (its torque moments are 2 % above Lemma 1's).
 fn anisotropic_sim(model: &Arc<Model>) -> SimRobot {
-    let mut config = box_sim_config([11, 11]);
-    config.ground.patches = PATCHES
-        .iter()
-        .map(|&(x_min, x_max, k, b)| GroundPatchConfig {
-            x_min,
-            x_max,
-            normal_stiffness: k,
-            normal_damping: b,
-        })
-        .collect();
+    let config = box_on_patches_config([11, 11]);
     SimRobot::new(Arc::clone(model), config, Duration::from_micros(500)).expect("box sim")
 }
 
@@ -49,8 +31,12 @@ fn anisotropic_sim(model: &Arc<Model>) -> SimRobot {
 /// centre at half its static sink, rocking at 0.3 rad/s; the covariance reset at touch-down when `reset`.
 fn run(reset: bool) -> Vec<Vec<(f64, GroundParameters)>> {
     let model = box_model(
-        MASS,
-        [MASS * 0.01 / 12.0, MASS * 0.01 / 12.0, MASS * 0.05 / 12.0],
+        BOX_MASS,
+        [
+            BOX_MASS * 0.01 / 12.0,
+            BOX_MASS * 0.01 / 12.0,
+            BOX_MASS * 0.05 / 12.0,
+        ],
     );
     let mut sim = anisotropic_sim(&model);
     let mut noise = GaussianNoise::new(7);
@@ -59,11 +45,10 @@ fn run(reset: bool) -> Vec<Vec<(f64, GroundParameters)>> {
         ..rigid_guess_settings()
     };
     let mut estimator = GroundEstimator::new(&settings).expect("estimator settings");
-    let input = SimInput::zeros(0);
     let mut histories = Vec::new();
     for &(x_min, x_max, k, _) in &PATCHES {
         let rest = Vector3::new(0.5 * (x_min + x_max), 0.0, 0.0);
-        let sink = 0.5 * MASS * 9.81 / (k * SOLE.area());
+        let sink = 0.5 * BOX_MASS * 9.81 / (k * SOLE.area());
         let mut state = RobotState::zero(&model);
         state.base_pose.translation.vector = rest + Vector3::new(0.0, 0.0, SOLE_DROP - sink);
         state.base_velocity[3] = 0.3;
@@ -73,19 +58,11 @@ fn run(reset: bool) -> Vec<Vec<(f64, GroundParameters)>> {
             estimator.touch_down();
         }
         let mut history = Vec::new();
-        for step in 1..=2000 {
-            sim.step(&input).expect("sim step");
-            if step % DECIMATION != 0 {
-                continue;
-            }
-            let out = sim.output();
-            let mut wrench = out.surfaces[0].wrench;
-            for (i, w) in wrench.iter_mut().enumerate() {
-                *w += noise.sample(WRENCH_STD[i / 3]);
-            }
-            let regressor = SOLE.regressor(&sole_state(&out.state, &at_rest(rest)));
+        for sample in 1..=500 {
+            let (state, wrench) = estimator_sample(&mut sim, &mut noise, WRENCH_STD);
+            let regressor = SOLE.regressor(&sole_state(&state, &at_rest(rest)));
             estimator.update(&regressor, &wrench);
-            history.push((step as f64 * 5e-4, estimator.estimate()));
+            history.push((sample as f64 * 2e-3, estimator.estimate()));
         }
         histories.push(history);
     }

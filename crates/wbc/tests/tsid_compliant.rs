@@ -406,6 +406,22 @@ fn sink_and_rise(
     gap: f64,
     rest_pose: stride_wbc::EstimatorRestPose,
 ) -> Vec<stride_wbc::GroundParameters> {
+    let (model_ground, estimates) = sink_and_rise_with(threshold, gap, rest_pose, |_| {});
+    assert_eq!(model_ground, estimates.first().copied());
+    estimates
+}
+
+/// [`sink_and_rise`] with `tweak` applied to the compliant settings: the ground of the first contact's
+/// model and the estimates.
+fn sink_and_rise_with(
+    threshold: f64,
+    gap: f64,
+    rest_pose: stride_wbc::EstimatorRestPose,
+    tweak: impl Fn(&mut stride_wbc::config::CompliantConfig),
+) -> (
+    Option<stride_wbc::GroundParameters>,
+    Vec<stride_wbc::GroundParameters>,
+) {
     let model = bundled_model();
     let mut config = compliant_config();
     config.compliant.ground_stiffness = 2e6;
@@ -413,6 +429,7 @@ fn sink_and_rise(
     config.compliant.estimate_ground = true;
     config.compliant.estimator_contact_force = threshold;
     config.compliant.estimator_rest_pose = rest_pose;
+    tweak(&mut config.compliant);
     let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
     let start = standing_state(&model, &default_posture(&model));
     let kd = kd_at(&model, &start);
@@ -436,8 +453,43 @@ fn sink_and_rise(
         let input = input_with_wrenches(&model, &tsid, &state, &measured);
         tsid.step(&input).unwrap();
     }
-    assert_eq!(tsid.ground(), tsid.ground_estimates().map(|g| g[0]));
-    tsid.ground_estimates().unwrap().to_vec()
+    (tsid.ground(), tsid.ground_estimates().unwrap().to_vec())
+}
+
+/// `estimator_open_loop`: on the same prescribed motion (the estimate does not feed back into it) the
+/// estimates are those of the closed loop to the bit, and the contact model keeps the prior `2e6, 2e4`.
+/// `estimate_rest_height` on a rest plane that is right (the soles flat, 3 mm above the ground): `k̂`,
+/// `b̂` within 10 % as without it.
+#[test]
+fn the_open_loop_estimate_and_the_rest_height_in_the_tsid() {
+    use stride_wbc::EstimatorRestPose::Level;
+    let closed = sink_and_rise(5.0, 0.003, Level);
+    let (model_ground, open) =
+        sink_and_rise_with(5.0, 0.003, Level, |c| c.estimator_open_loop = true);
+    assert_eq!(open, closed);
+    assert_eq!(
+        model_ground,
+        Some(stride_wbc::GroundParameters {
+            stiffness: 2e6,
+            damping: 2e4
+        })
+    );
+    let (_, rest) = sink_and_rise_with(5.0, 0.003, Level, |c| c.estimate_rest_height = true);
+    for g in rest {
+        assert!((g.stiffness / GROUND.stiffness - 1.0).abs() < 0.1, "{g:?}");
+        assert!((g.damping / GROUND.damping - 1.0).abs() < 0.1, "{g:?}");
+    }
+    let mut bad = compliant_config();
+    bad.compliant.estimate_ground = true;
+    bad.compliant.estimate_rest_height = true;
+    bad.compliant.estimator_rest_height_std = 0.0;
+    assert!(matches!(
+        Tsid::new(bundled_model(), bad, PERIOD),
+        Err(stride_wbc::WbcError::InvalidConfig {
+            key: "estimator_rest_height_std",
+            ..
+        })
+    ));
 }
 
 /// The ground estimate of a sole whose planned touch-down comes before its impact: both soles start 3 mm

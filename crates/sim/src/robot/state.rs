@@ -158,7 +158,7 @@ impl SimRobot {
         for p in &mut self.points {
             let s = &self.surfaces[p.surface];
             p.place(&s.pose, &s.twist, &self.ground);
-            p.set_normal_densities(self.compliance.at(p.position.x));
+            p.set_densities(self.compliance.densities_at(p.position.x));
         }
         Ok(())
     }

@@ -6,5 +6,5 @@
 pub mod estimator;
 pub mod model;
 
-pub use estimator::{EstimatorSettings, GroundEstimator};
+pub use estimator::{EstimatorSettings, GroundEstimator, GroundRestEstimator};
 pub use model::{GroundParameters, SoleAcceleration, SoleGeometry, SoleState, WrenchRate};

@@ -2,7 +2,7 @@
 //! parameter regressor [eq. 8.2.17], its linearisation [Corollary 1, eq. 8.1.9–8.1.11] and its wrench rate
 //! [eq. 8.2.14]. The linearisation is the linear and rotational spring-damper of [Sygulla 2020, eq. 8].
 
-use nalgebra::{Matrix3, Matrix6, Matrix6x2, Rotation3, Vector2, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Matrix6x2, Matrix6x3, Rotation3, Vector2, Vector3, Vector6};
 
 use crate::math::skew;
 
@@ -150,6 +150,30 @@ impl SoleGeometry {
             .copy_from(&(spring_torque * scale));
         y.fixed_view_mut::<3, 1>(3, 1)
             .copy_from(&(damper_torque * scale));
+        y
+    }
+
+    /// The regressor column of a rest-height error `θ = k δ` (N/m²): the force a rest plane `δ` above
+    /// `ō` adds to Lemma 1 [Romualdi 2022, eq. 8.1.7a with `ō + δ e₃`], `l w |c| e₃`, and no torque (a
+    /// uniform density has no moment about the sole centre). See [`crate::GroundRestEstimator`].
+    pub fn rest_height_column(&self, state: &SoleState) -> Vector6<f64> {
+        Vector6::new(
+            0.0,
+            0.0,
+            self.area() * projection_factor(&state.rotation),
+            0.0,
+            0.0,
+            0.0,
+        )
+    }
+
+    /// `[𝒴, l w |c| e₃]`: the regressor of eq. 8.2.17 with the rest-height column
+    /// ([`Self::rest_height_column`]), `f = 𝒴 [k; b] + l w |c| e₃ k δ`.
+    pub fn regressor_with_rest_height(&self, state: &SoleState) -> Matrix6x3<f64> {
+        let mut y = Matrix6x3::zeros();
+        y.fixed_view_mut::<6, 2>(0, 0)
+            .copy_from(&self.regressor(state));
+        y.set_column(2, &self.rest_height_column(state));
         y
     }
 

@@ -280,7 +280,9 @@ impl CompliantContacts {
         if self.rest_pose == EstimatorRestPose::Level && !self.whole_sole_in(pose, &self.rest[c]) {
             return;
         }
-        let mut regressor = self.sole.regressor(&self.sole_state_at(c, pose, velocity));
+        let mut regressor = self
+            .sole
+            .regressor_with_rest_height(&self.sole_state_at(c, pose, velocity));
         let mut wrench = self.measured[c];
         for row in self.estimator_rows.unread() {
             regressor.row_mut(*row).fill(0.0);

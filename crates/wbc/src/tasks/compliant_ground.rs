@@ -3,20 +3,60 @@
 //! its sole's measured wrench and the regressor of its pose and velocity relative to its touch-down rest
 //! pose, its covariance reset at each of its touch-downs [Colman 2006], its estimate the ground of that
 //! contact's model. One per contact, because on a ground whose compliance changes along the path the two
-//! feet stand on different patches. Allocates nothing after construction.
+//! feet stand on different patches. With `estimate_rest_height` each estimate also has the rest height's
+//! error as a third parameter ([`GroundRestEstimator`]); with `estimator_open_loop` the contact models keep
+//! the prior. Allocates nothing after construction.
 
-use nalgebra::{Matrix6x2, Vector6};
+use nalgebra::{Matrix6x3, Vector6};
 
 use crate::config::CompliantConfig;
 use crate::error::WbcError;
-use crate::soft_contact::{EstimatorSettings, GroundEstimator, GroundParameters};
+use crate::soft_contact::{
+    EstimatorSettings, GroundEstimator, GroundParameters, GroundRestEstimator,
+};
+
+/// One contact's estimator: `[k; b]`, or `[k; b; k δ]` with the rest height's error.
+#[derive(Debug, Clone)]
+enum Estimator {
+    Ground(GroundEstimator),
+    WithRestHeight(GroundRestEstimator),
+}
+
+impl Estimator {
+    fn touch_down(&mut self) {
+        match self {
+            Estimator::Ground(e) => e.touch_down(),
+            Estimator::WithRestHeight(e) => e.touch_down(),
+        }
+    }
+
+    /// One step with the regressor `[𝒴, l w |c| e₃]` (the two-parameter estimate reads `𝒴`).
+    fn update(&mut self, regressor: &Matrix6x3<f64>, wrench: &Vector6<f64>) {
+        match self {
+            Estimator::Ground(e) => e.update(&regressor.fixed_columns::<2>(0).into_owned(), wrench),
+            Estimator::WithRestHeight(e) => e.update(regressor, wrench),
+        };
+    }
+
+    fn estimate(&self) -> GroundParameters {
+        match self {
+            Estimator::Ground(e) => e.estimate(),
+            Estimator::WithRestHeight(e) => e.estimate(),
+        }
+    }
+}
 
 /// The per-contact ground estimates and the ground each contact's model uses.
 #[derive(Debug, Clone)]
 pub(crate) struct ContactGroundEstimates {
-    estimators: Vec<GroundEstimator>,
-    /// Per contact: the ground its contact model uses (the estimate's positive components over the prior).
+    estimators: Vec<Estimator>,
+    /// Per contact: the estimate's positive components over the prior (logged; the ground of its
+    /// contact model unless `open_loop`).
     grounds: Vec<GroundParameters>,
+    /// The configured ground (the prior).
+    prior: GroundParameters,
+    /// `estimator_open_loop`: the contact models keep `prior`.
+    open_loop: bool,
     /// `estimator_reset`: reset a contact's covariance at its touch-down.
     reset_at_touch_down: bool,
     /// `estimator_contact_force`: the measured normal force (N) above which a sole is on the ground.
@@ -33,14 +73,31 @@ impl ContactGroundEstimates {
             stiffness: c.ground_stiffness,
             damping: c.ground_damping,
         };
-        let estimator = GroundEstimator::new(&EstimatorSettings {
+        let settings = EstimatorSettings {
             initial: prior,
             initial_std: [c.ground_stiffness, c.ground_damping],
             wrench_std: c.estimator_wrench_std,
-        })?;
+        };
+        let estimator = match c.estimate_rest_height {
+            false => Estimator::Ground(GroundEstimator::new(&settings)?),
+            true => Estimator::WithRestHeight(
+                GroundRestEstimator::new(&settings, c.estimator_rest_height_std).map_err(|_| {
+                    WbcError::InvalidConfig {
+                        task: "<tsid>".into(),
+                        key: "estimator_rest_height_std",
+                        reason: format!(
+                            "compliant.estimator_rest_height_std = {} must be finite and > 0",
+                            c.estimator_rest_height_std
+                        ),
+                    }
+                })?,
+            ),
+        };
         Ok(Self {
             estimators: vec![estimator; contacts],
             grounds: vec![prior; contacts],
+            prior,
+            open_loop: c.estimator_open_loop,
             reset_at_touch_down: c.estimator_reset,
             contact_force: match c.estimator_contact_force {
                 f if f.is_finite() && f >= 0.0 => f,
@@ -76,7 +133,7 @@ impl ContactGroundEstimates {
     /// One RLS step of contact `c` with its sole's regressor and measured wrench (its sole on the ground);
     /// its model's ground takes the estimate's positive components. The first step after a touch-down
     /// resets the covariance to `P₀` (with `estimator_reset`), keeping the estimate [Colman 2006].
-    pub fn update(&mut self, c: usize, regressor: &Matrix6x2<f64>, wrench: &Vector6<f64>) {
+    pub fn update(&mut self, c: usize, regressor: &Matrix6x3<f64>, wrench: &Vector6<f64>) {
         if std::mem::take(&mut self.awaiting[c]) && self.reset_at_touch_down {
             self.estimators[c].touch_down();
         }
@@ -92,12 +149,15 @@ impl ContactGroundEstimates {
         }
     }
 
-    /// The ground of contact `c`'s model.
+    /// The ground of contact `c`'s model: its estimate, or the prior with `estimator_open_loop`.
     pub fn ground(&self, c: usize) -> GroundParameters {
-        self.grounds[c]
+        match self.open_loop {
+            true => self.prior,
+            false => self.grounds[c],
+        }
     }
 
-    /// The grounds of every contact's model, in contact order.
+    /// The estimates of every contact (their positive components over the prior), in contact order.
     pub fn grounds(&self) -> &[GroundParameters] {
         &self.grounds
     }

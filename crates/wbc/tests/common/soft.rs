@@ -7,7 +7,9 @@ use std::sync::Arc;
 
 use nalgebra::{Rotation3, Vector3, Vector6};
 use stride_model::{Model, RobotState};
-use stride_sim::{ContactSurfaceConfig, SimConfig};
+use stride_sim::{
+    ContactSurfaceConfig, GaussianNoise, GroundPatchConfig, SimConfig, SimInput, SimRobot,
+};
 use stride_wbc::{EstimatorSettings, GroundParameters, SoleGeometry, SoleState};
 
 /// The bundled humanoid's sole, 0.20 × 0.09 m.
@@ -118,4 +120,46 @@ pub fn sole_state(state: &RobotState, rest: &SoleState) -> SoleState {
         rest_position: rest.rest_position,
         rest_rotation: rest.rest_rotation,
     }
+}
+
+/// Half the bundled humanoid's mass: the box of the ground estimator's simulator tests, kg.
+pub const BOX_MASS: f64 = 16.0;
+
+/// The three patches of Table 8.1's grounds along world x, `(x_min, x_max, k, b)`.
+pub const PATCHES: [(f64, f64, f64, f64); 3] = [
+    (0.0, 1.0, 2e6, 1e4),
+    (1.0, 2.0, 8e5, 1e3),
+    (2.0, 3.0, 1e6, 1e4),
+];
+
+/// Simulator steps per estimator update (2 kHz simulation, 500 Hz estimator as the whole-body controller).
+pub const DECIMATION: usize = 4;
+
+/// [`box_sim_config`] with a `grid` over the ground of [`PATCHES`].
+pub fn box_on_patches_config(grid: [usize; 2]) -> SimConfig {
+    let mut config = box_sim_config(grid);
+    config.ground.patches = PATCHES
+        .iter()
+        .map(|&(x_min, x_max, k, b)| GroundPatchConfig::normal(x_min, x_max, k, b))
+        .collect();
+    config
+}
+
+/// Steps the box `sim` [`DECIMATION`] times (one estimator period, 2 ms) and returns its state and its
+/// sole's wrench plus Gaussian noise of `wrench_std` (`[force (N), torque (N·m)]`).
+pub fn estimator_sample(
+    sim: &mut SimRobot,
+    noise: &mut GaussianNoise,
+    wrench_std: [f64; 2],
+) -> (RobotState, Vector6<f64>) {
+    let input = SimInput::zeros(0);
+    for _ in 0..DECIMATION {
+        sim.step(&input).expect("sim step");
+    }
+    let out = sim.output();
+    let mut wrench = out.surfaces[0].wrench;
+    for (i, w) in wrench.iter_mut().enumerate() {
+        *w += noise.sample(wrench_std[i / 3]);
+    }
+    (out.state.clone(), wrench)
 }
