@@ -36,6 +36,8 @@ struct TrackedStep {
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StepTracker {
     step: Option<TrackedStep>,
+    /// Time \[s\] and value of the low-passed DCM error (`dcm_error_cutoff`).
+    error: Option<(f64, Vector2<f64>)>,
 }
 
 impl StepTracker {
@@ -53,6 +55,8 @@ impl StepTracker {
         time: Duration,
     ) -> Option<StepAdjustmentRequest> {
         let t = seconds(time);
+        let cutoff = adjuster.config().dcm_error_cutoff;
+        let dcm = &self.filtered_dcm(cutoff, dcm, sample.dcm_position.xy(), t);
         let Some(step) = plan.current_step(t) else {
             self.step = None;
             return None;
@@ -108,6 +112,31 @@ impl StepTracker {
             land_time: land,
             min_remaining: c.min_remaining_time,
         })
+    }
+
+    /// The DCM the QP reads: the planned DCM plus the measured error low-passed at `cutoff` Hz (first
+    /// order, discretised exactly over the time since the last call); `cutoff` 0: the measured DCM.
+    fn filtered_dcm(
+        &mut self,
+        cutoff: f64,
+        dcm: &Vector2<f64>,
+        planned: Vector2<f64>,
+        t: f64,
+    ) -> Vector2<f64> {
+        if cutoff <= 0.0 {
+            self.error = None;
+            return *dcm;
+        }
+        let error = dcm - planned;
+        let filtered = match self.error {
+            Some((t0, e)) if t > t0 => {
+                let a = 1.0 - (-std::f64::consts::TAU * cutoff * (t - t0)).exp();
+                e + a * (error - e)
+            }
+            _ => error,
+        };
+        self.error = Some((t, filtered));
+        planned + filtered
     }
 
     /// Records that the planner applied `request` (solved as `result`); returns the log record.
@@ -169,4 +198,43 @@ pub struct AdjustedFootstepMsg {
     pub qp_status: QpStatus,
     /// Active-set iterations.
     pub iterations: usize,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 40 mm jump of the measured DCM lasting 20 ms (the iCub's transient, docs/push-recovery.md)
+    /// reaches the QP as `1 − e^{−2π f 0.02}` of itself at `f` = 2 Hz (8.9 mm) and decays after it; a
+    /// lasting error is passed whole (to 0.1 mm after 1 s); cut-off 0 passes the measured DCM unchanged.
+    #[test]
+    fn the_dcm_error_filter_attenuates_a_short_transient_and_passes_a_lasting_error() {
+        let planned = Vector2::new(0.15, -0.06);
+        let jump = Vector2::new(0.0, -0.04);
+        let mut tracker = StepTracker::default();
+        let dt = 0.002;
+        let at = |k: usize| k as f64 * dt;
+        for k in 0..100 {
+            assert_eq!(tracker.filtered_dcm(2.0, &planned, planned, at(k)), planned);
+        }
+        let mut seen = Vector2::zeros();
+        for k in 100..110 {
+            seen = tracker.filtered_dcm(2.0, &(planned + jump), planned, at(k)) - planned;
+        }
+        let expected = jump * (1.0 - (-std::f64::consts::TAU * 2.0 * 0.02).exp());
+        assert!(
+            (seen - expected).norm() < 1e-12,
+            "{seen:?} against {expected:?}"
+        );
+        assert!(seen.norm() < 0.009);
+        let after = tracker.filtered_dcm(2.0, &planned, planned, at(160)) - planned;
+        assert!(after.norm() < seen.norm());
+        let mut lasting = Vector2::zeros();
+        for k in 161..=660 {
+            lasting = tracker.filtered_dcm(2.0, &(planned + jump), planned, at(k)) - planned;
+        }
+        assert!((lasting - jump).norm() < 1e-4, "{lasting:?}");
+        let raw = planned + Vector2::new(0.0123, -0.0456);
+        assert_eq!(tracker.filtered_dcm(0.0, &raw, planned, at(661)), raw);
+    }
 }

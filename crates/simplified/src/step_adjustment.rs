@@ -91,6 +91,7 @@ const RY: usize = 8;
 /// | `cop_weight` | m⁻² | 1 | `w_r` on `‖δr‖²`; with the amplification `α` ≈ 3–15 the ankle takes `α²/(α² + w_r/w_u)` of an error first |
 /// | `deadband` | m | 0.02 | the runner moves the planned touch-down only when the solution differs from it by more than this (as IHMC's 0.02 m on Atlas): DCM errors of normal walking leave the plan alone, and the plan is not rebuilt every tick |
 /// | `time_deadband` | s | 0.03 | the same for the touch-down time |
+/// | `dcm_error_cutoff` | Hz | 0 (off) | cut-off of a first-order low-pass on the DCM error (measured − planned) the runner gives the QP (it reads the planned DCM plus the filtered error): a transient of the measured DCM shorter than the filter's time constant, amplified by `e^{ω(T−t)}` early in a swing, does not move the step |
 /// | `touchdown_force` | N | 0 (off) | early touch-down: when the swing foot's estimated vertical ground force exceeds this in the second half of its swing while the plan has the sole `touchdown_height` or more above its landing height, the runner lands the step where the foot is, `touchdown_lead` later (the plan re-anchored at the real touch-down instead of the sole dragged on to its planned one) |
 /// | `touchdown_height` | m | 0.01 | planned height of the swing sole above its landing height below which a loaded sole is an ordinary (slightly early) touch-down, left to the plan |
 /// | `touchdown_lead` | s | 0.08 | time from a detected early touch-down to the planned one it becomes |
@@ -136,6 +137,8 @@ pub struct StepAdjustmentConfig {
     pub deadband: f64,
     /// Smallest change of the touch-down time the runner applies \[s\].
     pub time_deadband: f64,
+    /// Cut-off of the low-pass on the DCM error the QP reads \[Hz\]; 0: unfiltered.
+    pub dcm_error_cutoff: f64,
     /// Vertical force on the swing foot above which a late swing lands where it is \[N\]; 0: off.
     pub touchdown_force: f64,
     /// Time from a detected early touch-down to the planned touch-down it becomes \[s\].
@@ -165,6 +168,7 @@ impl Default for StepAdjustmentConfig {
             cop_weight: 1.0,
             deadband: 0.02,
             time_deadband: 0.03,
+            dcm_error_cutoff: 0.0,
             touchdown_force: 0.0,
             touchdown_lead: 0.08,
             touchdown_height: 0.01,
@@ -199,6 +203,7 @@ impl StepAdjustmentConfig {
         check_non_negative("step_adjustment.cop_y", self.cop_y)?;
         check_non_negative("step_adjustment.deadband", self.deadband)?;
         check_non_negative("step_adjustment.time_deadband", self.time_deadband)?;
+        check_non_negative("step_adjustment.dcm_error_cutoff", self.dcm_error_cutoff)?;
         check_non_negative("step_adjustment.touchdown_force", self.touchdown_force)?;
         check_positive("step_adjustment.touchdown_lead", self.touchdown_lead)?;
         check_non_negative("step_adjustment.touchdown_height", self.touchdown_height)?;
