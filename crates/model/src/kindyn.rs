@@ -198,12 +198,18 @@ impl KinDyn {
     /// Sets the state (base velocity in the current representation) and computes the kinematics of every
     /// body (poses, velocities, bias accelerations). Checks sizes and finiteness.
     pub fn set_state(&mut self, state: &RobotState) -> Result<(), ModelError> {
+        self.store_state(state)?;
+        self.update();
+        Ok(())
+    }
+
+    /// Validates `state` and stores its numbers, leaving the per-body kinematics to the caller.
+    fn store_state(&mut self, state: &RobotState) -> Result<(), ModelError> {
         state.validate(&self.model)?;
         self.base_pose = state.base_pose;
         self.q.copy_from(&state.joint_positions);
         self.qd.copy_from(&state.joint_velocities);
         self.base_velocity = state.base_velocity;
-        self.update();
         Ok(())
     }
 
@@ -223,11 +229,7 @@ impl KinDyn {
         {
             return self.set_state(state);
         }
-        state.validate(&self.model)?;
-        self.base_pose = state.base_pose;
-        self.q.copy_from(&state.joint_positions);
-        self.qd.copy_from(&state.joint_velocities);
-        self.base_velocity = state.base_velocity;
+        self.store_state(state)?;
         self.base_rot = source.base_rot;
         self.base_pos = source.base_pos;
         self.rot.copy_from_slice(&source.rot);
