@@ -79,6 +79,14 @@ impl EstimatorConfig {
         self.ekf.validate()?;
         self.contact.validate()?;
         self.ft_offsets.validate()?;
+        if self.ekf.level_soles_while_standing && self.ft_offsets.learn_while_standing <= 0.0 {
+            return Err(EstimatorError::InvalidParameter {
+                name: "ekf.level_soles_while_standing",
+                value: self.ft_offsets.learn_while_standing,
+                reason: "measures the soles level while the robot stands at start-up: needs that window, \
+                         ft_offsets.learn_while_standing > 0 (the value)",
+            });
+        }
         check_non_negative("joint_velocity_bandwidth", self.joint_velocity_bandwidth)?;
         check_positive("sole_size", self.sole_size[0])?;
         check_positive("sole_size", self.sole_size[1])?;
@@ -121,6 +129,8 @@ impl EstimatorConfig {
 /// | `flat_ground` | – | true | a foot in contact is at the ground height (the soles' height in the initial state): a pseudo-measurement of the contact point's z that bounds the height drift |
 /// | `ground_height_noise` | m | 2e-3 | σ of that pseudo-measurement (floor unevenness, sole compliance) |
 /// | `bias_estimation` | – | true | estimate the gyro and accelerometer biases (false: they stay at `initial_*_bias`) |
+/// | `level_soles_while_standing` | – | false | while the robot stands on both feet at start-up (the window of `ft_offsets.learn_while_standing`, which must be > 0), its soles are taken level: the legs' kinematics give the IMU's tilt, and the accelerometer's bias (across gravity a tilt to the filter, unobservable otherwise) is learnt as the mean of its reading less a still IMU's and set as the filter's estimate (docs/estimation.md, "The IMU's biases learnt while standing") |
+/// | `level_soles_noise` | rad | 0 | > 0: each sole in contact is also measured level by the filter over that window, σ this per axis ([`crate::InvariantEkf::update_level_sole`]); 0: not (on soft ground the pseudo-measurement closes a loop through the controller's ankles and the soles' rocking: docs/soft-ground.md) |
 /// | `initial_gyro_bias` | rad/s | `[0; 3]` | IMU frame |
 /// | `initial_accelerometer_bias` | m/s² | `[0; 3]` | IMU frame |
 /// | `prior` | | [`EkfPrior`] | σ's of the initial state |
@@ -155,6 +165,11 @@ pub struct EkfConfig {
     pub ground_height_noise: f64,
     /// Estimate the IMU biases.
     pub bias_estimation: bool,
+    /// Learn the accelerometer's bias with the soles taken level while the robot stands at start-up (the
+    /// window of `ft_offsets.learn_while_standing`).
+    pub level_soles_while_standing: bool,
+    /// σ of the level-sole pseudo-measurement \[rad\] (0: none).
+    pub level_soles_noise: f64,
     /// Initial gyroscope bias \[rad/s\], IMU axes.
     pub initial_gyro_bias: [f64; 3],
     /// Initial accelerometer bias \[m/s²\], IMU axes.
@@ -180,6 +195,8 @@ impl Default for EkfConfig {
             flat_ground: true,
             ground_height_noise: 2e-3,
             bias_estimation: true,
+            level_soles_while_standing: false,
+            level_soles_noise: 0.0,
             initial_gyro_bias: [0.0; 3],
             initial_accelerometer_bias: [0.0; 3],
             prior: EkfPrior::default(),
@@ -235,6 +252,7 @@ impl EkfConfig {
             self.kinematics_orientation_noise,
         )?;
         check_positive("ekf.ground_height_noise", self.ground_height_noise)?;
+        check_non_negative("ekf.level_soles_noise", self.level_soles_noise)?;
         check_non_negative("ekf.sole_spin_threshold", self.sole_spin_threshold)?;
         self.prior.validate()
     }

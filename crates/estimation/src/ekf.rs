@@ -564,6 +564,38 @@ impl InvariantEkf {
         self.correct(&jac, &residual, &noise, "flat ground")
     }
 
+    /// Sets the accelerometer bias estimate (IMU frame, m/s²), its covariance unchanged: a bias learnt
+    /// outside the filter (the estimator's standing window, `level_soles_while_standing`).
+    pub fn set_accelerometer_bias(&mut self, acc: &Vector3<f64>) {
+        self.acc_bias = *acc;
+    }
+
+    /// Level-sole pseudo-measurement on a sole in contact while the robot stands
+    /// (`level_soles_while_standing`): the sole's normal in the world, `n = R R_h e_z` (`r_h` its orientation
+    /// in the IMU frame from the encoders), is `normal` (the level ground's `e_z`, or that tilted by the
+    /// sole's sink under its moments), σ `sigma` per axis. With `R = Exp(φ) R̂`, `n ≈ n̂ + φ × n̂ = n̂ − [n̂]× φ`,
+    /// so the x and y rows of the residual `normal − n̂` have `H = −[n̂]×` (rows x, y) on `φ` alone: the IMU's
+    /// roll and pitch from the legs' kinematics. Gravity alone cannot tell a tilt `φ` from the accelerometer's
+    /// bias across it (`R (ã − b_a) + g` is the same for `φ × g = R δb_a`), so while this holds the tilt,
+    /// a still robot's kinematics make that bias observable. Not invariant (the row depends on `R̂`), like
+    /// [`Self::update_ground_height`].
+    pub fn update_level_sole(
+        &mut self,
+        r_h: &Matrix3<f64>,
+        normal: &Vector3<f64>,
+        sigma: f64,
+    ) -> Result<()> {
+        let n = self.rot * r_h.column(2);
+        // −[n̂]× rows x and y: (0, n_z, −n_y) and (−n_z, 0, n_x).
+        let jac = [
+            [(PHI + 1, n.z), (PHI + 2, -n.y), (PHI, 0.0)],
+            [(PHI, -n.z), (PHI + 2, n.x), (PHI + 1, 0.0)],
+        ];
+        let residual = SVector::<f64, 2>::new(normal.x - n.x, normal.y - n.y);
+        let noise = SMatrix::<f64, 2, 2>::identity() * (sigma * sigma);
+        self.correct(&jac, &residual, &noise, "level sole")
+    }
+
     /// Kalman correction: `K = P Hᵀ S⁻¹`, `δ = K r`, `X̂ ← Exp(δ) X̂`, `F̂ ← Exp(δ_ψ) F̂`, `b̂ ← b̂ + δ_b`,
     /// `P ← P − K H P`. Fails, changing nothing, if `S = H P Hᵀ + N` is not positive definite.
     ///

@@ -38,7 +38,9 @@ use crate::standing::{standing_foot_wrenches, StandingOffsets};
 /// 5. contact detection: a [`SchmittTrigger`] per foot on the normal force `w_z`;
 /// 6. EKF: feet in swing are placed by kinematics (position and sole orientation), feet in contact update
 ///    the filter with their kinematics (position and, option, sole orientation) and (option) the
-///    flat-ground pseudo-measurement;
+///    flat-ground pseudo-measurement; while the robot stands at start-up on both feet
+///    (`ekf.level_soles_while_standing`), both soles are measured level
+///    ([`InvariantEkf::update_level_sole`]);
 /// 7. offsets: on a sensor whose child side carries no contact, `y − y₀` is an offset sample
 ///    [Traversaro 2017, §4.7], averaged by a first-order filter;
 /// 8. joint torques by inverse dynamics with the estimated foot wrenches acting on the soles (both feet,
@@ -576,6 +578,46 @@ impl Estimator {
         Ok(())
     }
 
+    /// Step 6b (`ekf.level_soles_while_standing`): while the robot stands still at start-up (the window of
+    /// `ft_offsets.learn_while_standing`) on both feet on a level ground, its soles' attitude is the
+    /// ground's, so the legs' kinematics give the IMU's tilt: the accelerometer's bias is learnt as the
+    /// running mean of its reading less a still IMU's (`StandingOffsets::accelerometer_bias`) and set as the
+    /// filter's estimate ([`InvariantEkf::set_accelerometer_bias`]); with `level_soles_noise` > 0 each sole
+    /// is also measured level ([`InvariantEkf::update_level_sole`], that σ). The mean, not the filter, learns the
+    /// bias: with the filter's accelerometer noise density (0.1 m/s²/√Hz) one second standing still leaves
+    /// its bias σ near 0.1 m/s², twice the bias to learn. The gyroscope's bias is the filter's (observable
+    /// through roll and pitch): its mean reading would take the robot's own turning for bias.
+    fn level_soles(
+        &mut self,
+        input: &EstimatorInput,
+        imu_r_sole: &[Matrix3<f64>; 2],
+    ) -> Result<()> {
+        if !self.config.ekf.level_soles_while_standing || self.output.contacts != [true; 2] {
+            return Ok(());
+        }
+        let Some(st) = self.standing.as_mut() else {
+            return Ok(());
+        };
+        if !st.active(input.time_ns) {
+            return Ok(());
+        }
+        let bias = st.accelerometer_bias(
+            &input.imu.proper_acceleration,
+            self.model.gravity().norm(),
+            imu_r_sole,
+        );
+        self.ekf.set_accelerometer_bias(&bias);
+        if self.config.ekf.level_soles_noise <= 0.0 {
+            return Ok(());
+        }
+        let level = Vector3::z();
+        for r_h in imu_r_sole {
+            self.ekf
+                .update_level_sole(r_h, &level, self.config.ekf.level_soles_noise)?;
+        }
+        Ok(())
+    }
+
     /// Step 8: joint torques, from the RNEA of [`Self::foot_wrenches`] (same state and `ν̇`) with the foot
     /// wrenches subtracted ([`KinDyn::inverse_dynamics_after_ft_sensors`]).
     fn joint_torques(&mut self, wrenches: &[Vector6<f64>; 2]) -> Result<()> {
@@ -702,6 +744,7 @@ impl Estimator {
             }
             self.output.contacts[foot] = contact;
         }
+        self.level_soles(input, &imu_r_sole)?;
         self.update_offsets(input, &wrenches, interval);
         self.joint_torques(&wrenches)?;
         self.learn_standing_offsets(input)?;

@@ -89,6 +89,10 @@ pub(crate) struct StandingOffsets {
     pub(crate) expected: Vec<Vector6<f64>>,
     /// The standing robot's generalized acceleration: zero (`nv`).
     pub(crate) still: DVector<f64>,
+    /// Sum of the accelerometer's bias samples (`ekf.level_soles_while_standing`).
+    pub(crate) acc_sum: Vector3<f64>,
+    /// Accelerometer samples taken.
+    pub(crate) acc_count: usize,
 }
 
 impl StandingOffsets {
@@ -101,6 +105,8 @@ impl StandingOffsets {
             count: 0,
             expected: vec![Vector6::zeros(); n_ft],
             still: DVector::zeros(nv),
+            acc_sum: Vector3::zeros(),
+            acc_count: 0,
         }
     }
 
@@ -109,6 +115,8 @@ impl StandingOffsets {
         self.until_ns = None;
         self.count = 0;
         self.sum.iter_mut().for_each(|s| *s = Vector6::zeros());
+        self.acc_count = 0;
+        self.acc_sum = Vector3::zeros();
     }
 
     /// Whether a tick at `time_ns` learns (fixes the end on the first call).
@@ -117,5 +125,23 @@ impl StandingOffsets {
             .until_ns
             .get_or_insert(time_ns.saturating_add(self.duration_ns));
         time_ns <= until
+    }
+
+    /// Adds an accelerometer bias sample of a robot standing still on two level soles, the reading `acc`
+    /// less the proper acceleration of a still IMU, `|g| n` (`gravity` = `|g|`), with `n` the up direction
+    /// in the IMU frame, the mean of the soles' normals `imu_r_sole[i] e_z` (a level sole's normal is the
+    /// world's up). Returns the running mean, the accelerometer's bias (IMU frame). A robot that moves while
+    /// it learns adds its acceleration to the samples, whose mean is its change of velocity over the window
+    /// (none, standing), and the tilt of its soles, which a level ground does not give them.
+    pub(crate) fn accelerometer_bias(
+        &mut self,
+        acc: &Vector3<f64>,
+        gravity: f64,
+        imu_r_sole: &[Matrix3<f64>; 2],
+    ) -> Vector3<f64> {
+        let up = (imu_r_sole[0].column(2) + imu_r_sole[1].column(2)).normalize();
+        self.acc_sum += acc - up * gravity;
+        self.acc_count += 1;
+        self.acc_sum / self.acc_count as f64
     }
 }

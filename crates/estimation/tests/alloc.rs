@@ -82,3 +82,21 @@ fn the_joint_velocity_filter_allocates_nothing() {
     let n = allocations_preintegrating(&mut est, &inputs);
     assert_eq!(n, 0, "the filter allocated {n} times");
 }
+
+#[test]
+fn learning_while_standing_on_level_soles_allocates_nothing() {
+    // The force/torque offsets and the accelerometer's bias learnt while standing, with the level-sole
+    // pseudo-measurement: every step of these 40 is inside the 1 s window, both feet loaded.
+    let mut config = EstimatorConfig::default();
+    config.ft_offsets.learn_while_standing = 1.0;
+    config.ekf.level_soles_while_standing = true;
+    config.ekf.level_soles_noise = 2e-3;
+    let (mut est, inputs) = started_with(&config, [150.0, 150.0], 500_000, 40);
+    let (_, n) = ALLOC.allocations_during(|| {
+        for input in &inputs[1..] {
+            est.step(input).unwrap();
+        }
+    });
+    assert_eq!(est.output().contacts, [true, true]);
+    assert_eq!(n, 0, "learning while standing allocated {n} times");
+}
