@@ -82,3 +82,20 @@ fn the_joint_velocity_filter_allocates_nothing() {
     let n = allocations_preintegrating(&mut est, &inputs);
     assert_eq!(n, 0, "the filter allocated {n} times");
 }
+
+#[test]
+fn the_stance_leg_accelerations_allocate_nothing() {
+    let config = EstimatorConfig {
+        stance_leg_accelerations: true,
+        ..EstimatorConfig::default()
+    };
+    let (mut est, inputs) = started_with(&config, [10.0, 300.0], 2_000_000, 200);
+    let (_, n) = ALLOC.allocations_during(|| {
+        for input in &inputs[1..] {
+            est.step(input).unwrap();
+        }
+    });
+    // Both feet in contact at the start, then the right one alone: both solves ran.
+    assert_eq!(est.output().contacts, [false, true]);
+    assert_eq!(n, 0, "a step allocated {n} times");
+}
