@@ -17,6 +17,8 @@ use crate::error::{check_non_negative, check_positive, EstimatorError, Result};
 /// | `ft_offsets` | [`FtOffsetConfig`] | model-based offset estimation [Traversaro 2017, §4.7] |
 /// | `sole_size` | `[0.20, 0.09]` | \[m\] length and width of the sole rectangles (the bundled humanoid's), for the weight's split between the soles when `ft_offsets.learn_while_standing` > 0 ([`crate::standing_foot_wrenches`]; the runner takes `planner.foot_length`, `foot_width`) |
 /// | `ground_stiffness` | 0 | \[N/m³\] stiffness density `k` of the ground under the soles ([`crate::sole_sink`]); 0: a rigid ground. > 0: a stance foot's contact point is its sole's zero-force point, and the kinematics measure it as the sole's position minus its sink `s`, `ṡ = −(f/A + k s)/b` from the foot's estimated force `f` (`A` the area of `sole_size`); the runner sets it from the compliant TSID's ground with `estimation.sole_sink = "controller_ground"` |
+/// | `stance_leg_accelerations` | false | true: in the inverse dynamics (foot wrenches, joint torques), a foot in contact's leg gets the six actuated joints' accelerations that keep its sole still under the base's acceleration ([`crate::FlexibleJointObserver`]'s passive hip torques then carry the stance leg's inertia); false: zero joint accelerations |
+/// | `passive_joints` | `[]` | joints without a motor (the runner gives TSID-Flex's `flexible_joints`): their acceleration stays zero in that solve |
 /// | `ground_damping` | 0 | \[N·s/m³\] damping density `b` of the same ground (0: the sink follows the force at once) |
 /// | `joint_velocity_bandwidth` | 0 | \[Hz\] 0: the joint velocities as the encoders report them; > 0: the velocities of a critically damped α–β filter of that bandwidth on the encoder positions ([`crate::JointVelocityFilter`]) |
 /// | `ft_calibration` | sensor name → 6 × 6 rows | calibration matrix `C` of each named force/torque sensor: every reading `r` is used as the wrench `C (r − b)` [Traversaro 2017, eq. (5.1)], `b` the offset; sensors not named: identity (`stride calibrate` with added-mass logs writes it) |
@@ -51,6 +53,11 @@ pub struct EstimatorConfig {
     pub ground_damping: f64,
     /// Sole rectangle `[length, width]` \[m\] for the standing split of `ft_offsets.learn_while_standing`.
     pub sole_size: [f64; 2],
+    /// The inverse dynamics give a foot in contact's leg the joint accelerations that keep its sole still
+    /// (`crate::stance_leg`); false: zero joint accelerations.
+    pub stance_leg_accelerations: bool,
+    /// Joints without a motor (passive springs): their acceleration stays zero in that solve.
+    pub passive_joints: Vec<String>,
 }
 
 impl Default for EstimatorConfig {
@@ -69,6 +76,8 @@ impl Default for EstimatorConfig {
             ground_stiffness: 0.0,
             ground_damping: 0.0,
             sole_size: [0.20, 0.09],
+            stance_leg_accelerations: false,
+            passive_joints: Vec::new(),
         }
     }
 }

@@ -16,6 +16,7 @@ use crate::io::{EstimatorInput, EstimatorOutput};
 use crate::joint_velocity::JointVelocityFilter;
 use crate::schmitt::SchmittTrigger;
 use crate::sole_sink::SoleSink;
+use crate::stance_leg::StanceLegs;
 use crate::standing::{standing_foot_wrenches, StandingOffsets};
 
 /// The estimation layer.
@@ -74,6 +75,8 @@ pub struct Estimator {
     calibration: Vec<Option<Calibration>>,
     predicted: Vec<Vector6<f64>>,
     nu_dot: DVector<f64>,
+    /// `stance_leg_accelerations`: the legs' chains for the stance feet's joint accelerations in `nu_dot`.
+    stance_legs: Option<StanceLegs>,
     generalized: DVector<f64>,
     scratch: RobotState,
     swing_since_ns: [Option<u64>; 2],
@@ -203,6 +206,10 @@ impl Estimator {
             calibration,
             predicted: vec![Vector6::zeros(); n_ft],
             nu_dot: DVector::zeros(model.nv()),
+            stance_legs: match config.stance_leg_accelerations {
+                true => Some(StanceLegs::new(&model, soles, &config.passive_joints)?),
+                false => None,
+            },
             generalized: DVector::zeros(model.nv()),
             scratch: RobotState::zero(&model),
             swing_since_ns: [None; 2],
@@ -444,7 +451,9 @@ impl Estimator {
     }
 
     /// Step 3: the robot at EKF state `s` (base pose and mixed twist, joints as measured) in `self.kd`, and
-    /// its acceleration in `self.nu_dot` (base linear acceleration only).
+    /// its acceleration in `self.nu_dot`: the base's linear acceleration, and with
+    /// `stance_leg_accelerations` the joints of the legs in contact (last tick's) that keep their soles
+    /// still ([`crate::stance_leg`]).
     fn place_robot(
         &mut self,
         s: &EkfState,
@@ -455,6 +464,13 @@ impl Estimator {
         self.set_kinematics(pose, twist, input)?;
         self.nu_dot.fill(0.0);
         self.nu_dot.fixed_rows_mut::<3>(0).copy_from(&acc);
+        if let Some(legs) = &mut self.stance_legs {
+            for foot in 0..2 {
+                if self.output.contacts[foot] {
+                    legs.hold_sole(&self.kd, foot, self.soles[foot], &mut self.nu_dot)?;
+                }
+            }
+        }
         Ok(())
     }
 

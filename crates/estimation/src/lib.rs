@@ -20,6 +20,7 @@ mod joint_velocity;
 mod schmitt;
 pub mod sole_sink;
 pub mod sole_spin;
+mod stance_leg;
 mod standing;
 
 pub use config::{ContactConfig, EkfConfig, EkfPrior, EstimatorConfig, FtOffsetConfig};

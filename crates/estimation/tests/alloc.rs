@@ -100,3 +100,20 @@ fn learning_while_standing_on_level_soles_allocates_nothing() {
     assert_eq!(est.output().contacts, [true, true]);
     assert_eq!(n, 0, "learning while standing allocated {n} times");
 }
+
+#[test]
+fn the_stance_leg_accelerations_allocate_nothing() {
+    let config = EstimatorConfig {
+        stance_leg_accelerations: true,
+        ..EstimatorConfig::default()
+    };
+    let (mut est, inputs) = started_with(&config, [10.0, 300.0], 2_000_000, 200);
+    let (_, n) = ALLOC.allocations_during(|| {
+        for input in &inputs[1..] {
+            est.step(input).unwrap();
+        }
+    });
+    // Both feet in contact at the start, then the right one alone: both solves ran.
+    assert_eq!(est.output().contacts, [false, true]);
+    assert_eq!(n, 0, "a step allocated {n} times");
+}

@@ -496,3 +496,36 @@ fn ticking_only_when_read_is_refused_with_the_flexible_joints_observer() {
         "{e}"
     );
 }
+
+/// `estimation.stance_leg_accelerations` on the flexible-hip robot: the runner names TSID-Flex's flexible
+/// joints as the passive ones, so each leg has six actuated joints to solve and the run starts; on the same
+/// robot with the rigid TSID (no flexible joints named) the legs have eight and the scenario is refused at
+/// the key.
+#[test]
+fn stance_leg_accelerations_take_tsid_flex_passive_joints() {
+    let s = Scratch::new("stance-leg-flex");
+    let options = |name: &str| RunOptions {
+        output: Some(s.path(name)),
+        duration: Some(0.05),
+        ..RunOptions::default()
+    };
+    let flex = common::scenario_from_configs(
+        &s,
+        "flex",
+        &["walk_flexible_hips_tsid_flex_torque.toml"],
+        "[estimation]\nstance_leg_accelerations = true",
+    );
+    let out = stride_runner::run::run_scenario(&flex, &options("flex.mcap"));
+    assert!(out.is_ok(), "{:?}", out.err().map(|e| e.to_string()));
+    let rigid = common::scenario_from_configs(
+        &s,
+        "rigid",
+        &["walk_flexible_hips_torque.toml"],
+        "[estimation]\nstance_leg_accelerations = true",
+    );
+    let e = stride_runner::run::run_scenario(&rigid, &options("rigid.mcap"))
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(e.contains("stance_leg_accelerations"), "{e}");
+}

@@ -115,6 +115,10 @@ pub struct EstimationSection {
     /// (`stride_estimation::Estimator::set_joint_accelerations`); needs `joint_velocity_bandwidth` > 0
     /// and torque control.
     pub joint_velocity_prediction: bool,
+    /// The inverse dynamics give a stance leg the joint accelerations that keep its sole still
+    /// (`stride_estimation::EstimatorConfig::stance_leg_accelerations`; TSID-Flex's flexible joints stay
+    /// at zero); false (default): zero joint accelerations.
+    pub stance_leg_accelerations: bool,
     /// The ground the estimation layer's soles sink into (`stride_estimation::sole_sink`): `none`
     /// (default) a rigid ground; `controller_ground` the compliant TSID's (`wbc.tsid.compliant.ground_stiffness`,
     /// `ground_damping`; needs `[wbc.tsid] contact_model = "compliant"`).
@@ -152,6 +156,7 @@ impl Default for EstimationSection {
             ft_calibration: Default::default(),
             joint_velocity_bandwidth: 0.0,
             joint_velocity_prediction: false,
+            stance_leg_accelerations: false,
             sole_sink: SoleSinkSource::None,
         }
     }
@@ -182,6 +187,8 @@ impl EstimationSection {
             ground_stiffness: ground[0],
             ground_damping: ground[1],
             sole_size,
+            stance_leg_accelerations: self.stance_leg_accelerations,
+            passive_joints: Vec::new(),
         }
     }
 }
@@ -541,7 +548,8 @@ pub fn expand_env_vars(
 
 impl ScenarioConfig {
     /// The estimation layer's configuration ([`EstimationSection::estimator_config`]) with the robot's
-    /// frames, the planner's sole size and the ground of `estimation.sole_sink`.
+    /// frames, the planner's sole size, the ground of `estimation.sole_sink` and TSID-Flex's flexible
+    /// joints as the passive ones.
     pub fn estimator_config(&self) -> stride_estimation::EstimatorConfig {
         let ground = match self.estimation.sole_sink {
             SoleSinkSource::None => [0.0; 2],
@@ -550,12 +558,15 @@ impl ScenarioConfig {
                 [g.ground_stiffness, g.ground_damping]
             }
         };
-        self.estimation.estimator_config(
-            &self.robot,
-            &self.sim.sensors.imu_frame,
-            [self.planner.foot_length, self.planner.foot_width],
-            ground,
-        )
+        stride_estimation::EstimatorConfig {
+            passive_joints: self.wbc.tsid.flexible_joints.clone(),
+            ..self.estimation.estimator_config(
+                &self.robot,
+                &self.sim.sensors.imu_frame,
+                [self.planner.foot_length, self.planner.foot_width],
+                ground,
+            )
+        }
     }
 }
 
