@@ -1,6 +1,7 @@
 //! `Planner::adjust_step`: a mid-swing change of the touch-down (position and time) keeps the past,
 //! keeps DCM, CoM and the swing foot continuous, lands on the target, replans the later steps from it and
-//! still reaches the goal; the adjusted plan passes the run-time verification.
+//! still reaches the goal; the adjusted plan passes the run-time verification; a crossed touch-down (past
+//! the stance foot) is replanned from the crossed feet, the next step uncrossing them.
 
 mod common;
 
@@ -9,9 +10,10 @@ use std::time::Duration;
 
 use nalgebra::Vector2;
 use stride_block::seconds;
+use stride_planner::geometry::feet_lateral_separation;
 use stride_planner::{
     Foot, Goal, PhaseKind, Plan, PlanSample, PlanVerification, Planner, PlannerConfig,
-    PlannerError, StepAdjustmentRequest,
+    PlannerError, Pose2, StepAdjustmentRequest,
 };
 
 const GOAL: Goal = Goal::Pose {
@@ -206,4 +208,150 @@ fn non_finite_request_seconds_are_refused() {
     }
     // the same request with finite seconds is applied
     assert!(p.adjust_step(&valid, &GOAL).unwrap());
+}
+
+/// The `n`-th single support retargeted `inward` metres past the stance foot (a crossed touch-down, at the
+/// nominal touch-down time), mid-swing: the planner, its plan before, the request.
+fn crossed_request(n: usize, inward: f64) -> (Planner, Plan, StepAdjustmentRequest) {
+    let p = planner();
+    let (time, t) = mid_single_support(&p, n);
+    let old = p.plan().unwrap().clone();
+    let step = old.current_step(t).unwrap();
+    let stance = step.stance_pose.translation.vector.xy();
+    let nominal = step.swing.end.translation.vector.xy();
+    // the swing foot's side is −stance.side(): past the stance foot is +stance.side()
+    let target = Vector2::new(nominal.x, stance.y + step.stance.side() * inward);
+    let request = StepAdjustmentRequest {
+        time,
+        target,
+        land_time: step.swing.land_time,
+        min_remaining: 0.1,
+    };
+    (p, old, request)
+}
+
+#[test]
+fn a_crossed_touch_down_is_replanned_and_the_next_step_uncrosses() {
+    for n in [1, 2, 3] {
+        for inward in [0.10, 0.15, 0.20, 0.25] {
+            let (mut p, old, request) = crossed_request(n, inward);
+            let t = seconds(request.time);
+            let land = request.land_time;
+            let step = old.current_step(t).unwrap();
+            let (stance_foot, swing_foot) = (step.stance, step.stance.other());
+            let stance = Pose2::from_isometry(&step.stance_pose);
+            // (the request is crossed: the swing sole lands on the stance foot's outer side)
+            let lateral = stance.inverse_transform_point(request.target).y;
+            assert!(lateral * stance_foot.side() > 0.09, "{lateral}");
+            let applied = p.adjust_step(&request, &GOAL);
+            assert!(
+                matches!(applied, Ok(true)),
+                "step {n}, {inward} m inward: {applied:?}"
+            );
+            let new = p.plan().unwrap();
+            // DCM, CoM and the ZMP continuous at the request and at the crossed touch-down
+            for tc in [t, land] {
+                let (a, b) = (sample(&p, tc - 1e-7), sample(&p, tc + 1e-7));
+                assert!(
+                    (a.dcm_position - b.dcm_position).norm() < 1e-6,
+                    "DCM at {tc}"
+                );
+                assert!(
+                    (a.com_position - b.com_position).norm() < 1e-6,
+                    "CoM at {tc}"
+                );
+                assert!((a.zmp - b.zmp).norm() < 1e-5, "ZMP at {tc}");
+            }
+            // the crossed touch-down is where it was asked, and the soles do not overlap there
+            let crossed = new.contacts(swing_foot).active_at(land + 1e-3).unwrap();
+            assert!((crossed.pose.translation.vector.xy() - request.target).norm() < 1e-12);
+            assert!(!rectangles_overlap(
+                &corners(&crossed.pose, p.config()),
+                &corners(&step.stance_pose, p.config())
+            ));
+            // the next step is the stance foot's, out past the crossed one at no less than the minimum
+            // width: the pair is uncrossed
+            let uncross = new
+                .swings(stance_foot)
+                .iter()
+                .find(|s| s.lift_time >= land)
+                .unwrap();
+            let other = Pose2::from_isometry(&crossed.pose);
+            let out = Pose2::from_isometry(&uncross.end);
+            let (l, r) = match stance_foot {
+                Foot::Left => (out, other),
+                Foot::Right => (other, out),
+            };
+            let width = feet_lateral_separation(l, r);
+            assert!(
+                width >= p.config().min_width - 1e-9,
+                "step {n}, {inward} m: uncrossing width {width}"
+            );
+            // every later touch-down keeps the minimum width (only the crossed one is below it)
+            for foot in [Foot::Left, Foot::Right] {
+                for c in &new.contacts(foot).contacts {
+                    if c.activation_time <= land + 1e-9 {
+                        continue;
+                    }
+                    let tc = c.activation_time + 1e-6;
+                    let ll = new.contacts(Foot::Left).active_at(tc).unwrap().pose;
+                    let rr = new.contacts(Foot::Right).active_at(tc).unwrap().pose;
+                    let w = feet_lateral_separation(
+                        Pose2::from_isometry(&ll),
+                        Pose2::from_isometry(&rr),
+                    );
+                    assert!(w >= p.config().min_width - 1e-9, "width {w} at {tc}");
+                }
+            }
+            // the walk still ends at the goal; ZMP in the support (independent hull test), the LIPM
+            // relations and the swing shapes on the whole plan
+            let l = new.contacts(Foot::Left).contacts.last().unwrap().pose;
+            let r = new.contacts(Foot::Right).contacts.last().unwrap().pose;
+            let mid = (l.translation.vector + r.translation.vector) * 0.5;
+            assert!((mid.x - 2.0).abs() < 0.02 && mid.y.abs() < 0.02, "{mid:?}");
+            check_dynamics(p.config(), new, 0.01);
+            check_swings(p.config(), new);
+        }
+    }
+}
+
+#[test]
+fn the_single_support_is_kept_when_the_dcm_lands_inside_the_new_support() {
+    // an outward adjustment: the plan up to the touch-down is the old one, segment for segment
+    let mut p = planner();
+    let (time, t) = mid_single_support(&p, 2);
+    let old = p.plan().unwrap().clone();
+    let step = old.current_step(t).unwrap();
+    let nominal = step.swing.end.translation.vector.xy();
+    let request = StepAdjustmentRequest {
+        time,
+        target: nominal + Vector2::new(0.0, -0.04 * step.stance.side()),
+        land_time: step.swing.land_time,
+        min_remaining: 0.1,
+    };
+    assert!(p.adjust_step(&request, &GOAL).unwrap());
+    for k in 0..=40 {
+        let tk = t + (request.land_time - t) * k as f64 / 40.0;
+        assert_eq!(sample(&p, tk).zmp, {
+            let mut s = PlanSample::default();
+            old.sample(tk, &mut s);
+            s.zmp
+        });
+    }
+    // the crossed request moves the ZMP inside the stance sole before the touch-down
+    let (mut p, old, request) = crossed_request(2, 0.15);
+    assert!(p.adjust_step(&request, &GOAL).unwrap());
+    let before = request.land_time - 0.01;
+    let (a, b) = (sample(&p, before), {
+        let mut s = PlanSample::default();
+        old.sample(before, &mut s);
+        s
+    });
+    let stance = old.current_step(seconds(request.time)).unwrap().stance;
+    assert!((a.zmp - b.zmp).norm() > 0.02, "{:?} vs {:?}", a.zmp, b.zmp);
+    assert!(in_hull(
+        &corners(&a.foot(stance).pose, p.config()),
+        a.zmp.xy(),
+        1e-9
+    ));
 }
