@@ -18,7 +18,7 @@
 //!   back (ξ̇ = ω(ξ − ZMP) drives it away from every support point). The rest of the single support then
 //!   moves its ZMP inside S's sole (a smooth transition from its value at `t`, so ZMP, DCM and CoM stay
 //!   continuous) to the point that brings the DCM at `T` nearest the middle of the two soles
-//!   ([`support_tail`]), and the plan after `T` starts from the crossed pair: its first double support keeps
+//!   (`support_tail`), and the plan after `T` starts from the crossed pair: its first double support keeps
 //!   the ZMP in the crossed hull, and the unicycle, re-anchored on W, puts S out past W at the nominal width
 //!   (the step that uncrosses).
 

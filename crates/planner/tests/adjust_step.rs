@@ -55,6 +55,32 @@ fn sample(p: &Planner, t: f64) -> PlanSample {
     s
 }
 
+/// The plan of `p` ends with the feet around the goal (2, 0); ZMP in the support (independent hull
+/// test), the LIPM relations and the swing shapes (no swing sole over the stance sole) on the whole plan.
+fn reaches_the_goal_and_holds(p: &Planner) {
+    let new = p.plan().unwrap();
+    let l = new.contacts(Foot::Left).contacts.last().unwrap().pose;
+    let r = new.contacts(Foot::Right).contacts.last().unwrap().pose;
+    let mid = (l.translation.vector + r.translation.vector) * 0.5;
+    assert!((mid.x - 2.0).abs() < 0.02 && mid.y.abs() < 0.02, "{mid:?}");
+    check_dynamics(p.config(), new, 0.01);
+    check_swings(p.config(), new);
+}
+
+/// The samples 0.1 µs before and after `tc`, asserting DCM and CoM continuous there.
+fn continuous_at(p: &Planner, tc: f64) -> (PlanSample, PlanSample) {
+    let (a, b) = (sample(p, tc - 1e-7), sample(p, tc + 1e-7));
+    assert!(
+        (a.dcm_position - b.dcm_position).norm() < 1e-6,
+        "DCM at {tc}"
+    );
+    assert!(
+        (a.com_position - b.com_position).norm() < 1e-6,
+        "CoM at {tc}"
+    );
+    (a, b)
+}
+
 #[test]
 fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
     for (n, shift, dt_land) in [
@@ -90,15 +116,7 @@ fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
         }
         // continuity of DCM, CoM and the swing foot across t and across the new touch-down
         for tc in [t, land] {
-            let (a, b) = (sample(&p, tc - 1e-7), sample(&p, tc + 1e-7));
-            assert!(
-                (a.dcm_position - b.dcm_position).norm() < 1e-6,
-                "DCM at {tc}"
-            );
-            assert!(
-                (a.com_position - b.com_position).norm() < 1e-6,
-                "CoM at {tc}"
-            );
+            let (a, b) = continuous_at(&p, tc);
             assert!(
                 (a.com_velocity - b.com_velocity).norm() < 1e-5,
                 "CoM velocity at {tc}"
@@ -127,14 +145,9 @@ fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
             .find(|ph| ph.start >= land && ph.kind != PhaseKind::DoubleSupport)
             .unwrap();
         assert_eq!(next.kind, PhaseKind::SingleSupport { stance: swing_foot });
-        let l = new.contacts(Foot::Left).contacts.last().unwrap().pose;
-        let r = new.contacts(Foot::Right).contacts.last().unwrap().pose;
-        let mid = (l.translation.vector + r.translation.vector) * 0.5;
-        assert!((mid.x - 2.0).abs() < 0.02 && mid.y.abs() < 0.02, "{mid:?}");
         // the LIPM relations and the swing shapes hold on the whole adjusted plan (the step bounds are
         // the adjustment's, checked by `adjust_step`'s own verification)
-        check_dynamics(p.config(), new, 0.01);
-        check_swings(p.config(), new);
+        reaches_the_goal_and_holds(&p);
     }
 }
 
@@ -251,15 +264,7 @@ fn a_crossed_touch_down_is_replanned_and_the_next_step_uncrosses() {
             let new = p.plan().unwrap();
             // DCM, CoM and the ZMP continuous at the request and at the crossed touch-down
             for tc in [t, land] {
-                let (a, b) = (sample(&p, tc - 1e-7), sample(&p, tc + 1e-7));
-                assert!(
-                    (a.dcm_position - b.dcm_position).norm() < 1e-6,
-                    "DCM at {tc}"
-                );
-                assert!(
-                    (a.com_position - b.com_position).norm() < 1e-6,
-                    "CoM at {tc}"
-                );
+                let (a, b) = continuous_at(&p, tc);
                 assert!((a.zmp - b.zmp).norm() < 1e-5, "ZMP at {tc}");
             }
             // the crossed touch-down is where it was asked, and the soles do not overlap there
@@ -305,12 +310,7 @@ fn a_crossed_touch_down_is_replanned_and_the_next_step_uncrosses() {
             }
             // the walk still ends at the goal; ZMP in the support (independent hull test), the LIPM
             // relations and the swing shapes on the whole plan
-            let l = new.contacts(Foot::Left).contacts.last().unwrap().pose;
-            let r = new.contacts(Foot::Right).contacts.last().unwrap().pose;
-            let mid = (l.translation.vector + r.translation.vector) * 0.5;
-            assert!((mid.x - 2.0).abs() < 0.02 && mid.y.abs() < 0.02, "{mid:?}");
-            check_dynamics(p.config(), new, 0.01);
-            check_swings(p.config(), new);
+            reaches_the_goal_and_holds(&p);
         }
     }
 }
