@@ -340,6 +340,8 @@ pub struct StepAdjuster {
     /// start is the same with the crossover on or off.
     cross_solver: ActiveSetSolver,
     cross_out: SolverOutput,
+    /// Stance position of the step whose touch-down crossed over: the rest of that step stays crossed.
+    crossed_step: Option<Vector2<f64>>,
     result: StepAdjustment,
 }
 
@@ -376,6 +378,7 @@ impl StepAdjuster {
             out,
             cross_solver,
             cross_out,
+            crossed_step: None,
             result: StepAdjustment::default(),
         })
     }
@@ -451,7 +454,9 @@ impl StepAdjuster {
 
     /// The crossover (`crossover_min` > 0): when the main solution's touch-down is at the no-crossing bound,
     /// the same QP with the lateral bounds on the stance foot's far side (`crossover_min`..`crossover_max`
-    /// past it); its solution replaces the main one in `out` when it succeeds at a lower cost. Returns
+    /// past it); its solution replaces the main one in `out` when it succeeds at a lower cost. Once a step
+    /// has crossed over (same stance position), the rest of its solves keep the crossed solution whenever
+    /// it succeeds (no switching back and forth across the stance foot from one tick to the next). Returns
     /// whether it did. [`StepAdjuster::qp`] is then the crossover's QP (its lateral bounds), otherwise the
     /// main one.
     fn crossover(&mut self, input: &StepAdjustmentInput) -> bool {
@@ -466,8 +471,9 @@ impl StepAdjuster {
         } else {
             self.qp.upper_bounds()[UY]
         };
+        let committed = self.crossed_step == Some(input.stance_position);
         let uy = self.out.x[UY];
-        if (uy - inner).abs() > 1e-9 * (1.0 + inner.abs()) {
+        if !committed && (uy - inner).abs() > 1e-9 * (1.0 + inner.abs()) {
             return false;
         }
         let (lo, hi) = if side > 0.0 {
@@ -483,8 +489,9 @@ impl StepAdjuster {
         let better = crossed.status.is_success()
             && crossed.x.iter().all(|v| v.is_finite())
             && crossed.x[TAU] > 0.0
-            && crossed.objective < self.out.objective;
+            && (committed || crossed.objective < self.out.objective);
         if better {
+            self.crossed_step = Some(input.stance_position);
             std::mem::swap(&mut self.out, &mut self.cross_out);
         } else {
             self.qp.lower_bounds_mut()[UY] = main.0;

@@ -271,6 +271,17 @@ fn an_inward_push_past_the_no_crossing_bound_crosses_over_when_enabled() {
             // without the crossover the same push stops at the bound
             let out = (main.touchdown.y - c.input.stance_position.y) * side;
             assert!((out - config.lateral_min).abs() < 1e-9 && !main.diagnostics.crossover);
+            // the step stays crossed for the rest of its solves, even with the DCM back on the plan;
+            // a fresh adjuster, or the next step (another stance position), does not cross
+            let mut back = c.input;
+            back.dcm = c.planned_dcm;
+            assert!(adj.solve(&back).unwrap().diagnostics.crossover);
+            let fresh = *StepAdjuster::new(&config).unwrap().solve(&back).unwrap();
+            assert!(!fresh.diagnostics.crossover);
+            back.stance_position.x += 0.2;
+            back.stance_cop.x += 0.2;
+            back.nominal_step.x += 0.2;
+            assert!(!adj.solve(&back).unwrap().diagnostics.crossover);
         }
         // a push that the outward region absorbs (the bound inactive) is solved as without the crossover
         for (dx, dy) in [(0.0, 0.0), (0.05, 0.0), (0.0, 0.06 * side)] {
