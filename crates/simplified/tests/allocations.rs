@@ -146,6 +146,41 @@ fn step_adjustment_does_not_allocate() {
 }
 
 #[test]
+fn step_adjustment_with_the_crossover_does_not_allocate() {
+    let config = StepAdjustmentConfig {
+        crossover_min: 0.10,
+        crossover_max: 0.25,
+        ..Default::default()
+    };
+    let mut adj = StepAdjuster::new(&config).unwrap();
+    let mut input = StepAdjustmentInput {
+        dcm: Vector2::new(0.35, 0.0),
+        omega: OMEGA,
+        stance: Foot::Left,
+        stance_position: Vector2::new(0.3, 0.075),
+        stance_yaw: 0.1,
+        stance_cop: Vector2::new(0.31, 0.075),
+        nominal_step: Vector2::new(0.4, -0.075),
+        nominal_offset: Vector2::new(0.0, 0.05),
+        time_since_touchdown: 0.35,
+        nominal_duration: 1.0,
+    };
+    let mut crossed = 0;
+    let (_, n) = ALLOC.allocations_during(|| {
+        for i in 0..200 {
+            // pushed towards the stance foot (left): to the no-crossing bound, then past the stance foot
+            input.dcm.y = 0.002 * i as f64;
+            input.time_since_touchdown = 0.35 + 0.002 * i as f64;
+            if adj.solve(&input).unwrap().diagnostics.crossover {
+                crossed += 1;
+            }
+        }
+    });
+    assert_eq!(n, 0, "step adjustment with the crossover allocated");
+    assert!(crossed > 0 && crossed < 200, "{crossed}");
+}
+
+#[test]
 fn foot_admittance_does_not_allocate() {
     use nalgebra::{Isometry3, Vector6};
     let config = FootAdmittanceConfig {
