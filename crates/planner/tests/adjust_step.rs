@@ -12,7 +12,7 @@ use nalgebra::Vector2;
 use stride_block::seconds;
 use stride_planner::geometry::feet_lateral_separation;
 use stride_planner::{
-    Foot, Goal, PhaseKind, Plan, PlanSample, PlanVerification, Planner, PlannerConfig,
+    Foot, Goal, Phase, PhaseKind, Plan, PlanSample, PlanVerification, Planner, PlannerConfig,
     PlannerError, Pose2, StepAdjustmentRequest,
 };
 
@@ -35,17 +35,21 @@ fn planner() -> Planner {
     p
 }
 
-/// The middle of the `n`-th single support (whole nanoseconds), as an instant and in plan time \[s\].
-fn mid_single_support(p: &Planner, n: usize) -> (Duration, f64) {
-    let phase = p
-        .plan()
+/// The `n`-th single support of `p`'s plan.
+fn single_support(p: &Planner, n: usize) -> Phase {
+    p.plan()
         .unwrap()
         .phases
         .iter()
         .filter(|ph| matches!(ph.kind, PhaseKind::SingleSupport { .. }))
         .nth(n)
         .copied()
-        .unwrap();
+        .unwrap()
+}
+
+/// The middle of the `n`-th single support (whole nanoseconds), as an instant and in plan time \[s\].
+fn mid_single_support(p: &Planner, n: usize) -> (Duration, f64) {
+    let phase = single_support(p, n);
     instant(0.5 * (phase.start + phase.end))
 }
 
@@ -223,23 +227,33 @@ fn non_finite_request_seconds_are_refused() {
     assert!(p.adjust_step(&valid, &GOAL).unwrap());
 }
 
-/// The `n`-th single support retargeted `inward` metres past the stance foot (a crossed touch-down, at the
-/// nominal touch-down time), mid-swing: the planner, its plan before, the request.
-fn crossed_request(n: usize, inward: f64) -> (Planner, Plan, StepAdjustmentRequest) {
-    let p = planner();
-    let (time, t) = mid_single_support(&p, n);
-    let old = p.plan().unwrap().clone();
-    let step = old.current_step(t).unwrap();
+/// The swing in progress at `(time, t)` of `p`'s plan retargeted `inward` metres past the stance foot
+/// (negative: outward) at the nominal step's x, to land at `land_time` (`None`: its nominal touch-down).
+fn lateral_request(
+    p: &Planner,
+    (time, t): (Duration, f64),
+    inward: f64,
+    land_time: Option<f64>,
+) -> StepAdjustmentRequest {
+    let step = p.plan().unwrap().current_step(t).unwrap();
     let stance = step.stance_pose.translation.vector.xy();
     let nominal = step.swing.end.translation.vector.xy();
     // the swing foot's side is −stance.side(): past the stance foot is +stance.side()
     let target = Vector2::new(nominal.x, stance.y + step.stance.side() * inward);
-    let request = StepAdjustmentRequest {
+    StepAdjustmentRequest {
         time,
         target,
-        land_time: step.swing.land_time,
+        land_time: land_time.unwrap_or(step.swing.land_time),
         min_remaining: 0.1,
-    };
+    }
+}
+
+/// The `n`-th single support retargeted `inward` metres past the stance foot (a crossed touch-down, at the
+/// nominal touch-down time), mid-swing: the planner, its plan before, the request.
+fn crossed_request(n: usize, inward: f64) -> (Planner, Plan, StepAdjustmentRequest) {
+    let p = planner();
+    let old = p.plan().unwrap().clone();
+    let request = lateral_request(&p, mid_single_support(&p, n), inward, None);
     (p, old, request)
 }
 
@@ -354,4 +368,38 @@ fn the_single_support_is_kept_when_the_dcm_lands_inside_the_new_support() {
         a.zmp.xy(),
         1e-9
     ));
+}
+
+/// The `n`-th single support, 0.02 s after its lift-off, retargeted `inward` metres past the stance foot
+/// (negative: outward) to land 0.39 s later, well before its nominal touch-down: the step a released hold
+/// asks for (docs/push-recovery.md, "The step out of the held double support").
+fn early_request(n: usize, inward: f64) -> (Planner, StepAdjustmentRequest) {
+    let p = planner();
+    let (time, t) = instant(single_support(&p, n).start + 0.02);
+    let request = lateral_request(&p, (time, t), inward, Some(t + 0.39));
+    (p, request)
+}
+
+/// A known limit, pinned on both sides: a crossed touch-down asked at the start of the swing for 0.39 s
+/// later is refused (the replan from the crossed feet finds no double support long enough for its ZMP,
+/// 0.15-0.17 m outside), while the same early touch-down outward, and the crossed one at its nominal time
+/// (`a_crossed_touch_down_is_replanned_and_the_next_step_uncrosses`), are planned.
+#[test]
+fn an_early_crossed_touch_down_is_refused_and_the_same_early_touch_down_outward_is_planned() {
+    for n in [1, 2, 3] {
+        let (mut p, request) = early_request(n, -0.15);
+        let applied = p.adjust_step(&request, &GOAL);
+        assert!(matches!(applied, Ok(true)), "step {n}: {applied:?}");
+        reaches_the_goal_and_holds(&p);
+        for inward in [0.15, 0.25] {
+            let (mut p, request) = early_request(n, inward);
+            let before = p.plan().unwrap().clone();
+            let refused = p.adjust_step(&request, &GOAL);
+            assert!(
+                matches!(refused, Err(PlannerError::ZmpOutsideSupport { distance, .. }) if distance > 0.1),
+                "step {n}, {inward} m: {refused:?}"
+            );
+            assert_eq!(p.plan().unwrap(), &before);
+        }
+    }
 }
