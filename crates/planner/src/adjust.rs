@@ -4,7 +4,8 @@
 //!
 //! What changes, at the adjustment time `t` (inside a single support, stance foot S, swing foot W):
 //! * W's swing: [`SwingTrajectory::retarget`] from its desired state at `t` to the new target, landing at
-//!   the new time `T` (continuous position, velocity and acceleration at `t`).
+//!   the new time `T` (continuous position, velocity and acceleration at `t`); going round S's sole
+//!   ([`SwingTrajectory::go_round`]) when the straight path to a crossed target would pass over it.
 //! * DCM/ZMP/CoM: unchanged up to `T`. The single-support segment holds the ZMP on S; its closed form is
 //!   extended (or cut) to end at `T` instead of the planned touch-down, so the plan is continuous at `t`
 //!   and at `T`.
@@ -12,16 +13,25 @@
 //!   unicycle re-anchored on it, as the planner's replanning does on the last touch-down) and S swinging
 //!   first, towards the same goal; it starts with a double support whose extra ZMP term makes the DCM
 //!   start exactly at the old plan's state (see [`crate::dcm`]).
+//! * A crossed touch-down (W lands past S, the step a push towards the stance foot calls for): the old
+//!   plan's DCM at `T` lies outside the hull of the two soles, where no ZMP inside the support can bring it
+//!   back (ξ̇ = ω(ξ − ZMP) drives it away from every support point). The rest of the single support then
+//!   moves its ZMP inside S's sole (a smooth transition from its value at `t`, so ZMP, DCM and CoM stay
+//!   continuous) to the point that brings the DCM at `T` nearest the middle of the two soles
+//!   (`support_tail`), and the plan after `T` starts from the crossed pair: its first double support keeps
+//!   the ZMP in the crossed hull, and the unicycle, re-anchored on W, puts S out past W at the nominal width
+//!   (the step that uncrosses).
 
 use std::time::Duration;
 
-use nalgebra::{Vector2, Vector3};
+use nalgebra::{Isometry3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 use stride_block::seconds;
 
-use crate::build::{build_plan, StartState};
+use crate::build::{build_plan, double_support_polygon, xy, StartState};
 use crate::config::PlannerConfig;
 use crate::contacts::{Foot, Phase, PhaseKind};
+use crate::dcm::{zmp_constant, zmp_transition, DcmSegment};
 use crate::error::PlannerError;
 use crate::geometry::Pose2;
 use crate::goal::Goal;
@@ -103,8 +113,16 @@ pub(crate) fn adjusted_plan(
         RetargetOutcome::Retargeted => {}
         RetargetOutcome::Unchanged | RetargetOutcome::Frozen => return Ok(None),
     }
+    // a crossed target: the rest of the swing goes round the stance sole
+    if !swing.go_round(t, &step.stance_pose, cfg.foot_length, cfg.foot_width) {
+        return Err(PlannerError::SwingOverStance { time: t });
+    }
     let land = swing.land_time;
-    let state = single_support_state(plan, omega, t, land);
+    let tail = support_tail(cfg, omega, plan, t, land, &step.stance_pose, &swing.end);
+    let state = match &tail {
+        Some([_, hold]) => hold.evaluate_local(land - hold.start, omega),
+        None => single_support_state(plan, omega, t, land),
+    };
     let landed = Pose2::from_isometry(&swing.end);
     let anchor_xy = landed.transform_point(Vector2::new(
         0.0,
@@ -137,7 +155,75 @@ pub(crate) fn adjusted_plan(
         first_swing: Some(step.stance),
     };
     let new = build_plan(cfg, omega, &start, goal)?;
-    Ok(Some(splice(plan, new, t, swing)))
+    Ok(Some(splice(plan, new, t, swing, tail)))
+}
+
+/// Smallest depth of the DCM inside the two soles' hull at a touch-down for the single support to be kept
+/// as planned \[m\].
+const TOUCHDOWN_DCM_MARGIN: f64 = 0.01;
+/// Margin of the moved ZMP inside the stance sole's edges \[m\].
+const TAIL_ZMP_MARGIN: f64 = 0.01;
+/// Time the moved ZMP takes to reach its point in the stance sole \[s\].
+const TAIL_ZMP_RISE: f64 = 0.05;
+
+/// The rest of the single support `[t, land]` with its ZMP moved inside the stance sole, when the old
+/// plan's DCM at `land` would lie less than [`TOUCHDOWN_DCM_MARGIN`] inside the hull of the stance sole and
+/// the landed one (a crossed touch-down); `None` otherwise (the plan is kept as it is up to `land`).
+///
+/// Two segments: the ZMP goes from its value at `t` to a point `z` of the sole in [`TAIL_ZMP_RISE`] (or half
+/// the time left) with the smooth step of [`zmp_transition`], then stays there; the DCM starts at the old
+/// plan's. The DCM at `land` is affine in `z` with the same scalar gain on both axes, so the `z` that brings
+/// it onto the middle of the two soles is one division, then clamped into the sole (shrunk by
+/// [`TAIL_ZMP_MARGIN`]; the clamp of a rectangle in its own frame is the nearest point, and the map from `z`
+/// to the DCM is a scaling). The DCM moves by at most the sole's half width times `e^{ωΔ} − 1` (`Δ` the time
+/// left): a crossover asked for late in the swing may still be refused.
+pub(crate) fn support_tail(
+    cfg: &PlannerConfig,
+    omega: f64,
+    plan: &Plan,
+    t: f64,
+    land: f64,
+    stance: &Isometry3<f64>,
+    landed: &Isometry3<f64>,
+) -> Option<[DcmSegment; 2]> {
+    let hull = double_support_polygon(cfg, &[*stance, *landed])?;
+    if hull.signed_distance(single_support_state(plan, omega, t, land).dcm) >= TOUCHDOWN_DCM_MARGIN
+    {
+        return None;
+    }
+    let now = single_support_state(plan, omega, t, t);
+    let rise = TAIL_ZMP_RISE.min(0.5 * (land - t));
+    let tail_to = |z: Vector2<f64>| {
+        let mut up = DcmSegment::new(
+            t,
+            Some(rise),
+            zmp_transition(now.zmp, z, Vector2::zeros(), rise),
+            omega,
+        );
+        up.growth = now.dcm - up.dcm_poly[0];
+        up.set_com_start(now.com);
+        let top = up.evaluate_local(rise, omega);
+        let mut hold = DcmSegment::new(t + rise, Some(land - t - rise), zmp_constant(z), omega);
+        hold.growth = top.dcm - hold.dcm_poly[0];
+        hold.set_com_start(top.com);
+        [up, hold]
+    };
+    let end_dcm = |z: Vector2<f64>| {
+        let [_, hold] = tail_to(z);
+        hold.evaluate_local(land - t - rise, omega).dcm
+    };
+    let base = end_dcm(now.zmp);
+    let gain = end_dcm(now.zmp + Vector2::x()).x - base.x;
+    let aim = (xy(stance) + xy(landed)) * 0.5;
+    let wanted = now.zmp + (aim - base) / gain;
+    let sole = Pose2::from_isometry(stance);
+    let local = sole.inverse_transform_point(wanted);
+    let (hx, hy) = (
+        (0.5 * cfg.foot_length - TAIL_ZMP_MARGIN).max(0.0),
+        (0.5 * cfg.foot_width - TAIL_ZMP_MARGIN).max(0.0),
+    );
+    let clamped = Vector2::new(local.x.clamp(-hx, hx), local.y.clamp(-hy, hy));
+    Some(tail_to(sole.transform_point(clamped)))
 }
 
 /// The old plan's DCM/ZMP/CoM at `land`, with the single-support segment at `t` extended to `land`.
@@ -148,9 +234,15 @@ fn single_support_state(plan: &Plan, omega: f64, t: f64, land: f64) -> crate::dc
     seg.evaluate_local(land - seg.start, omega)
 }
 
-/// The old plan up to `t` (its single-support segment and phase stretched to the new touch-down), the
-/// retargeted `swing`, then `new` from the touch-down on.
-fn splice(old: &Plan, mut new: Plan, t: f64, swing: SwingTrajectory) -> Plan {
+/// The old plan up to `t` (its single-support segment and phase stretched to the new touch-down, or cut
+/// at `t` and followed by `tail` up to it), the retargeted `swing`, then `new` from the touch-down on.
+fn splice(
+    old: &Plan,
+    mut new: Plan,
+    t: f64,
+    swing: SwingTrajectory,
+    tail: Option<[DcmSegment; 2]>,
+) -> Plan {
     let land = swing.land_time;
     let mut segments: Vec<_> = old
         .segments
@@ -158,8 +250,15 @@ fn splice(old: &Plan, mut new: Plan, t: f64, swing: SwingTrajectory) -> Plan {
         .filter(|s| s.start <= t)
         .cloned()
         .collect();
+    let cut = if tail.is_some() { t } else { land };
     if let Some(last) = segments.last_mut() {
-        last.duration = Some(land - last.start);
+        last.duration = Some(cut - last.start);
+    }
+    if let Some(tail) = tail {
+        if segments.last().is_some_and(|s| s.duration == Some(0.0)) {
+            segments.pop();
+        }
+        segments.extend(tail);
     }
     segments.append(&mut new.segments);
     let mut phases: Vec<Phase> = old

@@ -120,7 +120,7 @@ pub(crate) fn build_plan(
     }
     check_segments_finite(&segments)?;
     let phases = phases(&steps, &timeline, start.t_start);
-    let ([lc, rc], [ls, rs]) = contacts_and_swings(cfg, start, &steps, &footholds, &timeline);
+    let ([lc, rc], [ls, rs]) = contacts_and_swings(cfg, start, &steps, &footholds, &timeline)?;
     Ok(Plan {
         omega,
         com_height: cfg.com_height,
@@ -170,8 +170,9 @@ struct Footholds {
     ds_polygons: Vec<Option<SupportPolygon>>,
 }
 
-/// Hull of the two soles `feet = [left, right]` (`None` when degenerate).
-fn double_support_polygon(
+/// Hull of the two soles `feet = [left, right]` (`None` when degenerate): valid whether the feet are
+/// crossed or not.
+pub(crate) fn double_support_polygon(
     cfg: &PlannerConfig,
     feet: &[Isometry3<f64>; 2],
 ) -> Option<SupportPolygon> {
@@ -391,14 +392,15 @@ fn phases(steps: &[StepPlan], timeline: &Timeline, t_start: f64) -> Vec<Phase> {
 /// Contacts and swing trajectories, `[left, right]`.
 type FeetPlans = ([Vec<PlannedContact>; 2], [Vec<SwingTrajectory>; 2]);
 
-/// The contacts of each foot (the start poses, then every landing) and its swing trajectories.
+/// The contacts of each foot (the start poses, then every landing) and its swing trajectories, each going
+/// round the stance sole if its straight path would cross it ([`SwingTrajectory::go_round`]).
 fn contacts_and_swings(
     cfg: &PlannerConfig,
     start: &StartState,
     steps: &[StepPlan],
     footholds: &Footholds,
     timeline: &Timeline,
-) -> FeetPlans {
+) -> Result<FeetPlans, PlannerError> {
     let (lift, land) = (&timeline.lift, &timeline.land);
     let mut contacts = [
         vec![PlannedContact {
@@ -427,7 +429,7 @@ fn contacts_and_swings(
             activation_time: land[k],
             deactivation_time: None,
         });
-        swings[foot_index(foot)].push(SwingTrajectory::new(
+        let mut swing = SwingTrajectory::new(
             foot,
             footholds.step_from[k],
             footholds.step_poses[k],
@@ -438,9 +440,18 @@ fn contacts_and_swings(
                 apex_fraction: cfg.swing_apex_fraction,
                 landing_velocity: cfg.landing_velocity,
             },
-        ));
+        );
+        // the stance sole: round it when the feet start crossed (the step that uncrosses them)
+        let stance = contacts[foot_index(foot.other())]
+            .last()
+            .map(|c| c.pose)
+            .unwrap_or(footholds.step_from[k]);
+        if !swing.go_round(lift[k], &stance, cfg.foot_length, cfg.foot_width) {
+            return Err(PlannerError::SwingOverStance { time: lift[k] });
+        }
+        swings[foot_index(foot)].push(swing);
     }
-    (contacts, swings)
+    Ok((contacts, swings))
 }
 
 /// DCM cubic of [Romualdi 2022, eq. 10.1.23] on [0, T] from (ξ_a, ξ̇_a) to (ξ_b, ξ̇_b), as a segment (ZMP = ξ − ξ̇/ω).

@@ -63,6 +63,13 @@ pub enum PlannerError {
         /// Distance outside the polygon \[m\].
         distance: f64,
     },
+    /// A swing's path sweeps over the stance sole and neither detour (in front of it or behind it) clears
+    /// it ([`crate::SwingTrajectory::go_round`]).
+    #[error("the swing lifting off at t = {time:.3} s cannot go round the stance sole")]
+    SwingOverStance {
+        /// Lift-off time of the swing, or the time of the retarget \[s\].
+        time: f64,
+    },
     /// A time argument is not finite or out of range.
     #[error("invalid time `{name}` = {value}: {reason}")]
     InvalidTime {

@@ -11,7 +11,7 @@ use crate::config::{check_gravity, PlannerConfig};
 use crate::contacts::{ContactList, Foot, Phase, PhaseKind, PlannedContact};
 use crate::dcm::DcmSegment;
 use crate::error::PlannerError;
-use crate::geometry::{wrap_angle, Pose2};
+use crate::geometry::{feet_lateral_separation, wrap_angle, Pose2};
 use crate::goal::Goal;
 use crate::plan::{Plan, PlanSample};
 use crate::swing::SwingTrajectory;
@@ -322,6 +322,29 @@ impl Planner {
             let mut cfg = self.config.clone();
             cfg.feet_distance_max = cfg.feet_distance_max.max(length + 1e-9);
             cfg.step_duration_min = cfg.step_duration_min.min(duration - 1e-9);
+            // a crossed touch-down: the adjustment's own width (the uncrossing step after it is the
+            // unicycle's, at the nominal width; the soles still may not overlap)
+            let stance = Pose2::from_isometry(&step.stance_pose);
+            let landed = Pose2 {
+                x: request.target.x,
+                y: request.target.y,
+                yaw: Pose2::from_isometry(&step.swing.end).yaw,
+            };
+            let width = match step.stance {
+                Foot::Left => feet_lateral_separation(stance, landed),
+                Foot::Right => feet_lateral_separation(landed, stance),
+            };
+            cfg.min_width = cfg.min_width.min(width - 1e-9);
+            // the step after the adjusted touch-down: its double support may have been lengthened until
+            // the ZMP stays in the support (as the first double support of any replan)
+            if let Some(next) = adjusted
+                .swings(step.stance)
+                .iter()
+                .find(|s| s.lift_time >= request.land_time)
+            {
+                let d = next.land_time - request.land_time;
+                cfg.step_duration_max = cfg.step_duration_max.max(d + 1e-9);
+            }
             adjusted.verify(&cfg, VERIFY_SAMPLING_PERIOD)?;
         }
         self.plan = Some(adjusted);

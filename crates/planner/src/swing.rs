@@ -4,7 +4,14 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
+use std::f64::consts::FRAC_PI_2;
+
+use nalgebra::Vector2;
+use stride_block::SupportPolygon;
+
 use crate::contacts::Foot;
+use crate::geometry::{wrap_angle, Pose2};
+use crate::verify::quadrilaterals_intersect;
 
 /// Coefficients a0..a5 of a quintic in local time τ.
 pub type Quintic = [f64; 6];
@@ -157,6 +164,9 @@ struct SwingRetarget {
     z: Option<HeightProfile>,
     /// New orientation blend `s` (from its value at `time` to 1), or `None` to keep the previous one.
     blend: Option<Quintic>,
+    /// A piece of a detour round the other sole ([`SwingTrajectory::go_round`]), not a retarget.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    detour: bool,
 }
 
 /// A height profile after a retarget: `first` over `[time, switch]`, `second` over `[switch, land]`
@@ -398,6 +408,7 @@ impl SwingTrajectory {
             y,
             z,
             blend,
+            detour: false,
         });
         self.end.translation.vector = target;
         self.land_time = land_time;
@@ -466,8 +477,120 @@ impl SwingTrajectory {
         }
     }
 
-    /// Number of mid-swing retargets applied to this swing.
+    /// Number of mid-swing retargets applied to this swing (the pieces of a detour not counted).
     pub fn retarget_count(&self) -> usize {
-        self.retargets.len()
+        self.retargets.iter().filter(|r| !r.detour).count()
+    }
+
+    /// Whether the sole (`length` × `width` \[m\]), swept from `from` \[s\] to the touch-down, intersects the
+    /// sole at `other`: [`SWEEP_SAMPLES`] + 1 poses, exact rectangle intersection at each.
+    pub fn sweeps_over(&self, from: f64, other: &Isometry3<f64>, length: f64, width: f64) -> bool {
+        let fixed = SupportPolygon::foot_corners(other, length, width);
+        (0..=SWEEP_SAMPLES).any(|i| {
+            let t = from + (self.land_time - from) * i as f64 / SWEEP_SAMPLES as f64;
+            let moving = SupportPolygon::foot_corners(&self.evaluate(t).pose, length, width);
+            quadrilaterals_intersect(&moving, &fixed)
+        })
+    }
+
+    /// Makes the rest of the swing from `from` \[s\] go round the sole at `other` (the stance foot, soles
+    /// `length` × `width` \[m\]) when its path would sweep over it (a crossover step, or the step that
+    /// uncrosses the feet after one): three pieces in `other`'s frame, from the state at `from` (position,
+    /// velocity, acceleration: continuous) to a corner in front of or behind the sole, across it, then to
+    /// the touch-down, each a quintic ending at rest [Romualdi 2022, eq. D.3.6], the time shared in
+    /// proportion to the lengths. In front or behind, whichever path is shorter (the other if that one
+    /// still touches); the corners are [`DETOUR_CLEARANCE`] past the sole, counting the swing sole turned
+    /// by the larger relative yaw of its two ends. Height and orientation profiles are kept.
+    ///
+    /// Returns `false` when neither detour clears the sole (the swing is then left as it was); `true`
+    /// when the swing clears it (unchanged if its path already did: every planned step of a walk).
+    /// Allocates only when it builds a detour (a planner event).
+    pub fn go_round(&mut self, from: f64, other: &Isometry3<f64>, length: f64, width: f64) -> bool {
+        let frame = Pose2::from_isometry(other);
+        let start_local =
+            frame.inverse_transform_point(self.evaluate(from).pose.translation.vector.xy());
+        let end_local = frame.inverse_transform_point(self.end.translation.vector.xy());
+        let turn = |h: &Isometry3<f64>| wrap_angle(Pose2::from_isometry(h).yaw - frame.yaw).abs();
+        let yaw = turn(&self.start).max(turn(&self.end)).min(FRAC_PI_2);
+        let half_x = 0.5 * length * yaw.cos() + 0.5 * width * yaw.sin();
+        let half_y = 0.5 * length * yaw.sin() + 0.5 * width * yaw.cos();
+        // a path that never leaves one side of the sole band cannot touch it (a swing as planned)
+        let band = 0.5 * width + half_y;
+        let (ys, ye) = (start_local.y, end_local.y);
+        let planned = self.retargets.is_empty(); // a straight path, the yaw between its ends'
+        if planned && ys * ye > 0.0 && ys.abs().min(ye.abs()) >= band {
+            return true;
+        }
+        if !self.sweeps_over(from, other, length, width) {
+            return true;
+        }
+        let saved = self.retargets.clone();
+        let reach = 0.5 * length + half_x + DETOUR_CLEARANCE;
+        let cost = |x: f64| (start_local.x - x).abs() + (end_local.x - x).abs();
+        let mut sides = [reach, -reach];
+        if cost(-reach) < cost(reach) {
+            sides.swap(0, 1);
+        }
+        for x in sides {
+            let corners = [
+                frame.transform_point(Vector2::new(x, ys)),
+                frame.transform_point(Vector2::new(x, ye)),
+            ];
+            self.retargets.clone_from(&saved);
+            self.detour(from, corners);
+            if !self.sweeps_over(from, other, length, width) {
+                return true;
+            }
+        }
+        self.retargets = saved;
+        false
+    }
+
+    /// Replaces the horizontal path from `from` by quintics through `corners` (at rest there) to the
+    /// touch-down (see [`SwingTrajectory::go_round`]).
+    fn detour(&mut self, from: f64, corners: [Vector2<f64>; 2]) {
+        let now = self.evaluate(from);
+        let p0 = now.pose.translation.vector.xy();
+        let (v0, a0) = (now.twist.xyz().xy(), now.acceleration.xyz().xy());
+        let points = [p0, corners[0], corners[1], self.end.translation.vector.xy()];
+        let lengths: [f64; 3] =
+            std::array::from_fn(|i| (points[i + 1] - points[i]).norm() + DETOUR_MIN_PIECE);
+        let total: f64 = lengths.iter().sum();
+        let duration = self.land_time - from;
+        let mut t = from;
+        for (i, len) in lengths.iter().enumerate() {
+            let d = duration * len / total;
+            let (v, a) = if i == 0 {
+                (v0, a0)
+            } else {
+                (Vector2::zeros(), Vector2::zeros())
+            };
+            let (p, q) = (points[i], points[i + 1]);
+            let x = quintic(p.x, v.x, a.x, q.x, 0.0, 0.0, d);
+            let y = quintic(p.y, v.y, a.y, q.y, 0.0, 0.0, d);
+            match self.retargets.last_mut() {
+                // the retarget made at `from` keeps its height and orientation profiles
+                Some(r) if i == 0 && r.time == from => {
+                    r.x = x;
+                    r.y = y;
+                }
+                _ => self.retargets.push(SwingRetarget {
+                    time: t,
+                    x,
+                    y,
+                    z: None,
+                    blend: None,
+                    detour: true,
+                }),
+            }
+            t += d;
+        }
     }
 }
+
+/// Poses sampled by [`SwingTrajectory::sweeps_over`] (past the first).
+pub const SWEEP_SAMPLES: usize = 100;
+/// Gap a detour leaves between the swing sole and the sole it goes round \[m\].
+pub const DETOUR_CLEARANCE: f64 = 0.01;
+/// Length added to each piece of a detour when the time is shared, so that no piece is instantaneous \[m\].
+const DETOUR_MIN_PIECE: f64 = 0.02;

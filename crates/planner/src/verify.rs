@@ -77,7 +77,7 @@ fn all_finite<'a>(values: impl IntoIterator<Item = &'a f64>) -> bool {
 }
 
 /// The separating-axis test for two convex quadrilaterals.
-fn quadrilaterals_intersect(a: &[Vector2<f64>; 4], b: &[Vector2<f64>; 4]) -> bool {
+pub(crate) fn quadrilaterals_intersect(a: &[Vector2<f64>; 4], b: &[Vector2<f64>; 4]) -> bool {
     for poly in [a, b] {
         for i in 0..4 {
             let e = poly[(i + 1) % 4] - poly[i];

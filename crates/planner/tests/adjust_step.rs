@@ -1,6 +1,7 @@
 //! `Planner::adjust_step`: a mid-swing change of the touch-down (position and time) keeps the past,
 //! keeps DCM, CoM and the swing foot continuous, lands on the target, replans the later steps from it and
-//! still reaches the goal; the adjusted plan passes the run-time verification.
+//! still reaches the goal; the adjusted plan passes the run-time verification; a crossed touch-down (past
+//! the stance foot) is replanned from the crossed feet, the next step uncrossing them.
 
 mod common;
 
@@ -9,9 +10,10 @@ use std::time::Duration;
 
 use nalgebra::Vector2;
 use stride_block::seconds;
+use stride_planner::geometry::feet_lateral_separation;
 use stride_planner::{
-    Foot, Goal, PhaseKind, Plan, PlanSample, PlanVerification, Planner, PlannerConfig,
-    PlannerError, StepAdjustmentRequest,
+    Foot, Goal, Phase, PhaseKind, Plan, PlanSample, PlanVerification, Planner, PlannerConfig,
+    PlannerError, Pose2, StepAdjustmentRequest,
 };
 
 const GOAL: Goal = Goal::Pose {
@@ -33,17 +35,21 @@ fn planner() -> Planner {
     p
 }
 
-/// The middle of the `n`-th single support (whole nanoseconds), as an instant and in plan time \[s\].
-fn mid_single_support(p: &Planner, n: usize) -> (Duration, f64) {
-    let phase = p
-        .plan()
+/// The `n`-th single support of `p`'s plan.
+fn single_support(p: &Planner, n: usize) -> Phase {
+    p.plan()
         .unwrap()
         .phases
         .iter()
         .filter(|ph| matches!(ph.kind, PhaseKind::SingleSupport { .. }))
         .nth(n)
         .copied()
-        .unwrap();
+        .unwrap()
+}
+
+/// The middle of the `n`-th single support (whole nanoseconds), as an instant and in plan time \[s\].
+fn mid_single_support(p: &Planner, n: usize) -> (Duration, f64) {
+    let phase = single_support(p, n);
     instant(0.5 * (phase.start + phase.end))
 }
 
@@ -51,6 +57,32 @@ fn sample(p: &Planner, t: f64) -> PlanSample {
     let mut s = PlanSample::default();
     p.plan().unwrap().sample(t, &mut s);
     s
+}
+
+/// The plan of `p` ends with the feet around the goal (2, 0); ZMP in the support (independent hull
+/// test), the LIPM relations and the swing shapes (no swing sole over the stance sole) on the whole plan.
+fn reaches_the_goal_and_holds(p: &Planner) {
+    let new = p.plan().unwrap();
+    let l = new.contacts(Foot::Left).contacts.last().unwrap().pose;
+    let r = new.contacts(Foot::Right).contacts.last().unwrap().pose;
+    let mid = (l.translation.vector + r.translation.vector) * 0.5;
+    assert!((mid.x - 2.0).abs() < 0.02 && mid.y.abs() < 0.02, "{mid:?}");
+    check_dynamics(p.config(), new, 0.01);
+    check_swings(p.config(), new);
+}
+
+/// The samples 0.1 µs before and after `tc`, asserting DCM and CoM continuous there.
+fn continuous_at(p: &Planner, tc: f64) -> (PlanSample, PlanSample) {
+    let (a, b) = (sample(p, tc - 1e-7), sample(p, tc + 1e-7));
+    assert!(
+        (a.dcm_position - b.dcm_position).norm() < 1e-6,
+        "DCM at {tc}"
+    );
+    assert!(
+        (a.com_position - b.com_position).norm() < 1e-6,
+        "CoM at {tc}"
+    );
+    (a, b)
 }
 
 #[test]
@@ -88,15 +120,7 @@ fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
         }
         // continuity of DCM, CoM and the swing foot across t and across the new touch-down
         for tc in [t, land] {
-            let (a, b) = (sample(&p, tc - 1e-7), sample(&p, tc + 1e-7));
-            assert!(
-                (a.dcm_position - b.dcm_position).norm() < 1e-6,
-                "DCM at {tc}"
-            );
-            assert!(
-                (a.com_position - b.com_position).norm() < 1e-6,
-                "CoM at {tc}"
-            );
+            let (a, b) = continuous_at(&p, tc);
             assert!(
                 (a.com_velocity - b.com_velocity).norm() < 1e-5,
                 "CoM velocity at {tc}"
@@ -125,14 +149,9 @@ fn an_adjusted_step_is_continuous_lands_on_target_and_reaches_the_goal() {
             .find(|ph| ph.start >= land && ph.kind != PhaseKind::DoubleSupport)
             .unwrap();
         assert_eq!(next.kind, PhaseKind::SingleSupport { stance: swing_foot });
-        let l = new.contacts(Foot::Left).contacts.last().unwrap().pose;
-        let r = new.contacts(Foot::Right).contacts.last().unwrap().pose;
-        let mid = (l.translation.vector + r.translation.vector) * 0.5;
-        assert!((mid.x - 2.0).abs() < 0.02 && mid.y.abs() < 0.02, "{mid:?}");
         // the LIPM relations and the swing shapes hold on the whole adjusted plan (the step bounds are
         // the adjustment's, checked by `adjust_step`'s own verification)
-        check_dynamics(p.config(), new, 0.01);
-        check_swings(p.config(), new);
+        reaches_the_goal_and_holds(&p);
     }
 }
 
@@ -206,4 +225,181 @@ fn non_finite_request_seconds_are_refused() {
     }
     // the same request with finite seconds is applied
     assert!(p.adjust_step(&valid, &GOAL).unwrap());
+}
+
+/// The swing in progress at `(time, t)` of `p`'s plan retargeted `inward` metres past the stance foot
+/// (negative: outward) at the nominal step's x, to land at `land_time` (`None`: its nominal touch-down).
+fn lateral_request(
+    p: &Planner,
+    (time, t): (Duration, f64),
+    inward: f64,
+    land_time: Option<f64>,
+) -> StepAdjustmentRequest {
+    let step = p.plan().unwrap().current_step(t).unwrap();
+    let stance = step.stance_pose.translation.vector.xy();
+    let nominal = step.swing.end.translation.vector.xy();
+    // the swing foot's side is −stance.side(): past the stance foot is +stance.side()
+    let target = Vector2::new(nominal.x, stance.y + step.stance.side() * inward);
+    StepAdjustmentRequest {
+        time,
+        target,
+        land_time: land_time.unwrap_or(step.swing.land_time),
+        min_remaining: 0.1,
+    }
+}
+
+/// The `n`-th single support retargeted `inward` metres past the stance foot (a crossed touch-down, at the
+/// nominal touch-down time), mid-swing: the planner, its plan before, the request.
+fn crossed_request(n: usize, inward: f64) -> (Planner, Plan, StepAdjustmentRequest) {
+    let p = planner();
+    let old = p.plan().unwrap().clone();
+    let request = lateral_request(&p, mid_single_support(&p, n), inward, None);
+    (p, old, request)
+}
+
+#[test]
+fn a_crossed_touch_down_is_replanned_and_the_next_step_uncrosses() {
+    for n in [1, 2, 3] {
+        for inward in [0.10, 0.15, 0.20, 0.25] {
+            let (mut p, old, request) = crossed_request(n, inward);
+            let t = seconds(request.time);
+            let land = request.land_time;
+            let step = old.current_step(t).unwrap();
+            let (stance_foot, swing_foot) = (step.stance, step.stance.other());
+            let stance = Pose2::from_isometry(&step.stance_pose);
+            // (the request is crossed: the swing sole lands on the stance foot's outer side)
+            let lateral = stance.inverse_transform_point(request.target).y;
+            assert!(lateral * stance_foot.side() > 0.09, "{lateral}");
+            let applied = p.adjust_step(&request, &GOAL);
+            assert!(
+                matches!(applied, Ok(true)),
+                "step {n}, {inward} m inward: {applied:?}"
+            );
+            let new = p.plan().unwrap();
+            // DCM, CoM and the ZMP continuous at the request and at the crossed touch-down
+            for tc in [t, land] {
+                let (a, b) = continuous_at(&p, tc);
+                assert!((a.zmp - b.zmp).norm() < 1e-5, "ZMP at {tc}");
+            }
+            // the crossed touch-down is where it was asked, and the soles do not overlap there
+            let crossed = new.contacts(swing_foot).active_at(land + 1e-3).unwrap();
+            assert!((crossed.pose.translation.vector.xy() - request.target).norm() < 1e-12);
+            assert!(!rectangles_overlap(
+                &corners(&crossed.pose, p.config()),
+                &corners(&step.stance_pose, p.config())
+            ));
+            // the next step is the stance foot's, out past the crossed one at no less than the minimum
+            // width: the pair is uncrossed
+            let uncross = new
+                .swings(stance_foot)
+                .iter()
+                .find(|s| s.lift_time >= land)
+                .unwrap();
+            let other = Pose2::from_isometry(&crossed.pose);
+            let out = Pose2::from_isometry(&uncross.end);
+            let (l, r) = match stance_foot {
+                Foot::Left => (out, other),
+                Foot::Right => (other, out),
+            };
+            let width = feet_lateral_separation(l, r);
+            assert!(
+                width >= p.config().min_width - 1e-9,
+                "step {n}, {inward} m: uncrossing width {width}"
+            );
+            // every later touch-down keeps the minimum width (only the crossed one is below it)
+            for foot in [Foot::Left, Foot::Right] {
+                for c in &new.contacts(foot).contacts {
+                    if c.activation_time <= land + 1e-9 {
+                        continue;
+                    }
+                    let tc = c.activation_time + 1e-6;
+                    let ll = new.contacts(Foot::Left).active_at(tc).unwrap().pose;
+                    let rr = new.contacts(Foot::Right).active_at(tc).unwrap().pose;
+                    let w = feet_lateral_separation(
+                        Pose2::from_isometry(&ll),
+                        Pose2::from_isometry(&rr),
+                    );
+                    assert!(w >= p.config().min_width - 1e-9, "width {w} at {tc}");
+                }
+            }
+            // the walk still ends at the goal; ZMP in the support (independent hull test), the LIPM
+            // relations and the swing shapes on the whole plan
+            reaches_the_goal_and_holds(&p);
+        }
+    }
+}
+
+#[test]
+fn the_single_support_is_kept_when_the_dcm_lands_inside_the_new_support() {
+    // an outward adjustment: the plan up to the touch-down is the old one, segment for segment
+    let mut p = planner();
+    let (time, t) = mid_single_support(&p, 2);
+    let old = p.plan().unwrap().clone();
+    let step = old.current_step(t).unwrap();
+    let nominal = step.swing.end.translation.vector.xy();
+    let request = StepAdjustmentRequest {
+        time,
+        target: nominal + Vector2::new(0.0, -0.04 * step.stance.side()),
+        land_time: step.swing.land_time,
+        min_remaining: 0.1,
+    };
+    assert!(p.adjust_step(&request, &GOAL).unwrap());
+    for k in 0..=40 {
+        let tk = t + (request.land_time - t) * k as f64 / 40.0;
+        assert_eq!(sample(&p, tk).zmp, {
+            let mut s = PlanSample::default();
+            old.sample(tk, &mut s);
+            s.zmp
+        });
+    }
+    // the crossed request moves the ZMP inside the stance sole before the touch-down
+    let (mut p, old, request) = crossed_request(2, 0.15);
+    assert!(p.adjust_step(&request, &GOAL).unwrap());
+    let before = request.land_time - 0.01;
+    let (a, b) = (sample(&p, before), {
+        let mut s = PlanSample::default();
+        old.sample(before, &mut s);
+        s
+    });
+    let stance = old.current_step(seconds(request.time)).unwrap().stance;
+    assert!((a.zmp - b.zmp).norm() > 0.02, "{:?} vs {:?}", a.zmp, b.zmp);
+    assert!(in_hull(
+        &corners(&a.foot(stance).pose, p.config()),
+        a.zmp.xy(),
+        1e-9
+    ));
+}
+
+/// The `n`-th single support, 0.02 s after its lift-off, retargeted `inward` metres past the stance foot
+/// (negative: outward) to land 0.39 s later, well before its nominal touch-down: the step a released hold
+/// asks for (docs/push-recovery.md, "The step out of the held double support").
+fn early_request(n: usize, inward: f64) -> (Planner, StepAdjustmentRequest) {
+    let p = planner();
+    let (time, t) = instant(single_support(&p, n).start + 0.02);
+    let request = lateral_request(&p, (time, t), inward, Some(t + 0.39));
+    (p, request)
+}
+
+/// A known limit, pinned on both sides: a crossed touch-down asked at the start of the swing for 0.39 s
+/// later is refused (the replan from the crossed feet finds no double support long enough for its ZMP,
+/// 0.15-0.17 m outside), while the same early touch-down outward, and the crossed one at its nominal time
+/// (`a_crossed_touch_down_is_replanned_and_the_next_step_uncrosses`), are planned.
+#[test]
+fn an_early_crossed_touch_down_is_refused_and_the_same_early_touch_down_outward_is_planned() {
+    for n in [1, 2, 3] {
+        let (mut p, request) = early_request(n, -0.15);
+        let applied = p.adjust_step(&request, &GOAL);
+        assert!(matches!(applied, Ok(true)), "step {n}: {applied:?}");
+        reaches_the_goal_and_holds(&p);
+        for inward in [0.15, 0.25] {
+            let (mut p, request) = early_request(n, inward);
+            let before = p.plan().unwrap().clone();
+            let refused = p.adjust_step(&request, &GOAL);
+            assert!(
+                matches!(refused, Err(PlannerError::ZmpOutsideSupport { distance, .. }) if distance > 0.1),
+                "step {n}, {inward} m: {refused:?}"
+            );
+            assert_eq!(p.plan().unwrap(), &before);
+        }
+    }
 }

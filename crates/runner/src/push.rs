@@ -6,6 +6,7 @@
 //! `p − F̂/(m ω²)` given to the step-adjustment QP as its stance CoP).
 
 use nalgebra::{Vector2, Vector3};
+use stride_block::SupportPolygon;
 use stride_planner::{Phase, PhaseKind, Plan, PlanSample};
 use stride_simplified::{push_zmp_offset, PushConfig, PushObserver, SimplifiedError};
 use stride_walking::PlanClock;
@@ -28,8 +29,15 @@ pub struct PushResponse {
     /// Whether the estimate's current rise above `hold_force` came within `impact_window` of a planned
     /// touch-down (then it must last `hold_delay` before a hold starts).
     near_impact: bool,
+    /// How far the DCM with the push, `ξ + F̂/(m ω²)`, is outside the support polygon (the last
+    /// [`PushResponse::capture`]; −∞ before the first) \[m\].
+    outside: f64,
+    /// Whether `step_out` ended the hold of the current double support (it is not held again).
+    stepped_out: bool,
     /// Double supports held so far.
     pub holds: u64,
+    /// Holds ended by `step_out` so far.
+    pub step_outs: u64,
 }
 
 impl PushResponse {
@@ -48,7 +56,10 @@ impl PushResponse {
             double_support_start: None,
             since_touch_down: None,
             near_impact: false,
+            outside: f64::NEG_INFINITY,
+            stepped_out: false,
             holds: 0,
+            step_outs: 0,
         })
     }
 
@@ -71,6 +82,19 @@ impl PushResponse {
         Ok(())
     }
 
+    /// Notes where the measured DCM `dcm` \[m\] stands with the push for the next [`PushResponse::decide`]:
+    /// the capture point of the pushed LIPM, `ξ + F̂/(m ω²)` (the DCM a CoP inside `support` can stop
+    /// only if that point is inside it), and its distance outside `support` (half-plane test; ≤ 0
+    /// inside). Returns that distance \[m\]. No allocation.
+    pub fn capture(&mut self, dcm: Vector2<f64>, omega: f64, support: &SupportPolygon) -> f64 {
+        self.outside = if omega > 0.0 {
+            support.max_violation(dcm + push_zmp_offset(&self.estimate, self.mass, omega))
+        } else {
+            f64::NEG_INFINITY
+        };
+        self.outside
+    }
+
     /// Tells `clock` to hold or run for the plan `sample` (taken at the clock's plan time) while
     /// `walking` (every simplified tick, `dt` \[s\] apart; `start_or_stop`: the sample is in the walk's
     /// first or last double support, [`in_start_or_stop`]). A hold starts in a double support once the
@@ -79,7 +103,10 @@ impl PushResponse {
     /// touch-down (before or after it), or in the start-up or stopping double support, waits
     /// `hold_delay` (a touch-down's impact, and the torque walks' weight shift before the first lift-off
     /// and after the last touch-down, show in the observer as short pulses); any other rise holds at
-    /// once. Returns whether a hold started.
+    /// once. With `step_out`, a hold ends for the rest of the double support once the last
+    /// [`PushResponse::capture`] is more than `step_out_margin` outside the support polygon (counted in
+    /// `step_outs`): the clock runs on to the next lift-off and the step adjustment places that step.
+    /// Returns whether a hold started.
     pub fn decide(
         &mut self,
         dt: f64,
@@ -93,6 +120,7 @@ impl PushResponse {
         self.note_rise(dt, touch_down);
         if !double_support {
             self.double_support_start = None;
+            self.stepped_out = false;
             clock.hold(false);
             return false;
         }
@@ -108,6 +136,15 @@ impl PushResponse {
             && pushed
             && (clock.holding() || persistent)
             && clock.delay() - start < self.config.max_hold;
+        if self.config.step_out
+            && hold
+            && !self.stepped_out
+            && self.outside > self.config.step_out_margin
+        {
+            self.stepped_out = true;
+            self.step_outs += 1;
+        }
+        let hold = hold && !self.stepped_out;
         let started = hold && !clock.holding();
         if started {
             self.holds += 1;
@@ -405,6 +442,65 @@ mod tests {
         let mut clock = PlanClock::new(0.1);
         push_run(&mut r, &mut clock, PhaseKind::DoubleSupport, true, 1.0);
         assert_eq!(clock.delay(), 0.0);
+    }
+
+    #[test]
+    fn with_step_out_a_hold_ends_once_the_dcm_with_the_push_leaves_the_support_and_not_before() {
+        // feet 0.2 m wide apart: the hull spans y in [-0.145, 0.145] (0.09 m wide soles)
+        let support = SupportPolygon::rectangle(-0.1, 0.1, -0.145, 0.145).unwrap();
+        let omega = (9.81f64 / 0.5).sqrt();
+        let config = PushConfig {
+            hold_at_once: true,
+            step_out: true,
+            step_out_margin: 0.01,
+            ..PushConfig::default()
+        };
+        let ds = sample(PhaseKind::DoubleSupport);
+        let ss = sample(PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Left,
+        });
+        // 40 N to the right: F/(m ω²) = 40 · 0.5 / (30 · 9.81) = 68 mm; a DCM at y = -0.05 m puts the
+        // pushed capture point at -0.118 m (inside), at y = -0.10 m at -0.168 m (23 mm outside)
+        let run = |config: PushConfig, dcm_y: f64| {
+            let mut r = response(config);
+            r.estimate = Vector2::new(0.0, -40.0);
+            r.pushed_for = 1.0;
+            let mut clock = PlanClock::new(0.1);
+            let mut held = 0;
+            for k in 0..20u64 {
+                clock.plan_time(Duration::from_millis(k * 10));
+                let outside = r.capture(Vector2::new(0.0, dcm_y), omega, &support);
+                r.decide(0.01, &ds, true, false, &mut clock);
+                held += u32::from(clock.holding());
+                // the capture point is still inside: held throughout
+                if dcm_y > -0.06 {
+                    assert!(outside < 0.0 && clock.holding(), "{outside}");
+                }
+            }
+            (r, clock, held)
+        };
+        let (r, _, held) = run(config, -0.05);
+        assert_eq!((r.holds, r.step_outs, held), (1, 0, 20));
+        let (mut r, mut clock, held) = run(config, -0.10);
+        assert_eq!((r.step_outs, held), (1, 0));
+        assert!((r.capture(Vector2::new(0.0, -0.1), omega, &support) - 0.0231).abs() < 1e-3);
+        // not held again in that double support, even with the capture point back inside
+        r.capture(Vector2::zeros(), omega, &support);
+        r.decide(0.01, &ds, true, false, &mut clock);
+        assert!(!clock.holding() && r.step_outs == 1);
+        // the next double support is held again
+        r.decide(0.01, &ss, true, false, &mut clock);
+        r.decide(0.01, &ds, true, false, &mut clock);
+        assert!(clock.holding());
+        // without step_out the same push is held
+        let (r, _, held) = run(
+            PushConfig {
+                step_out: false,
+                ..config
+            },
+            -0.10,
+        );
+        assert_eq!((r.holds, r.step_outs, held), (1, 0, 20));
     }
 
     #[test]

@@ -433,6 +433,13 @@ impl<'a> Loop<'a> {
             );
             self.event(t, "push_hold", detail)?;
         }
+        if let Some(outside) = self.stack.push_step_out.take() {
+            let detail = format!(
+                "hold ended for a step: DCM with the push {:.1} mm outside the support polygon",
+                outside * 1e3
+            );
+            self.event(t, "push_step_out", detail)?;
+        }
         if let Some(message) = held {
             let detail = format!("simplified layer held its references: {message}");
             self.event(t, "hold", detail)?;

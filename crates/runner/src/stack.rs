@@ -327,6 +327,9 @@ pub struct Stack {
     /// The push estimate \[N\] when a double-support hold started at the last simplified tick, for the
     /// `push_hold` event (taken by the scheduler).
     pub push_hold_started: Option<Vector2<f64>>,
+    /// How far \[m\] the DCM with the push was outside the support polygon when `step_out` ended a
+    /// hold at the last simplified tick, for the `push_step_out` event (taken by the scheduler).
+    pub push_step_out: Option<f64>,
     /// Whether [`Stack::adjusted_footstep`] is an early touch-down (`step_adjustment.touchdown_force`)
     /// rather than a step moved by the step-adjustment QP.
     pub early_touchdown: bool,
@@ -533,6 +536,7 @@ impl Stack {
                 None
             },
             push_hold_started: None,
+            push_step_out: None,
             early_touchdown: false,
             wbc_period: 1.0 / f64::from(c.rates.wbc_hz),
             flexible,
@@ -944,6 +948,12 @@ impl Stack {
         let walking = plan.is_some_and(|p| stride_walking::is_walking(p, t));
         let start_or_stop = plan.is_some_and(|p| crate::push::in_start_or_stop(p, t));
         let dt = self.simplified.period();
+        let outside = push.capture(
+            self.measured.dcm,
+            self.plan_sample.omega,
+            &self.simplified_input.support_polygon,
+        );
+        let step_outs = push.step_outs;
         if push.decide(
             dt,
             &self.plan_sample,
@@ -952,6 +962,9 @@ impl Stack {
             &mut self.plan_clock,
         ) {
             self.push_hold_started = Some(push.estimate());
+        }
+        if push.step_outs > step_outs {
+            self.push_step_out = Some(outside);
         }
     }
 

@@ -91,6 +91,13 @@ fn steady_state_ticks_do_not_allocate() {
          [[sim.pushes]]\nframe = \"chest\"\nstart = 2.0\nduration = 1.0\nwrench = [0.0, 15.0, 0.0, 0.0, 0.0, 0.0]\n",
     );
     assert_steady_on_simulator(&s, &push, extra_seconds, "push response");
+    // the same with the hold ended for a step (`simplified.push.step_out`: the pushed capture point
+    // against the support polygon at every simplified tick)
+    let step_out = s.write(
+        "po.toml",
+        "include = [\"p.toml\"]\n[simplified.push]\nstep_out = true\n",
+    );
+    assert_steady_on_simulator(&s, &step_out, extra_seconds, "push response, step out");
     // torque control with the actuator compensation (`wbc.tsid.actuators`: the lead, the friction
     // feed-forward, the delay's prediction) on the simulator's default actuators
     let actuators = s.write(

@@ -4,6 +4,8 @@
 //! push it moves the swing foot's touch-down outward, in the push direction, and logs it on
 //! `/planner/adjusted_footsteps`. On the official iCub (STRIDE_ICUB_MODELS_DIR): with its robot file's
 //! low-passed DCM error the unpushed walk adjusts nothing and reaches its goal, unfiltered it falls.
+//! With the crossover (`configs/layers/step_crossover.toml`) a 40 N push towards the stance foot gets
+//! touch-downs past it, accepted by the planner; without it every touch-down stays outward.
 mod common;
 
 use common::{adjusted_footsteps, log_options as options, Scratch};
@@ -155,4 +157,43 @@ fn on_the_icub_the_filtered_dcm_error_leaves_the_unpushed_walk_alone_and_unfilte
         raw.render()
     );
     assert!(raw.step_adjustments.0 > 0, "{}", raw.render());
+}
+
+/// The push response scenario with a 40 N push to the left (+y) for 1 s from 5.0 s, mid single support on
+/// the left foot (at (0.64, 0.075) m): the right foot swings and the push is towards the stance foot.
+/// With the crossover the step adjustment asks for right touch-downs 0.10–0.25 m left of the left foot and
+/// the planner applies them (measured: 21 applied, 5 refused; the walk still falls at 5.39 s, the
+/// whole-body layer losing the swing's detour, docs/push-recovery.md "The crossover step, replanned");
+/// without it every right touch-down stays right of the left foot (the evening's experiment had every
+/// crossed request refused by the planner).
+#[test]
+fn a_push_towards_the_stance_foot_gets_crossed_touch_downs_applied_only_with_the_crossover() {
+    let s = Scratch::new("step_adjustment_crossover");
+    let push = "[scenario]\nduration = 6.0\n[[sim.pushes]]\nframe = \"chest\"\nstart = 5.0\n\
+                duration = 1.0\nwrench = [0.0, 40.0, 0.0, 0.0, 0.0, 0.0]\n";
+    let base = &[
+        "walk_straight_step_adjustment_push_response.toml",
+        "layers/step_crossover.toml",
+    ];
+    let mut right_ys = Vec::new();
+    for (name, layers) in [("on", &base[..]), ("off", &base[..1])] {
+        let sc = common::scenario_from_configs(&s, name, layers, push);
+        let run = run_scenario(&sc, &options(&s, name)).unwrap();
+        let ys: Vec<f64> = adjusted_footsteps(&s.path(&format!("{name}.mcap")))
+            .iter()
+            .filter(|m| m["foot"] == "right" && m["time"].as_f64().unwrap() < 5.6)
+            .map(|m| m["position"][1].as_f64().unwrap())
+            .collect();
+        right_ys.push((run.step_adjustments, ys));
+    }
+    let ((applied, refused), on) = &right_ys[0];
+    assert!(!on.is_empty(), "no right step adjusted");
+    // past the left sole (y 0.075, half width 0.045) by at least crossover_min − 1 mm
+    assert!(
+        on.iter().filter(|&&y| y > 0.075 + 0.099).count() >= 5,
+        "crossed touch-downs with the crossover: {on:?}"
+    );
+    assert!(applied > refused, "{applied} applied, {refused} refused");
+    let (_, off) = &right_ys[1];
+    assert!(off.iter().all(|&y| y < 0.075 - 0.139), "without: {off:?}");
 }

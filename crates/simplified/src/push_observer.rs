@@ -66,6 +66,13 @@ pub struct PushConfig {
     pub step_adjustment: bool,
     /// Fraction of the push's LIPM offset the tracked CoM and DCM lean against the push, in \[0, 1\].
     pub lean: f64,
+    /// Whether a hold ends early (the plan's clock runs on into the next single support, whose step the
+    /// step adjustment moves) once the DCM with the push, `ξ + F̂/(m ω²)`, is more than
+    /// `step_out_margin` outside the measured support polygon: no CoP of the held double support can
+    /// capture it any more.
+    pub step_out: bool,
+    /// Distance outside the support polygon of `ξ + F̂/(m ω²)` at which `step_out` ends a hold \[m\].
+    pub step_out_margin: f64,
 }
 
 impl Default for PushConfig {
@@ -83,6 +90,8 @@ impl Default for PushConfig {
             hold_ramp: 0.1,
             step_adjustment: true,
             lean: 0.0,
+            step_out: false,
+            step_out_margin: 0.0,
         }
     }
 }
@@ -97,6 +106,7 @@ impl PushConfig {
         check_non_negative("push.impact_window", self.impact_window)?;
         check_non_negative("push.max_hold", self.max_hold)?;
         check_positive("push.hold_ramp", self.hold_ramp)?;
+        check_non_negative("push.step_out_margin", self.step_out_margin)?;
         if !(0.0..=1.0).contains(&self.lean) {
             return Err(SimplifiedError::InvalidParameter {
                 name: "push.lean",

@@ -95,9 +95,12 @@ const RY: usize = 8;
 /// | `touchdown_force` | N | 0 (off) | early touch-down: when the swing foot's estimated vertical ground force exceeds this in the second half of its swing while the plan has the sole `touchdown_height` or more above its landing height, the runner lands the step where the foot is, `touchdown_lead` later (the plan re-anchored at the real touch-down instead of the sole dragged on to its planned one) |
 /// | `touchdown_height` | m | 0.01 | planned height of the swing sole above its landing height below which a loaded sole is an ordinary (slightly early) touch-down, left to the plan |
 /// | `touchdown_lead` | s | 0.08 | time from a detected early touch-down to the planned one it becomes |
+/// | `crossover_min` | m | 0 (off) | crossover step: when the solution's touch-down sits at the no-crossing bound (`lateral_min`: the DCM pushed towards the stance foot's side), the QP is solved again with the touch-down on the stance foot's far side, between `crossover_min` and `crossover_max` past the stance foot (stance frame y), and the cheaper of the two solutions is kept; more than the sole's width (0.09 m on the bundled humanoid) keeps the soles apart. The planner replans from the crossed feet, the next step uncrossing them, and the swing goes round the stance sole |
+/// | `crossover_max` | m | 0.25 | farthest crossover touch-down past the stance foot (stance frame y) |
 ///
 /// `validate()` requires finite positive lengths, weights and durations, `lateral_min < lateral_max`,
-/// `step_duration_min < step_duration_max` and `min_remaining_time < step_duration_max`.
+/// `step_duration_min < step_duration_max`, `min_remaining_time < step_duration_max` and, with the
+/// crossover on, `crossover_min < crossover_max`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StepAdjustmentConfig {
@@ -145,6 +148,10 @@ pub struct StepAdjustmentConfig {
     pub touchdown_lead: f64,
     /// Planned sole height above the landing height below which a loaded sole is left to the plan \[m\].
     pub touchdown_height: f64,
+    /// Smallest distance of a crossover touch-down past the stance foot \[m\]; 0: no crossover.
+    pub crossover_min: f64,
+    /// Largest distance of a crossover touch-down past the stance foot \[m\].
+    pub crossover_max: f64,
 }
 
 impl Default for StepAdjustmentConfig {
@@ -172,6 +179,8 @@ impl Default for StepAdjustmentConfig {
             touchdown_force: 0.0,
             touchdown_lead: 0.08,
             touchdown_height: 0.01,
+            crossover_min: 0.0,
+            crossover_max: 0.25,
         }
     }
 }
@@ -207,6 +216,8 @@ impl StepAdjustmentConfig {
         check_non_negative("step_adjustment.touchdown_force", self.touchdown_force)?;
         check_positive("step_adjustment.touchdown_lead", self.touchdown_lead)?;
         check_non_negative("step_adjustment.touchdown_height", self.touchdown_height)?;
+        check_non_negative("step_adjustment.crossover_min", self.crossover_min)?;
+        check_positive("step_adjustment.crossover_max", self.crossover_max)?;
         let order = |name, value, ok, reason| {
             if ok {
                 Ok(())
@@ -235,6 +246,12 @@ impl StepAdjustmentConfig {
             self.min_remaining_time,
             self.min_remaining_time < self.step_duration_max,
             "must be < step_duration_max",
+        )?;
+        order(
+            "step_adjustment.crossover_max",
+            self.crossover_max,
+            self.crossover_min == 0.0 || self.crossover_max > self.crossover_min,
+            "must be > crossover_min (the crossover interval is empty)",
         )
     }
 }
@@ -294,6 +311,8 @@ pub struct StepAdjustmentDiagnostics {
     pub bound_active: bool,
     /// CoP offset `δr` the solution counts on (world) \[m\].
     pub cop_offset: Vector2<f64>,
+    /// Whether the touch-down is a crossover (past the stance foot, `crossover_min`).
+    pub crossover: bool,
 }
 
 /// The adjusted step.
@@ -317,6 +336,12 @@ pub struct StepAdjuster {
     qp: DenseQp,
     solver: ActiveSetSolver,
     out: SolverOutput,
+    /// The crossover's solver and output (`crossover_min` > 0): its own, so that the main solve's warm
+    /// start is the same with the crossover on or off.
+    cross_solver: ActiveSetSolver,
+    cross_out: SolverOutput,
+    /// Stance position of the step whose touch-down crossed over: the rest of that step stays crossed.
+    crossed_step: Option<Vector2<f64>>,
     result: StepAdjustment,
 }
 
@@ -328,6 +353,9 @@ impl StepAdjuster {
         let mut solver = ActiveSetSolver::new(ActiveSetSettings::default());
         solver.reserve(STEP_ADJUSTMENT_VARIABLES, 2, 4);
         let out = SolverOutput::new(&qp);
+        let mut cross_solver = ActiveSetSolver::new(ActiveSetSettings::default());
+        cross_solver.reserve(STEP_ADJUSTMENT_VARIABLES, 2, 4);
+        let cross_out = SolverOutput::new(&qp);
         // The structure that never changes: the equality's unit columns and the softened offset rows.
         let mut e = qp.eq_matrix_mut();
         e[(0, UX)] = 1.0;
@@ -348,6 +376,9 @@ impl StepAdjuster {
             qp,
             solver,
             out,
+            cross_solver,
+            cross_out,
+            crossed_step: None,
             result: StepAdjustment::default(),
         })
     }
@@ -378,6 +409,7 @@ impl StepAdjuster {
         check_input(input)?;
         let nominal = self.fill(input);
         self.solver.solve(&self.qp, &mut self.out);
+        let crossover = self.crossover(input);
         let x = &self.out.x;
         let rot = Rotation2::new(input.stance_yaw);
         let ok = self.out.status.is_success() && x.iter().all(|v| v.is_finite()) && x[TAU] > 0.0;
@@ -414,9 +446,58 @@ impl StepAdjuster {
                 } else {
                     Vector2::zeros()
                 },
+                crossover: ok && crossover,
             },
         };
         Ok(&self.result)
+    }
+
+    /// The crossover (`crossover_min` > 0): when the main solution's touch-down is at the no-crossing bound,
+    /// the same QP with the lateral bounds on the stance foot's far side (`crossover_min`..`crossover_max`
+    /// past it); its solution replaces the main one in `out` when it succeeds at a lower cost. Once a step
+    /// has crossed over (same stance position), the rest of its solves keep the crossed solution whenever
+    /// it succeeds (no switching back and forth across the stance foot from one tick to the next). Returns
+    /// whether it did. [`StepAdjuster::qp`] is then the crossover's QP (its lateral bounds), otherwise the
+    /// main one.
+    fn crossover(&mut self, input: &StepAdjustmentInput) -> bool {
+        let c = self.config;
+        if c.crossover_min <= 0.0 || !self.out.status.is_success() {
+            return false;
+        }
+        // the swing foot's side: +1 when it steps to the left of the stance foot
+        let side = input.stance.other().side();
+        let inner = if side > 0.0 {
+            self.qp.lower_bounds()[UY]
+        } else {
+            self.qp.upper_bounds()[UY]
+        };
+        let committed = self.crossed_step == Some(input.stance_position);
+        let uy = self.out.x[UY];
+        if !committed && (uy - inner).abs() > 1e-9 * (1.0 + inner.abs()) {
+            return false;
+        }
+        let (lo, hi) = if side > 0.0 {
+            (-c.crossover_max, -c.crossover_min)
+        } else {
+            (c.crossover_min, c.crossover_max)
+        };
+        let main = (self.qp.lower_bounds()[UY], self.qp.upper_bounds()[UY]);
+        self.qp.lower_bounds_mut()[UY] = lo;
+        self.qp.upper_bounds_mut()[UY] = hi;
+        self.cross_solver.solve(&self.qp, &mut self.cross_out);
+        let crossed = &self.cross_out;
+        let better = crossed.status.is_success()
+            && crossed.x.iter().all(|v| v.is_finite())
+            && crossed.x[TAU] > 0.0
+            && (committed || crossed.objective < self.out.objective);
+        if better {
+            self.crossed_step = Some(input.stance_position);
+            std::mem::swap(&mut self.out, &mut self.cross_out);
+        } else {
+            self.qp.lower_bounds_mut()[UY] = main.0;
+            self.qp.upper_bounds_mut()[UY] = main.1;
+        }
+        better
     }
 
     /// Whether a variable bound (box or duration) holds with equality at the solution (1e-9).

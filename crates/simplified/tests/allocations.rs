@@ -118,11 +118,10 @@ fn serializing_a_support_polygon_does_not_allocate() {
     assert_eq!(back, polygon);
 }
 
-#[test]
-fn step_adjustment_does_not_allocate() {
-    let mut adj = StepAdjuster::new(&StepAdjustmentConfig::default()).unwrap();
-    let mut input = StepAdjustmentInput {
-        dcm: Vector2::new(0.35, -0.05),
+/// A step-adjustment problem mid-swing on the left foot with the measured DCM at `y` \[m\].
+fn left_stance_input(y: f64) -> StepAdjustmentInput {
+    StepAdjustmentInput {
+        dcm: Vector2::new(0.35, y),
         omega: OMEGA,
         stance: Foot::Left,
         stance_position: Vector2::new(0.3, 0.075),
@@ -132,7 +131,13 @@ fn step_adjustment_does_not_allocate() {
         nominal_offset: Vector2::new(0.0, 0.05),
         time_since_touchdown: 0.35,
         nominal_duration: 1.0,
-    };
+    }
+}
+
+#[test]
+fn step_adjustment_does_not_allocate() {
+    let mut adj = StepAdjuster::new(&StepAdjustmentConfig::default()).unwrap();
+    let mut input = left_stance_input(-0.05);
     let (_, n) = ALLOC.allocations_during(|| {
         for i in 0..200 {
             // from the nominal case to pushes that activate the box and the timing bounds
@@ -143,6 +148,30 @@ fn step_adjustment_does_not_allocate() {
     });
     assert_eq!(n, 0, "step adjustment allocated");
     assert!(adj.result().diagnostics.bound_active);
+}
+
+#[test]
+fn step_adjustment_with_the_crossover_does_not_allocate() {
+    let config = StepAdjustmentConfig {
+        crossover_min: 0.10,
+        crossover_max: 0.25,
+        ..Default::default()
+    };
+    let mut adj = StepAdjuster::new(&config).unwrap();
+    let mut input = left_stance_input(0.0);
+    let mut crossed = 0;
+    let (_, n) = ALLOC.allocations_during(|| {
+        for i in 0..200 {
+            // pushed towards the stance foot (left): to the no-crossing bound, then past the stance foot
+            input.dcm.y = 0.002 * i as f64;
+            input.time_since_touchdown = 0.35 + 0.002 * i as f64;
+            if adj.solve(&input).unwrap().diagnostics.crossover {
+                crossed += 1;
+            }
+        }
+    });
+    assert_eq!(n, 0, "step adjustment with the crossover allocated");
+    assert!(crossed > 0 && crossed < 200, "{crossed}");
 }
 
 #[test]

@@ -238,6 +238,79 @@ fn an_inward_push_stops_at_the_no_crossing_distance() {
 }
 
 #[test]
+fn an_inward_push_past_the_no_crossing_bound_crosses_over_when_enabled() {
+    let config = StepAdjustmentConfig {
+        crossover_min: 0.10,
+        crossover_max: 0.25,
+        ..Default::default()
+    };
+    let tol = 1e-9;
+    for stance in [Foot::Left, Foot::Right] {
+        let side = stance.other().side();
+        for (push, t) in [(0.08, 0.5), (0.15, 0.6), (0.3, 0.5)] {
+            let mut c = case(stance, 0.0);
+            c.input.dcm.y -= push * side;
+            c.input.time_since_touchdown = t;
+            let mut off = StepAdjuster::new(&StepAdjustmentConfig::default()).unwrap();
+            let main = *off.solve(&c.input).unwrap();
+            let main_cost = off.solver_output().objective;
+            let mut adj = StepAdjuster::new(&config).unwrap();
+            let r = *adj.solve(&c.input).unwrap();
+            assert_eq!(r.diagnostics.status, StepAdjustmentStatus::Solved);
+            assert!(r.diagnostics.crossover, "{stance:?} {push}: {r:?}");
+            // past the stance foot, inside the crossover interval, cheaper than the bound's solution
+            let past = -(r.touchdown.y - c.input.stance_position.y) * side;
+            assert!(
+                past >= config.crossover_min - tol && past <= config.crossover_max + tol,
+                "{past}"
+            );
+            assert!(adj.solver_output().objective < main_cost);
+            // the crossover's QP is a QP: its KKT conditions hold at the solution
+            let kkt = check_kkt(adj.qp(), adj.solver_output());
+            assert!(kkt.is_satisfied(1e-9), "{kkt:?}");
+            // without the crossover the same push stops at the bound
+            let out = (main.touchdown.y - c.input.stance_position.y) * side;
+            assert!((out - config.lateral_min).abs() < 1e-9 && !main.diagnostics.crossover);
+            // the step stays crossed for the rest of its solves, even with the DCM back on the plan;
+            // a fresh adjuster, or the next step (another stance position), does not cross
+            let mut back = c.input;
+            back.dcm = c.planned_dcm;
+            assert!(adj.solve(&back).unwrap().diagnostics.crossover);
+            let fresh = *StepAdjuster::new(&config).unwrap().solve(&back).unwrap();
+            assert!(!fresh.diagnostics.crossover);
+            back.stance_position.x += 0.2;
+            back.stance_cop.x += 0.2;
+            back.nominal_step.x += 0.2;
+            assert!(!adj.solve(&back).unwrap().diagnostics.crossover);
+        }
+        // a push that the outward region absorbs (the bound inactive) is solved as without the crossover
+        for (dx, dy) in [(0.0, 0.0), (0.05, 0.0), (0.0, 0.06 * side)] {
+            let mut c = case(stance, 0.0);
+            c.input.dcm += Vector2::new(dx, dy);
+            let with = *StepAdjuster::new(&config).unwrap().solve(&c.input).unwrap();
+            let without = *StepAdjuster::new(&StepAdjustmentConfig::default())
+                .unwrap()
+                .solve(&c.input)
+                .unwrap();
+            assert_eq!(with, without);
+        }
+    }
+    // an empty crossover interval is refused
+    let bad = StepAdjustmentConfig {
+        crossover_min: 0.2,
+        crossover_max: 0.15,
+        ..Default::default()
+    };
+    assert!(matches!(
+        StepAdjuster::new(&bad),
+        Err(SimplifiedError::InvalidParameter {
+            name: "step_adjustment.crossover_max",
+            ..
+        })
+    ));
+}
+
+#[test]
 fn kkt_holds_and_clarabel_agrees() {
     let config = StepAdjustmentConfig::default();
     let mut clarabel = ClarabelSolver::new(Default::default());
