@@ -694,3 +694,33 @@ fn the_touchdown_search_outlasts_the_clock_landing_and_still_falls() {
     assert!(without.simulated_time < 2.6, "{}", without.render());
     assert!(without.distance < 0.25, "{}", without.render());
 }
+
+/// Position control, the IK on the tilted sole (docs/soft-ground.md, "Position control: the IK on the tilted
+/// sole"), on k = 2e6, b = 1e4 with the sole-tilt feed-forward at 0.1 and the touch-down search at 0.1 m/s
+/// (measured 4.48 s, 0.469 m): turning the swing foot's reference back by the stance sole's measured roll
+/// and pitch beyond its reference (`swing_tilt_gain` 1) walks past 5 s (measured 5.50 s, 0.731 m); turning
+/// the stance sole's own reference by its measured tilt (`measured_tilt_gain` 1) rolls the light sole
+/// further, a loop of gain about one, and falls in the first steps (measured 1.99 s, 0.092 m). Every
+/// variant still falls (0 of 6), so the limit cannot move silently.
+#[test]
+fn the_swing_foot_turned_by_the_stance_tilt_outlasts_the_search_and_the_stance_turned_falls() {
+    let s = Scratch::new("soft_ground_position_tilted_sole");
+    let walk = |keys: &str| {
+        overlay(
+            "configs/walk_soft_ground_position_tilt.toml",
+            &format!(
+                "[sim.contact]\nnormal_stiffness = 2e6\n[simplified.foot_admittance]\n\
+                 ground_stiffness = 2e6\ntouchdown_search_speed = 0.1\n{keys}\n"
+            ),
+        )
+    };
+    let swing = assert_falls(&s, "swing", &walk("swing_tilt_gain = 1.0"));
+    assert!(swing.simulated_time > 5.0, "{}", swing.render());
+    assert!(swing.distance > 0.6, "{}", swing.render());
+    let search = assert_falls(&s, "search", &walk(""));
+    assert!(search.simulated_time < 5.0, "{}", search.render());
+    assert!(search.distance < 0.55, "{}", search.render());
+    let stance = assert_falls(&s, "stance", &walk("measured_tilt_gain = 1.0"));
+    assert!(stance.simulated_time < 2.3, "{}", stance.render());
+    assert!(stance.distance < 0.15, "{}", stance.render());
+}
