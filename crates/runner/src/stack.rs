@@ -1050,7 +1050,6 @@ impl Stack {
         let planned = [s.left.in_contact, s.right.in_contact];
         let e = &self.estimate;
         let input = FootAdmittanceInput {
-            dcm_error: self.measured.dcm - s.dcm_position.xy(),
             desired_zmp: self.wbc_input.desired_zmp.unwrap_or(s.zmp.xy()),
             soles: self.measured.soles,
             wrenches: e.foot_wrenches,

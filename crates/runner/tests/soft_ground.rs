@@ -703,7 +703,7 @@ fn the_touchdown_search_outlasts_the_clock_landing_and_still_falls() {
 /// further, a loop of gain about one, and falls in the first steps (measured 1.99 s, 0.092 m). Every
 /// variant still falls (0 of 6), so the limit cannot move silently.
 #[test]
-fn the_swing_foot_turned_by_the_stance_tilt_outlasts_the_search_and_the_stance_turned_falls() {
+fn the_tilted_sole_swing_form_outlasts_the_search_and_the_stance_form_falls() {
     let s = Scratch::new("soft_ground_position_tilted_sole");
     let walk = |keys: &str| {
         overlay(

@@ -57,11 +57,6 @@
 //!   IK thinks and turned by `Δ`; its reference is lowered by that height and turned by `−Δ` (times `g_s`),
 //!   which moves the swing leg only. Once the foot is loaded (or without a loaded stance) the offset leaks
 //!   back to the plan with `force_leak_time`;
-//! * **hip strategy** (`hip_strategy_gain` `k_h` > 0): in single support (one foot loaded) the torso's
-//!   reference is rolled and pitched towards the DCM error `e` (measured − planned, in the frame of the
-//!   stance sole's yaw), `(−k_h e_y, k_h e_x)` bounded by `max_hip_tilt` and low-passed at
-//!   `measured_tilt_cutoff`, zero otherwise: the upper body turned towards the fall pushes the CoM back
-//!   when the stance ankle has no centre of pressure to give (a sole on a soft ground);
 //! * **distribution** of the desired ZMP `p*`: with both feet loaded, `α` is the projection of `p*` on the
 //!   segment between the sole origins (clamped to `[0, 1]`), `f_L* = (1 − α) F`, `f_R* = α F` (`F` the
 //!   measured total normal force) and each desired centre of pressure is its sole origin plus the part of
@@ -83,7 +78,7 @@ use serde::{Deserialize, Serialize};
 
 use stride_block::{low_pass_gain, FirstOrderLowPass};
 
-use crate::error::{check_finite, check_non_negative, check_positive, Result, SimplifiedError};
+use crate::error::{check_non_negative, check_positive, Result, SimplifiedError};
 
 /// Default cut-off of the error filter \[Hz\] (`error_cutoff`; docs/foot-admittance.md, "MuJoCo").
 pub const DEFAULT_ERROR_CUTOFF: f64 = 20.0;
@@ -128,8 +123,6 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 /// | `max_touchdown_search` | m | 0.05 | bound on the depth of that descent |
 /// | `measured_tilt_gain` | – | 0 | fraction of each loaded sole's measured roll and pitch added to its reference tilt, so the QP-IK's stance sole is the robot's (0: off, 1: all of it) |
 /// | `measured_tilt_cutoff` | Hz | 5 | cut-off of the low-pass filter on the measured sole tilt (0: unfiltered) |
-/// | `hip_strategy_gain` | rad/m | 0 | torso roll and pitch per metre of DCM error in single support, towards the error (negative: away from it; 0: off) |
-/// | `max_hip_tilt` | rad | 0.2 | bound on each of those angles |
 /// | `swing_tilt_gain` | – | 0 | fraction of the stance sole's measured roll and pitch beyond its reference by which the swing foot's reference is turned back about the stance sole (0: off) |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -169,10 +162,6 @@ pub struct FootAdmittanceConfig {
     /// Fraction of the stance sole's measured roll and pitch beyond its reference by which the swing
     /// foot's reference is turned back about the stance sole (0: off).
     pub swing_tilt_gain: f64,
-    /// Torso roll and pitch per metre of DCM error in single support (the hip strategy) \[rad/m\] (0: off).
-    pub hip_strategy_gain: f64,
-    /// Bound on each hip-strategy torso angle \[rad\].
-    pub max_hip_tilt: f64,
 }
 
 impl Default for FootAdmittanceConfig {
@@ -194,8 +183,6 @@ impl Default for FootAdmittanceConfig {
             measured_tilt_gain: 0.0,
             measured_tilt_cutoff: 5.0,
             swing_tilt_gain: 0.0,
-            hip_strategy_gain: 0.0,
-            max_hip_tilt: 0.2,
         }
     }
 }
@@ -235,9 +222,7 @@ impl FootAdmittanceConfig {
             "foot_admittance.measured_tilt_cutoff",
             self.measured_tilt_cutoff,
         )?;
-        check_non_negative("foot_admittance.swing_tilt_gain", self.swing_tilt_gain)?;
-        check_finite("foot_admittance.hip_strategy_gain", self.hip_strategy_gain)?;
-        check_non_negative("foot_admittance.max_hip_tilt", self.max_hip_tilt)
+        check_non_negative("foot_admittance.swing_tilt_gain", self.swing_tilt_gain)
     }
 }
 
@@ -258,11 +243,8 @@ pub fn leaky_admittance(x: f64, gain: f64, error: f64, leak_time: f64, dt: f64, 
 /// | `contacts` | – | feet in contact (planned and measured) |
 /// | `planned` | – | feet the plan has in contact (the touch-down search) |
 /// | `dt` | s | time since the last tick (> 0) |
-/// | `dcm_error` | m | measured minus planned DCM (world xy), for the hip strategy |
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FootAdmittanceInput {
-    /// Measured minus planned DCM (world xy) \[m\].
-    pub dcm_error: Vector2<f64>,
     /// Desired ZMP \[m\].
     pub desired_zmp: Vector2<f64>,
     /// Measured sole poses `[left, right]`.
@@ -306,10 +288,6 @@ pub struct FootAdmittanceOutput {
     pub desired_cop: [Vector2<f64>; 2],
     /// Desired normal forces \[N\] (0 on an unloaded foot).
     pub desired_force: [f64; 2],
-    /// The hip strategy's torso roll and pitch (after the planned orientation) \[rad\].
-    pub torso_tilt: Vector2<f64>,
-    /// Their rates \[rad/s\].
-    pub torso_tilt_rate: Vector2<f64>,
 }
 
 /// Foot damping and force difference control (see the module documentation). Allocation-free.
@@ -516,9 +494,6 @@ impl FootAdmittance {
         if c.swing_tilt_gain > 0.0 {
             self.compensate_swing(input, loaded);
         }
-        if c.hip_strategy_gain != 0.0 {
-            self.hip_strategy(input, loaded);
-        }
         self.output.desired_cop = cops;
         self.output.desired_force = forces;
         Ok(&self.output)
@@ -551,10 +526,7 @@ impl FootAdmittance {
         } else {
             Vector2::zeros()
         };
-        let filter = &mut self.feedforward_tilts[k];
-        let before = filter.output().unwrap_or(Vector2::zeros());
-        let after = filter.update(target, dt);
-        (after, (after - before) / dt)
+        filter_with_rate(&mut self.feedforward_tilts[k], target, dt)
     }
 
     /// The measured sole tilt of foot `k` and its rate over the tick \[rad, rad/s\]: `measured_tilt_gain`
@@ -572,10 +544,7 @@ impl FootAdmittance {
         } else {
             Vector2::zeros()
         };
-        let filter = &mut self.measured_tilts[k];
-        let before = filter.output().unwrap_or(Vector2::zeros());
-        let after = filter.update(target, dt);
-        (after, (after - before) / dt)
+        filter_with_rate(&mut self.measured_tilts[k], target, dt)
     }
 
     /// The swing-foot tilt compensation, added to the output's corrections: an unloaded foot `k` while the
@@ -606,25 +575,6 @@ impl FootAdmittance {
             foot.tilt += after.yz();
             foot.tilt_rate += rate.yz();
         }
-    }
-
-    /// The hip strategy's torso tilt (see the module documentation), first-order towards its target.
-    fn hip_strategy(&mut self, input: &FootAdmittanceInput, loaded: [bool; 2]) {
-        let c = self.config;
-        let target = match loaded {
-            [true, false] | [false, true] => {
-                let stance = &input.soles[usize::from(loaded[1])];
-                let (_, _, yaw) = stance.rotation.euler_angles();
-                let e = nalgebra::Rotation2::new(-yaw) * input.dcm_error;
-                let b = c.max_hip_tilt;
-                Vector2::new(-e.y, e.x).map(|v| (v * c.hip_strategy_gain).clamp(-b, b))
-            }
-            _ => Vector2::zeros(),
-        };
-        let before = self.output.torso_tilt;
-        let after = before + (target - before) * low_pass_gain(input.dt, c.measured_tilt_cutoff);
-        self.output.torso_tilt = after;
-        self.output.torso_tilt_rate = (after - before) / input.dt;
     }
 
     /// The touch-down search's depths `[left, right]` and their rates over the tick \[m, m/s\]: a foot
@@ -676,6 +626,17 @@ impl FootAdmittance {
     }
 }
 
+/// One tick of `filter` on `target` over `dt` \[s\]: its output and that output's rate over the tick.
+fn filter_with_rate(
+    filter: &mut FirstOrderLowPass<Vector2<f64>>,
+    target: Vector2<f64>,
+    dt: f64,
+) -> (Vector2<f64>, Vector2<f64>) {
+    let before = filter.output().unwrap_or(Vector2::zeros());
+    let after = filter.update(target, dt);
+    (after, (after - before) / dt)
+}
+
 /// The roll and pitch of a sole's orientation relative to the level frame of the same yaw \[rad\]: the
 /// `(φ, θ)` of `R = R_z(ψ) R_y(θ) R_x(φ)`, the tilt a [`FootCorrection`] applies after a level planned
 /// orientation of yaw `ψ`.
@@ -714,7 +675,6 @@ pub fn sink_offsets(forces: &Vector2<f64>, compliance: f64) -> [f64; 2] {
 
 fn check_input(input: &FootAdmittanceInput) -> Result<()> {
     let finite = input.desired_zmp.iter().all(|v| v.is_finite())
-        && input.dcm_error.iter().all(|v| v.is_finite())
         && input
             .wrenches
             .iter()
@@ -893,7 +853,6 @@ mod tests {
     /// desired ZMP is; the right foot carries nothing.
     fn left_cop_ahead(contacts: [bool; 2], dt: f64) -> FootAdmittanceInput {
         FootAdmittanceInput {
-            dcm_error: Vector2::zeros(),
             desired_zmp: Vector2::new(0.0, 0.07),
             soles: [sole(0.0, 0.07, 0.0), sole(0.0, -0.07, 0.0)],
             wrenches: [
@@ -1071,14 +1030,7 @@ mod tests {
                 (previous - expected).norm() < 1e-9,
                 "{previous} vs {expected}"
             );
-            let lifted = FootAdmittanceInput {
-                contacts: [false, false],
-                ..input
-            };
-            for _ in 0..500 {
-                on.step(&lifted).unwrap();
-            }
-            assert!(on.output().feet[0].tilt.norm() < 1e-9);
+            assert_left_tilt_leaks_back(&mut on, &input);
         }
         // gain 0: the same corrections as without the key (the default admittance on the same ground)
         let plain = FootAdmittanceConfig {
@@ -1173,6 +1125,33 @@ mod tests {
         assert!((depths[2] - 0.03 * a).abs() < 1e-9, "{depths:?}");
     }
 
+    /// Both feet unloaded for 1 s: the left sole's tilt is back to the plan.
+    fn assert_left_tilt_leaks_back(admittance: &mut FootAdmittance, input: &FootAdmittanceInput) {
+        let lifted = FootAdmittanceInput {
+            contacts: [false, false],
+            ..*input
+        };
+        for _ in 0..500 {
+            admittance.step(&lifted).unwrap();
+        }
+        assert!(admittance.output().feet[0].tilt.norm() < 1e-9);
+    }
+
+    /// With `measured_tilt_gain` and `swing_tilt_gain` at 0 (the defaults) another `measured_tilt_cutoff`
+    /// changes nothing, bit for bit.
+    fn assert_measured_tilt_off_changes_nothing(input: &FootAdmittanceInput) {
+        let mut off =
+            FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
+        let config = FootAdmittanceConfig {
+            measured_tilt_cutoff: 1.0,
+            ..Default::default()
+        };
+        let mut zero = FootAdmittance::new(&config, 0.2, 0.09, 320.0).unwrap();
+        for _ in 0..100 {
+            assert_eq!(off.step(input).unwrap(), zero.step(input).unwrap());
+        }
+    }
+
     /// The measured sole tilt: a loaded sole rolled and pitched in the ground (any yaw) gets `g_m` times
     /// that roll and pitch on its reference, through the filter; unloaded, it goes back to zero; with the
     /// gain at 0 (the default) the corrections are those without it, bit for bit.
@@ -1209,36 +1188,79 @@ mod tests {
             );
             // the right foot is not loaded: no tilt
             assert_eq!(on.output().feet[1].tilt, Vector2::zeros());
-            let lifted = FootAdmittanceInput {
-                contacts: [false, false],
-                ..input
-            };
-            for _ in 0..500 {
-                on.step(&lifted).unwrap();
-            }
-            assert!(on.output().feet[0].tilt.norm() < 1e-9);
+            assert_left_tilt_leaks_back(&mut on, &input);
         }
-        let mut off =
-            FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
-        let mut zero = FootAdmittance::new(
-            &FootAdmittanceConfig {
-                measured_tilt_cutoff: 1.0,
-                ..Default::default()
-            },
-            0.2,
-            0.09,
-            320.0,
-        )
-        .unwrap();
-        for _ in 0..100 {
-            assert_eq!(off.step(&input).unwrap(), zero.step(&input).unwrap());
-        }
+        assert_measured_tilt_off_changes_nothing(&input);
         assert!(config(-0.1).validate().is_err());
-        assert!(FootAdmittanceConfig {
+        let negative_cutoff = FootAdmittanceConfig {
             measured_tilt_cutoff: -1.0,
             ..Default::default()
+        };
+        assert!(negative_cutoff.validate().is_err());
+    }
+
+    /// The swing-foot tilt compensation: with the left sole loaded and rolled and pitched beyond its
+    /// reference tilt, the unloaded right foot's reference goes to `g_s` times the height and tilt that undo
+    /// the robot's turn about the left sole (any yaw); once loaded it leaks back with `force_leak_time`;
+    /// with the gain at 0 (the default) the corrections are those without it, bit for bit.
+    #[test]
+    fn the_swing_foot_is_turned_back_about_the_stance_sole() {
+        let (roll, pitch, yaw) = (-0.2, 0.05, 0.4);
+        let level = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
+        let stance = Isometry3::from_parts(
+            Translation3::new(0.1, 0.07, -0.01),
+            UnitQuaternion::from_euler_angles(roll, pitch, yaw),
+        );
+        // the right sole 0.14 m to the right of and 0.05 m ahead of the left, in the left's heading
+        let swing = Isometry3::from_parts(
+            Translation3::from(stance.translation.vector + level * Vector3::new(0.05, -0.14, 0.02)),
+            level,
+        );
+        // Δ = (−0.2, 0.05): the swing sole is −0.2 · −0.14 − 0.05 · 0.05 = 0.0255 m too high
+        let offset = swing_offset(&stance, &Vector2::zeros(), &swing);
+        assert!(
+            (offset - Vector3::new(-0.0255, 0.2, -0.05)).norm() < 1e-12,
+            "{offset}"
+        );
+        // a commanded stance tilt equal to the measured one: nothing to undo
+        let none = swing_offset(&stance, &Vector2::new(roll, pitch), &swing);
+        assert!(none.norm() < 1e-12, "{none}");
+        let config = |swing_tilt_gain| FootAdmittanceConfig {
+            torque_gain: 0.0,
+            force_gain: 0.0,
+            swing_tilt_gain,
+            ..Default::default()
+        };
+        let input = FootAdmittanceInput {
+            soles: [stance, swing],
+            ..left_cop_ahead([true, false], 0.002)
+        };
+        let mut on = FootAdmittance::new(&config(0.5), 0.2, 0.09, 320.0).unwrap();
+        let (mut height, mut tilt) = (0.0, Vector2::zeros());
+        for _ in 0..500 {
+            let right = on.step(&input).unwrap().feet[1];
+            assert!((right.height_rate * 0.002 - (right.height - height)).abs() < 1e-12);
+            assert!((right.tilt_rate * 0.002 - (right.tilt - tilt)).norm() < 1e-12);
+            (height, tilt) = (right.height, right.tilt);
         }
-        .validate()
-        .is_err());
+        assert!((height + 0.5 * 0.0255).abs() < 1e-9, "{height}");
+        assert!((tilt - Vector2::new(0.1, -0.025)).norm() < 1e-9, "{tilt}");
+        // the stance foot itself is not turned
+        assert_eq!(on.output().feet[0].tilt, Vector2::zeros());
+        // loaded: back to the plan with force_leak_time (0.2 s), e^{−1} after 0.2 s
+        let w = Vector6::new(0.0, 0.0, 150.0, 0.0, 0.0, 0.0);
+        let landed = FootAdmittanceInput {
+            wrenches: [w, w],
+            contacts: [true, true],
+            planned: [true, true],
+            ..input
+        };
+        for _ in 0..100 {
+            on.step(&landed).unwrap();
+        }
+        let left_after = on.output().feet[1].height / height;
+        assert!((left_after - (-1.0_f64).exp()).abs() < 1e-9, "{left_after}");
+        assert_measured_tilt_off_changes_nothing(&input);
+        assert!(config(-1.0).validate().is_err());
     }
 }

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector2, Vector3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use stride_planner::{FootSample, PlanSample};
 use stride_simplified::{FootAdmittanceOutput, FootCorrection, SimplifiedOutput};
 use stride_wbc::{walking, ContactId, FrameRefId, FrameReference, InputLayout, WbcError, WbcInput};
@@ -125,16 +125,6 @@ pub fn apply_foot_admittance(
     {
         if *c != FootCorrection::default() {
             correct_foot(input.frame_mut(frame)?, c);
-        }
-    }
-    if corrections.torso_tilt != Vector2::zeros() {
-        let torso = input.frame_mut(handles.torso)?;
-        let planned = torso.pose.rotation;
-        let (tilt, rate) = (corrections.torso_tilt, corrections.torso_tilt_rate);
-        torso.pose.rotation = planned * UnitQuaternion::from_euler_angles(tilt.x, tilt.y, 0.0);
-        let rate = planned * Vector3::new(rate.x, rate.y, 0.0);
-        for axis in 0..3 {
-            torso.velocity[3 + axis] += rate[axis];
         }
     }
     Ok(())
