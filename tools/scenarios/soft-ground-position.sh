@@ -37,8 +37,8 @@ $admittance
 $extra
 EOT
     summary="$("$stride" run "$overlay" --duration "${DURATION:-10}" --no-progress -o "$out/position-$k-$b.mcap" 2>&1 || true)"
-    outcome="$(echo "$summary" | grep -m1 '^scenario' | sed 's/.*plant: //')"
-    time="$(echo "$summary" | grep -m1 'simulated' | awk '{print $2}')"
-    walked="$(echo "$summary" | grep -m1 '  walked' | awk '{print $2}')"
+    outcome="$(grep -m1 '^scenario' <<< "$summary" | sed 's/.*plant: //')"
+    time="$(grep -m1 'simulated' <<< "$summary" | awk '{print $2}')"
+    walked="$(grep -m1 '  walked' <<< "$summary" | awk '{print $2}')"
     echo "$k $b | $outcome | $time s | $walked m"
 done
