@@ -658,12 +658,17 @@ pub(crate) struct FootstepsMsg {
 
 /// `/wbc/ground_estimate`: TSID-Compliant's ground estimate per contact (`[wbc.tsid.compliant]
 /// estimate_ground`, [Romualdi 2022, §8.2.3]): `{"contacts": [names], "stiffness": [N/m³],
-/// "damping": [N·s/m³]}`, the three arrays in the TSID's contact order. Serialized without allocating.
+/// "damping": [N·s/m³], "model_stiffness": [N/m³], "model_damping": [N·s/m³]}`, the arrays in the TSID's
+/// contact order: the estimate, and the ground each contact's model uses
+/// ([`stride_wbc::Tsid::ground_models`]: the prior open loop, what the gate accepted with
+/// `estimator_accept_std`). Serialized without allocating.
 pub struct GroundEstimateRecord<'a> {
     /// The TSID (its contact names and estimates).
     pub tsid: &'a stride_wbc::Tsid,
     /// Its estimates ([`stride_wbc::Tsid::ground_estimates`]).
     pub grounds: &'a [stride_wbc::GroundParameters],
+    /// The grounds of its contact models ([`stride_wbc::Tsid::ground_models`]).
+    pub models: &'a [stride_wbc::GroundParameters],
 }
 
 impl Serialize for GroundEstimateRecord<'_> {
@@ -675,10 +680,15 @@ impl Serialize for GroundEstimateRecord<'_> {
                 s.collect_seq(self.0.clone())
             }
         }
-        let mut st = serializer.serialize_struct("GroundEstimate", 3)?;
+        let mut st = serializer.serialize_struct("GroundEstimate", 5)?;
         st.serialize_field("contacts", &Names(self.tsid))?;
         st.serialize_field("stiffness", &Seq(self.grounds.iter().map(|g| g.stiffness)))?;
         st.serialize_field("damping", &Seq(self.grounds.iter().map(|g| g.damping)))?;
+        st.serialize_field(
+            "model_stiffness",
+            &Seq(self.models.iter().map(|g| g.stiffness)),
+        )?;
+        st.serialize_field("model_damping", &Seq(self.models.iter().map(|g| g.damping)))?;
         st.end()
     }
 }

@@ -421,8 +421,12 @@ impl LogSink {
                 self.write_json(|tp| tp.wbc_output, t, &IkOutputRecord::new(ik.output()))
             }
             Wbc::Tsid(ts) => {
-                if let Some(grounds) = ts.ground_estimates() {
-                    let record = GroundEstimateRecord { tsid: ts, grounds };
+                if let (Some(grounds), Some(models)) = (ts.ground_estimates(), ts.ground_models()) {
+                    let record = GroundEstimateRecord {
+                        tsid: ts,
+                        grounds,
+                        models,
+                    };
                     self.write(|tp| tp.wbc_ground_estimate, t, &record)?;
                 }
                 self.write_json(|tp| tp.wbc_output, t, &TsidOutputRecord::new(ts.output()))

@@ -41,6 +41,22 @@
 //!   soft ground turns the real robot about it and holds the landing foot over the ground (16–30 mm on
 //!   `k = 10⁶` N/m³, measured, docs/soft-ground.md); the search lands it by the measured load, not by the
 //!   clock;
+//! * **measured sole tilt** (`measured_tilt_gain` `g_m` > 0): each loaded sole's reference is turned, on top
+//!   of the tilts above, by `g_m` times its measured roll and pitch (the estimated sole attitude relative to
+//!   the level frame of the same yaw, low-passed at `measured_tilt_cutoff`), so that the kinematic QP-IK,
+//!   which integrates its own state from the stance sole, has that sole where the robot's is: its base and
+//!   swing foot are then where it thinks. On a soft ground the stance sole rolls 12–17° in a single support
+//!   and the IK's level sole turns the real robot about it (docs/soft-ground.md, "Position control: the IK
+//!   on the tilted sole"). The plan's soles are level (flat ground). Measured: the ankle's command turns the
+//!   light sole on its soft ground, not the heavy body, so the sole rolls further by what the reference
+//!   adds (a loop of gain about one) and the robot falls sooner;
+//! * **swing-foot tilt compensation** (`swing_tilt_gain` `g_s` > 0): the same fact used on the swing foot
+//!   only. In single support the real robot is the IK's turned about the stance sole by `Δ`, the stance
+//!   sole's measured roll and pitch minus its reference tilt (low-passed at `measured_tilt_cutoff`), so the
+//!   swing foot, at `r` from the stance sole (level frame of its yaw), is `Δ_x r_y − Δ_y r_x` higher than the
+//!   IK thinks and turned by `Δ`; its reference is lowered by that height and turned by `−Δ` (times `g_s`),
+//!   which moves the swing leg only. Once the foot is loaded (or without a loaded stance) the offset leaks
+//!   back to the plan with `force_leak_time`;
 //! * **distribution** of the desired ZMP `p*`: with both feet loaded, `α` is the projection of `p*` on the
 //!   segment between the sole origins (clamped to `[0, 1]`), `f_L* = (1 − α) F`, `f_R* = α F` (`F` the
 //!   measured total normal force) and each desired centre of pressure is its sole origin plus the part of
@@ -60,7 +76,7 @@
 use nalgebra::{Isometry3, Vector2, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
-use stride_block::FirstOrderLowPass;
+use stride_block::{low_pass_gain, FirstOrderLowPass};
 
 use crate::error::{check_non_negative, check_positive, Result, SimplifiedError};
 
@@ -105,6 +121,9 @@ pub const MIN_ADMITTANCE_LOAD: f64 = 0.05;
 /// | `max_feedforward_tilt` | rad | 0.3 | bound on each feed-forward tilt angle |
 /// | `touchdown_search_speed` | m/s | 0 | speed at which a foot planned in contact since its touch-down, not yet loaded, keeps descending (0: off) |
 /// | `max_touchdown_search` | m | 0.05 | bound on the depth of that descent |
+/// | `measured_tilt_gain` | – | 0 | fraction of each loaded sole's measured roll and pitch added to its reference tilt, so the QP-IK's stance sole is the robot's (0: off, 1: all of it) |
+/// | `measured_tilt_cutoff` | Hz | 5 | cut-off of the low-pass filter on the measured sole tilt (0: unfiltered) |
+/// | `swing_tilt_gain` | – | 0 | fraction of the stance sole's measured roll and pitch beyond its reference by which the swing foot's reference is turned back about the stance sole (0: off) |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FootAdmittanceConfig {
@@ -136,6 +155,13 @@ pub struct FootAdmittanceConfig {
     pub touchdown_search_speed: f64,
     /// Bound on the depth of the touch-down search \[m\].
     pub max_touchdown_search: f64,
+    /// Fraction of each loaded sole's measured roll and pitch added to its reference tilt (0: off).
+    pub measured_tilt_gain: f64,
+    /// Cut-off of the low-pass filter on the measured sole tilt \[Hz\] (0: unfiltered).
+    pub measured_tilt_cutoff: f64,
+    /// Fraction of the stance sole's measured roll and pitch beyond its reference by which the swing
+    /// foot's reference is turned back about the stance sole (0: off).
+    pub swing_tilt_gain: f64,
 }
 
 impl Default for FootAdmittanceConfig {
@@ -154,6 +180,9 @@ impl Default for FootAdmittanceConfig {
             max_feedforward_tilt: 0.3,
             touchdown_search_speed: 0.0,
             max_touchdown_search: 0.05,
+            measured_tilt_gain: 0.0,
+            measured_tilt_cutoff: 5.0,
+            swing_tilt_gain: 0.0,
         }
     }
 }
@@ -184,7 +213,16 @@ impl FootAdmittanceConfig {
         check_non_negative(
             "foot_admittance.max_touchdown_search",
             self.max_touchdown_search,
-        )
+        )?;
+        check_non_negative(
+            "foot_admittance.measured_tilt_gain",
+            self.measured_tilt_gain,
+        )?;
+        check_non_negative(
+            "foot_admittance.measured_tilt_cutoff",
+            self.measured_tilt_cutoff,
+        )?;
+        check_non_negative("foot_admittance.swing_tilt_gain", self.swing_tilt_gain)
     }
 }
 
@@ -267,6 +305,10 @@ pub struct FootAdmittance {
     feedback_tilts: [Vector2<f64>; 2],
     /// Low-pass filters of the feed-forward tilts `[left, right]` (roll, pitch in the sole frame) \[rad\].
     feedforward_tilts: [FirstOrderLowPass<Vector2<f64>>; 2],
+    /// Low-pass filters of the measured sole tilts `[left, right]` (roll, pitch) \[rad\].
+    measured_tilts: [FirstOrderLowPass<Vector2<f64>>; 2],
+    /// Swing-foot tilt compensations `[left, right]`: height \[m\], roll and pitch \[rad\].
+    swing_offsets: [Vector3<f64>; 2],
     /// Half the robot's weight, the even split the normal-force filter starts from \[N\].
     half_weight: f64,
     /// Height difference `δ = z_L − z_R` \[m\].
@@ -325,6 +367,11 @@ impl FootAdmittance {
                 config.error_cutoff,
                 Vector2::zeros(),
             ); 2],
+            measured_tilts: [FirstOrderLowPass::starting_at(
+                config.measured_tilt_cutoff,
+                Vector2::zeros(),
+            ); 2],
+            swing_offsets: [Vector3::zeros(); 2],
             half_weight: weight * 0.5,
             height_difference: 0.0,
             torque_errors: [FirstOrderLowPass::starting_at(config.error_cutoff, Vector2::zeros());
@@ -354,7 +401,11 @@ impl FootAdmittance {
         }
         self.force_error.reset_to(0.0);
         self.feedback_tilts = [Vector2::zeros(); 2];
-        for filter in &mut self.feedforward_tilts {
+        for filter in self
+            .feedforward_tilts
+            .iter_mut()
+            .chain(&mut self.measured_tilts)
+        {
             filter.reset_to(Vector2::zeros());
         }
         self.normal_forces
@@ -362,6 +413,7 @@ impl FootAdmittance {
         self.search_depths = [0.0; 2];
         self.searching = [false; 2];
         self.planned_before = [true; 2];
+        self.swing_offsets = [Vector3::zeros(); 2];
         self.output = FootAdmittanceOutput::default();
     }
 
@@ -409,6 +461,13 @@ impl FootAdmittance {
                     c.torque_gain * e - *tilt / c.torque_leak_time + feedforward_rate[axis];
             }
             foot.tilt = self.feedback_tilts[k] + feedforward;
+            if c.measured_tilt_gain > 0.0 {
+                let (measured, measured_rate) =
+                    self.measured_tilt(k, loaded[k], &input.soles[k], input.dt);
+                let foot = &mut self.output.feet[k];
+                foot.tilt += measured;
+                foot.tilt_rate += measured_rate;
+            }
         }
         let raw_force_error = if loaded[0] && loaded[1] {
             (input.wrenches[0][2] - input.wrenches[1][2]) - (forces[0] - forces[1])
@@ -431,6 +490,9 @@ impl FootAdmittance {
         for (k, (foot, sign)) in self.output.feet.iter_mut().zip([0.5, -0.5]).enumerate() {
             foot.height = sign * d + sink[k] - depth[k];
             foot.height_rate = sign * rate + sink_rate[k] - depth_rate[k];
+        }
+        if c.swing_tilt_gain > 0.0 {
+            self.compensate_swing(input, loaded);
         }
         self.output.desired_cop = cops;
         self.output.desired_force = forces;
@@ -464,10 +526,55 @@ impl FootAdmittance {
         } else {
             Vector2::zeros()
         };
-        let filter = &mut self.feedforward_tilts[k];
-        let before = filter.output().unwrap_or(Vector2::zeros());
-        let after = filter.update(target, dt);
-        (after, (after - before) / dt)
+        filter_with_rate(&mut self.feedforward_tilts[k], target, dt)
+    }
+
+    /// The measured sole tilt of foot `k` and its rate over the tick \[rad, rad/s\]: `measured_tilt_gain`
+    /// times the roll and pitch of the measured sole ([`sole_tilt`]) while the foot is loaded, zero
+    /// otherwise, low-passed at `measured_tilt_cutoff`.
+    fn measured_tilt(
+        &mut self,
+        k: usize,
+        loaded: bool,
+        sole: &Isometry3<f64>,
+        dt: f64,
+    ) -> (Vector2<f64>, Vector2<f64>) {
+        let target = if loaded {
+            sole_tilt(sole) * self.config.measured_tilt_gain
+        } else {
+            Vector2::zeros()
+        };
+        filter_with_rate(&mut self.measured_tilts[k], target, dt)
+    }
+
+    /// The swing-foot tilt compensation, added to the output's corrections: an unloaded foot `k` while the
+    /// other foot `j` is loaded moves towards `g_s` times [`swing_offset`] of `j`'s measured sole over its
+    /// reference tilt (first-order, `measured_tilt_cutoff`); otherwise its offset leaks back to zero with
+    /// `force_leak_time`.
+    fn compensate_swing(&mut self, input: &FootAdmittanceInput, loaded: [bool; 2]) {
+        let c = self.config;
+        let alpha = low_pass_gain(input.dt, c.measured_tilt_cutoff);
+        let leak = (-input.dt / c.force_leak_time).exp();
+        let commanded: [Vector2<f64>; 2] =
+            std::array::from_fn(|k| self.output.feet[k].tilt + self.swing_offsets[k].yz());
+        for k in 0..2 {
+            let j = 1 - k;
+            let before = self.swing_offsets[k];
+            let after = if loaded[j] && !loaded[k] {
+                let target = swing_offset(&input.soles[j], &commanded[j], &input.soles[k])
+                    * c.swing_tilt_gain;
+                before + (target - before) * alpha
+            } else {
+                before * leak
+            };
+            self.swing_offsets[k] = after;
+            let rate = (after - before) / input.dt;
+            let foot = &mut self.output.feet[k];
+            foot.height += after.x;
+            foot.height_rate += rate.x;
+            foot.tilt += after.yz();
+            foot.tilt_rate += rate.yz();
+        }
     }
 
     /// The touch-down search's depths `[left, right]` and their rates over the tick \[m, m/s\]: a foot
@@ -517,6 +624,42 @@ impl FootAdmittance {
         let (z0, z1) = (sink(before), sink(after));
         (z1, [(z1[0] - z0[0]) / dt, (z1[1] - z0[1]) / dt])
     }
+}
+
+/// One tick of `filter` on `target` over `dt` \[s\]: its output and that output's rate over the tick.
+fn filter_with_rate(
+    filter: &mut FirstOrderLowPass<Vector2<f64>>,
+    target: Vector2<f64>,
+    dt: f64,
+) -> (Vector2<f64>, Vector2<f64>) {
+    let before = filter.output().unwrap_or(Vector2::zeros());
+    let after = filter.update(target, dt);
+    (after, (after - before) / dt)
+}
+
+/// The roll and pitch of a sole's orientation relative to the level frame of the same yaw \[rad\]: the
+/// `(φ, θ)` of `R = R_z(ψ) R_y(θ) R_x(φ)`, the tilt a [`FootCorrection`] applies after a level planned
+/// orientation of yaw `ψ`.
+pub fn sole_tilt(sole: &Isometry3<f64>) -> Vector2<f64> {
+    let (roll, pitch, _) = sole.rotation.euler_angles();
+    Vector2::new(roll, pitch)
+}
+
+/// The swing foot's correction for a stance sole turned beyond its reference: `Δ` = the stance sole's
+/// roll and pitch ([`sole_tilt`]) minus its reference tilt `commanded` \[rad\]; with `r` the swing sole's
+/// position from the stance sole's in the level frame of the stance's yaw, the robot turned about the stance
+/// sole by `Δ` holds the swing sole `Δ_x r_y − Δ_y r_x` higher and turned by `Δ` (small angles). Returns the
+/// opposite, `(−(Δ_x r_y − Δ_y r_x), −Δ_x, −Δ_y)`: height \[m\], roll and pitch \[rad\].
+pub fn swing_offset(
+    stance: &Isometry3<f64>,
+    commanded: &Vector2<f64>,
+    swing: &Isometry3<f64>,
+) -> Vector3<f64> {
+    let d = sole_tilt(stance) - commanded;
+    let (_, _, yaw) = stance.rotation.euler_angles();
+    let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), -yaw)
+        * (swing.translation.vector - stance.translation.vector);
+    Vector3::new(-(d.x * r.y - d.y * r.x), -d.x, -d.y)
 }
 
 /// The sole height offsets `[Δz_L, Δz_R]` that put each sole at its static sink under the normal forces
@@ -640,7 +783,6 @@ fn clamp_to_sole(p: &Vector2<f64>, sole: &Isometry3<f64>, half: &Vector2<f64>) -
 mod tests {
     use super::*;
     use nalgebra::{Translation3, UnitQuaternion};
-    use stride_block::low_pass_gain;
 
     fn sole(x: f64, y: f64, yaw: f64) -> Isometry3<f64> {
         Isometry3::from_parts(
@@ -888,14 +1030,7 @@ mod tests {
                 (previous - expected).norm() < 1e-9,
                 "{previous} vs {expected}"
             );
-            let lifted = FootAdmittanceInput {
-                contacts: [false, false],
-                ..input
-            };
-            for _ in 0..500 {
-                on.step(&lifted).unwrap();
-            }
-            assert!(on.output().feet[0].tilt.norm() < 1e-9);
+            assert_left_tilt_leaks_back(&mut on, &input);
         }
         // gain 0: the same corrections as without the key (the default admittance on the same ground)
         let plain = FootAdmittanceConfig {
@@ -988,5 +1123,144 @@ mod tests {
         assert!((depths[0] - 0.03).abs() < 1e-12, "{depths:?}");
         assert!((depths[1] - 0.03).abs() < 1e-12, "{depths:?}");
         assert!((depths[2] - 0.03 * a).abs() < 1e-9, "{depths:?}");
+    }
+
+    /// Both feet unloaded for 1 s: the left sole's tilt is back to the plan.
+    fn assert_left_tilt_leaks_back(admittance: &mut FootAdmittance, input: &FootAdmittanceInput) {
+        let lifted = FootAdmittanceInput {
+            contacts: [false, false],
+            ..*input
+        };
+        for _ in 0..500 {
+            admittance.step(&lifted).unwrap();
+        }
+        assert!(admittance.output().feet[0].tilt.norm() < 1e-9);
+    }
+
+    /// With `measured_tilt_gain` and `swing_tilt_gain` at 0 (the defaults) another `measured_tilt_cutoff`
+    /// changes nothing, bit for bit.
+    fn assert_measured_tilt_off_changes_nothing(input: &FootAdmittanceInput) {
+        let mut off =
+            FootAdmittance::new(&FootAdmittanceConfig::default(), 0.2, 0.09, 320.0).unwrap();
+        let config = FootAdmittanceConfig {
+            measured_tilt_cutoff: 1.0,
+            ..Default::default()
+        };
+        let mut zero = FootAdmittance::new(&config, 0.2, 0.09, 320.0).unwrap();
+        for _ in 0..100 {
+            assert_eq!(off.step(input).unwrap(), zero.step(input).unwrap());
+        }
+    }
+
+    /// The measured sole tilt: a loaded sole rolled and pitched in the ground (any yaw) gets `g_m` times
+    /// that roll and pitch on its reference, through the filter; unloaded, it goes back to zero; with the
+    /// gain at 0 (the default) the corrections are those without it, bit for bit.
+    #[test]
+    fn the_measured_tilt_turns_the_loaded_sole_reference_by_its_roll_and_pitch() {
+        let config = |measured_tilt_gain| FootAdmittanceConfig {
+            torque_gain: 0.0,
+            force_gain: 0.0,
+            measured_tilt_gain,
+            ..Default::default()
+        };
+        let (roll, pitch, yaw) = (-0.21, 0.07, 0.4);
+        let base = left_cop_ahead([true, false], 0.002);
+        let mut soles = base.soles;
+        soles[0].rotation = UnitQuaternion::from_euler_angles(roll, pitch, yaw);
+        let input = FootAdmittanceInput { soles, ..base };
+        assert!((sole_tilt(&soles[0]) - Vector2::new(roll, pitch)).norm() < 1e-12);
+        // the tilt a correction applies after the level planned orientation gives back the sole's
+        let level = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
+        let turned = level * UnitQuaternion::from_euler_angles(roll, pitch, 0.0);
+        assert!(turned.angle_to(&soles[0].rotation) < 1e-12);
+        for gain in [1.0, 0.5] {
+            let mut on = FootAdmittance::new(&config(gain), 0.2, 0.09, 320.0).unwrap();
+            let mut previous = Vector2::zeros();
+            for _ in 0..500 {
+                let foot = on.step(&input).unwrap().feet[0];
+                assert!((foot.tilt_rate * 0.002 - (foot.tilt - previous)).norm() < 1e-12);
+                previous = foot.tilt;
+            }
+            let expected = Vector2::new(roll, pitch) * gain;
+            assert!(
+                (previous - expected).norm() < 1e-9,
+                "{previous} vs {expected}"
+            );
+            // the right foot is not loaded: no tilt
+            assert_eq!(on.output().feet[1].tilt, Vector2::zeros());
+            assert_left_tilt_leaks_back(&mut on, &input);
+        }
+        assert_measured_tilt_off_changes_nothing(&input);
+        assert!(config(-0.1).validate().is_err());
+        let negative_cutoff = FootAdmittanceConfig {
+            measured_tilt_cutoff: -1.0,
+            ..Default::default()
+        };
+        assert!(negative_cutoff.validate().is_err());
+    }
+
+    /// The swing-foot tilt compensation: with the left sole loaded and rolled and pitched beyond its
+    /// reference tilt, the unloaded right foot's reference goes to `g_s` times the height and tilt that undo
+    /// the robot's turn about the left sole (any yaw); once loaded it leaks back with `force_leak_time`;
+    /// with the gain at 0 (the default) the corrections are those without it, bit for bit.
+    #[test]
+    fn the_swing_foot_is_turned_back_about_the_stance_sole() {
+        let (roll, pitch, yaw) = (-0.2, 0.05, 0.4);
+        let level = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
+        let stance = Isometry3::from_parts(
+            Translation3::new(0.1, 0.07, -0.01),
+            UnitQuaternion::from_euler_angles(roll, pitch, yaw),
+        );
+        // the right sole 0.14 m to the right of and 0.05 m ahead of the left, in the left's heading
+        let swing = Isometry3::from_parts(
+            Translation3::from(stance.translation.vector + level * Vector3::new(0.05, -0.14, 0.02)),
+            level,
+        );
+        // Δ = (−0.2, 0.05): the swing sole is −0.2 · −0.14 − 0.05 · 0.05 = 0.0255 m too high
+        let offset = swing_offset(&stance, &Vector2::zeros(), &swing);
+        assert!(
+            (offset - Vector3::new(-0.0255, 0.2, -0.05)).norm() < 1e-12,
+            "{offset}"
+        );
+        // a commanded stance tilt equal to the measured one: nothing to undo
+        let none = swing_offset(&stance, &Vector2::new(roll, pitch), &swing);
+        assert!(none.norm() < 1e-12, "{none}");
+        let config = |swing_tilt_gain| FootAdmittanceConfig {
+            torque_gain: 0.0,
+            force_gain: 0.0,
+            swing_tilt_gain,
+            ..Default::default()
+        };
+        let input = FootAdmittanceInput {
+            soles: [stance, swing],
+            ..left_cop_ahead([true, false], 0.002)
+        };
+        let mut on = FootAdmittance::new(&config(0.5), 0.2, 0.09, 320.0).unwrap();
+        let (mut height, mut tilt) = (0.0, Vector2::zeros());
+        for _ in 0..500 {
+            let right = on.step(&input).unwrap().feet[1];
+            assert!((right.height_rate * 0.002 - (right.height - height)).abs() < 1e-12);
+            assert!((right.tilt_rate * 0.002 - (right.tilt - tilt)).norm() < 1e-12);
+            (height, tilt) = (right.height, right.tilt);
+        }
+        assert!((height + 0.5 * 0.0255).abs() < 1e-9, "{height}");
+        assert!((tilt - Vector2::new(0.1, -0.025)).norm() < 1e-9, "{tilt}");
+        // the stance foot itself is not turned
+        assert_eq!(on.output().feet[0].tilt, Vector2::zeros());
+        // loaded: back to the plan with force_leak_time (0.2 s), e^{−1} after 0.2 s
+        let w = Vector6::new(0.0, 0.0, 150.0, 0.0, 0.0, 0.0);
+        let landed = FootAdmittanceInput {
+            wrenches: [w, w],
+            contacts: [true, true],
+            planned: [true, true],
+            ..input
+        };
+        for _ in 0..100 {
+            on.step(&landed).unwrap();
+        }
+        let left_after = on.output().feet[1].height / height;
+        assert!((left_after - (-1.0_f64).exp()).abs() < 1e-9, "{left_after}");
+        assert_measured_tilt_off_changes_nothing(&input);
+        assert!(config(-1.0).validate().is_err());
     }
 }

@@ -180,6 +180,10 @@ fn foot_admittance_does_not_allocate() {
     let config = FootAdmittanceConfig {
         enabled: true,
         touchdown_search_speed: 0.1,
+        ground_stiffness: 1e6,
+        tilt_feedforward_gain: 0.1,
+        measured_tilt_gain: 0.5,
+        swing_tilt_gain: 1.0,
         ..Default::default()
     };
     let mut admittance = FootAdmittance::new(&config, 0.2, 0.09, 320.0).unwrap();

@@ -709,6 +709,7 @@ pub enum ContactModel {
 /// | `estimate_rest_height` | – | false | with `estimate_ground`: estimate a third parameter, the error `δ` of the rest (zero-force) height the regressor measures the sole's sink from, as `k δ` with the column `l w abs(e₃ᵀRe₃) e₃` (see [`crate::GroundRestEstimator`]), reset to zero at each touch-down; `k̂`, `b̂` then do not absorb the rest plane's error |
 /// | `estimator_rest_height_std` | m | 0.001 | with `estimate_rest_height`: the standard deviation of `δ`'s prior (zero) |
 /// | `estimator_open_loop` | – | false | with `estimate_ground`: run and log the estimate but give the contact models (and the runner's `plan_on_surface`) the configured `ground_stiffness`, `ground_damping` |
+/// | `estimator_accept_std` | – | inf | with `estimate_ground` (closed loop): the gate. from each planned touch-down a contact's model keeps the prior until a parameter of the new landing's estimate has a standard deviation (the covariance's) at most this fraction of it, then takes it (holding the last one taken while the bound is not met); `inf`: every estimate, at once (off) |
 /// | `estimator_reset` | – | true | with `estimate_ground`: reset a contact's estimate covariance at its touch-down [Colman 2006] (`false` only to show what the reset buys) |
 /// | `plan_on_surface` | – | false | the runner plans the footholds from the soles' zero-force poses (raised by their static sink `f_z / (k l w)`), so the swing feet land on the ground's surface, not as deep as the standing feet sank |
 /// | `held_acceleration` | – | false | the contact dynamics give the wrench rate averaged over one control period of a held acceleration: the acceleration gain of eq. 8.2.14 uses the damping `b + k·period/2` (see [`crate::soft_contact::WrenchRate::held_over`]) |
@@ -746,6 +747,10 @@ pub struct CompliantConfig {
     /// With `estimate_ground`: the estimate runs and is logged, the contact models keep the configured
     /// ground (open loop).
     pub estimator_open_loop: bool,
+    /// With `estimate_ground`, closed loop: from each planned touch-down a contact's model keeps the prior
+    /// until a parameter of the estimate has a standard deviation at most this fraction of it, then takes
+    /// it (holding the last one taken while the bound is not met); `inf`: off (every estimate at once).
+    pub estimator_accept_std: f64,
     /// With `estimate_ground`: the measured normal force (N) above which a sole that touched down in the
     /// plan is on the ground (its rest pose is set and its estimate fed from then on).
     pub estimator_contact_force: f64,
@@ -854,6 +859,7 @@ impl Default for CompliantConfig {
             estimate_rest_height: false,
             estimator_rest_height_std: 1e-3,
             estimator_open_loop: false,
+            estimator_accept_std: f64::INFINITY,
             estimator_contact_force: 5.0,
             estimator_rest_pose: EstimatorRestPose::Level,
             estimator_rows: EstimatorRows::All,

@@ -737,6 +737,16 @@ impl Tsid {
             .map(|e| e.grounds())
     }
 
+    /// With `compliant.estimate_ground`: the ground every contact's model uses, in the order of
+    /// [`Tsid::contact_tasks`] (the estimate, the prior with `compliant.estimator_open_loop`, or what the
+    /// gate `compliant.estimator_accept_std` accepted); `None` otherwise.
+    pub fn ground_models(&self) -> Option<&[crate::soft_contact::GroundParameters]> {
+        self.compliant
+            .as_ref()
+            .and_then(|c| c.estimates.as_ref())
+            .map(|e| e.models())
+    }
+
     /// With `compliant.estimate_ground`: the ground the contact model of the contact whose flag is `flag`
     /// (e.g. [`crate::walking::LEFT_FOOT`]) uses, its estimate (the prior with
     /// `compliant.estimator_open_loop`); `None` otherwise.

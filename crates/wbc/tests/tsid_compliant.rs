@@ -492,6 +492,40 @@ fn the_open_loop_estimate_and_the_rest_height_in_the_tsid() {
     ));
 }
 
+/// `estimator_accept_std` (the gate): on the same prescribed motion the estimates are those of the
+/// ungated closed loop to the bit; the contact model takes them once their standard deviations are below
+/// 10 % of them (it ends on the estimate), and keeps the prior `2e6, 2e4` when the bound is never met
+/// (1e-9). A bound that is not > 0 is refused by name.
+#[test]
+fn the_gate_feeds_the_model_only_a_converged_estimate() {
+    use stride_wbc::EstimatorRestPose::Level;
+    let closed = sink_and_rise(5.0, 0.003, Level);
+    let (taken, gated) = sink_and_rise_with(5.0, 0.003, Level, |c| c.estimator_accept_std = 0.1);
+    assert_eq!(gated, closed);
+    assert_eq!(taken, Some(closed[0]));
+    let (held, never) = sink_and_rise_with(5.0, 0.003, Level, |c| c.estimator_accept_std = 1e-9);
+    assert_eq!(never, closed);
+    assert_eq!(
+        held,
+        Some(stride_wbc::GroundParameters {
+            stiffness: 2e6,
+            damping: 2e4
+        })
+    );
+    for bound in [0.0, -1.0, f64::NAN] {
+        let mut bad = compliant_config();
+        bad.compliant.estimate_ground = true;
+        bad.compliant.estimator_accept_std = bound;
+        assert!(matches!(
+            Tsid::new(bundled_model(), bad, PERIOD),
+            Err(stride_wbc::WbcError::InvalidConfig {
+                key: "estimator_accept_std",
+                ..
+            })
+        ));
+    }
+}
+
 /// The ground estimate of a sole whose planned touch-down comes before its impact: both soles start 3 mm
 /// above the ground (no wrench there; Lemma 1's below) and sink by up to 1 cm (7 mm into the ground). With
 /// the default `estimator_contact_force` (5 N) the rest pose waits for the sole to meet the ground and the

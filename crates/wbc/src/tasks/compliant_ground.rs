@@ -5,7 +5,9 @@
 //! contact's model. One per contact, because on a ground whose compliance changes along the path the two
 //! feet stand on different patches. With `estimate_rest_height` each estimate also has the rest height's
 //! error as a third parameter ([`GroundRestEstimator`]); with `estimator_open_loop` the contact models keep
-//! the prior. Allocates nothing after construction.
+//! the prior; with `estimator_accept_std` a contact's model takes each parameter of its estimate only once
+//! that parameter's standard deviation (from the covariance) is below that fraction of it, and the prior
+//! from each planned touch-down until then (the gate). Allocates nothing after construction.
 
 use nalgebra::{Matrix6x3, Vector6};
 
@@ -44,6 +46,20 @@ impl Estimator {
             Estimator::WithRestHeight(e) => e.estimate(),
         }
     }
+
+    /// The variances of `k̂`, `b̂` (the covariance's first two diagonal entries).
+    fn variances(&self) -> [f64; 2] {
+        match self {
+            Estimator::Ground(e) => {
+                let p = e.covariance();
+                [p[(0, 0)], p[(1, 1)]]
+            }
+            Estimator::WithRestHeight(e) => {
+                let p = e.covariance();
+                [p[(0, 0)], p[(1, 1)]]
+            }
+        }
+    }
 }
 
 /// The per-contact ground estimates and the ground each contact's model uses.
@@ -51,8 +67,14 @@ impl Estimator {
 pub(crate) struct ContactGroundEstimates {
     estimators: Vec<Estimator>,
     /// Per contact: the estimate's positive components over the prior (logged; the ground of its
-    /// contact model unless `open_loop`).
+    /// contact model unless `open_loop` or the gate).
     grounds: Vec<GroundParameters>,
+    /// Per contact: the ground its contact model uses (the prior with `open_loop`; with the gate the
+    /// prior from its touch-down until a parameter is accepted).
+    models: Vec<GroundParameters>,
+    /// `estimator_accept_std`: the relative standard deviation below which a parameter of the estimate is
+    /// accepted by the contact model; `None` (infinite): every estimate is.
+    accept_std: Option<f64>,
     /// The configured ground (the prior).
     prior: GroundParameters,
     /// `estimator_open_loop`: the contact models keep `prior`.
@@ -96,6 +118,20 @@ impl ContactGroundEstimates {
         Ok(Self {
             estimators: vec![estimator; contacts],
             grounds: vec![prior; contacts],
+            models: vec![prior; contacts],
+            accept_std: match c.estimator_accept_std {
+                f if f == f64::INFINITY => None,
+                f if f.is_finite() && f > 0.0 => Some(f),
+                f => {
+                    return Err(WbcError::InvalidConfig {
+                        task: "<tsid>".into(),
+                        key: "estimator_accept_std",
+                        reason: format!(
+                            "compliant.estimator_accept_std = {f} must be > 0 (inf: off)"
+                        ),
+                    })
+                }
+            },
             prior,
             open_loop: c.estimator_open_loop,
             reset_at_touch_down: c.estimator_reset,
@@ -115,9 +151,14 @@ impl ContactGroundEstimates {
         })
     }
 
-    /// Contact `c` touched down in the plan: its estimate waits for the sole to meet the ground.
+    /// Contact `c` touched down in the plan: its estimate waits for the sole to meet the ground; with the
+    /// gate (`estimator_accept_std`) its model returns to the prior until the new landing's estimate is
+    /// accepted.
     pub fn touch_down(&mut self, c: usize) {
         self.awaiting[c] = true;
+        if self.accept_std.is_some() && !self.open_loop {
+            self.models[c] = self.prior;
+        }
     }
 
     /// The measured normal force above which a sole is on the ground, N.
@@ -131,8 +172,9 @@ impl ContactGroundEstimates {
     }
 
     /// One RLS step of contact `c` with its sole's regressor and measured wrench (its sole on the ground);
-    /// its model's ground takes the estimate's positive components. The first step after a touch-down
-    /// resets the covariance to `P₀` (with `estimator_reset`), keeping the estimate [Colman 2006].
+    /// its model's ground takes the estimate's positive components (with the gate, each one whose standard
+    /// deviation is below `estimator_accept_std` of it). The first step after a touch-down resets the
+    /// covariance to `P₀` (with `estimator_reset`), keeping the estimate [Colman 2006].
     pub fn update(&mut self, c: usize, regressor: &Matrix6x3<f64>, wrench: &Vector6<f64>) {
         if std::mem::take(&mut self.awaiting[c]) && self.reset_at_touch_down {
             self.estimators[c].touch_down();
@@ -147,14 +189,34 @@ impl ContactGroundEstimates {
         if estimate.damping > 0.0 {
             g.damping = estimate.damping;
         }
+        if self.open_loop {
+            return;
+        }
+        let model = &mut self.models[c];
+        match self.accept_std {
+            None => *model = *g,
+            Some(bound) => {
+                let [var_k, var_b] = e.variances();
+                if estimate.stiffness > 0.0 && var_k.sqrt() <= bound * estimate.stiffness {
+                    model.stiffness = estimate.stiffness;
+                }
+                if estimate.damping > 0.0 && var_b.sqrt() <= bound * estimate.damping {
+                    model.damping = estimate.damping;
+                }
+            }
+        }
     }
 
-    /// The ground of contact `c`'s model: its estimate, or the prior with `estimator_open_loop`.
+    /// The ground of contact `c`'s model: its estimate, the prior with `estimator_open_loop`, or with the
+    /// gate (`estimator_accept_std`) the estimate's parameters accepted since its touch-down (the prior
+    /// until then).
     pub fn ground(&self, c: usize) -> GroundParameters {
-        match self.open_loop {
-            true => self.prior,
-            false => self.grounds[c],
-        }
+        self.models[c]
+    }
+
+    /// The grounds of every contact's model ([`Self::ground`]), in contact order.
+    pub fn models(&self) -> &[GroundParameters] {
+        &self.models
     }
 
     /// The estimates of every contact (their positive components over the prior), in contact order.
