@@ -473,6 +473,32 @@ fn the_ground_estimate_in_the_loop_finds_k_within_10_percent_on_the_patches() {
     assert!(fixed.simulated_time >= 5.99, "{}", fixed.render());
 }
 
+/// The three-patch walk reached the goal, and on every touch-down of a sole wholly on one patch (at least
+/// one on each of the three) `k̂` came within 10 % of the patch's `k` within 0.3 s.
+fn assert_k_found_on_every_patch(touch_downs: &[EstimateTouchDown], summary: &RunSummary) {
+    assert_eq!(
+        summary.outcome,
+        Outcome::GoalReached,
+        "{}",
+        summary.render()
+    );
+    let landed: Vec<&EstimateTouchDown> = touch_downs
+        .iter()
+        .filter(|t| t.truth.is_some() && t.lift_off - t.time >= 1.0)
+        .collect();
+    for k in [2e6, 8e5, 1e6] {
+        assert!(
+            landed
+                .iter()
+                .any(|t| t.truth.is_some_and(|g| g.stiffness == k)),
+            "no whole landing on k = {k}: {touch_downs:?}"
+        );
+    }
+    for t in &landed {
+        assert!(t.stiffness_within.is_some_and(|w| w <= 0.3), "{t:?}");
+    }
+}
+
 /// The ground estimate run open loop over the three patches
 /// (`configs/walk_soft_ground_patches_estimate_open_loop_torque.toml`: the contact models keep the prior,
 /// the rest plane of a landing sole fixed at 0.1 N; docs/soft-ground.md, "The ground estimate: `b̂` and the
@@ -486,25 +512,8 @@ fn the_open_loop_estimate_finds_k_on_all_three_patches() {
     const OPEN_LOOP: &str = "configs/walk_soft_ground_patches_estimate_open_loop_torque.toml";
     let s = Scratch::new("soft_ground_patches_open_loop");
     let (shallow, summary) = patch_walk_of(OPEN_LOOP, &s, "shallow", "", 20.0, true);
-    assert_eq!(
-        summary.outcome,
-        Outcome::GoalReached,
-        "{}",
-        summary.render()
-    );
+    assert_k_found_on_every_patch(&shallow, &summary);
     let whole = |t: &&EstimateTouchDown| t.truth.is_some() && t.lift_off - t.time >= 1.0;
-    let landed: Vec<&EstimateTouchDown> = shallow.iter().filter(whole).collect();
-    for k in [2e6, 8e5, 1e6] {
-        assert!(
-            landed
-                .iter()
-                .any(|t| t.truth.is_some_and(|g| g.stiffness == k)),
-            "no whole landing on k = {k}: {shallow:?}"
-        );
-    }
-    for t in &landed {
-        assert!(t.stiffness_within.is_some_and(|w| w <= 0.3), "{t:?}");
-    }
     let first = |all: &[EstimateTouchDown]| -> Vec<f64> {
         all.iter()
             .filter(whole)
@@ -549,25 +558,7 @@ fn the_gated_estimate_walks_the_three_patches_in_the_closed_loop() {
     const GATED: &str = "configs/walk_soft_ground_patches_estimate_gated_torque.toml";
     let s = Scratch::new("soft_ground_patches_gated");
     let (gated, summary) = patch_walk_of(GATED, &s, "gated", "", 20.0, true);
-    assert_eq!(
-        summary.outcome,
-        Outcome::GoalReached,
-        "{}",
-        summary.render()
-    );
-    let whole = |t: &&EstimateTouchDown| t.truth.is_some() && t.lift_off - t.time >= 1.0;
-    let landed: Vec<&EstimateTouchDown> = gated.iter().filter(whole).collect();
-    for k in [2e6, 8e5, 1e6] {
-        assert!(
-            landed
-                .iter()
-                .any(|t| t.truth.is_some_and(|g| g.stiffness == k)),
-            "no whole landing on k = {k}: {gated:?}"
-        );
-    }
-    for t in &landed {
-        assert!(t.stiffness_within.is_some_and(|w| w <= 0.3), "{t:?}");
-    }
+    assert_k_found_on_every_patch(&gated, &summary);
     let (_, ungated) = patch_walk_of(
         GATED,
         &s,

@@ -157,7 +157,8 @@ fn tsid_flex_ticks_allocate_nothing() {
     assert_eq!(n, 0, "TSID-Flex ticks allocated {n} times");
 }
 
-/// TSID-Compliant (`contact_model = "compliant"`, its ground estimated with the rest height) ticks
+/// TSID-Compliant (`contact_model = "compliant"`, its ground estimated with the rest height, gated by
+/// `estimator_accept_std`) ticks
 /// allocate nothing, with the measured wrenches changing every tick and a lift-off and touch-down of the
 /// right foot; with the held-period rate
 /// (`held_acceleration`), a lift-off held while the sole still carries load (`lift_off_force`) and an
@@ -183,9 +184,11 @@ fn compliant_ticks_allocate_nothing(source: stride_wbc::WrenchSource) {
     config.compliant.wrench_source = source;
     config.compliant.held_acceleration = true;
     config.compliant.lift_off_force = 20.0;
-    // The ground estimate per contact, with the rest height as its third parameter.
+    // The ground estimate per contact, with the rest height as its third parameter, fed back through
+    // the gate.
     config.compliant.estimate_ground = true;
     config.compliant.estimate_rest_height = true;
+    config.compliant.estimator_accept_std = 0.1;
     config.tasks.push(stride_wbc::TaskConfig::AngularMomentum(
         stride_wbc::AngularMomentumTaskConfig {
             name: "angular_momentum".into(),
