@@ -159,6 +159,16 @@ impl PushResponse {
         }
         planned - push_zmp_offset(&self.estimate, self.mass, omega)
     }
+
+    /// The shift of the step-adjustment QP's nominal DCM offset at touch-down, `−step_offset F̂/(m ω²)`
+    /// (zero when `step_adjustment` is off): with the push still on after the touch-down, the new
+    /// stance foot must carry the pushed LIPM's CoP, `F̂/(m ω²)` along the push from its effective ZMP.
+    pub fn step_offset_shift(&self, omega: f64) -> Vector2<f64> {
+        if !self.config.step_adjustment || omega <= 0.0 || self.config.step_offset == 0.0 {
+            return Vector2::zeros();
+        }
+        -push_zmp_offset(&self.estimate, self.mass, omega) * self.config.step_offset
+    }
 }
 
 /// Whether plan time `t` \[s\] is in the start-up or the stopping double support of `plan`: before its
