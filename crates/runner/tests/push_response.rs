@@ -13,6 +13,9 @@
 //! weights switched during a push (`configs/layers/tsid_push_weights.toml`): the unpushed walk never
 //! switches, a 40 N forward push in single support that tips the torso without the switch is a topple
 //! with the torso upright, later, and still a fall; a hard CoM task with the switch is a start-up error.
+//! With the step adjustment's touch-down placed for the push as well (`configs/layers/push_step_offset.toml`):
+//! a 40 N forward-right push in single support walked through that falls without it, a 40 N forward push
+//! that still falls.
 mod common;
 
 use common::{log_options as options, Scratch};
@@ -32,6 +35,8 @@ const TORQUE_STEPS_RESPONSE_COP_35: &[&str] =
     &["walk_straight_step_adjustment_push_response_cop_y_35mm_torque.toml"];
 const TORQUE_STEPS_RESPONSE_PUSH_WEIGHTS: &[&str] =
     &["walk_straight_step_adjustment_push_response_push_weights_torque.toml"];
+const TORQUE_STEPS_RESPONSE_STEP_OFFSET: &[&str] =
+    &["walk_straight_step_adjustment_push_response_push_weights_step_offset_torque.toml"];
 const POSITION_STEPS: &[&str] = &["walk_straight_step_adjustment.toml"];
 const POSITION_STEPS_RESPONSE: &[&str] = &[
     "walk_straight_step_adjustment.toml",
@@ -376,4 +381,46 @@ fn without_pushes_the_torque_walk_with_the_push_weights_never_switches_and_reach
     let hard = common::scenario_from_configs(&s, "hard", &layers[..5], hard);
     let err = run_scenario(&hard, &options(&s, "hard")).unwrap_err();
     assert!(err.to_string().contains("`com`"), "{err}");
+}
+
+/// 40 N forward and to the right (315°) from 5.25 s (the left foot alone, the right swinging towards the
+/// push) with the push weights: the touch-down placed for the push (`configs/layers/push_step_offset.toml`:
+/// the right foot lands 40 mm further forward and 56 mm further out, the held double support takes the
+/// rest) walks through 9 s; without the step offset it topples; 40 N straight forward from the same
+/// instant still falls with it (the other side of the limit; docs/push-recovery.md, "A step during the
+/// push in torque control").
+#[test]
+fn torque_control_a_forward_right_push_in_single_support_is_walked_through_with_the_step_offset() {
+    let s = Scratch::new("push_response_torque_step_offset");
+    let f = 40.0 * std::f64::consts::FRAC_1_SQRT_2;
+    let forward_right = [f, -f];
+    let offset = pushed(
+        &s,
+        "offset",
+        TORQUE_STEPS_RESPONSE_STEP_OFFSET,
+        forward_right,
+        5.25,
+    );
+    assert_eq!(
+        offset.outcome,
+        Outcome::DurationReached,
+        "{}",
+        offset.render()
+    );
+    let weights = pushed(
+        &s,
+        "weights",
+        TORQUE_STEPS_RESPONSE_PUSH_WEIGHTS,
+        forward_right,
+        5.25,
+    );
+    assert_fell(&weights);
+    let forward = pushed(
+        &s,
+        "forward",
+        TORQUE_STEPS_RESPONSE_STEP_OFFSET,
+        [40.0, 0.0],
+        5.25,
+    );
+    assert_fell(&forward);
 }
