@@ -456,4 +456,29 @@ mod tests {
             Vector2::new(1.0, 0.1)
         );
     }
+
+    #[test]
+    fn the_step_offset_moves_the_touch_down_offset_against_the_push_by_its_lipm_offset() {
+        let omega = (9.81f64 / 0.5).sqrt();
+        let pushed = |step_offset: f64, step_adjustment: bool| {
+            let mut r = response(PushConfig {
+                step_offset,
+                step_adjustment,
+                ..PushConfig::default()
+            });
+            r.estimate = Vector2::new(40.0, -20.0);
+            r.step_offset_shift(omega)
+        };
+        // −F/(m ω²) = −(40, −20) · 0.5 / (30 · 9.81), half of it with 0.5
+        let lipm = Vector2::new(40.0, -20.0) * 0.5 / (30.0 * 9.81);
+        assert!((pushed(1.0, true) + lipm).norm() < 1e-12);
+        assert!((pushed(0.5, true) + 0.5 * lipm).norm() < 1e-12);
+        assert_eq!(pushed(0.0, true), Vector2::zeros());
+        assert_eq!(pushed(1.0, false), Vector2::zeros());
+        let invalid = PushConfig {
+            step_offset: 1.5,
+            ..PushConfig::default()
+        };
+        assert!(invalid.validate().is_err());
+    }
 }

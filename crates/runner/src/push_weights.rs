@@ -22,6 +22,7 @@ struct Switched {
 #[derive(Debug, Clone, PartialEq)]
 pub struct PushWeights {
     force: f64,
+    nominal_in_hold: bool,
     tasks: [Option<Switched>; 3],
     /// Whether the push weights are in the TSID now.
     active: bool,
@@ -52,6 +53,7 @@ impl PushWeights {
         ];
         Ok(tasks.iter().any(Option::is_some).then_some(Self {
             force: config.wbc_force,
+            nominal_in_hold: config.wbc_nominal_in_hold,
             tasks,
             active: false,
             ticks: 0,
@@ -63,10 +65,16 @@ impl PushWeights {
         self.active
     }
 
-    /// Puts the push weights into `tsid` while `estimate` \[N\] exceeds `wbc_force`, the nominal ones
-    /// otherwise (a change only when the state changes).
-    pub fn update(&mut self, estimate: &Vector2<f64>, tsid: &mut Tsid) -> Result<(), WbcError> {
-        let pushed = estimate.norm() > self.force;
+    /// Puts the push weights into `tsid` while `estimate` \[N\] exceeds `wbc_force` (and, with
+    /// `wbc_nominal_in_hold`, no double support is `held`), the nominal ones otherwise (a change only
+    /// when the state changes).
+    pub fn update(
+        &mut self,
+        estimate: &Vector2<f64>,
+        held: bool,
+        tsid: &mut Tsid,
+    ) -> Result<(), WbcError> {
+        let pushed = estimate.norm() > self.force && !(self.nominal_in_hold && held);
         if pushed {
             self.ticks += 1;
         }

@@ -41,6 +41,7 @@ use crate::error::{check_finite, check_non_negative, check_positive, Result, Sim
 /// | `step_offset` | – | 0 | fraction in \[0, 1\] of the push's LIPM offset by which the step-adjustment QP's nominal DCM offset at touch-down moves against the push, `b_n − step_offset F̂/(m ω²)`: the push is taken to last past the touch-down, so the foot lands that much further along it (under the CoP the pushed LIPM needs) |
 /// | `wbc_force` | N | 20 | push (after the dead zone) above which the TSID's weights switch to `wbc_com_weight` / `wbc_upright_weight` (back below it); above the touch-down pulses of the unpushed torque walks |
 /// | `wbc_com_weight` | – | 0 (off) | weight of the TSID's `com` task while the push exceeds `wbc_force` (the task must be soft; its configured weight otherwise): the CoM gives way to the push instead of the torso |
+/// | `wbc_nominal_in_hold` | – | `false` | the TSID's configured weights while the push response holds a double support (the push weights only outside the hold) |
 /// | `wbc_upright_weight` | – | 0 (off) | weight of the TSID's `torso` and `pelvis` orientation tasks while the push exceeds `wbc_force` (soft tasks; their configured weight otherwise) |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -78,6 +79,8 @@ pub struct PushConfig {
     pub wbc_com_weight: f64,
     /// Weight of the TSID's `torso` and `pelvis` tasks during a push; 0: unchanged.
     pub wbc_upright_weight: f64,
+    /// Whether the TSID keeps its configured weights while a double support is held.
+    pub wbc_nominal_in_hold: bool,
 }
 
 impl Default for PushConfig {
@@ -99,6 +102,7 @@ impl Default for PushConfig {
             wbc_force: 20.0,
             wbc_com_weight: 0.0,
             wbc_upright_weight: 0.0,
+            wbc_nominal_in_hold: false,
         }
     }
 }
