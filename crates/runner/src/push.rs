@@ -358,6 +358,7 @@ mod tests {
             right_swings: Vec::new(),
             outcome: stride_planner::PlanOutcome::Complete,
             merge_times: Vec::new(),
+            waypoint_progress: None,
         }
     }
 
