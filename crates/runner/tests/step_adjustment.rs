@@ -163,7 +163,7 @@ fn on_the_icub_the_filtered_dcm_error_leaves_the_unpushed_walk_alone_and_unfilte
 /// the step adjustment and the QP reading the unfiltered DCM error (`dcm_error_cutoff = 0`), 10 s: the
 /// measured DCM's transients move touch-downs, and each adjustment replans from the new touch-down towards
 /// the waypoints the plan has not yet passed. Before that fix the replan restarted from the first waypoint,
-/// 0.26 m from the start, and the robot stepped about it (measured: 1.94 m from the goal at 10 s, 2.00 m
+/// 0.26 m from the start, and the robot stepped about it (measured: 1.96 m from the goal at 10 s, 2.00 m
 /// at 30 s after 216 adjustments); now it is 1.50 m from the goal at 10 s after 70 adjustments
 /// (docs/push-recovery.md, "Without pushes on the hard default floor").
 #[test]
