@@ -38,6 +38,7 @@ use crate::goal::Goal;
 use crate::plan::Plan;
 use crate::planner::spliced_plan;
 use crate::swing::{RetargetOutcome, SwingTrajectory};
+use crate::unicycle::waypoints_passed;
 
 /// The step of a plan that is being executed at some instant of single support (borrowed from the plan:
 /// no allocation).
@@ -154,7 +155,12 @@ pub(crate) fn adjusted_plan(
         ground: plan.ground_height,
         first_swing: Some(step.stance),
     };
-    let new = build_plan(cfg, omega, &start, goal)?;
+    // towards the waypoints not yet passed: the full list would send the robot back to the first one
+    let (goal, passed) = remaining_goal(cfg, plan, goal, anchor_xy)?;
+    let mut new = build_plan(cfg, omega, &start, &goal)?;
+    if let Some(p) = new.waypoint_progress.as_mut() {
+        p.passed = passed;
+    }
     Ok(Some(splice(plan, new, t, swing, tail)))
 }
 
@@ -224,6 +230,24 @@ pub(crate) fn support_tail(
     );
     let clamped = Vector2::new(local.x.clamp(-hx, hx), local.y.clamp(-hy, hy));
     Some(tail_to(sole.transform_point(clamped)))
+}
+
+/// The goal a step adjustment replans towards from `anchor`, and how many of `goal`'s waypoints it drops:
+/// a waypoint goal without the waypoints the plan's path has passed where it comes closest to `anchor`
+/// (never the last one); any other goal as it is.
+fn remaining_goal(
+    cfg: &PlannerConfig,
+    plan: &Plan,
+    goal: &Goal,
+    anchor: Vector2<f64>,
+) -> Result<(Goal, usize), PlannerError> {
+    let (Goal::Waypoints { points }, Some(progress)) = (goal, plan.waypoint_progress) else {
+        return Ok((goal.clone(), 0));
+    };
+    let before = progress.passed.min(points.len().saturating_sub(1));
+    let passed = before + waypoints_passed(cfg, progress.origin, &points[before..], anchor)?;
+    let points = points[passed..].to_vec();
+    Ok((Goal::Waypoints { points }, passed))
 }
 
 /// The old plan's DCM/ZMP/CoM at `land`, with the single-support segment at `t` extended to `land`.

@@ -12,7 +12,7 @@ use crate::dcm::{
 use crate::error::PlannerError;
 use crate::geometry::{wrap_angle, Pose2};
 use crate::goal::Goal;
-use crate::plan::{Plan, PlanOutcome};
+use crate::plan::{Plan, PlanOutcome, WaypointProgress};
 use crate::swing::{SwingShape, SwingTrajectory};
 use crate::unicycle::{choose_first_swing, search_footsteps, unicycle_path, StepPlan};
 use stride_block::SupportPolygon;
@@ -143,6 +143,10 @@ pub(crate) fn build_plan(
         right_swings: rs,
         outcome,
         merge_times: Vec::new(),
+        waypoint_progress: matches!(goal, Goal::Waypoints { .. }).then_some(WaypointProgress {
+            origin: start.anchor,
+            passed: 0,
+        }),
     })
 }
 

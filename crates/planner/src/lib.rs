@@ -75,7 +75,7 @@ pub use contacts::{ContactList, Foot, Phase, PhaseKind, PlannedContact};
 pub use error::PlannerError;
 pub use geometry::Pose2;
 pub use goal::{Goal, Waypoint};
-pub use plan::{FootSample, Plan, PlanOutcome, PlanReport, PlanSample};
+pub use plan::{FootSample, Plan, PlanOutcome, PlanReport, PlanSample, WaypointProgress};
 pub use planner::{plan_from_standing, Planner, PlannerInput};
 pub use stride_block::{Block, FootRectangle, SupportPolygon};
 pub use swing::{RetargetOutcome, SwingShape, SwingTrajectory};

@@ -141,6 +141,20 @@ pub struct Plan {
     pub outcome: PlanOutcome,
     /// Times at which new plans were merged into this one.
     pub merge_times: Vec<f64>,
+    /// For a waypoint goal: where the unicycle path of the plan's last part starts and how many of the
+    /// goal's waypoints were passed before it (a step adjustment replans towards the waypoints not yet
+    /// passed); `None` for the other goals.
+    #[serde(default)]
+    pub waypoint_progress: Option<WaypointProgress>,
+}
+
+/// Progress along a waypoint goal ([`Plan::waypoint_progress`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WaypointProgress {
+    /// Start pose of the unicycle path towards the remaining waypoints.
+    pub origin: crate::geometry::Pose2,
+    /// Number of the goal's waypoints already passed when that path was built.
+    pub passed: usize,
 }
 
 impl Plan {

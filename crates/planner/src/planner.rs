@@ -471,6 +471,7 @@ pub(crate) fn spliced_plan(
         right_swings: keep_swings(Foot::Right, &old.right_swings, new.right_swings),
         outcome: new.outcome,
         merge_times,
+        waypoint_progress: new.waypoint_progress,
     }
 }
 

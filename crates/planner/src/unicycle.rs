@@ -71,6 +71,8 @@ enum LegSpec {
 /// Reference of the point F: a chain of legs decided from the goal.
 struct Reference {
     specs: Vec<LegSpec>,
+    /// Index of the waypoint each spec leads to (parallel to `specs`).
+    owners: Vec<usize>,
     offset: Vector2<f64>,
     final_pose: Pose2,
 }
@@ -82,6 +84,7 @@ impl Reference {
         let v_back = cfg.reference_speed_fraction * cfg.max_backward_speed();
         let w_ref = cfg.reference_speed_fraction * cfg.max_yaw_rate();
         let mut specs = Vec::new();
+        let mut owners = Vec::new();
         let mut p = start.position();
         let mut yaw = start.yaw;
         let thr = cfg.turn_in_place_threshold;
@@ -129,9 +132,11 @@ impl Reference {
             if let (true, Some(y)) = (is_last, wp_yaw) {
                 turn(&mut specs, &mut yaw, y);
             }
+            owners.resize(specs.len(), i);
         }
         Self {
             specs,
+            owners,
             offset: d,
             final_pose: Pose2 {
                 x: p.x,
@@ -397,16 +402,54 @@ pub(crate) fn unicycle_path(
         }
         Goal::Pose { x, y, yaw } => {
             let pts = [(Vector2::new(*x, *y), Some(*yaw))];
-            follow(cfg, start, &pts, max_samples, samples)
+            follow(cfg, start, &pts, max_samples, samples, None)
         }
         Goal::Waypoints { points } => {
             let pts: Vec<_> = points
                 .iter()
                 .map(|w| (Vector2::new(w.x, w.y), w.yaw))
                 .collect();
-            follow(cfg, start, &pts, max_samples, samples)
+            follow(cfg, start, &pts, max_samples, samples, None)
         }
     }
+}
+
+/// How many of `points` (a waypoint goal followed from `origin`) the unicycle path has passed where it comes
+/// closest to `position`: the waypoints of the legs completed at that sample, at most all but the last. A step
+/// adjustment replans from its new touch-down towards the waypoints not yet passed instead of from the
+/// first one.
+pub(crate) fn waypoints_passed(
+    cfg: &PlannerConfig,
+    origin: Pose2,
+    points: &[crate::goal::Waypoint],
+    position: Vector2<f64>,
+) -> Result<usize, PlannerError> {
+    let pts: Vec<_> = points
+        .iter()
+        .map(|w| (Vector2::new(w.x, w.y), w.yaw))
+        .collect();
+    let max_samples = (cfg.horizon / cfg.unicycle_dt).floor() as usize;
+    let mut passed = vec![0];
+    let path = follow(
+        cfg,
+        origin,
+        &pts,
+        max_samples,
+        vec![origin],
+        Some(&mut passed),
+    )?;
+    let nearest = path
+        .samples
+        .iter()
+        .map(|s| (s.position() - position).norm_squared())
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(0, |(i, _)| i);
+    Ok(passed
+        .get(nearest)
+        .copied()
+        .unwrap_or(0)
+        .min(points.len().saturating_sub(1)))
 }
 
 fn follow(
@@ -415,9 +458,13 @@ fn follow(
     points: &[(Vector2<f64>, Option<f64>)],
     max_samples: usize,
     mut samples: Vec<Pose2>,
+    mut passed: Option<&mut Vec<usize>>,
 ) -> Result<UnicyclePath, PlannerError> {
     let dt = cfg.unicycle_dt;
     let reference = Reference::build(cfg, start, points);
+    // waypoints passed at each sample (parallel to `samples`, when asked): those before the current leg's,
+    // all but the last once every leg is done
+    let last = points.len().saturating_sub(1);
     let d = reference.offset;
     let k = cfg.unicycle_gain;
     let (v_fwd, v_back, w_max) = (
@@ -467,6 +514,9 @@ fn follow(
             let w = (local.y / d.x).clamp(-w_max, w_max);
             p = integrate(p, v, 0.0, w, dt);
             samples.push(p);
+            if let Some(passed) = passed.as_deref_mut() {
+                passed.push(last);
+            }
             continue;
         };
         let (f_ref, df_ref) = reference.evaluate(l, t - t0);
@@ -479,6 +529,12 @@ fn follow(
         let (v, _, w) = feasible_twist(cfg, v, 0.0, w);
         p = integrate(p, v, 0.0, w, dt);
         samples.push(p);
+        if let Some(passed) = passed.as_deref_mut() {
+            let owner = next_spec
+                .checked_sub(1)
+                .and_then(|j| reference.owners.get(j));
+            passed.push(owner.copied().unwrap_or(0));
+        }
     }
     if !samples
         .iter()

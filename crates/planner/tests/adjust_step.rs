@@ -401,5 +401,71 @@ fn an_early_crossed_touch_down_is_refused_and_the_same_early_touch_down_outward_
             );
             assert_eq!(p.plan().unwrap(), &before);
         }
+/// With a waypoint goal, an adjusted step replans towards the waypoints the plan has not yet passed:
+/// adjusted past the first waypoint (and again, chained, past the second), the later footsteps keep going
+/// forward and the walk ends at the last waypoint (within 0.15 m: measured 0.13 m; the plan without
+/// adjustment ends 0.057 m from it, the unicycle's own accuracy at a final turn). Until 2026-12-06 the replan restarted from the first
+/// waypoint and the footsteps after the adjusted touch-down walked back to it.
+#[test]
+fn with_waypoints_an_adjusted_step_replans_towards_the_waypoints_not_yet_passed() {
+    let cfg = PlannerConfig {
+        com_height: 0.54,
+        nominal_width: 0.15,
+        verify_plans: PlanVerification::Always,
+        ..Default::default()
+    };
+    let point = |x: f64, y: f64, yaw: Option<f64>| stride_planner::Waypoint { x, y, yaw };
+    let goal = Goal::Waypoints {
+        points: vec![
+            point(0.4, 0.0, None),
+            point(0.9, 0.2, None),
+            point(1.4, 0.2, Some(0.0)),
+        ],
+    };
+    let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+    let mut p = Planner::new(cfg, GRAVITY).unwrap();
+    p.start(Duration::ZERO, &l, &r, &goal).unwrap();
+    let mut passed = 0;
+    for x_min in [0.5, 1.0] {
+        // the first single support whose swing lands beyond `x_min`
+        let n = (0..)
+            .find(|&n| {
+                let (_, t) = mid_single_support(&p, n);
+                let step = p.plan().unwrap().current_step(t).unwrap();
+                step.swing.end.translation.x > x_min
+            })
+            .unwrap();
+        let (time, t) = mid_single_support(&p, n);
+        let step = p.plan().unwrap().current_step(t).unwrap();
+        let target = step.swing.end.translation.vector.xy() + Vector2::new(0.03, 0.0);
+        let land = step.swing.land_time;
+        let request = StepAdjustmentRequest {
+            time,
+            target,
+            land_time: land,
+            min_remaining: 0.1,
+        };
+        assert!(p.adjust_step(&request, &goal).unwrap());
+        let plan = p.plan().unwrap();
+        let progress = plan.waypoint_progress.unwrap();
+        assert!(progress.passed > passed, "{progress:?} after x > {x_min}");
+        passed = progress.passed;
+        // every later touch-down is ahead of the adjusted one, less a step's back-and-forth
+        for c in plan.footsteps() {
+            if c.activation_time > land {
+                let x = c.pose.translation.x;
+                assert!(
+                    x > target.x - 0.05,
+                    "{x} behind {} after x > {x_min}",
+                    target.x
+                );
+            }
+        }
+        let l = plan.contacts(Foot::Left).contacts.last().unwrap().pose;
+        let r = plan.contacts(Foot::Right).contacts.last().unwrap().pose;
+        let mid = (l.translation.vector + r.translation.vector) * 0.5;
+        // the unadjusted plan itself ends 0.057 m from the last waypoint, the adjusted ones 0.13 m
+        let end = (mid.xy() - Vector2::new(1.4, 0.2)).norm();
+        assert!(end < 0.15, "{mid:?}");
     }
 }

@@ -39,6 +39,7 @@ pub mod mujoco_plant;
 pub mod plot;
 pub mod position_command;
 pub mod push;
+pub mod push_weights;
 pub mod records;
 pub mod replay;
 pub mod robot;

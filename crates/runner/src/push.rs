@@ -196,6 +196,16 @@ impl PushResponse {
         }
         planned - push_zmp_offset(&self.estimate, self.mass, omega)
     }
+
+    /// The shift of the step-adjustment QP's nominal DCM offset at touch-down, `−step_offset F̂/(m ω²)`
+    /// (zero when `step_adjustment` is off): with the push still on after the touch-down, the new
+    /// stance foot must carry the pushed LIPM's CoP, `F̂/(m ω²)` along the push from its effective ZMP.
+    pub fn step_offset_shift(&self, omega: f64) -> Vector2<f64> {
+        if !self.config.step_adjustment || omega <= 0.0 || self.config.step_offset == 0.0 {
+            return Vector2::zeros();
+        }
+        -push_zmp_offset(&self.estimate, self.mass, omega) * self.config.step_offset
+    }
 }
 
 /// Whether plan time `t` \[s\] is in the start-up or the stopping double support of `plan`: before its
@@ -385,6 +395,7 @@ mod tests {
             right_swings: Vec::new(),
             outcome: stride_planner::PlanOutcome::Complete,
             merge_times: Vec::new(),
+            waypoint_progress: None,
         }
     }
 
@@ -541,5 +552,30 @@ mod tests {
             off.effective_cop(Vector2::new(1.0, 0.1), omega),
             Vector2::new(1.0, 0.1)
         );
+    }
+
+    #[test]
+    fn the_step_offset_moves_the_touch_down_offset_against_the_push_by_its_lipm_offset() {
+        let omega = (9.81f64 / 0.5).sqrt();
+        let pushed = |step_offset: f64, step_adjustment: bool| {
+            let mut r = response(PushConfig {
+                step_offset,
+                step_adjustment,
+                ..PushConfig::default()
+            });
+            r.estimate = Vector2::new(40.0, -20.0);
+            r.step_offset_shift(omega)
+        };
+        // −F/(m ω²) = −(40, −20) · 0.5 / (30 · 9.81), half of it with 0.5
+        let lipm = Vector2::new(40.0, -20.0) * 0.5 / (30.0 * 9.81);
+        assert!((pushed(1.0, true) + lipm).norm() < 1e-12);
+        assert!((pushed(0.5, true) + 0.5 * lipm).norm() < 1e-12);
+        assert_eq!(pushed(0.0, true), Vector2::zeros());
+        assert_eq!(pushed(1.0, false), Vector2::zeros());
+        let invalid = PushConfig {
+            step_offset: 1.5,
+            ..PushConfig::default()
+        };
+        assert!(invalid.validate().is_err());
     }
 }

@@ -37,6 +37,7 @@ use crate::config::{ControlMode, EstimationKind, EstimationUpdate, Goal, Scenari
 use crate::error::RunError;
 use crate::flexible::{FlexibleObserver, FlexibleSprings};
 use crate::push::PushResponse;
+use crate::push_weights::PushWeights;
 use crate::robot::{JointCommand, Measurement};
 use crate::setup::frame_of;
 use crate::soft_soles::zero_force_sole;
@@ -324,6 +325,9 @@ pub struct Stack {
     pub plan_clock: PlanClock,
     /// The push estimate and the double-support hold (`simplified.push.enabled`).
     pub push: Option<PushResponse>,
+    /// The TSID's weights during a push (`simplified.push.wbc_com_weight`, `wbc_upright_weight`; torque
+    /// control with the push response only).
+    pub push_weights: Option<PushWeights>,
     /// The push estimate \[N\] when a double-support hold started at the last simplified tick, for the
     /// `push_hold` event (taken by the scheduler).
     pub push_hold_started: Option<Vector2<f64>>,
@@ -416,6 +420,10 @@ impl Stack {
             Duration::from_nanos(1_000_000_000 / u64::from(c.rates.simplified_hz));
         let simplified = SimplifiedController::new(&c.simplified, simplified_period)?;
         let mut wbc = Wbc::new(scenario, &model)?;
+        let push_weights = match &wbc {
+            Wbc::Tsid(t) if c.simplified.push.enabled => PushWeights::new(&c.simplified.push, t)?,
+            _ => None,
+        };
         let flexible = match &mut wbc {
             Wbc::Tsid(t) => {
                 let springs = FlexibleSprings::new(scenario, &model, &t.config().flexible_joints)?;
@@ -535,6 +543,7 @@ impl Stack {
             } else {
                 None
             },
+            push_weights,
             push_hold_started: None,
             push_step_out: None,
             early_touchdown: false,
@@ -796,16 +805,16 @@ impl Stack {
         };
         let time = self.plan_clock.plan_time(Duration::from_nanos(time_ns));
         let cop = self.plan_sample.zmp.xy();
-        let cop = self
-            .push
-            .as_ref()
-            .map_or(cop, |p| p.effective_cop(cop, self.plan_sample.omega));
+        let omega = self.plan_sample.omega;
+        let push = self.push.as_ref().map_or((cop, Vector2::zeros()), |p| {
+            (p.effective_cop(cop, omega), p.step_offset_shift(omega))
+        });
         let Some(request) = tracker.request(
             plan,
             adjuster,
             &self.measured.dcm,
             &self.plan_sample,
-            cop,
+            push,
             time,
         ) else {
             return;
@@ -983,6 +992,13 @@ impl Stack {
         stride_walking::fill_wbc_input(i, &self.wbc_handles, s, simplified)?;
         for (id, wrench) in self.foot_contacts.iter().zip(&self.estimate.foot_wrenches) {
             i.contact_mut(*id)?.measured_wrench = *wrench;
+        }
+        if let (Wbc::Tsid(t), Some(w), Some(push)) = (
+            &mut self.wbc,
+            self.push_weights.as_mut(),
+            self.push.as_ref(),
+        ) {
+            w.update(&push.estimate(), self.plan_clock.holding(), t)?;
         }
         if let Wbc::Tsid(t) = &self.wbc {
             if t.config().contact_model == ContactModel::Compliant {

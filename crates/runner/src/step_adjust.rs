@@ -43,17 +43,20 @@ pub struct StepTracker {
 impl StepTracker {
     /// The adjustment to apply at `time`, if any: `None` outside single support, with less than
     /// `min_remaining_time` before the planned touch-down (frozen), when the QP falls back or when its
-    /// answer is within the dead bands of what the plan has. `stance_cop` is the single-support ZMP the
-    /// QP predicts the DCM with (the plan's, or the push-aware one of [`crate::push::PushResponse`]).
+    /// answer is within the dead bands of what the plan has. `push.0` is the single-support ZMP the
+    /// QP predicts the DCM with (the plan's, or the push-aware one of [`crate::push::PushResponse`]),
+    /// `push.1` the shift of the nominal DCM offset at touch-down (zero, or
+    /// [`crate::push::PushResponse::step_offset_shift`]).
     pub fn request(
         &mut self,
         plan: &Plan,
         adjuster: &mut StepAdjuster,
         dcm: &Vector2<f64>,
         sample: &PlanSample,
-        stance_cop: Vector2<f64>,
+        push: (Vector2<f64>, Vector2<f64>),
         time: Duration,
     ) -> Option<StepAdjustmentRequest> {
+        let (stance_cop, offset_shift) = push;
         let t = seconds(time);
         let cutoff = adjuster.config().dcm_error_cutoff;
         let dcm = &self.filtered_dcm(cutoff, dcm, sample.dcm_position.xy(), t);
@@ -94,7 +97,7 @@ impl StepTracker {
             stance_yaw: step.stance_pose.rotation.euler_angles().2,
             stance_cop,
             nominal_step: tracked.nominal_target,
-            nominal_offset: tracked.nominal_offset,
+            nominal_offset: tracked.nominal_offset + offset_shift,
             time_since_touchdown: t - tracked.stance_touchdown,
             nominal_duration: tracked.nominal_land - tracked.stance_touchdown,
         };

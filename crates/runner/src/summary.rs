@@ -178,6 +178,9 @@ pub struct RunSummary {
     /// Double supports held by a push (`simplified.push`), and the plan's delay behind the run's time at
     /// the end \[s\].
     pub push_holds: (u64, f64),
+    /// Whole-body ticks with the TSID's push weights (`simplified.push.wbc_com_weight`,
+    /// `wbc_upright_weight`).
+    pub push_weight_ticks: u64,
     /// Realtime mode: whole-body ticks that started late.
     pub deadline_misses: u64,
     /// Estimation errors (estimate − plant truth).
@@ -220,6 +223,7 @@ impl RunSummary {
             step_adjustments: (0, 0),
             early_touchdowns: 0,
             push_holds: (0, 0.0),
+            push_weight_ticks: 0,
             deadline_misses: 0,
             estimation: EstimationSummary::default(),
             log: None,
@@ -365,6 +369,13 @@ impl RunSummary {
             let _ = writeln!(
                 s,
                 "  double supports held by a push {holds} (the plan {delay:.2} s behind)"
+            );
+        }
+        if self.push_weight_ticks > 0 {
+            let _ = writeln!(
+                s,
+                "  whole-body ticks with the push weights {}",
+                self.push_weight_ticks
             );
         }
         if let Some((p, st)) = &self.log {

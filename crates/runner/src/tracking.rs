@@ -229,6 +229,7 @@ impl Tracker {
         s.step_adjustments = (counters.step_adjustments, counters.step_adjustment_failures);
         s.early_touchdowns = counters.early_touchdowns;
         s.push_holds = stack.push_holds();
+        s.push_weight_ticks = stack.push_weights.as_ref().map_or(0, |w| w.ticks);
         s.finish(self.start_mid, end, goal, wall);
         s.gait = self.gait.finish(s.distance);
         s.estimation.finish(s.distance);

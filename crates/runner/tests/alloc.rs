@@ -98,6 +98,15 @@ fn steady_state_ticks_do_not_allocate() {
         "include = [\"p.toml\"]\n[simplified.push]\nstep_out = true\n",
     );
     assert_steady_on_simulator(&s, &step_out, extra_seconds, "push response, step out");
+    // the TSID's weights switched while the push lasts (`simplified.push.wbc_com_weight`,
+    // `wbc_upright_weight`; on at the push, off after it, both inside the measured window)
+    let weights = s.write(
+        "w.toml",
+        "include = [\"p.toml\"]\n[simplified.push]\nwbc_force = 5.0\nwbc_com_weight = 10.0\n\
+         wbc_upright_weight = 500.0\n[[wbc.tsid.tasks]]\ntype = \"com\"\nname = \"com\"\nkp = 25.0\n\
+         kd = 5.0\npriority = \"soft\"\nweight = 100.0\n",
+    );
+    assert_steady_on_simulator(&s, &weights, extra_seconds, "push weights");
     // torque control with the actuator compensation (`wbc.tsid.actuators`: the lead, the friction
     // feed-forward, the delay's prediction) on the simulator's default actuators
     let actuators = s.write(

@@ -9,7 +9,13 @@
 //! control with the step adjustment on (`configs/walk_straight_step_adjustment.toml`): the same two sides
 //! of the limit on the hard default floor. Torque control with the TSID's CoP region ±35 mm across the sole
 //! (`configs/layers/tsid_cop_y_35mm.toml`): the unpushed walk as good, a 40 N backward push in double
-//! support walked through that falls with ±25 mm, a 40 N side push that still falls.
+//! support walked through that falls with ±25 mm, a 40 N side push that still falls. With the TSID's
+//! weights switched during a push (`configs/layers/tsid_push_weights.toml`): the unpushed walk never
+//! switches, a 40 N forward push in single support that tips the torso without the switch is a topple
+//! with the torso upright, later, and still a fall; a hard CoM task with the switch is a start-up error.
+//! With the step adjustment's touch-down placed for the push as well (`configs/layers/push_step_offset.toml`):
+//! a 40 N forward-right push in single support walked through that falls without it, a 40 N forward push
+//! that still falls.
 mod common;
 
 use common::{log_options as options, Scratch};
@@ -27,6 +33,10 @@ const TORQUE_RESPONSE_AT_ONCE: &[&str] = &[
 const TORQUE_STEPS_RESPONSE: &[&str] = &["walk_straight_step_adjustment_push_response_torque.toml"];
 const TORQUE_STEPS_RESPONSE_COP_35: &[&str] =
     &["walk_straight_step_adjustment_push_response_cop_y_35mm_torque.toml"];
+const TORQUE_STEPS_RESPONSE_PUSH_WEIGHTS: &[&str] =
+    &["walk_straight_step_adjustment_push_response_push_weights_torque.toml"];
+const TORQUE_STEPS_RESPONSE_STEP_OFFSET: &[&str] =
+    &["walk_straight_step_adjustment_push_response_push_weights_step_offset_torque.toml"];
 const POSITION_STEPS: &[&str] = &["walk_straight_step_adjustment.toml"];
 const POSITION_STEPS_RESPONSE: &[&str] = &[
     "walk_straight_step_adjustment.toml",
@@ -299,4 +309,118 @@ fn without_pushes_the_torque_walk_with_the_wider_cop_region_reaches_its_goal_as_
         wide.dcm_error.rms,
         base.dcm_error.rms
     );
+}
+
+/// 40 N forward from 5.25 s (the left foot alone, the right swinging): without the push weights the torso
+/// tips within 0.35 s (fall by torso tilt, the DCM error small); with them
+/// (`configs/layers/tsid_push_weights.toml`) the torso stays upright and the walk topples (DCM error)
+/// more than 0.3 s later: the switch moves the fall from the torso to the CoM but saves nothing (the
+/// limit, docs/push-recovery.md, "A step during the push in torque control").
+#[test]
+fn torque_control_the_push_weights_keep_the_torso_upright_but_a_40_n_push_still_falls() {
+    let s = Scratch::new("push_response_torque_push_weights");
+    let forward = [40.0, 0.0];
+    let tips = pushed(&s, "tips", TORQUE_STEPS_RESPONSE_COP_35, forward, 5.25);
+    assert_fell(&tips);
+    let tip = tips.diagnosis.fall.expect("a fall diagnosis");
+    assert_eq!(tip.kind, "torso_lean", "{}", tips.render());
+    assert_eq!(tips.push_weight_ticks, 0);
+    let upright = pushed(
+        &s,
+        "upright",
+        TORQUE_STEPS_RESPONSE_PUSH_WEIGHTS,
+        forward,
+        5.25,
+    );
+    assert_fell(&upright);
+    let topple = upright.diagnosis.fall.expect("a fall diagnosis");
+    assert!(upright.push_weight_ticks > 0, "{}", upright.render());
+    assert!(topple.tilt_deg < 10.0, "{}", upright.render());
+    assert!(
+        topple.time > tip.time + 0.3,
+        "{} against {}",
+        topple.time,
+        tip.time
+    );
+}
+
+/// Without pushes the torque walk with the push weights (`configs/layers/tsid_push_weights.toml`, on the
+/// layers of `walk_straight_step_adjustment_push_response_cop_y_35mm_torque.toml`) never switches and
+/// reaches its goal, its DCM error RMS within 1 mm of the walk's without the layer; the switch on a
+/// hard CoM task is a start-up error naming the task.
+#[test]
+fn without_pushes_the_torque_walk_with_the_push_weights_never_switches_and_reaches_its_goal() {
+    let s = Scratch::new("push_response_torque_push_weights_nominal");
+    let mut layers = vec![
+        "walk_straight_torque.toml",
+        "layers/step_adjustment.toml",
+        "layers/push_response.toml",
+        "layers/push_hold_at_once.toml",
+        "layers/tsid_cop_y_35mm.toml",
+    ];
+    let base = common::scenario_from_configs(&s, "base", &layers, "");
+    let base = run_scenario(&base, &options(&s, "base")).unwrap();
+    layers.push("layers/tsid_push_weights.toml");
+    let switched = common::scenario_from_configs(&s, "switched", &layers, "");
+    let switched = run_scenario(&switched, &options(&s, "switched")).unwrap();
+    assert_eq!(base.outcome, Outcome::GoalReached, "{}", base.render());
+    assert_eq!(
+        switched.outcome,
+        Outcome::GoalReached,
+        "{}",
+        switched.render()
+    );
+    assert_eq!(switched.push_weight_ticks, 0, "{}", switched.render());
+    assert!(
+        switched.dcm_error.rms <= base.dcm_error.rms + 1e-3,
+        "{} against {}",
+        switched.dcm_error.rms,
+        base.dcm_error.rms
+    );
+    let hard = "[simplified.push]\nwbc_com_weight = 10.0\n";
+    let hard = common::scenario_from_configs(&s, "hard", &layers[..5], hard);
+    let err = run_scenario(&hard, &options(&s, "hard")).unwrap_err();
+    assert!(err.to_string().contains("`com`"), "{err}");
+}
+
+/// 40 N forward and to the right (315°) from 5.25 s (the left foot alone, the right swinging towards the
+/// push) with the push weights: the touch-down placed for the push (`configs/layers/push_step_offset.toml`:
+/// the right foot lands 40 mm further forward and 56 mm further out, the held double support takes the
+/// rest) walks through 9 s; without the step offset it topples; 40 N straight forward from the same
+/// instant still falls with it (the other side of the limit; docs/push-recovery.md, "A step during the
+/// push in torque control").
+#[test]
+fn torque_control_a_forward_right_push_in_single_support_is_walked_through_with_the_step_offset() {
+    let s = Scratch::new("push_response_torque_step_offset");
+    let f = 40.0 * std::f64::consts::FRAC_1_SQRT_2;
+    let forward_right = [f, -f];
+    let offset = pushed(
+        &s,
+        "offset",
+        TORQUE_STEPS_RESPONSE_STEP_OFFSET,
+        forward_right,
+        5.25,
+    );
+    assert_eq!(
+        offset.outcome,
+        Outcome::DurationReached,
+        "{}",
+        offset.render()
+    );
+    let weights = pushed(
+        &s,
+        "weights",
+        TORQUE_STEPS_RESPONSE_PUSH_WEIGHTS,
+        forward_right,
+        5.25,
+    );
+    assert_fell(&weights);
+    let forward = pushed(
+        &s,
+        "forward",
+        TORQUE_STEPS_RESPONSE_STEP_OFFSET,
+        [40.0, 0.0],
+        5.25,
+    );
+    assert_fell(&forward);
 }

@@ -38,6 +38,11 @@ use crate::error::{check_finite, check_non_negative, check_positive, Result, Sim
 /// | `hold_ramp` | s | 0.1 | time for the plan's clock rate to go from 1 to 0 and back (linear ramp) |
 /// | `step_adjustment` | – | `true` | the step-adjustment QP predicts the DCM with the push: its stance CoP is moved by `−F̂/(m ω²)` |
 /// | `lean` | – | 0 | fraction in \[0, 1\] of the push's LIPM offset by which the planned CoM and DCM the simplified layer tracks move against the push, `−lean F̂/(m ω²)`: with 1 the pushed LIPM's ZMP stays on the plan's |
+/// | `step_offset` | – | 0 | fraction in \[0, 1\] of the push's LIPM offset by which the step-adjustment QP's nominal DCM offset at touch-down moves against the push, `b_n − step_offset F̂/(m ω²)`: the push is taken to last past the touch-down, so the foot lands that much further along it (under the CoP the pushed LIPM needs) |
+/// | `wbc_force` | N | 20 | push (after the dead zone) above which the TSID's weights switch to `wbc_com_weight` / `wbc_upright_weight` (back below it); above the touch-down pulses of the unpushed torque walks |
+/// | `wbc_com_weight` | – | 0 (off) | weight of the TSID's `com` task while the push exceeds `wbc_force` (the task must be soft; its configured weight otherwise): the CoM gives way to the push instead of the torso |
+/// | `wbc_nominal_in_hold` | – | `false` | the TSID's configured weights while the push response holds a double support (the push weights only outside the hold) |
+/// | `wbc_upright_weight` | – | 0 (off) | weight of the TSID's `torso` and `pelvis` orientation tasks while the push exceeds `wbc_force` (soft tasks; their configured weight otherwise) |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PushConfig {
@@ -73,6 +78,16 @@ pub struct PushConfig {
     pub step_out: bool,
     /// Distance outside the support polygon of `ξ + F̂/(m ω²)` at which `step_out` ends a hold \[m\].
     pub step_out_margin: f64,
+    /// Fraction of the push's LIPM offset by which the step QP's nominal touch-down DCM offset moves, in \[0, 1\].
+    pub step_offset: f64,
+    /// Push above which the TSID's weights switch \[N\].
+    pub wbc_force: f64,
+    /// Weight of the TSID's `com` task during a push; 0: unchanged.
+    pub wbc_com_weight: f64,
+    /// Weight of the TSID's `torso` and `pelvis` tasks during a push; 0: unchanged.
+    pub wbc_upright_weight: f64,
+    /// Whether the TSID keeps its configured weights while a double support is held.
+    pub wbc_nominal_in_hold: bool,
 }
 
 impl Default for PushConfig {
@@ -92,6 +107,11 @@ impl Default for PushConfig {
             lean: 0.0,
             step_out: false,
             step_out_margin: 0.0,
+            step_offset: 0.0,
+            wbc_force: 20.0,
+            wbc_com_weight: 0.0,
+            wbc_upright_weight: 0.0,
+            wbc_nominal_in_hold: false,
         }
     }
 }
@@ -107,12 +127,20 @@ impl PushConfig {
         check_non_negative("push.max_hold", self.max_hold)?;
         check_positive("push.hold_ramp", self.hold_ramp)?;
         check_non_negative("push.step_out_margin", self.step_out_margin)?;
-        if !(0.0..=1.0).contains(&self.lean) {
-            return Err(SimplifiedError::InvalidParameter {
-                name: "push.lean",
-                value: self.lean,
-                reason: "must be in [0, 1]",
-            });
+        check_non_negative("push.wbc_force", self.wbc_force)?;
+        check_non_negative("push.wbc_com_weight", self.wbc_com_weight)?;
+        check_non_negative("push.wbc_upright_weight", self.wbc_upright_weight)?;
+        for (name, value) in [
+            ("push.lean", self.lean),
+            ("push.step_offset", self.step_offset),
+        ] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(SimplifiedError::InvalidParameter {
+                    name,
+                    value,
+                    reason: "must be in [0, 1]",
+                });
+            }
         }
         Ok(())
     }
