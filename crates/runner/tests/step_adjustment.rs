@@ -3,7 +3,9 @@
 //! walk fall without it and not with it (40 N falls with both: the other side of the limit); with a side
 //! push it moves the swing foot's touch-down outward, in the push direction, and logs it on
 //! `/planner/adjusted_footsteps`. On the official iCub (STRIDE_ICUB_MODELS_DIR): with its robot file's
-//! low-passed DCM error the unpushed walk adjusts nothing and reaches its goal, unfiltered it falls.
+//! low-passed DCM error the unpushed walk adjusts nothing and reaches its goal, unfiltered it falls; with
+//! the push response as well, its robot file's gate on the push estimate (`step_adjustment_delay`) leaves
+//! the unpushed walk as the push response alone walks it, ungated it falls.
 mod common;
 
 use common::{adjusted_footsteps, log_options as options, Scratch};
@@ -155,4 +157,46 @@ fn on_the_icub_the_filtered_dcm_error_leaves_the_unpushed_walk_alone_and_unfilte
         raw.render()
     );
     assert!(raw.step_adjustments.0 > 0, "{}", raw.render());
+}
+
+/// The official iCub with the push response as well (`configs/walk_straight_icub_step_adjustment_push_response.toml`,
+/// STRIDE_ICUB_MODELS_DIR; without it the test returns early and says so): its robot file gives the step
+/// adjustment the push estimate only once it has stayed above `hold_force` for 0.1 s
+/// (`simplified.push.step_adjustment_delay`), and the unpushed walk then adjusts nothing and walks as with
+/// the push response alone (`configs/walk_straight_icub_push_response.toml`: the same goal distance and DCM
+/// error). With the estimate passed at once, the observer's pulses at the single supports' base rolls (40–115 N
+/// for at most 56 ms) move the QP's CoP by centimetres, the steps are shortened and the walk falls (measured:
+/// at 5.34 s after 17 adjustments; docs/push-recovery.md, "The push response on the iCub").
+#[test]
+fn on_the_icub_the_gated_push_estimate_leaves_the_unpushed_walk_alone_and_ungated_it_falls() {
+    let test =
+        "on_the_icub_the_gated_push_estimate_leaves_the_unpushed_walk_alone_and_ungated_it_falls";
+    if stride_testkit::icub_models_dir(test).is_none() {
+        return;
+    }
+    let s = Scratch::new("step_adjustment_push_response_icub");
+    let run = |name: &str, layers: &[&str], extra: &str| {
+        let scenario = common::scenario_from_configs(&s, name, layers, extra);
+        run_scenario(&scenario, &options(&s, name)).unwrap()
+    };
+    let both = ["walk_straight_icub_step_adjustment_push_response.toml"];
+    let alone = run("alone", &["walk_straight_icub_push_response.toml"], "");
+    let on = run("on", &both, "");
+    let ungated = run(
+        "ungated",
+        &both,
+        "[simplified.push]\nstep_adjustment_delay = 0.0\n",
+    );
+    assert_eq!(alone.outcome, Outcome::GoalReached, "{}", alone.render());
+    assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
+    assert!(adjusted_footsteps(&s.path("on.mcap")).is_empty());
+    assert_eq!(on.step_adjustments, (0, 0));
+    assert!(on.dcm_error.rms <= alone.dcm_error.rms && on.dcm_error.max <= alone.dcm_error.max);
+    assert!(on.goal_distance.unwrap() <= alone.goal_distance.unwrap());
+    assert!(
+        matches!(ungated.outcome, Outcome::Fell { .. }),
+        "{}",
+        ungated.render()
+    );
+    assert!(ungated.step_adjustments.0 > 0, "{}", ungated.render());
 }
