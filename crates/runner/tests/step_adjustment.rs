@@ -11,7 +11,7 @@ mod common;
 
 use common::{adjusted_footsteps, log_options as options, Scratch};
 use stride_runner::config::Scenario;
-use stride_runner::run::{run_scenario, Outcome};
+use stride_runner::run::{run_scenario, Outcome, RunSummary};
 
 /// `configs/walk_straight.toml`, with the step-adjustment layer when `adjust`, and `extra` appended.
 fn walk(s: &Scratch, name: &str, adjust: bool, extra: &str) -> Scenario {
@@ -21,6 +21,12 @@ fn walk(s: &Scratch, name: &str, adjust: bool, extra: &str) -> Scenario {
         &["walk_straight.toml"]
     };
     common::scenario_from_configs(s, name, layers, extra)
+}
+
+/// Runs the scenario of `layers` (under `configs/`) with `extra` appended, logged to `<scratch>/<name>.mcap`.
+fn run_configs(s: &Scratch, name: &str, layers: &[&str], extra: &str) -> RunSummary {
+    let scenario = common::scenario_from_configs(s, name, layers, extra);
+    run_scenario(&scenario, &options(s, name)).unwrap()
 }
 
 #[test]
@@ -134,10 +140,7 @@ fn on_the_icub_the_filtered_dcm_error_leaves_the_unpushed_walk_alone_and_unfilte
         return;
     }
     let s = Scratch::new("step_adjustment_icub");
-    let run = |name: &str, layers: &[&str], extra: &str| {
-        let scenario = common::scenario_from_configs(&s, name, layers, extra);
-        run_scenario(&scenario, &options(&s, name)).unwrap()
-    };
+    let run = |name: &str, layers: &[&str], extra: &str| run_configs(&s, name, layers, extra);
     let adjusting = ["walk_straight_icub.toml", "layers/step_adjustment.toml"];
     let off = run("off", &["walk_straight_icub.toml"], "");
     let on = run("on", &adjusting, "");
@@ -179,10 +182,7 @@ fn on_the_icub_the_gated_push_estimate_leaves_the_unpushed_walk_alone_and_ungate
         return;
     }
     let s = Scratch::new("step_adjustment_push_response_icub");
-    let run = |name: &str, layers: &[&str], extra: &str| {
-        let scenario = common::scenario_from_configs(&s, name, layers, extra);
-        run_scenario(&scenario, &options(&s, name)).unwrap()
-    };
+    let run = |name: &str, layers: &[&str], extra: &str| run_configs(&s, name, layers, extra);
     let both = ["walk_straight_icub_step_adjustment_push_response.toml"];
     let alone = run("alone", &["walk_straight_icub_push_response.toml"], "");
     let on = run("on", &both, "");
@@ -234,11 +234,8 @@ fn on_the_icub_the_planner_takes_the_adjusted_steps_with_a_narrower_min_width_an
     }
     let s = Scratch::new("step_adjustment_icub_min_width");
     let push = "[scenario]\nduration = 6.0\n[[sim.pushes]]\nframe = \"chest\"\nstart = 5.0\nduration = 1.0\nwrench = [40.0, 0.0, 0.0, 0.0, 0.0, 0.0]\n";
-    let run = |name: &str, extra: &str| {
-        let layers = ["walk_straight_icub_step_adjustment_push_response.toml"];
-        let scenario = common::scenario_from_configs(&s, name, &layers, &format!("{push}{extra}"));
-        run_scenario(&scenario, &options(&s, name)).unwrap()
-    };
+    let layers = ["walk_straight_icub_step_adjustment_push_response.toml"];
+    let run = |name: &str, extra: &str| run_configs(&s, name, &layers, &format!("{push}{extra}"));
     let narrow = run("narrow", "");
     let nominal = run("nominal", "[planner]\nmin_width = 0.14\n");
     assert!(narrow.step_adjustments.0 > 0, "{}", narrow.render());
