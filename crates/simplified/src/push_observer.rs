@@ -37,7 +37,7 @@ use crate::error::{check_finite, check_non_negative, check_positive, Result, Sim
 /// | `max_hold` | s | 2 | longest hold of one double support (an estimate that never decays cannot stop the walk) |
 /// | `hold_ramp` | s | 0.1 | time for the plan's clock rate to go from 1 to 0 and back (linear ramp) |
 /// | `step_adjustment` | – | `true` | the step-adjustment QP predicts the DCM with the push: its stance CoP is moved by `−F̂/(m ω²)` |
-/// | `step_adjustment_delay` | s | 0 (off) | with `step_adjustment`: the QP predicts with the estimate only once it has stayed above `hold_force` this long (0: at once, also below `hold_force`). On the iCub the estimated CoM velocity jumps for 20–30 ms about 0.2 s into each single support (the base rolls), a 40–70 N pulse of the observer that moves the QP's CoP by 7–12 cm and shortens the step |
+/// | `step_adjustment_delay` | s | 0 (off) | with `step_adjustment`: the QP predicts with the estimate only once it has stayed above `hold_force` this long (0: at once, also below `hold_force`). On the iCub the estimated CoM velocity jumps for 20–30 ms about 0.2 s into each single support (the base rolls), a 40–115 N pulse of the observer (at most 56 ms) that moves the QP's CoP by 7–19 cm and shortens the steps |
 /// | `lean` | – | 0 | fraction in \[0, 1\] of the push's LIPM offset by which the planned CoM and DCM the simplified layer tracks move against the push, `−lean F̂/(m ω²)`: with 1 the pushed LIPM's ZMP stays on the plan's |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
