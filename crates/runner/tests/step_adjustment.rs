@@ -5,8 +5,8 @@
 //! `/planner/adjusted_footsteps`. On the official iCub (STRIDE_ICUB_MODELS_DIR): with its robot file's
 //! low-passed DCM error the unpushed walk adjusts nothing and reaches its goal, unfiltered it falls; with
 //! the push response as well, its robot file's gate on the push estimate (`step_adjustment_delay`) leaves
-//! the unpushed walk as the push response alone walks it, ungated it misses its goal; the scenario's
-//! `planner.min_width` lets the planner take the adjusted steps of a push.
+//! the unpushed walk as the push response alone walks it, ungated it misses its goal; the planner takes
+//! the adjusted steps of a push at the robot's own `min_width`.
 mod common;
 
 use common::{adjusted_footsteps, log_options as options, Scratch};
@@ -170,8 +170,8 @@ fn on_the_icub_the_filtered_dcm_error_leaves_the_unpushed_walk_alone_and_unfilte
 /// the push response alone (`configs/walk_straight_icub_push_response.toml`: the same goal distance and DCM
 /// error). With the estimate passed at once, the observer's pulses at the single supports' base rolls (40–115 N
 /// for at most 56 ms) move the QP's CoP by centimetres and the steps are retimed: the walk does not reach its
-/// goal (measured: 31 adjustments, DCM 120.5 mm RMS against 7.4, 0.16 m from the goal at 25 s; with the
-/// planner's default `min_width`, which refuses most replans, it fell at 5.34 s; docs/push-recovery.md,
+/// goal (measured: 31 adjustments, DCM 120.5 mm RMS against 7.4, 0.16 m from the goal at 25 s; before the
+/// planner's footstep-search fix of 2026-12-06, which refused most replans, it fell at 5.34 s; docs/push-recovery.md,
 /// "The push response on the iCub").
 #[test]
 fn on_the_icub_the_gated_push_estimate_leaves_the_unpushed_walk_alone_and_ungated_it_misses_the_goal(
@@ -195,8 +195,7 @@ fn on_the_icub_the_gated_push_estimate_leaves_the_unpushed_walk_alone_and_ungate
     assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
     assert!(adjusted_footsteps(&s.path("on.mcap")).is_empty());
     assert_eq!(on.step_adjustments, (0, 0));
-    // the same tracking to 0.1 mm (measured 7.38 / 15.93 against 7.37 / 15.93 mm): the scenario's
-    // `planner.min_width` changes the plan's closing steps at the goal (4 ticks longer)
+    // the same tracking to 0.1 mm (measured 7.38 / 15.93 against 7.37 / 15.93 mm)
     let tenth_mm = 1e-4;
     assert!(
         on.dcm_error.rms <= alone.dcm_error.rms + tenth_mm
@@ -221,14 +220,15 @@ fn on_the_icub_the_gated_push_estimate_leaves_the_unpushed_walk_alone_and_ungate
 }
 
 /// The same iCub scenario pushed 40 N forward at the chest for 1 s from 5.0 s (the swing of the right foot):
-/// the step adjustment moves the step, and the planner applies every answer with the scenario's
-/// `planner.min_width` 0.13 m; with 0.14 m (iCub's nominal width, the default) the replan from the
-/// adjusted touch-down fails its footstep search and the planner refuses (measured: 1 applied, 8 refused;
-/// docs/push-recovery.md, "The push response on the iCub").
+/// the step adjustment moves the step, and the planner applies every answer at the robot's own
+/// `min_width` (0.14 m, its nominal width), as it does 1 cm under it. Until 2026-12-06 the replan from the
+/// adjusted touch-down failed its footstep search at 0.14 m (a closing step 20 µm under `min_width` across
+/// the turned stance foot; measured: 1 applied, 8 refused) and the scenarios set 0.13 m; the search now
+/// widens such a step (crates/planner/src/unicycle.rs, `widened`; docs/push-recovery.md, "The push
+/// response on the iCub").
 #[test]
-fn on_the_icub_the_planner_takes_the_adjusted_steps_with_a_narrower_min_width_and_refuses_them_without(
-) {
-    let test = "on_the_icub_the_planner_takes_the_adjusted_steps_with_a_narrower_min_width_and_refuses_them_without";
+fn on_the_icub_the_planner_takes_the_adjusted_steps_at_the_robots_own_width() {
+    let test = "on_the_icub_the_planner_takes_the_adjusted_steps_at_the_robots_own_width";
     if stride_testkit::icub_models_dir(test).is_none() {
         return;
     }
@@ -236,10 +236,11 @@ fn on_the_icub_the_planner_takes_the_adjusted_steps_with_a_narrower_min_width_an
     let push = "[scenario]\nduration = 6.0\n[[sim.pushes]]\nframe = \"chest\"\nstart = 5.0\nduration = 1.0\nwrench = [40.0, 0.0, 0.0, 0.0, 0.0, 0.0]\n";
     let layers = ["walk_straight_icub_step_adjustment_push_response.toml"];
     let run = |name: &str, extra: &str| run_configs(&s, name, &layers, &format!("{push}{extra}"));
-    let narrow = run("narrow", "");
-    let nominal = run("nominal", "[planner]\nmin_width = 0.14\n");
-    assert!(narrow.step_adjustments.0 > 0, "{}", narrow.render());
-    assert_eq!(narrow.step_adjustments.1, 0, "{}", narrow.render());
-    assert!(nominal.step_adjustments.1 > 0, "{}", nominal.render());
-    assert!(adjusted_footsteps(&s.path("narrow.mcap")).len() as u64 == narrow.step_adjustments.0);
+    let nominal = run("nominal", "");
+    let narrow = run("narrow", "[planner]\nmin_width = 0.13\n");
+    for r in [&nominal, &narrow] {
+        assert!(r.step_adjustments.0 > 0, "{}", r.render());
+        assert_eq!(r.step_adjustments.1, 0, "{}", r.render());
+    }
+    assert!(adjusted_footsteps(&s.path("nominal.mcap")).len() as u64 == nominal.step_adjustments.0);
 }
