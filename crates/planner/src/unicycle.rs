@@ -641,6 +641,46 @@ fn close(a: Pose2, b: Pose2) -> bool {
     (a.position() - b.position()).norm() <= 2e-4 && wrap_angle(a.yaw - b.yaw).abs() <= 4e-4
 }
 
+/// The candidate on unicycle pose `u` for `swing`, moved outward along the unicycle's axle until it is
+/// `min_width` away from `stance`, when the candidate at the nominal width violates only `min_width`
+/// (`None` otherwise, or when the wider candidate breaks another bound).
+///
+/// The lateral separation is measured across the feet's own headings
+/// ([`feet_lateral_separation`]), so with `nominal_width == min_width` a candidate at the nominal width is
+/// narrower than `min_width` (by cos of the relative yaw, and by the stance foot's offset from the axle)
+/// whenever the stance foot does not sit exactly on the unicycle's axle: e.g. the closing step at the goal
+/// after a replan that left the stance foot turned by 1° (0.13998 m across it on the iCub, whose
+/// `nominal_width` is its `min_width`). Without this, no candidate was feasible, the fallback set the foot
+/// parallel to the stance foot, and the search swapped the feet in place until its step budget.
+fn widened(
+    cfg: &PlannerConfig,
+    u: Pose2,
+    swing: Foot,
+    stance: Pose2,
+    reason: Violation,
+) -> Option<Pose2> {
+    let mut reason = reason;
+    let mut width = cfg.nominal_width;
+    // the separation grows by about half the width's growth (× the cosine of the relative yaw): two
+    // corrections with a 1 µm allowance land above `min_width` for the relative yaws a step allows
+    for _ in 0..3 {
+        if reason.too_long || reason.too_short || reason.too_twisted || !reason.too_narrow {
+            return None;
+        }
+        width += 2.0 * (cfg.min_width - reason.lateral) + 1e-6;
+        let cand = foot_on(u, swing, width);
+        let result = match swing {
+            Foot::Left => feet_feasible(cfg, cand, stance),
+            Foot::Right => feet_feasible(cfg, stance, cand),
+        };
+        match result {
+            Ok(()) => return Some(cand),
+            Err(r) => reason = r,
+        }
+    }
+    None
+}
+
 /// Picks the first swing foot: explicit, or the side the unicycle moves/turns to.
 pub(crate) fn choose_first_swing(cfg: &PlannerConfig, path: &UnicyclePath) -> Foot {
     match cfg.first_swing_foot {
@@ -705,15 +745,29 @@ pub(crate) fn search_footsteps(
         skipped = false;
         let stance = feet[idx(swing.other())];
         let mut best: Option<(f64, usize, Pose2)> = None;
+        // the cheapest candidate that is feasible only once set wider than the nominal width (see
+        // [`widened`]); taken when no candidate at the nominal width is feasible
+        let mut best_widened: Option<(f64, usize, Pose2)> = None;
         let mut last_reason = Violation::default();
         for n in n_min..=n_max {
-            let cand = foot_on(samples[(prev + n).min(last)], swing, cfg.nominal_width);
+            let sample = samples[(prev + n).min(last)];
+            let cand = foot_on(sample, swing, cfg.nominal_width);
             let (l, r) = match swing {
                 Foot::Left => (cand, stance),
                 Foot::Right => (stance, cand),
             };
-            match feet_feasible(cfg, l, r) {
-                Ok(()) => {
+            let feasible = match feet_feasible(cfg, l, r) {
+                Ok(()) => Ok((cand, false)),
+                Err(reason) => widened(cfg, sample, swing, stance, reason)
+                    .map(|wide| (wide, true))
+                    .ok_or(reason),
+            };
+            match feasible {
+                Ok((cand, is_widened)) => {
+                    let (l, r) = match swing {
+                        Foot::Left => (cand, stance),
+                        Foot::Right => (stance, cand),
+                    };
                     let duration = n as f64 * dt;
                     let dx = (l.position() - r.position()).norm();
                     let cost =
@@ -724,14 +778,19 @@ pub(crate) fn search_footsteps(
                     } else {
                         cost
                     };
-                    if best.is_none_or(|(c, _, _)| cost < c) {
-                        best = Some((cost, n, cand));
+                    let slot = if is_widened {
+                        &mut best_widened
+                    } else {
+                        &mut best
+                    };
+                    if slot.is_none_or(|(c, _, _)| cost < c) {
+                        *slot = Some((cost, n, cand));
                     }
                 }
                 Err(reason) => last_reason = reason,
             }
         }
-        let best = best.or_else(|| {
+        let best = best.or(best_widened).or_else(|| {
             // No candidate on the unicycle path is feasible (the feet lag behind the unicycle, e.g. after a
             // start from feet that are not at the nominal width): take the step from the pose parallel to the
             // stance foot towards the nominal-duration candidate, as far as the constraints allow.

@@ -469,3 +469,83 @@ fn with_waypoints_an_adjusted_step_replans_towards_the_waypoints_not_yet_passed(
         assert!(end < 0.15, "{mid:?}");
     }
 }
+
+/// The iCub's widths (`nominal_width` = `min_width` = 0.14 m, configs/robots/icub_v2_7.toml): a step moved
+/// outward, forward or backward mid-swing is taken, and the replan from it closes at the goal. The replan
+/// arrives at the goal with the stance foot turned (about 1°), so its closing step at the nominal width
+/// measures under `min_width` across the stance foot (0.13998 m); until 2026-12-06 the footstep search then
+/// found no candidate, set the foot parallel to the stance foot and swapped the feet in place until
+/// "footstep search exceeded 32–36 steps" (measured: 180 of these 180 requests refused). A step moved 2 cm
+/// inward (0.12 m from the stance foot) is still refused: the adjusted step itself is under `min_width`.
+#[test]
+fn with_the_icubs_widths_the_replan_after_an_adjusted_step_closes_at_the_goal() {
+    let goal = Goal::Pose {
+        x: 2.05,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let cfg = PlannerConfig {
+        com_height: 0.5345,
+        nominal_width: 0.14,
+        min_width: 0.14,
+        feet_distance_max: 0.20,
+        foot_length: 0.11,
+        foot_width: 0.07,
+        verify_plans: PlanVerification::Always,
+        ..Default::default()
+    };
+    let request = |n: usize, shift: Vector2<f64>| {
+        let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+        let mut p = Planner::new(cfg.clone(), GRAVITY).unwrap();
+        p.start(Duration::ZERO, &l, &r, &goal).unwrap();
+        let (time, t) = mid_single_support(&p, n);
+        let step = p.plan().unwrap().current_step(t).unwrap();
+        let side = step.stance.other().side();
+        let target = step.swing.end.translation.vector.xy() + Vector2::new(shift.x, shift.y * side);
+        let request = StepAdjustmentRequest {
+            time,
+            target,
+            land_time: step.swing.land_time,
+            min_remaining: 0.1,
+        };
+        let result = p.adjust_step(&request, &goal);
+        (p, result)
+    };
+    let mut taken = 0;
+    for n in 2..7 {
+        for sx in [-0.04, -0.02, 0.0, 0.02, 0.04, 0.06] {
+            for sy in [0.0, 0.01, 0.02, 0.03, 0.05, 0.08] {
+                if sx == 0.0 && sy == 0.0 {
+                    continue;
+                }
+                let (p, result) = request(n, Vector2::new(sx, sy));
+                assert!(
+                    matches!(result, Ok(true)),
+                    "step {n}, shift ({sx}, {sy}): {result:?}"
+                );
+                let plan = p.plan().unwrap();
+                let l = plan.contacts(Foot::Left).contacts.last().unwrap().pose;
+                let r = plan.contacts(Foot::Right).contacts.last().unwrap().pose;
+                let mid = (l.translation.vector + r.translation.vector) * 0.5;
+                let width = (l.translation.vector - r.translation.vector).xy().norm();
+                assert!(
+                    (mid.x - 2.05).abs() < 0.02 && mid.y.abs() < 0.02,
+                    "step {n}, shift ({sx}, {sy}): {mid:?}"
+                );
+                assert!(
+                    width >= cfg.min_width - 1e-9 && width < cfg.min_width + 1e-3,
+                    "step {n}, shift ({sx}, {sy}): closing width {width}"
+                );
+                taken += 1;
+            }
+        }
+    }
+    assert_eq!(taken, 5 * 35);
+    for n in 2..7 {
+        let (_, result) = request(n, Vector2::new(0.0, -0.02));
+        assert!(
+            matches!(result, Err(PlannerError::InvariantViolated(_))),
+            "step {n}: {result:?}"
+        );
+    }
+}

@@ -346,6 +346,9 @@ impl Json for TrackingMsg {
             dcm_error, com_error, zmp_error, zmp_edge_distance, feet_error, measured_com,
             measured_dcm, measured_zmp, base_height, tilt_deg);
         // `#[serde(skip_serializing_if = "Option::is_none")]`
+        if let Some(push) = &self.push_estimate {
+            field(out, b",\"push_estimate\":", push)?;
+        }
         if let Some(plant) = &self.plant {
             field(out, b",\"plant\":", plant)?;
         }
@@ -732,6 +735,7 @@ mod tests {
                 measured_zmp: floats(&mut rng),
                 base_height: float(&mut rng),
                 tilt_deg: float(&mut rng),
+                push_estimate: rng.random_bool(0.5).then(|| floats(&mut rng)),
                 plant: rng.random_bool(0.5).then(|| PlantTrackingMsg {
                     dcm_error: float(&mut rng),
                     com_error: float(&mut rng),

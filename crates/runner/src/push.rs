@@ -189,9 +189,13 @@ impl PushResponse {
     }
 
     /// The stance CoP the step-adjustment QP predicts the DCM with: the planned one moved by the push's
-    /// LIPM offset, `p − F̂/(m ω²)` (unchanged when `step_adjustment` is off).
+    /// LIPM offset, `p − F̂/(m ω²)` (unchanged when `step_adjustment` is off, and with a positive
+    /// `step_adjustment_delay` until the estimate has stayed above `hold_force` that long: the
+    /// observer's pulses of a touch-down or of a stance foot's roll last less, docs/push-recovery.md).
     pub fn effective_cop(&self, planned: Vector2<f64>, omega: f64) -> Vector2<f64> {
-        if !self.config.step_adjustment || omega <= 0.0 {
+        let delay = self.config.step_adjustment_delay;
+        let gated = delay > 0.0 && self.pushed_for < delay - 1e-9;
+        if !self.config.step_adjustment || omega <= 0.0 || gated {
             return planned;
         }
         planned - push_zmp_offset(&self.estimate, self.mass, omega)
@@ -577,5 +581,37 @@ mod tests {
             ..PushConfig::default()
         };
         assert!(invalid.validate().is_err());
+    }
+
+    /// With `step_adjustment_delay` 0.1 s the QP's CoP stays the planned one while the estimate has been
+    /// above `hold_force` for less than 0.1 s (a 56 ms pulse, the longest of the unpushed iCub walk, is
+    /// never seen) and moves by the whole offset once it has lasted 0.1 s; 0 (the default) moves it at
+    /// once.
+    #[test]
+    fn the_step_adjustment_delay_hides_a_short_pulse_and_passes_a_lasting_push() {
+        let planned = Vector2::new(1.0, 0.1);
+        let omega = (9.81f64 / 0.5).sqrt();
+        let pushed = planned - push_zmp_offset(&Vector2::new(0.0, 20.0), 30.0, omega);
+        let mut clock = PlanClock::new(0.1);
+        let ss = sample(PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Left,
+        });
+        let mut cops = |delay: f64, ticks: usize| {
+            let mut r = response(PushConfig {
+                step_adjustment_delay: delay,
+                ..PushConfig::default()
+            });
+            r.estimate = Vector2::new(0.0, 20.0);
+            let mut cop = Vec::new();
+            for _ in 0..ticks {
+                r.decide(0.002, &ss, true, false, &mut clock);
+                cop.push(r.effective_cop(planned, omega));
+            }
+            cop
+        };
+        let gated = cops(0.1, 100);
+        assert!(gated[..49].iter().all(|c| *c == planned));
+        assert!(gated[49..].iter().all(|c| (c - pushed).norm() < 1e-15));
+        assert!(cops(0.0, 1).iter().all(|c| (c - pushed).norm() < 1e-15));
     }
 }

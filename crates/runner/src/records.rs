@@ -578,6 +578,9 @@ pub(crate) struct TrackingMsg {
     pub(crate) measured_zmp: [f64; 2],
     pub(crate) base_height: f64,
     pub(crate) tilt_deg: f64,
+    /// The push response's horizontal push estimate \[N\] (absent when `simplified.push` is off).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) push_estimate: Option<[f64; 2]>,
     /// The same errors from the plant's own model (absent when the plant runs on the controllers' model).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) plant: Option<PlantTrackingMsg>,

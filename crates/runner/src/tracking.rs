@@ -164,6 +164,7 @@ impl Tracker {
             measured_zmp: m.zmp.into(),
             base_height: m.base_height,
             tilt_deg: m.tilt.to_degrees(),
+            push_estimate: stack.push.as_ref().map(|p| p.estimate().into()),
             plant: plant_tracking,
         }
     }

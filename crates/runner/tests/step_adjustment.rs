@@ -8,11 +8,14 @@
 //! touch-downs past it, accepted by the planner; without it every touch-down stays outward. On the
 //! torque curve through waypoints an adjusted step replans towards the waypoints not yet passed, and with
 //! the scenario's low-passed DCM error the unpushed curve adjusts nothing.
+//! With the push response as well, the iCub robot file's gate on the push estimate
+//! (`step_adjustment_delay`) leaves the unpushed walk as the push response alone walks it, ungated it misses
+//! its goal; the planner takes the adjusted steps of a push at the robot's own `min_width`.
 mod common;
 
 use common::{adjusted_footsteps, log_options as options, Scratch};
 use stride_runner::config::Scenario;
-use stride_runner::run::{run_scenario, Outcome};
+use stride_runner::run::{run_scenario, Outcome, RunSummary};
 
 /// `configs/walk_straight.toml`, with the step-adjustment layer when `adjust`, and `extra` appended.
 fn walk(s: &Scratch, name: &str, adjust: bool, extra: &str) -> Scenario {
@@ -22,6 +25,12 @@ fn walk(s: &Scratch, name: &str, adjust: bool, extra: &str) -> Scenario {
         &["walk_straight.toml"]
     };
     common::scenario_from_configs(s, name, layers, extra)
+}
+
+/// Runs the scenario of `layers` (under `configs/`) with `extra` appended, logged to `<scratch>/<name>.mcap`.
+fn run_configs(s: &Scratch, name: &str, layers: &[&str], extra: &str) -> RunSummary {
+    let scenario = common::scenario_from_configs(s, name, layers, extra);
+    run_scenario(&scenario, &options(s, name)).unwrap()
 }
 
 #[test]
@@ -135,10 +144,7 @@ fn on_the_icub_the_filtered_dcm_error_leaves_the_unpushed_walk_alone_and_unfilte
         return;
     }
     let s = Scratch::new("step_adjustment_icub");
-    let run = |name: &str, layers: &[&str], extra: &str| {
-        let scenario = common::scenario_from_configs(&s, name, layers, extra);
-        run_scenario(&scenario, &options(&s, name)).unwrap()
-    };
+    let run = |name: &str, layers: &[&str], extra: &str| run_configs(&s, name, layers, extra);
     let adjusting = ["walk_straight_icub.toml", "layers/step_adjustment.toml"];
     let off = run("off", &["walk_straight_icub.toml"], "");
     let on = run("on", &adjusting, "");
@@ -198,6 +204,8 @@ fn a_push_towards_the_stance_foot_gets_crossed_touch_downs_applied_only_with_the
     assert!(applied > refused, "{applied} applied, {refused} refused");
     let (_, off) = &right_ys[1];
     assert!(off.iter().all(|&y| y < 0.075 - 0.139), "without: {off:?}");
+}
+
 /// `configs/walk_curve_fast_torque.toml` (a 1 m half circle through twelve waypoints, torque control) with
 /// the step adjustment and the QP reading the unfiltered DCM error (`dcm_error_cutoff = 0`), 10 s: the
 /// measured DCM's transients move touch-downs, and each adjustment replans from the new touch-down towards
@@ -242,4 +250,86 @@ fn without_pushes_the_torque_curve_with_the_step_adjustment_reaches_its_goal_unc
     assert!(on.dcm_error.rms <= off.dcm_error.rms && on.dcm_error.max <= off.dcm_error.max);
     assert!(on.com_error.rms <= off.com_error.rms && on.feet_error.rms <= off.feet_error.rms);
     assert!(on.goal_distance.unwrap() <= off.goal_distance.unwrap());
+}
+
+/// The official iCub with the push response as well (`configs/walk_straight_icub_step_adjustment_push_response.toml`,
+/// STRIDE_ICUB_MODELS_DIR; without it the test returns early and says so): its robot file gives the step
+/// adjustment the push estimate only once it has stayed above `hold_force` for 0.1 s
+/// (`simplified.push.step_adjustment_delay`), and the unpushed walk then adjusts nothing and walks as with
+/// the push response alone (`configs/walk_straight_icub_push_response.toml`: the same goal distance and DCM
+/// error). With the estimate passed at once, the observer's pulses at the single supports' base rolls (40–115 N
+/// for at most 56 ms) move the QP's CoP by centimetres and the steps are retimed: the walk does not reach its
+/// goal (measured: 31 adjustments, DCM 120.5 mm RMS against 7.4, 0.16 m from the goal at 25 s; before the
+/// planner's footstep-search fix of 2026-12-06, which refused most replans, it fell at 5.34 s; docs/push-recovery.md,
+/// "The push response on the iCub").
+#[test]
+fn on_the_icub_the_gated_push_estimate_leaves_the_unpushed_walk_alone_and_ungated_it_misses_the_goal(
+) {
+    let test =
+        "on_the_icub_the_gated_push_estimate_leaves_the_unpushed_walk_alone_and_ungated_it_misses_the_goal";
+    if stride_testkit::icub_models_dir(test).is_none() {
+        return;
+    }
+    let s = Scratch::new("step_adjustment_push_response_icub");
+    let run = |name: &str, layers: &[&str], extra: &str| run_configs(&s, name, layers, extra);
+    let both = ["walk_straight_icub_step_adjustment_push_response.toml"];
+    let alone = run("alone", &["walk_straight_icub_push_response.toml"], "");
+    let on = run("on", &both, "");
+    let ungated = run(
+        "ungated",
+        &both,
+        "[simplified.push]\nstep_adjustment_delay = 0.0\n",
+    );
+    assert_eq!(alone.outcome, Outcome::GoalReached, "{}", alone.render());
+    assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
+    assert!(adjusted_footsteps(&s.path("on.mcap")).is_empty());
+    assert_eq!(on.step_adjustments, (0, 0));
+    // the same tracking to 0.1 mm (measured 7.38 / 15.93 against 7.37 / 15.93 mm)
+    let tenth_mm = 1e-4;
+    assert!(
+        on.dcm_error.rms <= alone.dcm_error.rms + tenth_mm
+            && on.dcm_error.max <= alone.dcm_error.max + tenth_mm,
+        "{} against {}",
+        on.render(),
+        alone.render()
+    );
+    assert!(on.goal_distance.unwrap() <= alone.goal_distance.unwrap() + tenth_mm);
+    assert_ne!(
+        ungated.outcome,
+        Outcome::GoalReached,
+        "{}",
+        ungated.render()
+    );
+    assert!(ungated.step_adjustments.0 > 0, "{}", ungated.render());
+    assert!(
+        ungated.dcm_error.rms > 5.0 * on.dcm_error.rms,
+        "{}",
+        ungated.render()
+    );
+}
+
+/// The same iCub scenario pushed 40 N forward at the chest for 1 s from 5.0 s (the swing of the right foot):
+/// the step adjustment moves the step, and the planner applies every answer at the robot's own
+/// `min_width` (0.14 m, its nominal width), as it does 1 cm under it. Until 2026-12-06 the replan from the
+/// adjusted touch-down failed its footstep search at 0.14 m (a closing step 20 µm under `min_width` across
+/// the turned stance foot; measured: 1 applied, 8 refused) and the scenarios set 0.13 m; the search now
+/// widens such a step (crates/planner/src/unicycle.rs, `widened`; docs/push-recovery.md, "The push
+/// response on the iCub").
+#[test]
+fn on_the_icub_the_planner_takes_the_adjusted_steps_at_the_robots_own_width() {
+    let test = "on_the_icub_the_planner_takes_the_adjusted_steps_at_the_robots_own_width";
+    if stride_testkit::icub_models_dir(test).is_none() {
+        return;
+    }
+    let s = Scratch::new("step_adjustment_icub_min_width");
+    let push = "[scenario]\nduration = 6.0\n[[sim.pushes]]\nframe = \"chest\"\nstart = 5.0\nduration = 1.0\nwrench = [40.0, 0.0, 0.0, 0.0, 0.0, 0.0]\n";
+    let layers = ["walk_straight_icub_step_adjustment_push_response.toml"];
+    let run = |name: &str, extra: &str| run_configs(&s, name, &layers, &format!("{push}{extra}"));
+    let nominal = run("nominal", "");
+    let narrow = run("narrow", "[planner]\nmin_width = 0.13\n");
+    for r in [&nominal, &narrow] {
+        assert!(r.step_adjustments.0 > 0, "{}", r.render());
+        assert_eq!(r.step_adjustments.1, 0, "{}", r.render());
+    }
+    assert!(adjusted_footsteps(&s.path("nominal.mcap")).len() as u64 == nominal.step_adjustments.0);
 }
