@@ -401,6 +401,9 @@ fn an_early_crossed_touch_down_is_refused_and_the_same_early_touch_down_outward_
             );
             assert_eq!(p.plan().unwrap(), &before);
         }
+    }
+}
+
 /// With a waypoint goal, an adjusted step replans towards the waypoints the plan has not yet passed:
 /// adjusted past the first waypoint (and again, chained, past the second), the later footsteps keep going
 /// forward and the walk ends at the last waypoint (within 0.15 m: measured 0.13 m; the plan without
