@@ -7,9 +7,9 @@ mod common;
 
 use std::time::Duration;
 
-use common::{bundled_model, standing_input, standing_state, tilt_between, Gauss};
+use common::{bundled_model, standing_input, standing_split, standing_state, tilt_between, Gauss};
 use nalgebra::{Matrix3, Vector3, Vector6};
-use stride_estimation::{standing_foot_wrenches, Estimator, EstimatorConfig, EstimatorError};
+use stride_estimation::{Estimator, EstimatorConfig, EstimatorError};
 use stride_model::KinDyn;
 
 const PERIOD_NS: u64 = 1_000_000;
@@ -24,18 +24,14 @@ fn stand(level: bool, gyro_bias: Vector3<f64>, acc_bias: Vector3<f64>) -> (f64, 
     let state = standing_state(&model);
     let mut kd = KinDyn::new(model.clone());
     kd.set_state(&state).unwrap();
-    let soles =
-        ["l_sole", "r_sole"].map(|s| kd.frame_rotation_translation(model.frame_id(s).unwrap()));
     let (r_imu, _) = kd.frame_rotation_translation(model.frame_id("imu_frame").unwrap());
-    let force = -model.total_mass() * model.gravity();
     let mut config = EstimatorConfig {
         sole_size: [0.20, 0.09],
         ..EstimatorConfig::default()
     };
     config.ft_offsets.learn_while_standing = 1.0;
     config.ekf.level_soles_while_standing = level;
-    let ground =
-        standing_foot_wrenches(&force, &kd.com_position(), &soles, config.sole_size).unwrap();
+    let ground = standing_split(&model, &state, config.sole_size);
     let offsets = vec![Vector6::zeros(); model.ft_sensors().len()];
     let mut est = Estimator::new(model.clone(), &config, Duration::from_millis(1)).unwrap();
     est.set_initial_state(&state).unwrap();

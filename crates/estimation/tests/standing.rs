@@ -6,10 +6,9 @@ mod common;
 
 use std::time::Duration;
 
-use common::{bundled_model, standing_input, standing_state};
+use common::{bundled_model, standing_input, standing_split, standing_state};
 use nalgebra::{Matrix3, Rotation3, Vector3, Vector6};
 use stride_estimation::{standing_foot_wrenches, Estimator, EstimatorConfig};
-use stride_model::KinDyn;
 
 const PERIOD_NS: u64 = 2_000_000;
 
@@ -124,18 +123,12 @@ fn learnt_offsets(
 ) -> Vec<Vector6<f64>> {
     let model = bundled_model();
     let state = standing_state(&model);
-    let mut kd = KinDyn::new(model.clone());
-    kd.set_state(&state).unwrap();
-    let soles =
-        ["l_sole", "r_sole"].map(|s| kd.frame_rotation_translation(model.frame_id(s).unwrap()));
-    let force = -model.total_mass() * model.gravity();
     let mut config = EstimatorConfig {
         sole_size: [0.20, 0.09],
         ..EstimatorConfig::default()
     };
     config.ft_offsets.learn_while_standing = learn;
-    let split =
-        standing_foot_wrenches(&force, &kd.com_position(), &soles, config.sole_size).unwrap();
+    let split = standing_split(&model, &state, config.sole_size);
     let ground = [split[0] + internal, split[1] - internal];
     let mut est = Estimator::new(model.clone(), &config, Duration::from_millis(2)).unwrap();
     est.set_initial_state(&state).unwrap();

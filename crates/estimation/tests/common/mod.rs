@@ -200,6 +200,22 @@ pub fn bundled_model() -> Arc<Model> {
 
 /// A standing state of the bundled model: knees and ankles bent, base tilted a little and placed so that
 /// the left sole is on z = 0 (the right one too: the posture is symmetric).
+/// The weight of `model` standing at `state` split between its soles of `sole_size` \[m\]
+/// ([`stride_estimation::standing_foot_wrenches`], world frame, \[N, N·m\]).
+pub fn standing_split(
+    model: &Arc<Model>,
+    state: &RobotState,
+    sole_size: [f64; 2],
+) -> [Vector6<f64>; 2] {
+    let mut kd = KinDyn::new(model.clone());
+    kd.set_state(state).unwrap();
+    let soles =
+        ["l_sole", "r_sole"].map(|s| kd.frame_rotation_translation(model.frame_id(s).unwrap()));
+    let force = -model.total_mass() * model.gravity();
+    stride_estimation::standing_foot_wrenches(&force, &kd.com_position(), &soles, sole_size)
+        .unwrap()
+}
+
 pub fn standing_state(model: &Model) -> RobotState {
     let mut state = RobotState::zero(model);
     for (name, v) in [
