@@ -21,6 +21,13 @@
 //!   (`support_tail`), and the plan after `T` starts from the crossed pair: its first double support keeps
 //!   the ZMP in the crossed hull, and the unicycle, re-anchored on W, puts S out past W at the nominal width
 //!   (the step that uncrosses).
+//! * A replan from the measured DCM ([`crate::Planner::adjust_step_from`], for a push): the rest of the
+//!   single support is always the moved-ZMP tail above, but its DCM starts at the given DCM instead of the
+//!   old plan's (the segment is marked [`DcmSegment::restart`]: the CoM and the ZMP stay continuous, the
+//!   DCM jumps to where the robot is), so the touch-down state, and the plan after it, are predicted from
+//!   the pushed robot rather than from a plan the push has left: a crossover the old plan's DCM could not
+//!   reach (it diverges to the uncrossed side from the stance sole's centre) is planned when the measured
+//!   one is already on the crossed side.
 
 use std::time::Duration;
 
@@ -93,14 +100,16 @@ pub struct StepAdjustmentRequest {
     pub min_remaining: f64,
 }
 
-/// Adjusts `plan` (see the module documentation). `Ok(None)` when the swing is frozen or unchanged
-/// (nothing to do); errors leave the caller's plan as it was (it is not modified here).
+/// Adjusts `plan` (see the module documentation); `start_dcm`: the DCM \[m\] the rest of the single
+/// support restarts from (`None`: the old plan's, continuous). `Ok(None)` when the swing is frozen or
+/// unchanged (nothing to do); errors leave the caller's plan as it was (it is not modified here).
 pub(crate) fn adjusted_plan(
     cfg: &PlannerConfig,
     omega: f64,
     plan: &Plan,
     request: &StepAdjustmentRequest,
     goal: &Goal,
+    start_dcm: Option<Vector2<f64>>,
 ) -> Result<Option<Plan>, PlannerError> {
     let t = seconds(request.time);
     let step = plan
@@ -119,7 +128,14 @@ pub(crate) fn adjusted_plan(
         return Err(PlannerError::SwingOverStance { time: t });
     }
     let land = swing.land_time;
-    let tail = support_tail(cfg, omega, plan, t, land, &step.stance_pose, &swing.end);
+    let tail = support_tail(
+        cfg,
+        omega,
+        plan,
+        (t, land),
+        (&step.stance_pose, &swing.end),
+        start_dcm,
+    );
     let state = match &tail {
         Some([_, hold]) => hold.evaluate_local(land - hold.start, omega),
         None => single_support_state(plan, omega, t, land),
@@ -183,21 +199,27 @@ const TAIL_ZMP_RISE: f64 = 0.05;
 /// [`TAIL_ZMP_MARGIN`]; the clamp of a rectangle in its own frame is the nearest point, and the map from `z`
 /// to the DCM is a scaling). The DCM moves by at most the sole's half width times `e^{ωΔ} − 1` (`Δ` the time
 /// left): a crossover asked for late in the swing may still be refused.
+///
+/// With `start_dcm` the tail is always built and its DCM starts there (the first segment marked
+/// [`DcmSegment::restart`]; the CoM and the ZMP start at the old plan's).
 pub(crate) fn support_tail(
     cfg: &PlannerConfig,
     omega: f64,
     plan: &Plan,
-    t: f64,
-    land: f64,
-    stance: &Isometry3<f64>,
-    landed: &Isometry3<f64>,
+    (t, land): (f64, f64),
+    (stance, landed): (&Isometry3<f64>, &Isometry3<f64>),
+    start_dcm: Option<Vector2<f64>>,
 ) -> Option<[DcmSegment; 2]> {
     let hull = double_support_polygon(cfg, &[*stance, *landed])?;
-    if hull.signed_distance(single_support_state(plan, omega, t, land).dcm) >= TOUCHDOWN_DCM_MARGIN
-    {
+    let kept = hull.signed_distance(single_support_state(plan, omega, t, land).dcm)
+        >= TOUCHDOWN_DCM_MARGIN;
+    if kept && start_dcm.is_none() {
         return None;
     }
-    let now = single_support_state(plan, omega, t, t);
+    let mut now = single_support_state(plan, omega, t, t);
+    if let Some(dcm) = start_dcm {
+        now.dcm = dcm;
+    }
     let rise = TAIL_ZMP_RISE.min(0.5 * (land - t));
     let tail_to = |z: Vector2<f64>| {
         let mut up = DcmSegment::new(
@@ -207,6 +229,7 @@ pub(crate) fn support_tail(
             omega,
         );
         up.growth = now.dcm - up.dcm_poly[0];
+        up.restart = start_dcm.is_some();
         up.set_com_start(now.com);
         let top = up.evaluate_local(rise, omega);
         let mut hold = DcmSegment::new(t + rise, Some(land - t - rise), zmp_constant(z), omega);

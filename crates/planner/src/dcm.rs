@@ -65,6 +65,11 @@ pub struct DcmSegment {
     pub growth: Vector2<f64>,
     /// Coefficient of the stable exponential e^{−ωτ} in the CoM.
     pub decay: Vector2<f64>,
+    /// Whether the segment restarts the DCM from a measured one (a step adjustment replanned from the
+    /// measured DCM, [`crate::Planner::adjust_step_from`]): the DCM, its velocity and the CoM velocity
+    /// may jump at its start (the CoM and the ZMP stay continuous).
+    #[serde(default)]
+    pub restart: bool,
 }
 
 /// Planar DCM/ZMP/CoM values at one instant.
@@ -96,6 +101,7 @@ impl DcmSegment {
             com_poly: com_particular(&zmp, omega),
             growth: Vector2::zeros(),
             decay: Vector2::zeros(),
+            restart: false,
         }
     }
 

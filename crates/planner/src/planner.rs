@@ -304,13 +304,31 @@ impl Planner {
         request: &StepAdjustmentRequest,
         goal: &Goal,
     ) -> Result<bool, PlannerError> {
+        self.adjust_step_from(request, goal, None)
+    }
+
+    /// [`Planner::adjust_step`] with the rest of the single support restarted from `dcm` \[m\] when given
+    /// (a measured DCM, with a push's offset: the touch-down state and the plan after it predicted from
+    /// where the robot is; the plan's DCM jumps there at `request.time`, its CoM and ZMP stay continuous;
+    /// see [`crate::adjust`]). `None`: [`Planner::adjust_step`]. Errors: a non-finite `dcm`, and those of
+    /// [`Planner::adjust_step`].
+    pub fn adjust_step_from(
+        &mut self,
+        request: &StepAdjustmentRequest,
+        goal: &Goal,
+        dcm: Option<Vector2<f64>>,
+    ) -> Result<bool, PlannerError> {
         goal.validate()?;
         let plan = self.plan.as_ref().ok_or(PlannerError::NoPlan)?;
         check_time("request.land_time", request.land_time)?;
         check_time("request.min_remaining", request.min_remaining)?;
+        if let Some(d) = dcm {
+            check_time("dcm.x", d.x)?;
+            check_time("dcm.y", d.y)?;
+        }
         let t = seconds(request.time);
         let omega = self.config.omega(self.gravity);
-        let Some(adjusted) = adjusted_plan(&self.config, omega, plan, request, goal)? else {
+        let Some(adjusted) = adjusted_plan(&self.config, omega, plan, request, goal, dcm)? else {
             return Ok(false);
         };
         if self.config.verify_plans.enabled() {

@@ -201,6 +201,19 @@ impl PushResponse {
         planned - push_zmp_offset(&self.estimate, self.mass, omega)
     }
 
+    /// The DCM a step adjustment refused from the plan's own DCM is replanned from with
+    /// `replan_from_dcm`, once the estimate has stayed above `hold_force` for `hold_delay` (the
+    /// observer's touch-down pulses last less: without this gate the unpushed `walk_fast` restarted its
+    /// plan at them and ended 0.30 m from its goal, docs/push-recovery.md): the measured `dcm` moved by
+    /// `replan_push_offset F̂/(m ω²)` (the pushed LIPM's capture point with 1). `None` otherwise (the
+    /// plan's own DCM, continuous).
+    pub fn replan_dcm(&self, dcm: Vector2<f64>, omega: f64) -> Option<Vector2<f64>> {
+        let c = &self.config;
+        let pushed = self.estimate.norm() > c.hold_force && self.pushed_for >= c.hold_delay - 1e-9;
+        (c.replan_from_dcm && pushed && omega > 0.0)
+            .then(|| dcm + push_zmp_offset(&self.estimate, self.mass, omega) * c.replan_push_offset)
+    }
+
     /// The shift of the step-adjustment QP's nominal DCM offset at touch-down, `−step_offset F̂/(m ω²)`
     /// (zero when `step_adjustment` is off): with the push still on after the touch-down, the new
     /// stance foot must carry the pushed LIPM's CoP, `F̂/(m ω²)` along the push from its effective ZMP.
@@ -263,6 +276,43 @@ mod tests {
             r.observe(0.01, &v, &weight).unwrap();
             r.decide(0.01, &s, walking, false, clock);
         }
+    }
+
+    /// `replan_dcm`: none without the key or below `hold_force`; with it during a push, the measured DCM
+    /// moved by `replan_push_offset F̂/(m ω²)` along the push (0: the measured DCM itself).
+    #[test]
+    fn the_replan_dcm_is_the_measured_one_with_the_push_offset_only_during_a_push() {
+        let (omega, dcm) = (4.0, Vector2::new(0.3, -0.05));
+        let pushed = |config: PushConfig| {
+            let mut r = response(config);
+            let mut clock = PlanClock::new(config.hold_ramp);
+            assert_eq!(r.replan_dcm(dcm, omega), None, "before the push");
+            push_run(&mut r, &mut clock, PhaseKind::DoubleSupport, true, 1.0);
+            r
+        };
+        let off = pushed(PushConfig::default());
+        assert!(off.estimate().norm() > 8.0);
+        assert_eq!(off.replan_dcm(dcm, omega), None);
+        for k in [0.0, 0.5, 1.0] {
+            let r = pushed(PushConfig {
+                replan_from_dcm: true,
+                replan_push_offset: k,
+                ..PushConfig::default()
+            });
+            let f = r.estimate();
+            let from = r.replan_dcm(dcm, omega).unwrap();
+            assert!((from - dcm - k * f / (30.0 * omega * omega)).norm() < 1e-12);
+            assert!(k == 0.0 || (from - dcm).y > 0.0, "along the push: {from:?}");
+        }
+        // an estimate above `hold_force` for less than `hold_delay` (a touch-down's pulse): none
+        let mut r = pushed(PushConfig {
+            replan_from_dcm: true,
+            ..PushConfig::default()
+        });
+        r.pushed_for = 0.05;
+        assert_eq!(r.replan_dcm(dcm, omega), None);
+        r.pushed_for = 0.1;
+        assert!(r.replan_dcm(dcm, omega).is_some());
     }
 
     #[test]

@@ -795,7 +795,8 @@ impl Stack {
     /// The step adjustment of one simplified tick (when enabled): during single support, the QP's touch-down
     /// and time from the measured DCM, applied to the plan (swing retargeted, later steps replanned) when
     /// they differ from the planned ones by more than the dead bands. A refusal by the planner keeps the
-    /// plan (counted).
+    /// plan (counted); during a push with `[simplified.push] replan_from_dcm`, a refused request is tried
+    /// again from the measured DCM ([`crate::push::PushResponse::replan_dcm`]) first.
     fn adjust_step(&mut self, time_ns: u64) {
         let Some((adjuster, tracker)) = self.step_adjustment.as_mut() else {
             return;
@@ -809,6 +810,10 @@ impl Stack {
         let push = self.push.as_ref().map_or((cop, Vector2::zeros()), |p| {
             (p.effective_cop(cop, omega), p.step_offset_shift(omega))
         });
+        let from = self
+            .push
+            .as_ref()
+            .and_then(|p| p.replan_dcm(self.measured.dcm, omega));
         let Some(request) = tracker.request(
             plan,
             adjuster,
@@ -819,7 +824,12 @@ impl Stack {
         ) else {
             return;
         };
-        match self.planner.adjust_step(&request, &self.goal) {
+        // the plan's own DCM first (continuous); the measured one only for a request it refuses
+        let applied = match self.planner.adjust_step(&request, &self.goal) {
+            Err(_) if from.is_some() => self.planner.adjust_step_from(&request, &self.goal, from),
+            other => other,
+        };
+        match applied {
             Ok(true) => {
                 self.counters.step_adjustments += 1;
                 self.adjusted_footstep =

@@ -40,6 +40,8 @@ use crate::error::{check_finite, check_non_negative, check_positive, Result, Sim
 /// | `step_adjustment_delay` | s | 0 (off) | with `step_adjustment`: the QP predicts with the estimate only once it has stayed above `hold_force` this long (0: at once, also below `hold_force`). On the iCub the estimated CoM velocity jumps for 20–30 ms about 0.2 s into each single support (the base rolls), a 40–115 N pulse of the observer (at most 56 ms) that moves the QP's CoP by 7–19 cm and shortens the steps |
 /// | `lean` | – | 0 | fraction in \[0, 1\] of the push's LIPM offset by which the planned CoM and DCM the simplified layer tracks move against the push, `−lean F̂/(m ω²)`: with 1 the pushed LIPM's ZMP stays on the plan's |
 /// | `step_offset` | – | 0 | fraction in \[0, 1\] of the push's LIPM offset by which the step-adjustment QP's nominal DCM offset at touch-down moves against the push, `b_n − step_offset F̂/(m ω²)`: the push is taken to last past the touch-down, so the foot lands that much further along it (under the CoP the pushed LIPM needs) |
+/// | `replan_from_dcm` | – | `false` | once the estimate has stayed above `hold_force` for `hold_delay`, a step adjustment the planner refuses from the plan's own DCM is replanned from the measured DCM moved by `replan_push_offset F̂/(m ω²)` (the plan's DCM jumps to it; `stride_planner::Planner::adjust_step_from`): the touch-down state and the steps after it are planned from where the pushed robot is (replanning every adjustment of a push from it loses cells: docs/push-recovery.md) |
+/// | `replan_push_offset` | – | 1 | with `replan_from_dcm`: fraction in \[0, 1\] of the push's LIPM offset added to the measured DCM (with 1 the pushed LIPM's capture point `ξ + F̂/(m ω²)`, where the DCM goes if the push lasts) |
 /// | `wbc_force` | N | 20 | push (after the dead zone) above which the TSID's weights switch to `wbc_com_weight` / `wbc_upright_weight` (back below it); above the touch-down pulses of the unpushed torque walks |
 /// | `wbc_com_weight` | – | 0 (off) | weight of the TSID's `com` task while the push exceeds `wbc_force` (the task must be soft; its configured weight otherwise): the CoM gives way to the push instead of the torso |
 /// | `wbc_nominal_in_hold` | – | `false` | the TSID's configured weights while the push response holds a double support (the push weights only outside the hold) |
@@ -84,6 +86,11 @@ pub struct PushConfig {
     pub step_out_margin: f64,
     /// Fraction of the push's LIPM offset by which the step QP's nominal touch-down DCM offset moves, in \[0, 1\].
     pub step_offset: f64,
+    /// Whether a step adjustment refused during a push is replanned from the measured DCM (with the
+    /// push's offset).
+    pub replan_from_dcm: bool,
+    /// Fraction of the push's LIPM offset added to the measured DCM of `replan_from_dcm`, in \[0, 1\].
+    pub replan_push_offset: f64,
     /// Push above which the TSID's weights switch \[N\].
     pub wbc_force: f64,
     /// Weight of the TSID's `com` task during a push; 0: unchanged.
@@ -113,6 +120,8 @@ impl Default for PushConfig {
             step_out: false,
             step_out_margin: 0.0,
             step_offset: 0.0,
+            replan_from_dcm: false,
+            replan_push_offset: 1.0,
             wbc_force: 20.0,
             wbc_com_weight: 0.0,
             wbc_upright_weight: 0.0,
@@ -139,6 +148,7 @@ impl PushConfig {
         for (name, value) in [
             ("push.lean", self.lean),
             ("push.step_offset", self.step_offset),
+            ("push.replan_push_offset", self.replan_push_offset),
         ] {
             if !(0.0..=1.0).contains(&value) {
                 return Err(SimplifiedError::InvalidParameter {
