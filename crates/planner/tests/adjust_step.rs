@@ -1,7 +1,8 @@
 //! `Planner::adjust_step`: a mid-swing change of the touch-down (position and time) keeps the past,
 //! keeps DCM, CoM and the swing foot continuous, lands on the target, replans the later steps from it and
 //! still reaches the goal; the adjusted plan passes the run-time verification; a crossed touch-down (past
-//! the stance foot) is replanned from the crossed feet, the next step uncrossing them.
+//! the stance foot) is replanned from the crossed feet, the next step uncrossing them; `adjust_step_from`
+//! restarts the rest of the single support from a given DCM.
 
 mod common;
 
@@ -554,5 +555,102 @@ fn with_the_icubs_widths_the_replan_after_an_adjusted_step_closes_at_the_goal() 
         let (p, result) = request(n, Vector2::new(0.0, -0.02));
         assert!(matches!(result, Ok(true)), "step {n}: {result:?}");
         closes_at_the_goal(&p, &format!("step {n}, 2 cm inward"));
+    }
+}
+
+/// `Planner::adjust_step_from`: the early crossed touch-downs above (refused by `adjust_step`), restarted
+/// from a given DCM, are planned from the plan's own DCM and from one 5 cm past the stance sole's centre on
+/// the crossed side (the tail is always built), refused from one 5 cm on the uncrossed side; the restarted
+/// plan keeps the CoM and the ZMP continuous, starts its DCM where asked, passes the run-time verification
+/// and reaches the goal.
+#[test]
+fn an_early_crossed_touch_down_is_planned_from_a_dcm_on_the_crossed_side_and_refused_from_the_plans(
+) {
+    for n in [1, 2, 3] {
+        for inward in [0.15, 0.25] {
+            // `adjust_step` (the plan's own DCM, the tail only when the DCM would land outside the
+            // crossed pair) and a restart from a DCM 5 cm on the uncrossed side of the stance foot:
+            // refused, the plan unchanged
+            let (mut p, request) = early_request(n, inward);
+            let t = seconds(request.time);
+            let step = p.plan().unwrap().current_step(t).unwrap();
+            let (stance, side) = (step.stance_pose.translation.vector.xy(), step.stance.side());
+            let before = p.plan().unwrap().clone();
+            let own = common::sample(&before, t).dcm_position.xy();
+            for from in [None, Some(stance - Vector2::new(0.0, side * 0.05))] {
+                let refused = p.adjust_step_from(&request, &GOAL, from);
+                assert!(
+                    matches!(refused, Err(PlannerError::ZmpOutsideSupport { .. })),
+                    "step {n}, {inward} m from {from:?}: {refused:?}"
+                );
+                assert_eq!(p.plan().unwrap(), &before);
+            }
+            // restarted from the plan's own DCM (the tail always built) or from one 5 cm past the stance
+            // foot's centre on the crossed side (a push towards the stance foot): planned
+            for dcm in [own, stance + Vector2::new(0.0, side * 0.05)] {
+                let (mut p, _) = early_request(n, inward);
+                let applied = p.adjust_step_from(&request, &GOAL, Some(dcm));
+                assert!(
+                    matches!(applied, Ok(true)),
+                    "step {n}, {inward} m from {dcm:?}: {applied:?}"
+                );
+                restarted_plan_holds(&p, &before, &request, dcm);
+            }
+        }
+    }
+}
+
+/// The plan of `p`, restarted from `dcm` at `request`'s time: CoM and ZMP continuous there, the DCM
+/// starting at `dcm`; continuous at the crossed touch-down, which lands on the target; ZMP in the support,
+/// the LIPM relations and the swing shapes on the whole plan; the walk ends at the goal.
+fn restarted_plan_holds(
+    p: &Planner,
+    before: &Plan,
+    request: &StepAdjustmentRequest,
+    dcm: Vector2<f64>,
+) {
+    let t = seconds(request.time);
+    let new = p.plan().unwrap();
+    let (a, b) = (sample(p, t - 1e-7), sample(p, t + 1e-7));
+    assert!(
+        (a.com_position - b.com_position).norm() < 1e-6,
+        "CoM at {t}"
+    );
+    assert!((a.zmp - b.zmp).norm() < 1e-5, "ZMP at {t}");
+    assert!((b.dcm_position.xy() - dcm).norm() < 1e-6, "DCM at {t}");
+    // continuous at the crossed touch-down; lands on the target
+    let land = request.land_time;
+    let (a, b) = (sample(p, land - 1e-7), sample(p, land + 1e-7));
+    assert!((a.dcm_position - b.dcm_position).norm() < 1e-6);
+    assert!((a.com_position - b.com_position).norm() < 1e-6);
+    let step = before.current_step(t).unwrap();
+    let crossed = new
+        .contacts(step.stance.other())
+        .active_at(land + 1e-3)
+        .unwrap();
+    assert!((crossed.pose.translation.vector.xy() - request.target).norm() < 1e-12);
+    // ZMP in the support, the LIPM relations and the continuity from the restart on (the DCM jumps at
+    // `t`: the plan before it is the old one), the swing shapes on the whole plan; the walk ends at the
+    // goal
+    let mut after = new.clone();
+    after.segments.retain(|g| g.start >= t);
+    after.start_time = t;
+    assert!(after.segments[0].restart && after.segments.iter().skip(1).all(|g| !g.restart));
+    check_dynamics(p.config(), &after, 0.01);
+    check_swings(p.config(), new);
+    let l = new.contacts(Foot::Left).contacts.last().unwrap();
+    let r = new.contacts(Foot::Right).contacts.last().unwrap();
+    let mid = (l.pose.translation.vector + r.pose.translation.vector) * 0.5;
+    assert!((mid.x - 2.0).abs() < 0.02 && mid.y.abs() < 0.02, "{mid:?}");
+}
+
+#[test]
+fn a_non_finite_dcm_is_refused() {
+    let (mut p, request) = early_request(1, 0.15);
+    let before = p.plan().unwrap().clone();
+    for bad in [f64::NAN, f64::INFINITY] {
+        let r = p.adjust_step_from(&request, &GOAL, Some(Vector2::new(0.3, bad)));
+        assert!(matches!(r, Err(PlannerError::InvalidTime { .. })), "{r:?}");
+        assert_eq!(p.plan().unwrap(), &before);
     }
 }
