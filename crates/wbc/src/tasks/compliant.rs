@@ -93,18 +93,19 @@ fn positive(key: &'static str, value: f64) -> Result<f64, WbcError> {
 /// ratio is `ζ` for `K_p = k_h / (4 ζ²)`. `None` with `ζ = 0` (each task keeps its `kp`). Errors: `ζ` not
 /// finite or negative.
 pub(crate) fn derived_angular_momentum_gain(c: &CompliantConfig) -> Result<Option<f64>, WbcError> {
-    match c.angular_momentum_damping {
-        z if z == 0.0 => Ok(None),
-        z if z.is_finite() && z > 0.0 => {
-            let kh = positive("momentum_rate_gain", c.momentum_rate_gain)?;
-            Ok(Some(kh / (4.0 * z * z)))
-        }
-        z => Err(WbcError::InvalidConfig {
+    let z = c.angular_momentum_damping;
+    if z == 0.0 {
+        return Ok(None);
+    }
+    if !(z.is_finite() && z > 0.0) {
+        return Err(WbcError::InvalidConfig {
             task: "<tsid>".into(),
             key: "angular_momentum_damping",
             reason: format!("compliant.angular_momentum_damping = {z} must be finite and >= 0"),
-        }),
+        });
     }
+    let kh = positive("momentum_rate_gain", c.momentum_rate_gain)?;
+    Ok(Some(kh / (4.0 * z * z)))
 }
 
 impl CompliantContacts {
