@@ -211,18 +211,7 @@ fn the_planned_momentum_reference_walks_to_the_goal_where_the_rigid_tsid_falls()
         ("planned", include.clone()),
         ("planned_stiff", stiff.clone()),
     ] {
-        let scenario = Scenario::load(&s.write(&format!("{name}.toml"), &text)).unwrap();
-        let summary = run_scenario(&scenario, &options(&s, name)).unwrap();
-        assert_eq!(
-            summary.outcome,
-            Outcome::GoalReached,
-            "{name}: {}",
-            summary.render()
-        );
-        assert!(summary.distance > 1.49, "{name}: {}", summary.render());
-        let speed = summary.gait.steady_speed.expect("a steady speed");
-        assert!(speed >= 0.15, "{name}: {}", summary.render());
-        assert!(summary.com_error.rms < 0.01, "{name}: {}", summary.render());
+        assert_walks_to_goal(&s, name, &text);
     }
     let own = Scenario::load(&walk).unwrap();
     assert_eq!(own.config.sim.contact.normal_stiffness, 1e6);
@@ -264,6 +253,49 @@ fn the_planned_momentum_reference_walks_to_the_goal_where_the_rigid_tsid_falls()
         "stiff_kh20",
         &format!("{stiff}momentum_rate_gain = 20.0\n"),
     );
+}
+
+/// Stage 3's margin in `k_h` (docs/soft-ground.md, "Stage 3's margin in k_h"): with the angular momentum
+/// task's `K_p` derived from `k_h` (`angular_momentum_damping = 1`, `K_p = k_h/4`, the scenario's setting)
+/// the walk reaches its goal (steady speed ≥ 0.15 m/s, CoM error < 1 cm RMS) at `k_h` = 60 on the
+/// scenario's ground (k = 1e6, b = 1e3) and at `k_h` = 80 on k = 8e5, b = 1e4, where with the configured
+/// `K_p` = 10 (`angular_momentum_damping = 0`, the loop overdamped) it falls (measured 7.53 s at 60; 80:
+/// see the test). The other side of the widened margin: at `k_h` = 100 on k = 8e5, b = 1e4 and at
+/// `k_h` = 30 on k = 1e6, b = 1e4 it falls with the derived gain too.
+#[test]
+fn the_derived_angular_gain_walks_at_high_momentum_rate_gains() {
+    let s = Scratch::new("soft_ground_derived_angular_gain");
+    let include = overlay("configs/walk_soft_ground_compliant_planned_torque.toml", "");
+    let ground = |k: f64, b: f64, kh: f64, zeta: f64| {
+        format!(
+            "{include}[sim.contact]\nnormal_stiffness = {k:e}\nnormal_damping = {b:e}\n\
+             [wbc.tsid.compliant]\nground_stiffness = {k:e}\nground_damping = {b:e}\n\
+             momentum_rate_gain = {kh:.1}\nangular_momentum_damping = {zeta:.1}\n"
+        )
+    };
+    for (name, kh, k, b) in [("kh60", 60.0, 1e6, 1e3), ("kh80_soft", 80.0, 8e5, 1e4)] {
+        assert_walks_to_goal(&s, name, &ground(k, b, kh, 1.0));
+        assert_falls(&s, &format!("{name}_kp10"), &ground(k, b, kh, 0.0));
+    }
+    assert_falls(&s, "kh100", &ground(8e5, 1e4, 100.0, 1.0));
+    assert_falls(&s, "kh30", &ground(1e6, 1e4, 30.0, 1.0));
+}
+
+/// Runs the scenario file `text` (written as `name.toml`) and asserts the issue's walk: the goal (1.5 m),
+/// a steady speed of at least 0.15 m/s and the CoM error under 1 cm RMS.
+fn assert_walks_to_goal(s: &Scratch, name: &str, text: &str) {
+    let scenario = Scenario::load(&s.write(&format!("{name}.toml"), text)).unwrap();
+    let summary = run_scenario(&scenario, &options(s, name)).unwrap();
+    assert_eq!(
+        summary.outcome,
+        Outcome::GoalReached,
+        "{name}: {}",
+        summary.render()
+    );
+    assert!(summary.distance > 1.49, "{name}: {}", summary.render());
+    let speed = summary.gait.steady_speed.expect("a steady speed");
+    assert!(speed >= 0.15, "{name}: {}", summary.render());
+    assert!(summary.com_error.rms < 0.01, "{name}: {}", summary.render());
 }
 
 /// Runs the scenario file `text` (written as `name.toml`), asserts that the robot falls (or the run

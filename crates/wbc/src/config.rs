@@ -701,6 +701,7 @@ pub enum ContactModel {
 /// | `momentum_rate_gain` | 1/s | 20 | `k_h`: the momentum tasks ask `ḧ = k_h (ḣ* − ḣ)` |
 /// | `wrench_rate_gain` | 1/s | 10 | `k_f`: the wrench regularization asks `ḟ = k_f (f* − f)` [eq. 8.2.9] |
 /// | `feasibility_horizon` | s | 0.02 | `T` of the one-step-ahead feasibility `A (f + ḟ T) ≤ 0` [eq. 8.2.12] |
+/// | `angular_momentum_damping` | – | 0 (off) | `ζ`: the angular momentum tasks' `K_p` derived from `k_h`, `K_p = k_h / (4 ζ²)`, so that their rows' loop `ḧ = k_h (K_p (h* − h) − ḣ)` has the damping ratio `ζ` at any `k_h` (1: critically damped, both poles at `−k_h/2`); 0: each task's own `kp` |
 /// | `estimate_ground` | – | false | estimate `k`, `b` online (RLS, [eq. 8.2.20–8.2.22]), one estimate per contact from its loaded sole, covariance reset at its touch-down, prior the two values above with their own size as standard deviation; each contact's model uses its estimate |
 /// | `estimator_wrench_std` | N, N·m | [2, 0.2] | standard deviations of the measured force and torque for that estimate |
 /// | `estimator_contact_force` | N | 5 | with `estimate_ground`: a sole after its planned touch-down meets the ground when its measured normal force exceeds this; until then its rest pose follows it and its estimate is not fed, then the covariance is reset and the rest pose set there |
@@ -733,6 +734,9 @@ pub struct CompliantConfig {
     pub wrench_rate_gain: f64,
     /// `T`: the wrench feasibility holds for `f + T ḟ` [Romualdi 2022, eq. 8.2.12], s.
     pub feasibility_horizon: f64,
+    /// `ζ` (> 0): the angular momentum tasks' `K_p` is `k_h / (4 ζ²)` (the damping ratio `ζ` of their rows'
+    /// second-order loop at any `k_h`); 0: each task's configured `kp`.
+    pub angular_momentum_damping: f64,
     /// Estimate `k`, `b` online from the measured wrenches of the loaded soles [Romualdi 2022, §8.2.3].
     pub estimate_ground: bool,
     /// `[force (N), torque (N·m)]` standard deviations of the measured wrench for the ground estimate.
@@ -853,6 +857,7 @@ impl Default for CompliantConfig {
             momentum_rate_gain: 20.0,
             wrench_rate_gain: 10.0,
             feasibility_horizon: 0.02,
+            angular_momentum_damping: 0.0,
             estimate_ground: false,
             estimator_wrench_std: [2.0, 0.2],
             estimator_reset: true,

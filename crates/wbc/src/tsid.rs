@@ -23,8 +23,9 @@ use crate::io::{InputLayout, SolveReport, TaskResidual, TsidOutput, WbcInput};
 use crate::names::input_layout;
 use crate::names::Resolver;
 use crate::tasks::compliant::{
-    add_angular_momentum_drift, add_unloaded_wrenches, fill_contact_dynamics,
-    measured_joint_torques, to_rate_rows, CompliantContacts, HELD_LIFT_OFF_LOAD,
+    add_angular_momentum_drift, add_unloaded_wrenches, derived_angular_momentum_gain,
+    fill_contact_dynamics, measured_joint_torques, to_rate_rows, CompliantContacts,
+    HELD_LIFT_OFF_LOAD,
 };
 use crate::tasks::contact::fill_wrench_regularization;
 use crate::tasks::dynamics::{
@@ -490,7 +491,7 @@ impl Tsid {
         config.actuators.validate()?;
         let n = model.dof();
         let nv = model.nv();
-        let set = TaskSet::parse(&model, &config, period)?;
+        let mut set = TaskSet::parse(&model, &config, period)?;
         let compliant = match config.contact_model {
             ContactModel::Rigid => None,
             ContactModel::Compliant if !set.flexible.is_empty() => {
@@ -506,6 +507,15 @@ impl Tsid {
                 period,
             )?),
         };
+        if compliant.is_some() {
+            if let Some(kp) = derived_angular_momentum_gain(&config.compliant)? {
+                for t in &mut set.tasks {
+                    if let TsidTask::AngularMomentum(t) = t {
+                        t.set_gains(kp);
+                    }
+                }
+            }
+        }
         let mut variants = Vec::new();
         let zmp_options: &[bool] = if set.has_zmp {
             &[false, true]

@@ -664,3 +664,60 @@ fn the_wrench_source_sets_what_the_rows_read() {
     let err = Tsid::new(Arc::clone(&model), config, PERIOD).err().unwrap();
     assert!(err.to_string().contains("wrench_filter_time"), "{err}");
 }
+
+/// The joint torques of the second tick of a standing compliant TSID whose angular momentum task has `kp`,
+/// with `angular_momentum_damping = zeta` and `momentum_rate_gain = kh`, asked an angular momentum
+/// away from the robot's (so that the task's gain moves the torques).
+fn torques_with_angular_gain(kp: f64, zeta: f64, kh: f64) -> DVector<f64> {
+    let model = bundled_model();
+    let state = standing_state(&model, &default_posture(&model));
+    let half = model.total_mass() * 9.81 / 2.0;
+    let share = Vector6::new(0.0, 0.0, half, 0.0, 0.0, 0.0);
+    let mut config = compliant_config();
+    for task in &mut config.tasks {
+        if let TaskConfig::AngularMomentum(t) = task {
+            t.kp = kp;
+        }
+    }
+    config.compliant.momentum_rate_gain = kh;
+    config.compliant.angular_momentum_damping = zeta;
+    let mut tsid = Tsid::new(Arc::clone(&model), config, PERIOD).unwrap();
+    tsid.step(&input_with_wrenches(&model, &tsid, &state, &[share, share]))
+        .unwrap();
+    let mut input = input_with_wrenches(&model, &tsid, &state, &[share, share]);
+    input.angular_momentum = Vector3::new(0.3, -0.2, 0.1);
+    tsid.step(&input).unwrap().joint_torques.clone()
+}
+
+/// `angular_momentum_damping` (`ζ`): the angular momentum task's `K_p` becomes `k_h / (4 ζ²)` whatever its
+/// configured `kp` (the same torques as that `kp` configured, to 1e-9), at two momentum rate gains; off
+/// (0) the configured `kp` is kept (other torques); a negative or non-finite `ζ` is refused by name.
+#[test]
+fn the_angular_momentum_gain_is_derived_from_the_momentum_rate_gain() {
+    let dist = |a: &DVector<f64>, b: &DVector<f64>| (a - b).norm();
+    for (zeta, kh) in [(1.0, 25.0), (0.8, 60.0)] {
+        let derived = torques_with_angular_gain(3.0, zeta, kh);
+        let configured = torques_with_angular_gain(kh / (4.0 * zeta * zeta), 0.0, kh);
+        let own = torques_with_angular_gain(3.0, 0.0, kh);
+        assert!(
+            dist(&derived, &configured) < 1e-9 * configured.norm(),
+            "ζ {zeta}, k_h {kh}: {}",
+            dist(&derived, &configured)
+        );
+        assert!(
+            dist(&derived, &own) > 1e-3,
+            "ζ {zeta}, k_h {kh}: {}",
+            dist(&derived, &own)
+        );
+    }
+    let model = bundled_model();
+    for zeta in [-1.0, f64::NAN, f64::INFINITY] {
+        let mut config = compliant_config();
+        config.compliant.angular_momentum_damping = zeta;
+        let err = Tsid::new(Arc::clone(&model), config, PERIOD).err().unwrap();
+        assert!(
+            err.to_string().contains("angular_momentum_damping"),
+            "{err}"
+        );
+    }
+}

@@ -88,6 +88,26 @@ fn positive(key: &'static str, value: f64) -> Result<f64, WbcError> {
     }
 }
 
+/// The angular momentum tasks' `K_p` (1/s) that `angular_momentum_damping` (`ζ`) derives from the momentum
+/// rate gain `k_h`: the rows `ḧ = k_h (K_p (h* − h) − ḣ)` are the loop `s² + k_h s + k_h K_p`, whose damping
+/// ratio is `ζ` for `K_p = k_h / (4 ζ²)`. `None` with `ζ = 0` (each task keeps its `kp`). Errors: `ζ` not
+/// finite or negative.
+pub(crate) fn derived_angular_momentum_gain(c: &CompliantConfig) -> Result<Option<f64>, WbcError> {
+    let z = c.angular_momentum_damping;
+    if z == 0.0 {
+        return Ok(None);
+    }
+    if !(z.is_finite() && z > 0.0) {
+        return Err(WbcError::InvalidConfig {
+            task: "<tsid>".into(),
+            key: "angular_momentum_damping",
+            reason: format!("compliant.angular_momentum_damping = {z} must be finite and >= 0"),
+        });
+    }
+    let kh = positive("momentum_rate_gain", c.momentum_rate_gain)?;
+    Ok(Some(kh / (4.0 * z * z)))
+}
+
 impl CompliantContacts {
     /// Checked settings for `contacts` contacts of a controller running every `period` (s). Errors: a
     /// value that is not finite and > 0.
