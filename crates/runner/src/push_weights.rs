@@ -5,12 +5,6 @@
 //! balance is paid with the torso's orientation (docs/push-recovery.md, "Torque control: why the torso
 //! tips"); with these weights the QP lets the CoM give way instead, and the DCM error that follows is what
 //! the step adjustment reads.
-//!
-//! With `wbc_tilt_deg` the switch is a budget for that hip strategy instead: during a push the configured
-//! weights (a heavy CoM) stay until the estimated torso tilt exceeds the budget, and the push weights take
-//! over from then until the push ends. The configured weights keep the CoM, which holds a double support
-//! against a push along the soles, and spend the torso; the budget ends the spending before the torso
-//! tips.
 
 use nalgebra::Vector2;
 use stride_simplified::PushConfig;
@@ -29,8 +23,6 @@ struct Switched {
 pub struct PushWeights {
     force: f64,
     nominal_in_hold: bool,
-    /// Tilt budget \[rad\]; 0: none.
-    tilt: f64,
     tasks: [Option<Switched>; 3],
     /// Whether the push weights are in the TSID now.
     active: bool,
@@ -62,7 +54,6 @@ impl PushWeights {
         Ok(tasks.iter().any(Option::is_some).then_some(Self {
             force: config.wbc_force,
             nominal_in_hold: config.wbc_nominal_in_hold,
-            tilt: config.wbc_tilt_deg.to_radians(),
             tasks,
             active: false,
             ticks: 0,
@@ -75,17 +66,15 @@ impl PushWeights {
     }
 
     /// Puts the push weights into `tsid` while `estimate` \[N\] exceeds `wbc_force` (and, with
-    /// `wbc_nominal_in_hold`, no double support is `held`; with `wbc_tilt_deg`, once the torso's `tilt`
-    /// \[rad\] has exceeded it during this push), the nominal ones otherwise (a change only when the state
-    /// changes).
+    /// `wbc_nominal_in_hold`, no double support is `held`), the nominal ones otherwise (a change only
+    /// when the state changes).
     pub fn update(
         &mut self,
         estimate: &Vector2<f64>,
         held: bool,
-        tilt: f64,
         tsid: &mut Tsid,
     ) -> Result<(), WbcError> {
-        let pushed = self.wanted(estimate.norm(), held, tilt);
+        let pushed = estimate.norm() > self.force && !(self.nominal_in_hold && held);
         if pushed {
             self.ticks += 1;
         }
@@ -98,15 +87,6 @@ impl PushWeights {
         }
         self.active = pushed;
         Ok(())
-    }
-}
-
-impl PushWeights {
-    /// Whether the push weights belong in the TSID for a push estimate of norm `force` \[N\], a `held`
-    /// double support and the torso's `tilt` \[rad\], given whether they are in it now.
-    fn wanted(&self, force: f64, held: bool, tilt: f64) -> bool {
-        let spent = self.tilt <= 0.0 || self.active || tilt > self.tilt;
-        force > self.force && spent && !(self.nominal_in_hold && held)
     }
 }
 
@@ -159,45 +139,6 @@ mod tests {
             priority: Priority::Soft,
             weight,
         })
-    }
-
-    fn switch(tilt_deg: f64) -> PushWeights {
-        PushWeights {
-            force: 20.0,
-            nominal_in_hold: false,
-            tilt: tilt_deg.to_radians(),
-            tasks: [None; 3],
-            active: false,
-            ticks: 0,
-        }
-    }
-
-    #[test]
-    fn with_a_tilt_budget_the_push_weights_wait_for_the_tilt_and_stay_until_the_push_ends() {
-        let at_once = switch(0.0);
-        assert!(at_once.wanted(21.0, false, 0.0));
-        assert!(!at_once.wanted(19.0, false, 1.0));
-        let mut budget = switch(6.0);
-        let (below, above) = (5.9_f64.to_radians(), 6.1_f64.to_radians());
-        assert!(
-            !budget.wanted(40.0, false, below),
-            "a push within the budget"
-        );
-        assert!(!budget.wanted(19.0, false, above), "a tilt without a push");
-        assert!(budget.wanted(40.0, false, above));
-        budget.active = true;
-        assert!(
-            budget.wanted(40.0, false, 0.0),
-            "latched while the push lasts"
-        );
-        assert!(!budget.wanted(19.0, false, 0.0), "released when it ends");
-        budget.active = false;
-        assert!(
-            !budget.wanted(40.0, false, 0.0),
-            "the next push waits for the tilt again"
-        );
-        budget.nominal_in_hold = true;
-        assert!(!budget.wanted(40.0, true, above));
     }
 
     #[test]

@@ -998,12 +998,7 @@ impl Stack {
             self.push_weights.as_mut(),
             self.push.as_ref(),
         ) {
-            w.update(
-                &push.estimate(),
-                self.plan_clock.holding(),
-                self.measured.tilt,
-                t,
-            )?;
+            w.update(&push.estimate(), self.plan_clock.holding(), t)?;
         }
         if let Wbc::Tsid(t) = &self.wbc {
             if t.config().contact_model == ContactModel::Compliant {

@@ -44,7 +44,6 @@ use crate::error::{check_finite, check_non_negative, check_positive, Result, Sim
 /// | `wbc_com_weight` | – | 0 (off) | weight of the TSID's `com` task while the push exceeds `wbc_force` (the task must be soft; its configured weight otherwise): the CoM gives way to the push instead of the torso |
 /// | `wbc_nominal_in_hold` | – | `false` | the TSID's configured weights while the push response holds a double support (the push weights only outside the hold) |
 /// | `wbc_upright_weight` | – | 0 (off) | weight of the TSID's `torso` and `pelvis` orientation tasks while the push exceeds `wbc_force` (soft tasks; their configured weight otherwise) |
-/// | `wbc_tilt_deg` | deg | 0 (off) | a budget for the hip strategy: during a push (the estimate above `wbc_force`) the push weights wait until the estimated torso tilt exceeds this, then stay until the estimate falls below `wbc_force`; 0: they switch with the estimate alone |
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PushConfig {
@@ -93,8 +92,6 @@ pub struct PushConfig {
     pub wbc_upright_weight: f64,
     /// Whether the TSID keeps its configured weights while a double support is held.
     pub wbc_nominal_in_hold: bool,
-    /// Torso tilt above which, during a push, the push weights switch in \[deg\]; 0: at once.
-    pub wbc_tilt_deg: f64,
 }
 
 impl Default for PushConfig {
@@ -120,7 +117,6 @@ impl Default for PushConfig {
             wbc_com_weight: 0.0,
             wbc_upright_weight: 0.0,
             wbc_nominal_in_hold: false,
-            wbc_tilt_deg: 0.0,
         }
     }
 }
@@ -140,7 +136,6 @@ impl PushConfig {
         check_non_negative("push.wbc_force", self.wbc_force)?;
         check_non_negative("push.wbc_com_weight", self.wbc_com_weight)?;
         check_non_negative("push.wbc_upright_weight", self.wbc_upright_weight)?;
-        check_non_negative("push.wbc_tilt_deg", self.wbc_tilt_deg)?;
         for (name, value) in [
             ("push.lean", self.lean),
             ("push.step_offset", self.step_offset),
