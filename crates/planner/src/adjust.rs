@@ -173,6 +173,7 @@ pub(crate) fn adjusted_plan(
     };
     // towards the waypoints not yet passed: the full list would send the robot back to the first one
     let (goal, passed) = remaining_goal(cfg, plan, goal, anchor_xy)?;
+    let goal = closing_goal(cfg, goal, &start.anchor);
     let mut new = build_plan(cfg, omega, &start, &goal)?;
     if let Some(p) = new.waypoint_progress.as_mut() {
         p.passed = passed;
@@ -271,6 +272,44 @@ fn remaining_goal(
     let passed = before + waypoints_passed(cfg, progress.origin, &points[before..], anchor)?;
     let points = points[passed..].to_vec();
     Ok((Goal::Waypoints { points }, passed))
+}
+
+/// The goal a step adjustment replans towards when its anchor (the feet's mid-point once the other foot
+/// stands beside the adjusted step) is within `arrival_tolerance` of the final goal position: that goal
+/// moved onto the anchor, its heading kept (the plan closes in place: the stance foot steps beside the
+/// adjusted one, and turns only if the heading differs); `goal` itself otherwise, and for a velocity goal
+/// or standing.
+///
+/// Without it, a closing step adjusted sideways by a few centimetres replanned towards the goal's position:
+/// the unicycle cannot move sideways, so the plan turned in place towards it (the direction of a 2.5 cm
+/// lateral offset is ±90°), walked the 2.5 cm and turned back. On `walk_fast` with the push layers and the
+/// step adjustment each adjustment of a step round the goal did so again: 41 steps at the goal, the walk
+/// ending at 45 s turned by −101° (docs/push-recovery.md, "Without pushes nothing gets worse").
+fn closing_goal(cfg: &PlannerConfig, goal: Goal, anchor: &Pose2) -> Goal {
+    let (position, yaw) = match &goal {
+        Goal::Pose { x, y, yaw } => (Vector2::new(*x, *y), Some(*yaw)),
+        Goal::Waypoints { points } if points.len() == 1 => {
+            (Vector2::new(points[0].x, points[0].y), points[0].yaw)
+        }
+        _ => return goal,
+    };
+    if (position - anchor.position()).norm() > cfg.arrival_tolerance {
+        return goal;
+    }
+    match goal {
+        Goal::Pose { .. } => Goal::Pose {
+            x: anchor.x,
+            y: anchor.y,
+            yaw: yaw.unwrap_or(anchor.yaw),
+        },
+        _ => Goal::Waypoints {
+            points: vec![crate::goal::Waypoint {
+                x: anchor.x,
+                y: anchor.y,
+                yaw,
+            }],
+        },
+    }
 }
 
 /// The old plan's DCM/ZMP/CoM at `land`, with the single-support segment at `t` extended to `land`.

@@ -94,6 +94,7 @@ impl PlanVerification {
 /// | `dcm_interpolation` | – | `zmp_first` | `zmp_first` or `dcm_cubic` [Romualdi 2022, eq. 10.1.23] |
 /// | `last_step_dcm_alpha` | – | 0.2 | α_LS of [Romualdi 2022, eq. 10.2.3], in [0, 1] (only for `dcm_cubic`) |
 /// | `stop_deceleration` | m/s² | 0 | deceleration of the reference point F on its way to the goal: it slows down uniformly over the last `v²/(2a)` of the path instead of stopping there at full speed (0: full speed to the goal) |
+/// | `arrival_tolerance` | m | 0.05 | a step adjustment ([`crate::Planner::adjust_step`]) whose new touch-down puts the feet's mid-point this close to the goal's position closes the walk there (the other foot steps beside it, the goal's heading kept) instead of replanning a turn, a walk and a turn back to the goal (0: never) |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlannerConfig {
@@ -171,6 +172,9 @@ pub struct PlannerConfig {
     pub last_step_dcm_alpha: f64,
     /// Deceleration of the reference point on the last straight line to the goal \[m/s²\] (≥ 0; 0: none).
     pub stop_deceleration: f64,
+    /// Distance to the goal's position within which a step adjustment's replan closes the walk where the
+    /// adjusted step put the feet \[m\] (≥ 0; 0: never).
+    pub arrival_tolerance: f64,
 }
 
 /// The defaults fit the bundled humanoid: `com_height`, `nominal_width`, `foot_length` and `foot_width`
@@ -214,6 +218,7 @@ impl Default for PlannerConfig {
             dcm_interpolation: DcmInterpolation::ZmpFirst,
             last_step_dcm_alpha: 0.2,
             stop_deceleration: 0.0,
+            arrival_tolerance: 0.05,
         }
     }
 }
@@ -479,6 +484,12 @@ impl PlannerConfig {
             c.stop_deceleration,
             c.stop_deceleration >= 0.0,
             "must be >= 0 (0: no deceleration)",
+        )?;
+        check(
+            "arrival_tolerance",
+            c.arrival_tolerance,
+            c.arrival_tolerance >= 0.0,
+            "must be >= 0 (0: an adjusted step always replans towards the goal's position)",
         )?;
         Ok(())
     }

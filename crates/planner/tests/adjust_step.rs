@@ -654,3 +654,89 @@ fn a_non_finite_dcm_is_refused() {
         assert_eq!(p.plan().unwrap(), &before);
     }
 }
+
+/// The closing step (the last swing of the walk to (2, 0)) moved sideways mid-swing, then moved back 14 ms
+/// later (the pairs of `walk_fast` with the push layers and the step adjustment, docs/push-recovery.md):
+/// with the default `arrival_tolerance` each replan closes in place, one step (the stance foot beside the
+/// adjusted one), the heading kept, the feet within the tolerance of the goal. With the tolerance 0 (the
+/// planner before) the same replans turn in place towards the goal's position and add steps.
+#[test]
+fn a_closing_step_adjusted_sideways_closes_the_walk_in_place() {
+    let run = |tolerance: f64| {
+        let cfg = PlannerConfig {
+            com_height: 0.54,
+            nominal_width: 0.15,
+            verify_plans: PlanVerification::Always,
+            arrival_tolerance: tolerance,
+            ..Default::default()
+        };
+        let (l, r) = standing(0.0, 0.0, 0.0, cfg.nominal_width);
+        let mut p = Planner::new(cfg, GRAVITY).unwrap();
+        p.start(Duration::ZERO, &l, &r, &GOAL).unwrap();
+        let singles = p
+            .plan()
+            .unwrap()
+            .phases
+            .iter()
+            .filter(|ph| matches!(ph.kind, PhaseKind::SingleSupport { .. }))
+            .count();
+        let last = single_support(&p, singles - 1);
+        let (time, t) = instant(last.start + 0.3 * (last.end - last.start));
+        let step = p.plan().unwrap().current_step(t).unwrap();
+        let side = step.stance.other().side();
+        let nominal = step.swing.end.translation.vector.xy();
+        let land = step.swing.land_time;
+        let out = nominal + Vector2::new(-0.001, 0.025 * side);
+        let back = nominal + Vector2::new(-0.001, 0.005 * side);
+        let first = StepAdjustmentRequest {
+            time,
+            target: out,
+            land_time: land,
+            min_remaining: 0.1,
+        };
+        assert!(p.adjust_step(&first, &GOAL).unwrap());
+        let second = StepAdjustmentRequest {
+            time: time + Duration::from_millis(14),
+            target: back,
+            ..first
+        };
+        assert!(p.adjust_step(&second, &GOAL).unwrap());
+        let plan = p.plan().unwrap().clone();
+        let touchdowns_after = |foot: Foot| {
+            plan.contacts(foot)
+                .contacts
+                .iter()
+                .filter(|c| c.activation_time > land + 1e-9)
+                .count()
+        };
+        let steps_after = touchdowns_after(Foot::Left) + touchdowns_after(Foot::Right);
+        let l = plan.contacts(Foot::Left).contacts.last().unwrap().pose;
+        let r = plan.contacts(Foot::Right).contacts.last().unwrap().pose;
+        let mid = (l.translation.vector + r.translation.vector) * 0.5;
+        let heading = Pose2::from_isometry(&l)
+            .yaw
+            .abs()
+            .max(Pose2::from_isometry(&r).yaw.abs());
+        let most_turned = [Foot::Left, Foot::Right]
+            .iter()
+            .flat_map(|&f| plan.contacts(f).contacts.iter())
+            .map(|c| Pose2::from_isometry(&c.pose).yaw.abs())
+            .fold(0.0_f64, f64::max);
+        check_dynamics(p.config(), &plan, 0.01);
+        check_swings(p.config(), &plan);
+        (steps_after, mid, heading, most_turned)
+    };
+    let (steps, mid, heading, turned) = run(PlannerConfig::default().arrival_tolerance);
+    assert_eq!(steps, 1, "one closing step after the adjusted one");
+    assert!((mid.xy() - Vector2::new(2.0, 0.0)).norm() < 0.05, "{mid:?}");
+    assert!(
+        heading < 1e-9 && turned < 1e-9,
+        "heading {heading}, turned {turned}"
+    );
+    let (steps, _, _, turned) = run(0.0);
+    assert!(steps > 1, "without the tolerance: {steps} steps");
+    assert!(
+        turned > 0.2,
+        "without the tolerance the replan turns: {turned} rad"
+    );
+}

@@ -193,9 +193,7 @@ impl PushResponse {
     /// `step_adjustment_delay` until the estimate has stayed above `hold_force` that long: the
     /// observer's pulses of a touch-down or of a stance foot's roll last less, docs/push-recovery.md).
     pub fn effective_cop(&self, planned: Vector2<f64>, omega: f64) -> Vector2<f64> {
-        let delay = self.config.step_adjustment_delay;
-        let gated = delay > 0.0 && self.pushed_for < delay - 1e-9;
-        if !self.config.step_adjustment || omega <= 0.0 || gated {
+        if !self.seen_by_step_adjustment(omega) {
             return planned;
         }
         planned - push_zmp_offset(&self.estimate, self.mass, omega)
@@ -214,11 +212,22 @@ impl PushResponse {
             .then(|| dcm + push_zmp_offset(&self.estimate, self.mass, omega) * c.replan_push_offset)
     }
 
+    /// Whether the step-adjustment QP reads the estimate this tick: `step_adjustment` on, and with a
+    /// positive `step_adjustment_delay` once the estimate has stayed above `hold_force` that long.
+    fn seen_by_step_adjustment(&self, omega: f64) -> bool {
+        let delay = self.config.step_adjustment_delay;
+        let gated = delay > 0.0 && self.pushed_for < delay - 1e-9;
+        self.config.step_adjustment && omega > 0.0 && !gated
+    }
+
     /// The shift of the step-adjustment QP's nominal DCM offset at touch-down, `−step_offset F̂/(m ω²)`
-    /// (zero when `step_adjustment` is off): with the push still on after the touch-down, the new
-    /// stance foot must carry the pushed LIPM's CoP, `F̂/(m ω²)` along the push from its effective ZMP.
+    /// (zero when `step_adjustment` is off, and gated by `step_adjustment_delay` as
+    /// [`PushResponse::effective_cop`]: ungated, the observer's one-tick pulses of the unpushed
+    /// `walk_curve_fast_torque`, 9 N after the dead zone, moved a touch-down by 7 cm and back the next tick,
+    /// docs/push-recovery.md): with the push still on after the touch-down, the new stance foot must carry
+    /// the pushed LIPM's CoP, `F̂/(m ω²)` along the push from its effective ZMP.
     pub fn step_offset_shift(&self, omega: f64) -> Vector2<f64> {
-        if !self.config.step_adjustment || omega <= 0.0 || self.config.step_offset == 0.0 {
+        if !self.seen_by_step_adjustment(omega) || self.config.step_offset == 0.0 {
             return Vector2::zeros();
         }
         -push_zmp_offset(&self.estimate, self.mass, omega) * self.config.step_offset
@@ -663,5 +672,39 @@ mod tests {
         assert!(gated[..49].iter().all(|c| *c == planned));
         assert!(gated[49..].iter().all(|c| (c - pushed).norm() < 1e-15));
         assert!(cops(0.0, 1).iter().all(|c| (c - pushed).norm() < 1e-15));
+    }
+
+    /// The step offset's shift is gated as the CoP: with `step_adjustment_delay` 0.1 s zero while the
+    /// estimate has been above `hold_force` for less than 0.1 s and the whole `−F̂/(m ω²)` once it has
+    /// lasted 0.1 s (the unpushed torque curve's one-tick 9 N pulses are never seen); 0 passes it at once.
+    #[test]
+    fn the_step_adjustment_delay_gates_the_step_offset_as_the_cop() {
+        let omega = (9.81f64 / 0.5).sqrt();
+        let whole = -push_zmp_offset(&Vector2::new(0.0, 20.0), 30.0, omega);
+        let mut clock = PlanClock::new(0.1);
+        let ss = sample(PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Left,
+        });
+        let mut shifts = |delay: f64, estimate: Vector2<f64>, ticks: usize| {
+            let mut r = response(PushConfig {
+                step_adjustment_delay: delay,
+                step_offset: 1.0,
+                ..PushConfig::default()
+            });
+            r.estimate = estimate;
+            let mut shift = Vec::new();
+            for _ in 0..ticks {
+                r.decide(0.002, &ss, true, false, &mut clock);
+                shift.push(r.step_offset_shift(omega));
+            }
+            shift
+        };
+        let gated = shifts(0.1, Vector2::new(0.0, 20.0), 100);
+        assert!(gated[..49].iter().all(|s| *s == Vector2::zeros()));
+        assert!(gated[49..].iter().all(|s| (s - whole).norm() < 1e-15));
+        assert_eq!(shifts(0.1, Vector2::new(0.0, 9.0), 1), [Vector2::zeros()]);
+        assert!(shifts(0.0, Vector2::new(0.0, 20.0), 1)
+            .iter()
+            .all(|s| (s - whole).norm() < 1e-15));
     }
 }

@@ -252,6 +252,94 @@ fn without_pushes_the_torque_curve_with_the_step_adjustment_reaches_its_goal_unc
     assert!(on.goal_distance.unwrap() <= off.goal_distance.unwrap());
 }
 
+/// The torque push layers under `configs/layers/` (step adjustment, push response with the hold at once, the
+/// TSID's CoP region ±35 mm and push weights; with the step offset when `step_offset`).
+fn torque_push_layers(walk: &'static str, step_offset: bool) -> Vec<&'static str> {
+    let mut layers = vec![
+        walk,
+        "layers/step_adjustment.toml",
+        "layers/push_response.toml",
+        "layers/push_hold_at_once.toml",
+        "layers/tsid_cop_y_35mm.toml",
+        "layers/tsid_push_weights.toml",
+    ];
+    if step_offset {
+        layers.push("layers/push_step_offset.toml");
+    }
+    layers
+}
+
+/// Runs `walk` alone, with `layers`, and with `layers` and `ablation` appended; asserts that the walk alone
+/// and with the layers reach the goal, that the layers move no step and that the DCM error (RMS and max)
+/// and the goal distance are at most the walk alone's. Returns the ablated run.
+fn unpushed_with_layers_unchanged(
+    s: &Scratch,
+    walk: &str,
+    layers: &[&str],
+    ablation: &str,
+) -> RunSummary {
+    let off = run_configs(s, "off", &[walk], "");
+    let on = run_configs(s, "on", layers, "");
+    assert_eq!(off.outcome, Outcome::GoalReached, "{}", off.render());
+    assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
+    assert_eq!(on.step_adjustments, (0, 0), "{}", on.render());
+    assert!(
+        on.dcm_error.rms <= off.dcm_error.rms && on.dcm_error.max <= off.dcm_error.max,
+        "{} against {}",
+        on.render(),
+        off.render()
+    );
+    assert!(on.goal_distance.unwrap() <= off.goal_distance.unwrap());
+    run_configs(s, "ablated", layers, ablation)
+}
+
+/// The torque curve with the torque push layers, unpushed: with the scenario file's gate on the push
+/// estimate (`simplified.push.step_adjustment_delay` 0.1 s) the step adjustment moves no touch-down and the
+/// walk reaches its goal with the tracking of the walk without the layers (measured: 8 mm from the goal,
+/// DCM 9.1 / 23.2 mm RMS / max against 9 mm and 9.3 / 24.3). Ungated, the observer's one-tick pulses (9 N
+/// after the dead zone) move touch-downs by up to 7 cm and back the next tick: 153 adjustments, the walk
+/// ends its 30 s 5 cm from the goal turned by −81° (docs/push-recovery.md, "The unpushed torque walks with
+/// the push layers").
+#[test]
+fn without_pushes_the_torque_curve_with_the_push_layers_and_the_gated_estimate_reaches_its_goal() {
+    let s = Scratch::new("step_adjustment_curve_push_layers");
+    let walk = "walk_curve_fast_torque.toml";
+    let layers = torque_push_layers(walk, false);
+    let ungated = unpushed_with_layers_unchanged(
+        &s,
+        walk,
+        &layers,
+        "[simplified.push]\nstep_adjustment_delay = 0.0\n",
+    );
+    assert_ne!(
+        ungated.outcome,
+        Outcome::GoalReached,
+        "{}",
+        ungated.render()
+    );
+    assert!(ungated.step_adjustments.0 > 0, "{}", ungated.render());
+}
+
+/// `walk_fast_torque` with every torque push layer (the curve's above and the step offset), unpushed: with
+/// the scenario file's 2 Hz low-pass on the DCM error the QP reads (and its gate on the push estimate) the
+/// step adjustment moves no step and the walk reaches its goal with a DCM error at most the walk alone's
+/// (measured: 3 mm from the goal, 15.1 / 30.8 mm RMS / max against 5 mm and 16.0 / 31.4); with the DCM
+/// error unfiltered its transients move steps (measured: 16 adjustments, 16.4 / 36.7 mm;
+/// docs/push-recovery.md, "The unpushed torque walks with the push layers").
+#[test]
+fn without_pushes_the_fast_torque_walk_with_every_push_layer_adjusts_nothing() {
+    let s = Scratch::new("step_adjustment_fast_push_layers");
+    let walk = "walk_fast_torque.toml";
+    let layers = torque_push_layers(walk, true);
+    let raw = unpushed_with_layers_unchanged(
+        &s,
+        walk,
+        &layers,
+        "[simplified.step_adjustment]\ndcm_error_cutoff = 0.0\n",
+    );
+    assert!(raw.step_adjustments.0 > 0, "{}", raw.render());
+}
+
 /// The official iCub with the push response as well (`configs/walk_straight_icub_step_adjustment_push_response.toml`,
 /// STRIDE_ICUB_MODELS_DIR; without it the test returns early and says so): its robot file gives the step
 /// adjustment the push estimate only once it has stayed above `hold_force` for 0.1 s
