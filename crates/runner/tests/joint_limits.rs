@@ -144,34 +144,41 @@ fn effort_limit_entries_that_cannot_be_applied_are_errors_at_their_line() {
     }
 }
 
-/// 40 N at 135° (backward left) for 1 s at the chest from 5.0 s on the iCub's torque walk with the push
-/// response and the step adjustment (a cell of `configs/sweeps/push_walk_8dir_40n_icub_torque.toml`).
-/// Bounded, the robot falls (measured: torso tilt at 5.22 s, the torso and left shoulder at their
-/// bounds); at the URDF's placeholders the TSID's relaxed fallback commands the torso pitch up to 3500 N·m
-/// and stride-sim stops at 5.2035 s, the base's pitch rate over its 100 rad/s divergence bound.
-#[test]
-fn on_the_icub_the_bounded_upper_body_turns_a_torque_control_divergence_into_a_fall() {
-    let test = "on_the_icub_the_bounded_upper_body_turns_a_torque_control_divergence_into_a_fall";
+/// The cell `direction_deg` from 5.0 s of the iCub scenario `scenario` for the test `test`, bounded and at
+/// the URDF's placeholders ([`bounded_falls_and_placeholders_diverge`]); nothing without the iCub models.
+fn icub_cell(test: &str, scenario: &str, direction_deg: f64, torso_effort: f64) {
     if stride_testkit::icub_models_dir(test).is_none() {
         return;
     }
-    let s = Scratch::new("effort-limits-icub-torque");
-    let layers = &["walk_straight_icub_step_adjustment_push_response_torque.toml"];
-    bounded_falls_and_placeholders_diverge(&s, layers, &push(135.0), 37.0);
+    let s = Scratch::new(test);
+    bounded_falls_and_placeholders_diverge(&s, &[scenario], &push(direction_deg), torso_effort);
+}
+
+/// 40 N at 135° (backward left) for 1 s at the chest from 5.0 s on the iCub's torque walk with the push
+/// response and the step adjustment (a cell of `configs/sweeps/push_walk_8dir_40n_icub_torque.toml`).
+/// Bounded, the robot falls (measured: torso lean at 5.22 s); at the URDF's placeholders the TSID's relaxed fallback commands the torso pitch up to 3500 N·m
+/// and stride-sim stops at 5.2035 s, the base's pitch rate over its 100 rad/s divergence bound.
+#[test]
+fn on_the_icub_the_bounded_upper_body_turns_a_torque_control_divergence_into_a_fall() {
+    icub_cell(
+        "on_the_icub_the_bounded_upper_body_turns_a_torque_control_divergence_into_a_fall",
+        "walk_straight_icub_step_adjustment_push_response_torque.toml",
+        135.0,
+        37.0,
+    );
 }
 
 /// 40 N to the right (270°) from 5.0 s on the iCub's position walk with the push response and the step
 /// adjustment (a cell of `configs/sweeps/push_walk_8dir_40n_icub_step_adjustment.toml`). Bounded, the
-/// walk runs on (measured: at 6 s, 1.56 m from its goal, the torso tilted 18.8°, it falls at 5.68 s in the
-/// 25 s sweep run); at the URDF's placeholders the QP-IK's right shoulder yaw reference jumps by 0.8 rad in
-/// one tick (−398 rad/s) and stride-sim stops at 5.513 s, the joint at −439 rad/s over its 200 rad/s bound.
+/// walk runs on (measured: at 6 s 1.56 m from its goal, the torso tilted 18.8°; the 25 s sweep run falls
+/// at 6.17 s); at the URDF's placeholders the QP-IK's right shoulder yaw reference jumps by 0.8 rad in one
+/// tick (−398 rad/s) and stride-sim stops at 5.513 s, the joint at −439 rad/s over its 200 rad/s bound.
 #[test]
 fn on_the_icub_the_bounded_upper_body_removes_a_position_control_divergence() {
-    let test = "on_the_icub_the_bounded_upper_body_removes_a_position_control_divergence";
-    if stride_testkit::icub_models_dir(test).is_none() {
-        return;
-    }
-    let s = Scratch::new("effort-limits-icub-position");
-    let layers = &["walk_straight_icub_step_adjustment_push_response.toml"];
-    bounded_falls_and_placeholders_diverge(&s, layers, &push(270.0), 50000.0);
+    icub_cell(
+        "on_the_icub_the_bounded_upper_body_removes_a_position_control_divergence",
+        "walk_straight_icub_step_adjustment_push_response.toml",
+        270.0,
+        50000.0,
+    );
 }

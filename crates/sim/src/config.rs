@@ -20,7 +20,7 @@ use crate::error::SimError;
 /// | `contact` | – | rigid floor, the humanoid's two soles | [`ContactConfig`] |
 /// | `actuation` | – | position servos on every joint, 0.1 N·m Coulomb friction, 2-step command delay | [`ActuationConfig`] |
 /// | `passive_joints` | – | none | passive visco-elastic joints, no motor: [`crate::PassiveJointConfig`] list |
-/// | `joint_stops` | – | off | mechanical end stops at the URDF position limits: [`crate::JointStopConfig`] |
+/// | `joint_stops` | – | off | mechanical end stops at the URDF position limits: [`crate::JointStopsConfig`] |
 /// | `sensors` | – | iCub-class encoders, IMU on `imu_frame` and force/torque sensors, 2-step delay | [`SensorConfig`] |
 /// | `pushes` | – | none | [`PushConfig`] list |
 /// | `fall` | – | base below 0.25 m or tilted beyond 1 rad | [`FallConfig`] |
@@ -48,7 +48,7 @@ pub struct SimConfig {
     /// Passive visco-elastic joints `τ = −k q − b q̇`, no motor: their commands are discarded.
     pub passive_joints: Vec<crate::PassiveJointConfig>,
     /// Mechanical end stops at the joints' URDF position limits (off by default).
-    pub joint_stops: crate::JointStopConfig,
+    pub joint_stops: crate::JointStopsConfig,
     /// Sensors and their noise.
     pub sensors: SensorConfig,
     /// Scheduled external wrenches ("pushes").
@@ -72,7 +72,7 @@ impl Default for SimConfig {
             contact: ContactConfig::default(),
             actuation: ActuationConfig::default(),
             passive_joints: Vec::new(),
-            joint_stops: crate::JointStopConfig::default(),
+            joint_stops: crate::JointStopsConfig::default(),
             sensors: SensorConfig::default(),
             pushes: Vec::new(),
             fall: FallConfig::default(),

@@ -57,7 +57,7 @@ pub use robot::SimRobot;
 /// The sensor models of [`SimRobot`] for another plant (stride-mujoco): fill a [`SensorTruth`] each step and
 /// [`SensorModels::record`] returns the delayed [`SensorReading`].
 pub use sensors::{Reading as SensorReading, Sensors as SensorModels, Truth as SensorTruth};
-pub use stops::JointStopConfig;
+pub use stops::JointStopsConfig;
 
 /// What a user of the simulator needs in scope: `use stride_sim::prelude::*;`.
 pub mod prelude {

@@ -23,16 +23,16 @@ use crate::error::SimError;
 /// | `damping` | N·m·s/rad (N·s/m) | 100 | `b` of the stop's damper, ≥ 0 |
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct JointStopConfig {
+pub struct JointStopsConfig {
     /// Stop every joint at its URDF position limits (default `false`: the limits are not enforced).
     pub enabled: bool,
-    /// Stiffness `k` of the stop, N·m/rad (N/m for a prismatic joint); the position servos' order.
+    /// Stiffness `k` of the stop (N/m for a prismatic joint; the position servos' order), N·m/rad.
     pub stiffness: f64,
-    /// Damping `b` of the stop while the joint moves into it, N·m·s/rad (N·s/m).
+    /// Damping `b` of the stop while the joint moves into it (N·s/m for a prismatic joint), N·m·s/rad.
     pub damping: f64,
 }
 
-impl Default for JointStopConfig {
+impl Default for JointStopsConfig {
     fn default() -> Self {
         Self {
             enabled: false,
@@ -42,7 +42,7 @@ impl Default for JointStopConfig {
     }
 }
 
-impl JointStopConfig {
+impl JointStopsConfig {
     /// Checks `k > 0` and `b ≥ 0`, both finite.
     pub(crate) fn validate(&self) -> Result<(), SimError> {
         let bad = |parameter: &str, message: &str| SimError::InvalidConfig {
@@ -71,7 +71,7 @@ pub(crate) struct JointStops {
 
 impl JointStops {
     /// The stops of `model`'s joints under `config`.
-    pub(crate) fn new(model: &Model, config: &JointStopConfig) -> Self {
+    pub(crate) fn new(model: &Model, config: &JointStopsConfig) -> Self {
         Self {
             limits: model.joints().iter().map(|j| (j.lower, j.upper)).collect(),
             stiffness: config.stiffness,

@@ -10,10 +10,7 @@ mod common;
 use std::sync::Arc;
 
 use stride_model::RobotState;
-use stride_sim::{
-    ActuationMode, IntegratorKind, JointActuatorOverride, JointStopConfig, SimConfig, SimInput,
-    SimRobot,
-};
+use stride_sim::{IntegratorKind, JointStopsConfig, SimConfig, SimInput, SimRobot};
 
 /// Torque on the elbow, N·m.
 const TORQUE: f64 = 2.0;
@@ -35,20 +32,10 @@ fn drive_the_elbow(stops: bool) -> Run {
     config.fixed_base = true;
     config.contact.surfaces.clear();
     // the other joints held at 0 by their servos, the elbow driven by torque alone
-    config.actuation.joints.push(JointActuatorOverride {
-        name: "l_elbow".into(),
-        mode: Some(ActuationMode::Torque),
-        kp: None,
-        kd: None,
-        effort_limit: None,
-        damping: None,
-        armature: None,
-        coulomb_friction: None,
-        torque_bandwidth: None,
-    });
-    config.joint_stops = JointStopConfig {
+    config.actuation.joints.push(common::torque_mode("l_elbow"));
+    config.joint_stops = JointStopsConfig {
         enabled: stops,
-        ..JointStopConfig::default()
+        ..JointStopsConfig::default()
     };
     let mut sim = SimRobot::new(Arc::clone(&model), config, common::PERIOD).unwrap();
     let elbow = model.joint_index("l_elbow").unwrap();
@@ -73,7 +60,7 @@ fn drive_the_elbow(stops: bool) -> Run {
 
 #[test]
 fn a_joint_driven_into_its_stop_rests_at_the_limit_and_runs_past_it_without_stops() {
-    let stop = JointStopConfig::default();
+    let stop = JointStopsConfig::default();
     let k = stop.stiffness;
     let run = drive_the_elbow(true);
     // at rest: the spring holds the motor, τ = k d
@@ -116,7 +103,7 @@ fn stop_parameters_out_of_range_are_rejected() {
     ] {
         let mut config = common::ideal_config();
         config.integrator = integrator;
-        config.joint_stops = JointStopConfig {
+        config.joint_stops = JointStopsConfig {
             enabled: true,
             stiffness,
             damping,
