@@ -160,6 +160,17 @@ pub enum ModelError {
         /// What is wrong.
         reason: String,
     },
+    /// An effort or velocity limit set on the model is not positive and finite, or names no joint of the
+    /// model.
+    #[error("joint {joint}: {what} limit {value} is not a positive finite number")]
+    InvalidJointLimit {
+        /// The joint (name, or index when out of range).
+        joint: String,
+        /// `effort` or `velocity`.
+        what: &'static str,
+        /// The rejected limit.
+        value: f64,
+    },
     /// A locked-joint entry that cannot be applied ([`crate::JointLock`]).
     #[error("locked joints: `{pattern}`: {reason}")]
     InvalidLock {

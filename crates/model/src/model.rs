@@ -253,6 +253,55 @@ impl Model {
         Ok(())
     }
 
+    /// Sets the effort limit of joint `index` (N·m, or N for a prismatic joint), e.g. to bound a joint whose
+    /// URDF `effort` is a placeholder. Set it before sharing the model: workspaces built earlier keep the
+    /// limits they copied.
+    ///
+    /// # Errors
+    /// [`ModelError::InvalidJointLimit`] when `index` is not a joint of the model or `limit` is not a
+    /// positive finite number.
+    pub fn set_effort_limit(&mut self, index: usize, limit: f64) -> Result<(), ModelError> {
+        self.joint_for_limit(index, "effort", limit)?.effort_limit = limit;
+        Ok(())
+    }
+
+    /// Sets the velocity limit of joint `index` (rad/s, or m/s for a prismatic joint); as
+    /// [`Model::set_effort_limit`].
+    ///
+    /// # Errors
+    /// As [`Model::set_effort_limit`].
+    pub fn set_velocity_limit(&mut self, index: usize, limit: f64) -> Result<(), ModelError> {
+        self.joint_for_limit(index, "velocity", limit)?
+            .velocity_limit = limit;
+        Ok(())
+    }
+
+    /// Joint `index`, when `limit` is a valid `what` limit for it.
+    fn joint_for_limit(
+        &mut self,
+        index: usize,
+        what: &'static str,
+        limit: f64,
+    ) -> Result<&mut Joint, ModelError> {
+        let count = self.joints.len();
+        let joint = self
+            .joints
+            .get_mut(index)
+            .ok_or_else(|| ModelError::InvalidJointLimit {
+                joint: format!("#{index} (the model has {count} joints)"),
+                what,
+                value: limit,
+            })?;
+        if !(limit.is_finite() && limit > 0.0) {
+            return Err(ModelError::InvalidJointLimit {
+                joint: joint.name.clone(),
+                what,
+                value: limit,
+            });
+        }
+        Ok(joint)
+    }
+
     /// Robot name (`<robot name>`).
     pub fn name(&self) -> &str {
         &self.name

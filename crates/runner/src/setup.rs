@@ -65,7 +65,50 @@ pub fn load_model(scenario: &Scenario) -> Result<Arc<Model>, RunError> {
         .set_gravity(Vector3::new(0.0, 0.0, -g))
         .map_err(load_error)?;
     add_sole_frames(scenario, &mut model)?;
+    apply_joint_limits(scenario, &mut model)?;
     Ok(Arc::new(model))
+}
+
+/// `robot.effort_limits` and `robot.velocity_limits` on `model`: each entry sets the limit of every joint its
+/// name or glob matches (later entries, in name order, win). An entry that matches no joint, or a limit
+/// that is not positive and finite, is a configuration error at its key.
+fn apply_joint_limits(scenario: &Scenario, model: &mut Model) -> Result<(), RunError> {
+    type Setter = fn(&mut Model, usize, f64) -> Result<(), ModelError>;
+    let r = &scenario.config.robot;
+    let tables: [(&str, &std::collections::BTreeMap<String, f64>, Setter); 2] = [
+        (
+            "robot.effort_limits",
+            &r.effort_limits,
+            Model::set_effort_limit,
+        ),
+        (
+            "robot.velocity_limits",
+            &r.velocity_limits,
+            Model::set_velocity_limit,
+        ),
+    ];
+    for (table, entries, set) in tables {
+        for (pattern, limit) in entries {
+            let key = format!("{table}.{pattern}");
+            let matched: Vec<usize> = (0..model.dof())
+                .filter(|&i| stride_model::glob_matches(pattern, &model.joints()[i].name))
+                .collect();
+            if matched.is_empty() {
+                return Err(RunError::Config(scenario.invalid(
+                    &key,
+                    format!(
+                        "`{pattern}` matches no joint of the model; expected a name or glob of: {}",
+                        joint_list(model)
+                    ),
+                )));
+            }
+            for i in matched {
+                set(model, i, *limit)
+                    .map_err(|e| RunError::Config(scenario.invalid(&key, e.to_string())))?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// `robot.locked_joints` as the model's lock list.
@@ -126,6 +169,7 @@ pub fn load_plant_model(scenario: &Scenario, model: &Arc<Model>) -> Result<Arc<M
         .map_err(|e| load_failure(scenario, &scenario.urdf_path, e))?;
     plant.set_gravity(model.gravity()).map_err(load_error)?;
     add_sole_frames(scenario, &mut plant)?;
+    apply_joint_limits(scenario, &mut plant)?;
     check_same_joints(scenario, model, &plant)?;
     Ok(Arc::new(plant))
 }

@@ -20,6 +20,7 @@ use crate::error::SimError;
 /// | `contact` | – | rigid floor, the humanoid's two soles | [`ContactConfig`] |
 /// | `actuation` | – | position servos on every joint, 0.1 N·m Coulomb friction, 2-step command delay | [`ActuationConfig`] |
 /// | `passive_joints` | – | none | passive visco-elastic joints, no motor: [`crate::PassiveJointConfig`] list |
+/// | `joint_stops` | – | off | mechanical end stops at the URDF position limits: [`crate::JointStopsConfig`] |
 /// | `sensors` | – | iCub-class encoders, IMU on `imu_frame` and force/torque sensors, 2-step delay | [`SensorConfig`] |
 /// | `pushes` | – | none | [`PushConfig`] list |
 /// | `fall` | – | base below 0.25 m or tilted beyond 1 rad | [`FallConfig`] |
@@ -46,6 +47,8 @@ pub struct SimConfig {
     pub actuation: ActuationConfig,
     /// Passive visco-elastic joints `τ = −k q − b q̇`, no motor: their commands are discarded.
     pub passive_joints: Vec<crate::PassiveJointConfig>,
+    /// Mechanical end stops at the joints' URDF position limits (off by default).
+    pub joint_stops: crate::JointStopsConfig,
     /// Sensors and their noise.
     pub sensors: SensorConfig,
     /// Scheduled external wrenches ("pushes").
@@ -69,6 +72,7 @@ impl Default for SimConfig {
             contact: ContactConfig::default(),
             actuation: ActuationConfig::default(),
             passive_joints: Vec::new(),
+            joint_stops: crate::JointStopsConfig::default(),
             sensors: SensorConfig::default(),
             pushes: Vec::new(),
             fall: FallConfig::default(),
@@ -871,6 +875,12 @@ impl SimConfig {
         )?;
         self.validate_ground_and_contact()?;
         self.validate_actuation()?;
+        self.joint_stops.validate()?;
+        check(
+            !self.joint_stops.enabled || self.integrator == IntegratorKind::Implicit,
+            "joint_stops.enabled",
+            "needs integrator = \"implicit\" (a stiff stop on a light link is unstable explicitly)",
+        )?;
         self.validate_sensors_and_pushes()?;
         self.validate_fall_and_safety()
     }

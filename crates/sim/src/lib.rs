@@ -38,6 +38,7 @@ mod patches;
 mod push;
 mod robot;
 mod sensors;
+mod stops;
 
 pub use config::{
     ActuationConfig, ActuationMode, ContactConfig, ContactSurfaceConfig, EffortLimitPolicy,
@@ -56,6 +57,7 @@ pub use robot::SimRobot;
 /// The sensor models of [`SimRobot`] for another plant (stride-mujoco): fill a [`SensorTruth`] each step and
 /// [`SensorModels::record`] returns the delayed [`SensorReading`].
 pub use sensors::{Reading as SensorReading, Sensors as SensorModels, Truth as SensorTruth};
+pub use stops::JointStopsConfig;
 
 /// What a user of the simulator needs in scope: `use stride_sim::prelude::*;`.
 pub mod prelude {

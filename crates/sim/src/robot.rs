@@ -25,6 +25,7 @@ use crate::passive::{install_passive_joints, unmeasured_joints};
 use crate::patches::GroundCompliance;
 use crate::push::Push;
 use crate::sensors::{Sensors, Truth};
+use crate::stops::JointStops;
 
 /// The simulated robot: floating-base dynamics of a [`Model`] on compliant ground, joint servos, sensors and
 /// pushes. One [`Block::step`] advances one period (the constructor's `period`); gravity is the model's
@@ -65,6 +66,8 @@ pub struct SimRobot {
     actuators: Vec<Actuator>,
     /// Model indices of the passive joints (`config.passive_joints`): their commands are discarded.
     passive: Vec<usize>,
+    /// The joints' end stops (`config.joint_stops`).
+    stops: JointStops,
     /// Model indices of the passive joints without encoders: their encoder readings are 0.
     unmeasured: Vec<usize>,
     surfaces: Vec<Surface>,
@@ -212,6 +215,7 @@ impl SimRobot {
             compliance: GroundCompliance::from_config(&config.ground, &config.contact),
             actuators,
             passive,
+            stops: JointStops::new(&model, &config.joint_stops),
             unmeasured,
             anchor_backup: vec![None; points.len()],
             surfaces,

@@ -5,9 +5,7 @@ mod common;
 
 use std::sync::Arc;
 
-use stride_sim::{
-    ActuationMode, IntegratorKind, JointActuatorOverride, PushConfig, SimConfig, SimInput, SimRobot,
-};
+use stride_sim::{IntegratorKind, PushConfig, SimConfig, SimInput, SimRobot};
 
 #[global_allocator]
 static ALLOC: stride_testkit::CountingAllocator = stride_testkit::CountingAllocator::new();
@@ -32,17 +30,7 @@ fn stepping_does_not_allocate() {
         }
         // The default, realistic sensors and actuators (quantisation, filters, biases, force/torque sensors,
         // delays, friction), plus a torque-mode joint for the torque lag.
-        config.actuation.joints.push(JointActuatorOverride {
-            name: "r_elbow".into(),
-            mode: Some(ActuationMode::Torque),
-            kp: None,
-            kd: None,
-            effort_limit: None,
-            damping: None,
-            armature: None,
-            coulomb_friction: None,
-            torque_bandwidth: None,
-        });
+        config.actuation.joints.push(common::torque_mode("r_elbow"));
         config.pushes.push(PushConfig {
             frame: "chest".into(),
             start: 0.0,

@@ -146,17 +146,9 @@ fn bad_configurations_are_rejected_with_the_parameter() {
     let err = SimRobot::new(Arc::clone(&model), c, common::PERIOD).unwrap_err();
     assert!(err.to_string().contains("no_such_frame"), "{err}");
     let mut c = common::ideal_config();
-    c.actuation.joints.push(JointActuatorOverride {
-        name: "no_such_joint".into(),
-        mode: Some(ActuationMode::Torque),
-        kp: None,
-        kd: None,
-        effort_limit: None,
-        damping: None,
-        armature: None,
-        coulomb_friction: None,
-        torque_bandwidth: None,
-    });
+    c.actuation
+        .joints
+        .push(common::torque_mode("no_such_joint"));
     assert!(matches!(
         SimRobot::new(Arc::clone(&model), c, common::PERIOD),
         Err(SimError::UnknownJoint { .. })
@@ -393,17 +385,7 @@ fn a_torque_mode_joint_commanded_beyond_its_limit_is_saturated_every_step_with_b
             config.actuation.default.kp = 300.0;
             config.actuation.default.kd = 3.0;
         }
-        config.actuation.joints.push(JointActuatorOverride {
-            name: "l_elbow".into(),
-            mode: Some(ActuationMode::Torque),
-            kp: None,
-            kd: None,
-            effort_limit: None,
-            damping: None,
-            armature: None,
-            coulomb_friction: None,
-            torque_bandwidth: None,
-        });
+        config.actuation.joints.push(common::torque_mode("l_elbow"));
         let model = common::humanoid();
         let q = common::bent_knees(&model, 0.2);
         let mut sim = SimRobot::new(Arc::clone(&model), config, period).unwrap();

@@ -278,6 +278,13 @@ pub struct RobotSection {
     /// simulator use is reduced: each locked joint becomes a fixed joint at its position
     /// (`stride_model::Model::from_urdf_file_reduced`).
     pub locked_joints: BTreeMap<String, f64>,
+    /// Effort limits [N·m or N] by joint name or glob (`*`, `?`), replacing the URDF's `effort` in the model
+    /// every layer and the plant use (the TSID's torque bounds, stride-sim's and MuJoCo's saturation), for
+    /// a URDF whose `effort` is a placeholder (an entry that matches no joint is an error).
+    pub effort_limits: BTreeMap<String, f64>,
+    /// Velocity limits [rad/s or m/s] by joint name or glob, replacing the URDF's `velocity` the same way
+    /// (the QP-IK's and TSID's joint velocity limits).
+    pub velocity_limits: BTreeMap<String, f64>,
 }
 
 impl Default for RobotSection {
@@ -290,6 +297,8 @@ impl Default for RobotSection {
             base_frame: None,
             initial_joint_positions: stride_wbc::bundled_posture(),
             locked_joints: BTreeMap::new(),
+            effort_limits: BTreeMap::new(),
+            velocity_limits: BTreeMap::new(),
         }
     }
 }

@@ -131,7 +131,8 @@ impl SimRobot {
     /// `armature + dt (kd + d + b) + dt² kp` to its diagonal and its torque at the start of the step
     /// `τ_ff + kp (q_ref − q − dt q̇) + kd (q̇_ref − q̇) − (d + b) q̇ + τ_s` to `rhs` (a saturated joint: its
     /// fixed torque, no gains), where the Coulomb friction phase gives either the stick damper `b` or the
-    /// sliding torque `τ_s`; `rhs` also gets the pushes and `−h`.
+    /// sliding torque `τ_s`; a joint at its end stop ([`crate::stops`]) adds the stop's spring-damper the
+    /// same way; `rhs` also gets the pushes and `−h`.
     fn assemble_joints(&mut self, input: &SimInput) {
         let dt = self.dt;
         let nb = 6;
@@ -160,6 +161,10 @@ impl SimRobot {
             system[self.factorization.diagonal_index(i)] +=
                 a.armature + dt * (kd + damping) + dt * dt * kp;
             self.rhs[i] += motor - damping * qd[j] + slide;
+            if let Some((k, b, limit)) = self.stops.active(j, q[j], qd[j], dt) {
+                system[self.factorization.diagonal_index(i)] += dt * b + dt * dt * k;
+                self.rhs[i] += k * (limit - q[j] - dt * qd[j]) - b * qd[j];
+            }
         }
     }
 

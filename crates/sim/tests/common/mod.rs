@@ -6,7 +6,10 @@ use std::time::Duration;
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use stride_model::{KinDyn, Model, RobotState};
-use stride_sim::{ActuationConfig, ContactSurfaceConfig, SensorConfig, SimConfig};
+use stride_sim::{
+    ActuationConfig, ActuationMode, ContactSurfaceConfig, JointActuatorOverride, SensorConfig,
+    SimConfig,
+};
 
 /// The default step period of the tests, 500 µs (2 kHz).
 pub const PERIOD: Duration = Duration::from_micros(500);
@@ -128,4 +131,19 @@ pub fn bent_knees(model: &Model, a: f64) -> DVector<f64> {
         q[model.joint_index(name).expect("joint exists")] = v;
     }
     q
+}
+
+/// The override that puts `joint` in torque mode (every other field the default actuator's).
+pub fn torque_mode(joint: &str) -> JointActuatorOverride {
+    JointActuatorOverride {
+        name: joint.into(),
+        mode: Some(ActuationMode::Torque),
+        kp: None,
+        kd: None,
+        effort_limit: None,
+        damping: None,
+        armature: None,
+        coulomb_friction: None,
+        torque_bandwidth: None,
+    }
 }
