@@ -244,9 +244,10 @@ pub const TSID_LIMIT_LOOK_AHEAD: f64 = 0.05;
 
 /// The walking TSID [Romualdi 2022, eq. 7.2.31]: floating-base dynamics, sole contacts (CoP region
 /// `cop_x` × `cop_y`), feet SE(3) hard (K_p 400, K_d 40), CoM hard ([`BUNDLED_TSID_COM_KP`],
-/// [`BUNDLED_TSID_COM_KD`]; the height [`BUNDLED_TSID_COM_KP_Z`], [`BUNDLED_TSID_COM_KD_Z`]), torso and pelvis SO(3) soft at [`BUNDLED_TSID_UPRIGHT_WEIGHT`] (K_p 100, K_d
-/// 20), posture soft (K_p 100, K_d 20), wrench and torque regularization (1e-4), ZMP (1e-3), torque,
-/// position (look-ahead 0.05 s) and velocity limits.
+/// [`BUNDLED_TSID_COM_KD`]; the height [`BUNDLED_TSID_COM_KP_Z`], [`BUNDLED_TSID_COM_KD_Z`]), torso and
+/// pelvis SO(3) soft at [`BUNDLED_TSID_UPRIGHT_WEIGHT`] (K_p 100, K_d 20), posture soft (K_p 100, K_d 20),
+/// wrench and torque regularization (1e-4), ZMP (1e-3), torque, position (look-ahead 0.05 s) and velocity
+/// limits.
 pub fn walking_tsid(p: &WalkingPreset) -> TsidConfig {
     let f = &p.frames;
     let contact = |name: &str, frame: &str, foot: Foot| {
