@@ -121,6 +121,8 @@ mod tests {
             name: "com".into(),
             kp: 25.0,
             kd: 5.0,
+            kp_z: None,
+            kd_z: None,
             mask: [true; 3],
             priority,
             weight,

@@ -292,6 +292,37 @@ fn preset_tasks_are_overridden_by_name_removed_or_replaced_whole() {
     );
 }
 
+/// The walking preset's CoM task has its own vertical gains for the rigid TSID and the single gain for the
+/// compliant contact model (docs/wbc.md, "The CoM height": the compliant walk fell sooner with them).
+#[test]
+fn the_compliant_tsid_keeps_the_com_tasks_single_gain() {
+    let s = Scratch::new("compliant_com");
+    let model = stride_model::bundled::model().unwrap();
+    let com = |path: &std::path::Path| {
+        let tasks = Scenario::load(path)
+            .unwrap()
+            .tsid_config(&model)
+            .unwrap()
+            .tasks;
+        tasks
+            .into_iter()
+            .find_map(|t| match t {
+                stride_wbc::TaskConfig::Com(c) => Some(c),
+                _ => None,
+            })
+            .unwrap()
+    };
+    let rigid = com(&s.write("rigid.toml", "[goal.stand]\n"));
+    assert_eq!(rigid.kp_z, Some(stride_wbc::BUNDLED_TSID_COM_KP_Z));
+    assert_eq!(rigid.kd_z, Some(stride_wbc::BUNDLED_TSID_COM_KD_Z));
+    let compliant = com(&s.write(
+        "compliant.toml",
+        "[goal.stand]\n[wbc.tsid]\ncontact_model = \"compliant\"\n",
+    ));
+    assert_eq!((compliant.kp_z, compliant.kd_z), (None, None));
+    assert_eq!((compliant.kp, compliant.kd), (rigid.kp, rigid.kd));
+}
+
 #[test]
 fn include_cycles_are_rejected() {
     let s = Scratch::new("cycle");

@@ -59,14 +59,21 @@ fn so3(frame: &str, reference: &str, kp: f64, kd: f64, weight: f64) -> TaskConfi
 
 /// A hard CoM task named `com`.
 pub(crate) fn com(kp: f64, kd: f64) -> TaskConfig {
-    TaskConfig::Com(ComTaskConfig {
+    TaskConfig::Com(com_config(kp, kd))
+}
+
+/// The hard CoM task `com` on every row with gains `kp`, `kd` (the same on the vertical row).
+pub(crate) fn com_config(kp: f64, kd: f64) -> ComTaskConfig {
+    ComTaskConfig {
         name: "com".into(),
         kp,
         kd,
+        kp_z: None,
+        kd_z: None,
         mask: [true; 3],
         priority: Priority::Hard,
         weight: None,
-    })
+    }
 }
 
 fn posture_task(kp: f64, kd: f64, posture: &[(&str, f64)]) -> TaskConfig {

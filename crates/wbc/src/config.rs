@@ -164,9 +164,16 @@ pub struct Frame3TaskConfig {
 /// | `name` | – | required |
 /// | `kp` | 1/s (IK), 1/s² (TSID) | 0 |
 /// | `kd` | 1/s (TSID) | 0 |
+/// | `kp_z` | as `kp` | `kp` | the vertical row's `K_p` |
+/// | `kd_z` | 1/s (TSID) | `kd` | the vertical row's `K_d` |
 /// | `mask` | – | `[true, true, true]` |
 /// | `priority` | – | `soft` |
 /// | `weight` | – | 1 (soft only: an error on a hard task) |
+///
+/// The vertical gains are separate because the horizontal ones are bounded by the simplified layer's
+/// ZMP-CoM loop, which closes through them ([`BUNDLED_TSID_COM_KD`]), and the CoM height is in no such loop:
+/// the walking TSID's `K_p` 25 s⁻² leaves the height 1 mm off per 0.8 N of force the torques do not deliver
+/// (the joints' Coulomb friction, the torque lag at start-up), [`BUNDLED_TSID_COM_KP_Z`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ComTaskConfig {
@@ -178,6 +185,12 @@ pub struct ComTaskConfig {
     /// Derivative gain (TSID).
     #[serde(default)]
     pub kd: f64,
+    /// Proportional gain of the vertical row (`None`: `kp`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kp_z: Option<f64>,
+    /// Derivative gain of the vertical row, TSID (`None`: `kd`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kd_z: Option<f64>,
     /// Rows kept `[x, y, z]`.
     #[serde(default = "default_mask3")]
     pub mask: [bool; 3],
@@ -922,6 +935,19 @@ pub const BUNDLED_TSID_COM_KP: f64 = 25.0;
 /// 50 Hz that saturates at the sole edges (measured: ZMP error 94 mm RMS, 277 QP fallbacks, fall after
 /// 2.8 s when standing). K_d = 5 gives 0.28 standing and 0.41 walking.
 pub const BUNDLED_TSID_COM_KD: f64 = 5.0;
+/// Vertical CoM gain K_p (1/s²) of the default TSID (`kp_z` of its `com` task), with
+/// [`BUNDLED_TSID_COM_KD_Z`]: the torso's, pelvis's and posture's gains, critically damped.
+///
+/// The horizontal gains (25, 5) are bounded by the ZMP-CoM loop ([`BUNDLED_TSID_COM_KD`]); the height is not
+/// in that loop. At `K_p` 25 the CoM task is a vertical spring of `m K_p` ≈ 820 N/m on the bundled robot, and
+/// the force the torques fail to deliver stays in the height: stride-sim's default actuators (0.1 N·m
+/// Coulomb friction per joint, a 30 Hz torque lag from zero at start-up) left the CoM 3–5 mm low while
+/// standing at the start, 2.6 mm high standing at the end and 1 mm low walking. Measured on
+/// `walk_straight_torque` to 1 m (docs/wbc.md, "The CoM height"): the height error 1.76 → 0.69 mm RMS, the
+/// CoM error 2.7 → 2.3 mm.
+pub const BUNDLED_TSID_COM_KP_Z: f64 = 100.0;
+/// Vertical CoM gain K_d (1/s) of the default TSID; see [`BUNDLED_TSID_COM_KP_Z`].
+pub const BUNDLED_TSID_COM_KD_Z: f64 = 20.0;
 
 /// Weight of the bundled humanoid's TSID chest and pelvis (`root_link`) orientation tasks (K_p 100 s⁻², K_d
 /// 20 s⁻¹, soft). Measured in stride-sim on a 4 m walk of 0.22 m steps every 0.5 s: chest alone at weight 10

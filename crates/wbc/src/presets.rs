@@ -15,7 +15,8 @@
 //! let posture = [("left_knee_joint".to_string(), 0.7)].into_iter().collect();
 //! let mut ik = walking_ik(&WalkingPreset::new(frames, posture));
 //! let softer_com = TaskConfig::Com(ComTaskConfig {
-//!     name: "com".into(), kp: 1.0, kd: 0.0, mask: [true; 3], priority: Priority::Hard, weight: None,
+//!     name: "com".into(), kp: 1.0, kd: 0.0, kp_z: None, kd_z: None, mask: [true; 3],
+//!     priority: Priority::Hard, weight: None,
 //! });
 //! with_overrides(&mut ik.tasks, &[softer_com]);
 //! assert_eq!(ik.tasks.len(), 8);
@@ -25,7 +26,7 @@ use std::collections::BTreeMap;
 
 use stride_model::bundled;
 
-use crate::builder::{com, limits};
+use crate::builder::{com, com_config, limits};
 use crate::config::*;
 
 /// The frames a walking preset uses.
@@ -243,9 +244,10 @@ pub const TSID_LIMIT_LOOK_AHEAD: f64 = 0.05;
 
 /// The walking TSID [Romualdi 2022, eq. 7.2.31]: floating-base dynamics, sole contacts (CoP region
 /// `cop_x` × `cop_y`), feet SE(3) hard (K_p 400, K_d 40), CoM hard ([`BUNDLED_TSID_COM_KP`],
-/// [`BUNDLED_TSID_COM_KD`]), torso and pelvis SO(3) soft at [`BUNDLED_TSID_UPRIGHT_WEIGHT`] (K_p 100, K_d
-/// 20), posture soft (K_p 100, K_d 20), wrench and torque regularization (1e-4), ZMP (1e-3), torque,
-/// position (look-ahead 0.05 s) and velocity limits.
+/// [`BUNDLED_TSID_COM_KD`]; the height [`BUNDLED_TSID_COM_KP_Z`], [`BUNDLED_TSID_COM_KD_Z`]), torso and
+/// pelvis SO(3) soft at [`BUNDLED_TSID_UPRIGHT_WEIGHT`] (K_p 100, K_d 20), posture soft (K_p 100, K_d 20),
+/// wrench and torque regularization (1e-4), ZMP (1e-3), torque, position (look-ahead 0.05 s) and velocity
+/// limits.
 pub fn walking_tsid(p: &WalkingPreset) -> TsidConfig {
     let f = &p.frames;
     let contact = |name: &str, frame: &str, foot: Foot| {
@@ -287,7 +289,11 @@ pub fn walking_tsid(p: &WalkingPreset) -> TsidConfig {
                 foot_kp,
                 TSID_FOOT_KD,
             ),
-            com(BUNDLED_TSID_COM_KP, BUNDLED_TSID_COM_KD),
+            TaskConfig::Com(ComTaskConfig {
+                kp_z: Some(BUNDLED_TSID_COM_KP_Z),
+                kd_z: Some(BUNDLED_TSID_COM_KD_Z),
+                ..com_config(BUNDLED_TSID_COM_KP, BUNDLED_TSID_COM_KD)
+            }),
             upright_task(p, "torso", &f.torso, TSID_UPRIGHT_GAINS, w),
             upright_task(p, "pelvis", &f.base, TSID_UPRIGHT_GAINS, w),
             posture_task(p, TSID_UPRIGHT_GAINS[0], TSID_UPRIGHT_GAINS[1]),

@@ -221,8 +221,18 @@ fn the_rows_of_the_compliant_qp_are_their_definitions() {
         );
         // CoM (hard): Σ ḟ = k_h (m ẍ* − m g − Σ f) with ẍ* = K_d (0 − ẋ) + K_p (x* − x)
         let m = model.total_mass();
-        let acc = stride_wbc::BUNDLED_TSID_COM_KD * (-kd.com_velocity())
-            + stride_wbc::BUNDLED_TSID_COM_KP * (input.com_position - kd.com_position());
+        // (the preset's vertical row has its own gains, `kp_z`, `kd_z`)
+        let gains = |xy: f64, z: f64| Vector3::new(xy, xy, z);
+        let acc = gains(
+            stride_wbc::BUNDLED_TSID_COM_KD,
+            stride_wbc::BUNDLED_TSID_COM_KD_Z,
+        )
+        .component_mul(&(-kd.com_velocity()))
+            + gains(
+                stride_wbc::BUNDLED_TSID_COM_KP,
+                stride_wbc::BUNDLED_TSID_COM_KP_Z,
+            )
+            .component_mul(&(input.com_position - kd.com_position()));
         let total: Vector3<f64> = (0..2)
             .map(|k| measured[k].fixed_rows::<3>(0).into_owned())
             .sum();

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use stride_model::{glob_matches, Model};
 use stride_wbc::presets::{walking_ik, walking_tsid, with_overrides, WalkingFrames, WalkingPreset};
-use stride_wbc::{IkConfig, ReferenceOffset, TaskConfig, TsidConfig};
+use stride_wbc::{ContactModel, IkConfig, ReferenceOffset, TaskConfig, TsidConfig};
 
 use super::{RobotSection, Scenario};
 use crate::config::ConfigError;
@@ -183,7 +183,18 @@ impl Scenario {
         if c.wbc.preset == WbcPreset::None {
             return Ok(written.clone());
         }
-        let preset = walking_tsid(&walking_preset(&c.robot, &c.wbc.walking, model));
+        let mut preset = walking_tsid(&walking_preset(&c.robot, &c.wbc.walking, model));
+        if written.contact_model == ContactModel::Compliant {
+            // The compliant QP keeps the CoM's single gain on the vertical row: with the rigid TSID's 100 / 20
+            // `walk_soft_ground_compliant_torque` falls after 0.40 m instead of 0.83 m (docs/wbc.md, "The CoM
+            // height").
+            for t in &mut preset.tasks {
+                if let TaskConfig::Com(com) = t {
+                    com.kp_z = None;
+                    com.kd_z = None;
+                }
+            }
+        }
         let tasks = self.overridden(preset.tasks, &written.tasks, "tsid")?;
         Ok(TsidConfig {
             tasks,
