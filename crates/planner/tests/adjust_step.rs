@@ -615,7 +615,10 @@ fn a_closing_step_adjusted_sideways_closes_the_walk_in_place() {
         let l = plan.contacts(Foot::Left).contacts.last().unwrap().pose;
         let r = plan.contacts(Foot::Right).contacts.last().unwrap().pose;
         let mid = (l.translation.vector + r.translation.vector) * 0.5;
-        let heading = Pose2::from_isometry(&l).yaw.abs().max(Pose2::from_isometry(&r).yaw.abs());
+        let heading = Pose2::from_isometry(&l)
+            .yaw
+            .abs()
+            .max(Pose2::from_isometry(&r).yaw.abs());
         let most_turned = [Foot::Left, Foot::Right]
             .iter()
             .flat_map(|&f| plan.contacts(f).contacts.iter())
@@ -628,8 +631,14 @@ fn a_closing_step_adjusted_sideways_closes_the_walk_in_place() {
     let (steps, mid, heading, turned) = run(PlannerConfig::default().arrival_tolerance);
     assert_eq!(steps, 1, "one closing step after the adjusted one");
     assert!((mid.xy() - Vector2::new(2.0, 0.0)).norm() < 0.05, "{mid:?}");
-    assert!(heading < 1e-9 && turned < 1e-9, "heading {heading}, turned {turned}");
+    assert!(
+        heading < 1e-9 && turned < 1e-9,
+        "heading {heading}, turned {turned}"
+    );
     let (steps, _, _, turned) = run(0.0);
     assert!(steps > 1, "without the tolerance: {steps} steps");
-    assert!(turned > 0.2, "without the tolerance the replan turns: {turned} rad");
+    assert!(
+        turned > 0.2,
+        "without the tolerance the replan turns: {turned} rad"
+    );
 }
