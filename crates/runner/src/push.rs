@@ -189,9 +189,12 @@ impl PushResponse {
     }
 
     /// The stance CoP the step-adjustment QP predicts the DCM with: the planned one moved by the push's
-    /// LIPM offset, `p − F̂/(m ω²)` (unchanged when `step_adjustment` is off, and with a positive
-    /// `step_adjustment_delay` until the estimate has stayed above `hold_force` that long: the
-    /// observer's pulses of a touch-down or of a stance foot's roll last less, docs/push-recovery.md).
+    /// LIPM offset, `p − F̂/(m ω²)` (unchanged when `step_adjustment` is off, while the estimate is not
+    /// above `hold_force`, and with a positive `step_adjustment_delay` until it has stayed above that
+    /// long: the observer's pulses of a touch-down or of a stance foot's roll last less,
+    /// docs/push-recovery.md). Below `hold_force`: the unpushed fast walk's 3–6 N pulses at each
+    /// lift-off, about 8 mm of CoP amplified ×15 early in the swing, moved its steps by 2–13 cm and
+    /// back (docs/push-recovery.md, "Without pushes nothing gets worse").
     pub fn effective_cop(&self, planned: Vector2<f64>, omega: f64) -> Vector2<f64> {
         if !self.seen_by_step_adjustment(omega) {
             return planned;
@@ -212,11 +215,11 @@ impl PushResponse {
             .then(|| dcm + push_zmp_offset(&self.estimate, self.mass, omega) * c.replan_push_offset)
     }
 
-    /// Whether the step-adjustment QP reads the estimate this tick: `step_adjustment` on, and with a
-    /// positive `step_adjustment_delay` once the estimate has stayed above `hold_force` that long.
+    /// Whether the step-adjustment QP reads the estimate this tick: `step_adjustment` on, the estimate
+    /// above `hold_force`, and with a positive `step_adjustment_delay` once it has stayed above that long.
     fn seen_by_step_adjustment(&self, omega: f64) -> bool {
         let delay = self.config.step_adjustment_delay;
-        let gated = delay > 0.0 && self.pushed_for < delay - 1e-9;
+        let gated = self.pushed_for <= 0.0 || self.pushed_for < delay - 1e-9;
         self.config.step_adjustment && omega > 0.0 && !gated
     }
 
@@ -601,6 +604,8 @@ mod tests {
     fn the_step_adjustment_sees_the_push_as_a_cop_moved_against_it() {
         let mut r = response(PushConfig::default());
         r.estimate = Vector2::new(0.0, 20.0);
+        // above `hold_force` for one tick
+        r.pushed_for = 0.002;
         let omega = (9.81f64 / 0.5).sqrt();
         let cop = r.effective_cop(Vector2::new(1.0, 0.1), omega);
         // F/(m ω²) = 20 · 0.5 / (30 · 9.81)
@@ -611,6 +616,7 @@ mod tests {
             ..PushConfig::default()
         });
         off.estimate = r.estimate;
+        off.pushed_for = r.pushed_for;
         assert_eq!(
             off.effective_cop(Vector2::new(1.0, 0.1), omega),
             Vector2::new(1.0, 0.1)
@@ -706,5 +712,29 @@ mod tests {
         assert!(shifts(0.0, Vector2::new(0.0, 20.0), 1)
             .iter()
             .all(|s| (s - whole).norm() < 1e-15));
+    }
+
+    /// An estimate not above `hold_force` (8 N) leaves the QP's CoP the planned one: the unpushed fast
+    /// walk's 3–6 N pulses at each lift-off moved its steps by 2–13 cm and back (docs/push-recovery.md,
+    /// "Without pushes nothing gets worse"); 8.5 N moves it at the first tick.
+    #[test]
+    fn an_estimate_not_above_the_hold_force_leaves_the_planned_cop() {
+        let planned = Vector2::new(1.0, 0.1);
+        let omega = (9.81f64 / 0.5).sqrt();
+        let mut clock = PlanClock::new(0.1);
+        let ss = sample(PhaseKind::SingleSupport {
+            stance: stride_planner::Foot::Left,
+        });
+        let cop = |force: f64, clock: &mut PlanClock| {
+            let mut r = response(PushConfig::default());
+            r.estimate = Vector2::new(force, 0.0);
+            r.decide(0.002, &ss, true, false, clock);
+            r.effective_cop(planned, omega)
+        };
+        for force in [0.0, 5.0, -6.0, 8.0] {
+            assert_eq!(cop(force, &mut clock), planned, "{force} N");
+        }
+        let moved = planned - push_zmp_offset(&Vector2::new(8.5, 0.0), 30.0, omega);
+        assert!((cop(8.5, &mut clock) - moved).norm() < 1e-15);
     }
 }

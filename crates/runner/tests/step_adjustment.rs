@@ -421,3 +421,38 @@ fn on_the_icub_the_planner_takes_the_adjusted_steps_at_the_robots_own_width() {
     }
     assert!(adjusted_footsteps(&s.path("nominal.mcap")).len() as u64 == nominal.step_adjustments.0);
 }
+
+/// `configs/walk_fast.toml` with the push response, its hold at once and the step adjustment, unpushed:
+/// the steps adjusted round the goal close the walk where they land (the planner's `arrival_tolerance`), so
+/// it stops at its goal facing ahead. With the tolerance 0 (the planner before 2026-12-07) each adjusted
+/// closing step replanned a turn towards the goal's position and one more step: 20 s later the walk was
+/// still stepping round the goal (measured: at 45 s, 110 adjustments, heading −101°; docs/push-recovery.md,
+/// "Without pushes nothing gets worse").
+#[test]
+fn the_fast_walk_with_the_push_layers_and_the_step_adjustment_stops_at_its_goal() {
+    let s = Scratch::new("step_adjustment_fast_closing");
+    let layers = [
+        "walk_fast.toml",
+        "layers/push_response.toml",
+        "layers/push_hold_at_once.toml",
+        "layers/step_adjustment.toml",
+    ];
+    let duration = "[scenario]\nduration = 20.0\n";
+    let on = run_configs(&s, "on", &layers, duration);
+    assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
+    assert!(on.simulated_time < 16.0, "{}", on.render());
+    assert!(on.goal_distance.unwrap() < 0.05, "{}", on.render());
+    assert!(
+        on.goal_heading_error_deg.unwrap().abs() < 1.0,
+        "{}",
+        on.render()
+    );
+    let before = format!("{duration}[planner]\narrival_tolerance = 0.0\n");
+    let off = run_configs(&s, "before", &layers, &before);
+    assert_eq!(off.outcome, Outcome::DurationReached, "{}", off.render());
+    assert!(
+        off.step_adjustments.0 > on.step_adjustments.0,
+        "{}",
+        off.render()
+    );
+}
