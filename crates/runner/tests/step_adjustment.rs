@@ -144,21 +144,13 @@ fn on_the_icub_the_filtered_dcm_error_leaves_the_unpushed_walk_alone_and_unfilte
         return;
     }
     let s = Scratch::new("step_adjustment_icub");
-    let run = |name: &str, layers: &[&str], extra: &str| run_configs(&s, name, layers, extra);
-    let adjusting = ["walk_straight_icub.toml", "layers/step_adjustment.toml"];
-    let off = run("off", &["walk_straight_icub.toml"], "");
-    let on = run("on", &adjusting, "");
-    let raw = run(
-        "raw",
-        &adjusting,
+    let walk = "walk_straight_icub.toml";
+    let raw = unpushed_with_layers_unchanged(
+        &s,
+        walk,
+        &[walk, "layers/step_adjustment.toml"],
         "[simplified.step_adjustment]\ndcm_error_cutoff = 0.0\n",
     );
-    assert_eq!(off.outcome, Outcome::GoalReached, "{}", off.render());
-    assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
-    assert!(adjusted_footsteps(&s.path("on.mcap")).is_empty());
-    assert_eq!(on.step_adjustments, (0, 0));
-    assert!(on.dcm_error.rms <= off.dcm_error.rms && on.dcm_error.max <= off.dcm_error.max);
-    assert!(on.goal_distance.unwrap() <= off.goal_distance.unwrap());
     assert!(
         matches!(raw.outcome, Outcome::Fell { .. }),
         "{}",
