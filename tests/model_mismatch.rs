@@ -74,8 +74,9 @@ fn position_control_mass_limit() {
 
 #[test]
 fn torque_control_mass_limit() {
-    assert_walks("walk_straight_torque.toml", Mismatch::MassScale(1.2));
-    assert_falls("walk_straight_torque.toml", Mismatch::MassScale(1.25));
+    // 1.2 / 1.25 before the CoM task's own vertical gains of 2026-12-07 (docs/estimation.md).
+    assert_walks("walk_straight_torque.toml", Mismatch::MassScale(1.35));
+    assert_falls("walk_straight_torque.toml", Mismatch::MassScale(1.4));
 }
 
 #[test]

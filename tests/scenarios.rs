@@ -384,8 +384,9 @@ fn icub_walks_two_metres_in_torque_control() {
 /// its 4 m goal (measured 2026-12-06 on the hard default floor, the sole frames on the sole boxes' bottom:
 /// 0.352 m/s steady in position (sensor seeds 0–7: ≥ 0.3456), 0.263 m/s in torque control; the position walk
 /// 0.346 m/s on MuJoCo, tests/mujoco.rs), and each fails a few centimetres of step further (position:
-/// `feet_distance_max` 0.27 m, falls at 9.4 s, 0.77 m from its goal; torque: 0.22 m, the simulator stops on
-/// the diverging robot after 3.99 m, its torso tilted 19.8°).
+/// `feet_distance_max` 0.28 m, falls at 7.43 s, 1.53 m from its goal (0.27 m fell at 9.4 s before the merges of
+/// 2026-12-07, the iCub's upper-body velocity bounds among them, and now reaches its goal 5 cm off); torque:
+/// 0.22 m, the simulator stops on the diverging robot after 3.99 m, its torso tilted 19.8°).
 #[test]
 fn icub_walks_fast_to_its_goal_in_both_modes() {
     let test = "icub_walks_fast_to_its_goal_in_both_modes";
@@ -393,7 +394,7 @@ fn icub_walks_fast_to_its_goal_in_both_modes() {
         return;
     }
     for (name, min_speed, too_long) in [
-        ("walk_fast_icub.toml", 0.34, 0.27),
+        ("walk_fast_icub.toml", 0.34, 0.28),
         ("walk_fast_icub_torque.toml", 0.25, 0.22),
     ] {
         let s = run(name);

@@ -633,6 +633,7 @@ mod tests {
                 ..PushConfig::default()
             });
             r.estimate = Vector2::new(40.0, -20.0);
+            r.pushed_for = 0.002; // one tick above `hold_force`: the QP reads the estimate
             r.step_offset_shift(omega)
         };
         // −F/(m ω²) = −(40, −20) · 0.5 / (30 · 9.81), half of it with 0.5

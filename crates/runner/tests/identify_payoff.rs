@@ -191,8 +191,10 @@ fn the_identified_urdf_walks_better_than_the_prior_and_within_ten_percent_of_the
 
 /// Torque control: with the rotational inertias pulled towards the prior's (the default
 /// `inertia_prior_weight` 1, masses and first moments at `prior_weight` 1e-4) the identified URDF tracks
-/// the plant's DCM within 10 % of the plant's URDF and cuts the prior's plant CoM error (a 32.8 mm offset:
-/// TSID's model is 3.3 kg light, the CoM task sags) at least fourfold; TSID tracks its own CoM within 10 %
+/// the plant's DCM within 10 % of the plant's URDF and closes at least 90 % of the gap between the prior's
+/// plant CoM error and the plant URDF's (TSID's model is 3.3 kg light and the CoM task sags: 32.8 mm RMS
+/// with the CoM task's single gain, 9.3 mm since its own vertical gains of 2026-12-07, identified 2.5,
+/// plant 2.2 mm: 96 % closed; the former "at least fourfold" held only on the 32.8 mm sag); TSID tracks its own CoM within 10 %
 /// of the plant URDF's (the controllers' view; the plant's CoM error is 12.6 % above the plant URDF's
 /// over seeds 0–5, 2.95 against 2.62 mm: the identified CoM is a little off). The prior's plant DCM RMS is not above the identified or the plant
 /// URDF's in this scenario (6.37 against 6.47 and 6.43 mm over seeds 0–5: a light TSID model tracks the
@@ -221,10 +223,11 @@ fn in_torque_control_the_identified_urdf_walks_like_the_plant() {
         plant.controllers_com
     );
     assert!(
-        identified.com < 0.25 * prior.com,
-        "plant CoM RMS: identified {} vs prior {}",
+        prior.com - identified.com >= 0.9 * (prior.com - plant.com),
+        "plant CoM RMS: identified {} vs prior {} and plant {}",
         identified.com,
-        prior.com
+        prior.com,
+        plant.com
     );
 
     // The controllers on the plant's exact state (the estimation layer bypassed; deterministic, one
