@@ -301,7 +301,9 @@ fn unpushed_with_layers_unchanged(
 /// DCM 9.1 / 23.2 mm RMS / max against 9 mm and 9.3 / 24.3). Ungated, the observer's one-tick pulses (9 N
 /// after the dead zone) move touch-downs by up to 7 cm and back the next tick: 153 adjustments, the walk
 /// ends its 30 s 5 cm from the goal turned by −81° (docs/push-recovery.md, "The unpushed torque walks with
-/// the push layers").
+/// the push layers"). Since the planner's `arrival_tolerance` it steps round the goal instead (measured
+/// 2026-12-07: 86 adjustments, still stepping at 30 s), and with the closing step kept
+/// (`closing_dcm_margin`) it stops there at 29.6 s after 82 adjustments, 14 s after the gated walk.
 #[test]
 fn without_pushes_the_torque_curve_with_the_push_layers_and_the_gated_estimate_reaches_its_goal() {
     let s = Scratch::new("step_adjustment_curve_push_layers");
@@ -313,9 +315,8 @@ fn without_pushes_the_torque_curve_with_the_push_layers_and_the_gated_estimate_r
         &layers,
         "[simplified.push]\nstep_adjustment_delay = 0.0\n",
     );
-    assert_ne!(
-        ungated.outcome,
-        Outcome::GoalReached,
+    assert!(
+        ungated.outcome != Outcome::GoalReached || ungated.simulated_time > 25.0,
         "{}",
         ungated.render()
     );
