@@ -6,16 +6,20 @@
 //! the measured DCM, the stance foot, the planned single-support ZMP (held until touch-down), the nominal
 //! touch-down `u_n`, the nominal offset `b_n = ξ_plan(T_n) − u_n`, the time since the stance foot touched
 //! down and the nominal step duration. Its touch-down and time go to [`stride_planner::Planner::adjust_step`]
-//! when they differ from the planned ones by more than `deadband` / `time_deadband`.
+//! when they differ from the planned ones by more than `deadband` / `time_deadband`. The plan's last
+//! step is kept while the ankle can absorb the DCM error (`closing_dcm_margin`).
 
 use std::time::Duration;
 
 use nalgebra::Vector2;
 use serde::Serialize;
 use stride_block::seconds;
-use stride_planner::{Foot, Plan, PlanSample, StepAdjustmentRequest};
+use stride_planner::{CurrentStep, Foot, Plan, PlanSample, StepAdjustmentRequest};
 use stride_qp::QpStatus;
-use stride_simplified::{StepAdjuster, StepAdjustment, StepAdjustmentInput, StepAdjustmentStatus};
+use stride_simplified::{
+    feet_support_polygon, FootRectangle, StepAdjuster, StepAdjustment, StepAdjustmentInput,
+    StepAdjustmentStatus,
+};
 
 /// The step in progress: its nominal and what the plan currently has.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,6 +91,24 @@ impl StepTracker {
         // frozen near touch-down: the planner would refuse, and the QP's remaining-time bound would ask
         // for a later touch-down than planned
         if tracked.land - t < adjuster.config().min_remaining_time {
+            return None;
+        }
+        let c = adjuster.config();
+        let cop_box = Vector2::new(c.cop_x, c.cop_y);
+        let closing = ClosingStep {
+            target: tracked.target,
+            land: tracked.land,
+            margin: c.closing_dcm_margin,
+        };
+        if closing_step_holds(
+            plan,
+            &step,
+            &closing,
+            dcm,
+            (&stance_cop, cop_box),
+            sample.omega,
+            t,
+        ) {
             return None;
         }
         let input = StepAdjustmentInput {
@@ -174,6 +196,72 @@ impl StepTracker {
     }
 }
 
+/// The step in progress as the plan has it now, and the depth the closing-step rule asks for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ClosingStep {
+    /// Planned touch-down position \[m\].
+    pub target: Vector2<f64>,
+    /// Planned touch-down time \[s\].
+    pub land: f64,
+    /// `closing_dcm_margin` \[m\]; 0: the rule is off.
+    pub margin: f64,
+}
+
+/// Whether the step in progress is the plan's last and the ankle can still absorb the DCM error: the
+/// DCM predicted at its touch-down from the stance CoP, `p + (ξ − p) e^{ω(T−t)}`, moved by what the CoP
+/// box `p ± cop_box` (stance frame) can shift it by over the remaining time, `cop_box (e^{ω(T−t)} − 1)`,
+/// towards the middle of the final double support, ends at least `margin` inside the hull of the stance
+/// sole and the planned landed sole. Then the step is not adjusted (a closing step moved for an error
+/// the ankle takes costs CoM and feet tracking with no gain, docs/push-recovery.md). `margin` 0: never.
+pub(crate) fn closing_step_holds(
+    plan: &Plan,
+    step: &CurrentStep<'_>,
+    closing: &ClosingStep,
+    dcm: &Vector2<f64>,
+    (stance_cop, cop_box): (&Vector2<f64>, Vector2<f64>),
+    omega: f64,
+    t: f64,
+) -> bool {
+    if closing.margin <= 0.0 {
+        return false;
+    }
+    let later = |foot: Foot| {
+        plan.swings(foot)
+            .last()
+            .is_some_and(|s| s.lift_time > step.swing.lift_time)
+    };
+    if later(step.stance) || later(step.stance.other()) {
+        return false;
+    }
+    let mut landed = step.swing.end;
+    landed.translation.vector.x = closing.target.x;
+    landed.translation.vector.y = closing.target.y;
+    let soles = [
+        FootRectangle::centred(&step.stance_pose, plan.foot_length, plan.foot_width),
+        FootRectangle::centred(&landed, plan.foot_length, plan.foot_width),
+    ];
+    let Ok(hull) = feet_support_polygon(&soles) else {
+        return false;
+    };
+    let growth = (omega * (closing.land - t).max(0.0)).exp();
+    let predicted = stance_cop + (dcm - stance_cop) * growth;
+    let mid = (step.stance_pose.translation.vector.xy() + closing.target) * 0.5;
+    let (sin, cos) = step.stance_pose.rotation.euler_angles().2.sin_cos();
+    let to_mid = mid - predicted;
+    let local = Vector2::new(
+        cos * to_mid.x + sin * to_mid.y,
+        -sin * to_mid.x + cos * to_mid.y,
+    );
+    let reach = cop_box * (growth - 1.0);
+    let moved = Vector2::new(
+        local.x.clamp(-reach.x, reach.x),
+        local.y.clamp(-reach.y, reach.y),
+    );
+    let nearest =
+        predicted + Vector2::new(cos * moved.x - sin * moved.y, sin * moved.x + cos * moved.y);
+    hull.max_violation(nearest) <= -closing.margin
+}
+
 /// `/planner/adjusted_footsteps`: one footstep adjustment applied to the plan (world frame, SI units).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
 pub struct AdjustedFootstepMsg {
@@ -239,5 +327,67 @@ mod tests {
         assert!((lasting - jump).norm() < 1e-4, "{lasting:?}");
         let raw = planned + Vector2::new(0.0123, -0.0456);
         assert_eq!(tracker.filtered_dcm(0.0, &raw, planned, at(661)), raw);
+    }
+
+    /// A plan from standing at the origin to (0.6, 0) with the planner's defaults, and the middle of its
+    /// `n`-th single support counted from the end (0: the last) as plan time.
+    fn short_walk(from_end: usize) -> (Plan, f64) {
+        use stride_planner::{Goal, PhaseKind, Planner, PlannerConfig};
+        let cfg = PlannerConfig::default();
+        let sole = |y: f64| nalgebra::Isometry3::translation(0.0, y, 0.0);
+        let h = 0.5 * cfg.nominal_width;
+        let mut planner = Planner::new(cfg, 9.81).unwrap();
+        let goal = Goal::Pose {
+            x: 0.6,
+            y: 0.0,
+            yaw: 0.0,
+        };
+        planner
+            .start(Duration::ZERO, &sole(h), &sole(-h), &goal)
+            .unwrap();
+        let plan = planner.plan().unwrap().clone();
+        let phase = plan
+            .phases
+            .iter()
+            .rev()
+            .filter(|ph| matches!(ph.kind, PhaseKind::SingleSupport { .. }))
+            .nth(from_end)
+            .copied()
+            .unwrap();
+        (plan, 0.5 * (phase.start + phase.end))
+    }
+
+    /// The closing step is kept on the planned DCM and on a 1 cm error the ankle absorbs; it is left to
+    /// the QP on a 12 cm lateral error the CoP box cannot bring back into the final double support, on
+    /// any step but the last, and with `closing_dcm_margin` 0.
+    #[test]
+    fn the_closing_step_is_kept_while_the_ankle_absorbs_the_dcm_error() {
+        let config = stride_simplified::StepAdjustmentConfig::default();
+        assert_eq!(config.closing_dcm_margin, 0.02);
+        let cop_box = Vector2::new(config.cop_x, config.cop_y);
+        let holds = |from_end: usize, error: Vector2<f64>, margin: f64| {
+            let (plan, t) = short_walk(from_end);
+            let mut s = PlanSample::default();
+            plan.sample(t, &mut s);
+            let step = plan.current_step(t).unwrap();
+            let closing = ClosingStep {
+                target: step.swing.end.translation.vector.xy(),
+                land: step.swing.land_time,
+                margin,
+            };
+            let cop = s.zmp.xy();
+            let dcm = s.dcm_position.xy() + error;
+            closing_step_holds(&plan, &step, &closing, &dcm, (&cop, cop_box), s.omega, t)
+        };
+        let margin = config.closing_dcm_margin;
+        assert!(holds(0, Vector2::zeros(), margin));
+        assert!(holds(0, Vector2::new(0.01, 0.0), margin));
+        assert!(holds(0, Vector2::new(0.0, -0.01), margin));
+        for outward in [0.12, -0.12] {
+            assert!(!holds(0, Vector2::new(0.0, outward), margin), "{outward}");
+        }
+        assert!(!holds(0, Vector2::new(0.25, 0.0), margin));
+        assert!(!holds(1, Vector2::zeros(), margin));
+        assert!(!holds(0, Vector2::zeros(), 0.0));
     }
 }

@@ -11,6 +11,8 @@
 //! With the push response as well, the iCub robot file's gate on the push estimate
 //! (`step_adjustment_delay`) leaves the unpushed walk as the push response alone walks it, ungated it misses
 //! its goal; the planner takes the adjusted steps of a push at the robot's own `min_width`.
+//! On the fast upright walk the closing step is kept while the ankle absorbs the DCM error
+//! (`closing_dcm_margin`): it tracks as the walk alone; with the rule off it is moved and tracks worse.
 mod common;
 
 use common::{adjusted_footsteps, log_options as options, Scratch};
@@ -291,7 +293,9 @@ fn unpushed_with_layers_unchanged(
 /// DCM 9.1 / 23.2 mm RMS / max against 9 mm and 9.3 / 24.3). Ungated, the observer's one-tick pulses (9 N
 /// after the dead zone) move touch-downs by up to 7 cm and back the next tick: 153 adjustments, the walk
 /// ends its 30 s 5 cm from the goal turned by −81° (docs/push-recovery.md, "The unpushed torque walks with
-/// the push layers").
+/// the push layers"). Since the planner's `arrival_tolerance` it steps round the goal instead (measured
+/// 2026-12-07: 86 adjustments, still stepping at 30 s), and with the closing step kept
+/// (`closing_dcm_margin`) it stops there at 29.6 s after 82 adjustments, 14 s after the gated walk.
 #[test]
 fn without_pushes_the_torque_curve_with_the_push_layers_and_the_gated_estimate_reaches_its_goal() {
     let s = Scratch::new("step_adjustment_curve_push_layers");
@@ -303,9 +307,8 @@ fn without_pushes_the_torque_curve_with_the_push_layers_and_the_gated_estimate_r
         &layers,
         "[simplified.push]\nstep_adjustment_delay = 0.0\n",
     );
-    assert_ne!(
-        ungated.outcome,
-        Outcome::GoalReached,
+    assert!(
+        ungated.outcome != Outcome::GoalReached || ungated.simulated_time > 25.0,
         "{}",
         ungated.render()
     );
@@ -444,6 +447,37 @@ fn the_fast_walk_with_the_push_layers_and_the_step_adjustment_stops_at_its_goal(
     assert_eq!(off.outcome, Outcome::DurationReached, "{}", off.render());
     assert!(
         off.step_adjustments.0 > on.step_adjustments.0,
+        "{}",
+        off.render()
+    );
+}
+
+/// `configs/walk_fast_upright.toml` with the step adjustment, unpushed: the plan's last step is kept
+/// while the ankle can bring the predicted DCM 2 cm inside the final double support
+/// (`closing_dcm_margin`), so the walk adjusts nothing and tracks as the walk alone does. With the rule
+/// off (0) the closing steps are moved for an error the ankle takes, and the CoM tracking is worse
+/// (measured: 2 adjustments, CoM RMS 9.5 against 8.5 mm; docs/push-recovery.md, "Without pushes nothing
+/// gets worse").
+#[test]
+fn the_fast_upright_walk_keeps_its_closing_step_while_the_ankle_absorbs_the_dcm_error() {
+    let s = Scratch::new("step_adjustment_closing_margin");
+    let walk = ["walk_fast_upright.toml"];
+    let layers = ["walk_fast_upright.toml", "layers/step_adjustment.toml"];
+    let duration = "[scenario]\nduration = 18.0\n";
+    let alone = run_configs(&s, "alone", &walk, duration);
+    let on = run_configs(&s, "on", &layers, duration);
+    assert_eq!(alone.outcome, Outcome::GoalReached, "{}", alone.render());
+    assert_eq!(on.outcome, Outcome::GoalReached, "{}", on.render());
+    assert_eq!(on.step_adjustments, (0, 0), "{}", on.render());
+    assert!(adjusted_footsteps(&s.path("on.mcap")).is_empty());
+    assert!(on.com_error.rms <= alone.com_error.rms, "{}", on.render());
+    assert!(on.feet_error.rms <= alone.feet_error.rms, "{}", on.render());
+    assert!(on.dcm_error.rms <= alone.dcm_error.rms, "{}", on.render());
+    let rule_off = format!("{duration}[simplified.step_adjustment]\nclosing_dcm_margin = 0.0\n");
+    let off = run_configs(&s, "off", &layers, &rule_off);
+    assert!(off.step_adjustments.0 > 0, "{}", off.render());
+    assert!(
+        off.com_error.rms > alone.com_error.rms + 5e-4,
         "{}",
         off.render()
     );

@@ -97,6 +97,7 @@ const RY: usize = 8;
 /// | `touchdown_lead` | s | 0.08 | time from a detected early touch-down to the planned one it becomes |
 /// | `crossover_min` | m | 0 (off) | crossover step: when the solution's touch-down sits at the no-crossing bound (`lateral_min`: the DCM pushed towards the stance foot's side), the QP is solved again with the touch-down on the stance foot's far side, between `crossover_min` and `crossover_max` past the stance foot (stance frame y), and the cheaper of the two solutions is kept; more than the sole's width (0.09 m on the bundled humanoid) keeps the soles apart. The planner replans from the crossed feet, the next step uncrossing them, and the swing goes round the stance sole |
 /// | `crossover_max` | m | 0.25 | farthest crossover touch-down past the stance foot (stance frame y) |
+/// | `closing_dcm_margin` | m | 0.02 | closing step kept: the plan's last step is not adjusted while the CoP box (`cop_x`, `cop_y`) can still bring the DCM predicted at its touch-down this far inside the hull of the stance sole and the planned landed sole (the ankle absorbs the error); 0: off (the closing step is adjusted like any other) |
 ///
 /// `validate()` requires finite positive lengths, weights and durations, `lateral_min < lateral_max`,
 /// `step_duration_min < step_duration_max`, `min_remaining_time < step_duration_max` and, with the
@@ -152,6 +153,9 @@ pub struct StepAdjustmentConfig {
     pub crossover_min: f64,
     /// Largest distance of a crossover touch-down past the stance foot \[m\].
     pub crossover_max: f64,
+    /// Depth inside the final double support's hull the CoP box must still bring the predicted DCM to for
+    /// the plan's last step to be kept \[m\]; 0: the closing step is adjusted like any other.
+    pub closing_dcm_margin: f64,
 }
 
 impl Default for StepAdjustmentConfig {
@@ -181,6 +185,7 @@ impl Default for StepAdjustmentConfig {
             touchdown_height: 0.01,
             crossover_min: 0.0,
             crossover_max: 0.25,
+            closing_dcm_margin: 0.02,
         }
     }
 }
@@ -218,6 +223,10 @@ impl StepAdjustmentConfig {
         check_non_negative("step_adjustment.touchdown_height", self.touchdown_height)?;
         check_non_negative("step_adjustment.crossover_min", self.crossover_min)?;
         check_positive("step_adjustment.crossover_max", self.crossover_max)?;
+        check_non_negative(
+            "step_adjustment.closing_dcm_margin",
+            self.closing_dcm_margin,
+        )?;
         let order = |name, value, ok, reason| {
             if ok {
                 Ok(())
