@@ -382,23 +382,20 @@ fn the_mpc_position_walk_reaches_its_goal_on_mujoco_only_with_the_foot_admittanc
 
 /// The fast torque walk on MuJoCo (docs/mujoco.md, "Torque walks that fell on MuJoCo"): with the soft CoM
 /// task of `walk_fast_torque.toml` it reaches its goal without a relaxed TSID solve; with the walking preset's
-/// hard CoM task (configs/layers/walk_fast_base.toml, the 0.22 m walk, in torque control) the QP takes the CoM acceleration from the upper body
-/// and the torso topples.
+/// hard CoM task (configs/layers/walk_fast_base.toml, the 0.22 m walk, in torque control) the QP takes the CoM
+/// acceleration from the upper body and needs relaxed solves (measured 2026-12-07: 202, the torso tilted
+/// 14.6°; it still reaches its goal since the CoM task's own vertical gains of 2026-12-07, where before them
+/// the torso toppled).
 #[cfg(feature = "mujoco")]
 #[test]
-fn the_fast_torque_walk_reaches_its_goal_on_mujoco_only_with_a_soft_com_task() {
+fn the_fast_torque_walk_needs_no_relaxed_solve_on_mujoco_only_with_a_soft_com_task() {
     let s = run_on_mujoco("walk_fast_torque.toml");
     assert_eq!(s.outcome, Outcome::GoalReached, "{}", s.outcome);
     assert_eq!(s.wbc_fallbacks, 0);
     let mut hard = Scenario::load(&config_path("layers/walk_fast_base.toml")).expect("scenario");
     hard.config.scenario.control_mode = stride_runner::config::ControlMode::Torque;
-    let fell = run_scenario_on_mujoco(&hard);
-    assert!(
-        matches!(fell.outcome, Outcome::Fell { .. }),
-        "hard CoM task: {}",
-        fell.outcome
-    );
-    assert!(fell.wbc_fallbacks > 0);
+    let hard = run_scenario_on_mujoco(&hard);
+    assert!(hard.wbc_fallbacks > 0, "hard CoM task: {}", hard.outcome);
 }
 
 /// The fast torque curve on MuJoCo (docs/mujoco.md, "Torque walks that fell on MuJoCo"; issue 16): with the
